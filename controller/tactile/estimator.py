@@ -1,0 +1,234 @@
+"""The estimation pipeline: ``push(frame, t_s) -> WrenchEstimate``.
+
+frame (uint8 BGR or grey) -> working image -> grid displacement (px, vs the zeroed reference)
+-> mm in frame S -> optional temporal EMA -> NHHD (tau_z, shear, normal) -> dipole (tau_x,
+tau_y) and the FingerVision baseline -> optional calibration.
+
+Zeroing: the reference is the mean of ``reference_frames`` frames, captured from the frames
+pushed after ``rezero()`` (or on the first frames if no reference was ever set), or set
+directly with ``set_reference(frames)``. While it is being captured, ``push`` returns zero
+estimates flagged ``zeroing``.
+
+Frames may come in either orientation (e.g. 240 x 320 from a DIGIT) and at any size with
+the sensor profile's aspect ratio; they are resized to the profile's resolution in their own
+orientation, where ``mm_per_px`` applies. Every later frame must have the reference's shape.
+
+All buffers are allocated when the reference is set; a push allocates only what OpenCV
+must (its flow outputs) and the returned estimate.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import cv2
+import numpy as np
+
+from controller.config import SensorProfile
+from controller.tactile.baseline import FingerVisionTorque
+from controller.tactile.calibration import Calibration
+from controller.tactile.dipole import DipoleMomentCalculator
+from controller.tactile.field import VectorField, divergence, grid_axes_mm
+from controller.tactile.flow import GridFlow, make_grid_flow
+from controller.tactile.nhhd import NHHD, NHHDResult
+from controller.tactile.settings import EstimatorConfig
+from controller.tactile.wrench import WrenchEstimate
+
+_ASPECT_TOLERANCE = 0.02
+
+
+class TactileEstimator:
+    """Frame-to-wrench pipeline for one sensor (see module docstring)."""
+
+    def __init__(
+        self,
+        config: EstimatorConfig,
+        profile: SensorProfile,
+        calibration: Calibration | None = None,
+    ) -> None:
+        self.config = config
+        self.profile = profile
+        self.calibration = calibration
+        self._frame_shape: tuple[int, ...] | None = None
+        self._zeroing_left = 0
+        self._reference_sum: np.ndarray | None = None
+        self._zeroing_count = 0
+        self._grid_flow: GridFlow | None = None
+        self._last_nhhd: NHHDResult | None = None
+
+    # -- reference ---------------------------------------------------------------------------
+
+    @property
+    def is_zeroed(self) -> bool:
+        """True once a reference exists and is not being re-captured."""
+        return self._grid_flow is not None and self._zeroing_left == 0
+
+    def rezero(self, n_frames: int | None = None) -> None:
+        """Capture a new reference from the next ``n_frames`` pushed frames (default: the
+        configuration's ``reference_frames``). Call it after the grasp has settled."""
+        n = self.config.reference_frames if n_frames is None else n_frames
+        if n < 1:
+            raise ValueError(f"rezero needs at least one frame, got {n}")
+        self._zeroing_left = n
+        self._zeroing_count = 0
+        self._reference_sum = None
+
+    def set_reference(self, frames: np.ndarray | Sequence[np.ndarray]) -> None:
+        """Use the mean of ``frames`` (one image, or a sequence / stack of images) now."""
+        stack = [frames] if isinstance(frames, np.ndarray) and frames.ndim <= 3 else list(frames)
+        if not stack:
+            raise ValueError("set_reference needs at least one frame")
+        self._frame_shape = None
+        total = None
+        for frame in stack:
+            image = self._working_image(frame)
+            total = image.astype(np.float32) if total is None else total + image
+        self._install_reference(total / len(stack))
+        self._zeroing_left = 0
+
+    def _install_reference(self, mean_image: np.ndarray) -> None:
+        reference = np.clip(mean_image + 0.5, 0, 255).astype(np.uint8)
+        height, width = reference.shape[:2]
+        rows = max(3, round(height / self.config.stride_px))
+        cols = max(3, round(width / self.config.stride_px))
+        self._allocate(height, width, rows, cols)
+        self._grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
+        self._grid_flow.set_reference(reference)
+
+    def _allocate(self, height: int, width: int, rows: int, cols: int) -> None:
+        x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
+        self.x_mm, self.y_mm = x_mm, y_mm
+        self._grid_px = np.zeros((rows, cols, 2))
+        self._u = np.zeros((rows, cols))
+        self._v = np.zeros((rows, cols))
+        self._div = np.empty((rows, cols))
+        self._work = np.empty((rows, cols))
+        self._magnitude = np.empty((rows, cols))
+        self._filtered = False
+        self._nhhd = NHHD(x_mm, y_mm)
+        self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
+        self._baseline = FingerVisionTorque(x_mm, y_mm)
+
+    # -- frames ------------------------------------------------------------------------------
+
+    def _working_image(self, frame: np.ndarray) -> np.ndarray:
+        """BGR uint8 at the profile's resolution in the frame's own orientation."""
+        if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8:
+            kind = getattr(frame, "dtype", type(frame).__name__)
+            raise ValueError(f"tactile frame must be a uint8 image, got {kind}")
+        if frame.ndim == 2:
+            frame = cv2.cvtColor(frame, cv2.COLOR_GRAY2BGR)
+        elif frame.ndim != 3 or frame.shape[2] not in (3, 4):
+            raise ValueError(
+                f"tactile frame must be H x W grey, BGR or BGRA, got shape {frame.shape}"
+            )
+        elif frame.shape[2] == 4:
+            frame = cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
+        if self._frame_shape is not None and frame.shape[:2] != self._frame_shape:
+            raise ValueError(
+                f"frame of {frame.shape[1]} x {frame.shape[0]} px does not match the reference "
+                f"({self._frame_shape[1]} x {self._frame_shape[0]} px); re-zero after changing size"
+            )
+        self._frame_shape = frame.shape[:2]
+        target = self._target_shape(frame.shape[0], frame.shape[1])
+        if frame.shape[:2] == target:
+            return frame
+        return cv2.resize(frame, (target[1], target[0]), interpolation=cv2.INTER_AREA)
+
+    def _target_shape(self, height: int, width: int) -> tuple[int, int]:
+        p = self.profile
+        for target in ((p.height_px, p.width_px), (p.width_px, p.height_px)):
+            if (
+                abs(height / width - target[0] / target[1])
+                <= _ASPECT_TOLERANCE * target[0] / target[1]
+            ):
+                return target
+        raise ValueError(
+            f"frame of {width} x {height} px does not fit sensor profile '{p.name}' "
+            f"({p.width_px} x {p.height_px} px in either orientation, or the same aspect ratio)"
+        )
+
+    # -- estimation --------------------------------------------------------------------------
+
+    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
+        """Estimate the wrench from one frame captured at ``t_s`` seconds."""
+        if self._grid_flow is None and self._zeroing_left == 0:
+            self.rezero()
+        if self._zeroing_left > 0:
+            return self._capture_reference(frame, t_s)
+        image = self._working_image(frame)
+        self._grid_flow.measure(image, self._grid_px)
+        self._update_field()
+        return self._estimate(t_s)
+
+    def _capture_reference(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
+        if self._zeroing_count == 0:
+            self._frame_shape = None
+        image = self._working_image(frame).astype(np.float32)
+        self._reference_sum = image if self._reference_sum is None else self._reference_sum + image
+        self._zeroing_count += 1
+        self._zeroing_left -= 1
+        if self._zeroing_left == 0:
+            self._install_reference(self._reference_sum / self._zeroing_count)
+            self._reference_sum = None
+        return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
+
+    def _update_field(self) -> None:
+        """Grid px -> mm in S, then the temporal EMA (alpha = weight of the newest field)."""
+        scale = self.profile.mm_per_px
+        alpha = self.config.ema_alpha
+        if alpha >= 1.0 or not self._filtered:
+            np.multiply(self._grid_px[..., 0], scale, out=self._u)
+            np.multiply(self._grid_px[..., 1], scale, out=self._v)
+            self._filtered = True
+            return
+        for component, target in ((0, self._u), (1, self._v)):
+            target *= 1.0 - alpha
+            np.multiply(self._grid_px[..., component], alpha * scale, out=self._work)
+            target += self._work
+
+    def _estimate(self, t_s: float) -> WrenchEstimate:
+        decomposition = self._nhhd.decompose(self._u, self._v)
+        self._last_nhhd = decomposition
+        if self.config.divergence_of == "raw":
+            div = decomposition.div
+        else:
+            dx, dy = self._nhhd.dx, self._nhhd.dy
+            div = divergence(decomposition.d_u, decomposition.d_v, dx, dy, self._div, self._work)
+        dipole = self._dipole(div)
+        tau_x, tau_y = dipole.tilt_torque_raw
+        fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
+        np.hypot(self._u, self._v, out=self._magnitude)
+        contact = float(self._magnitude.mean()) > self.config.contact_threshold_mm
+        estimate = WrenchEstimate(
+            t_s=t_s,
+            tau_x=tau_x,
+            tau_y=tau_y,
+            tau_z=decomposition.tau_z,
+            shear_x=decomposition.shear_x,
+            shear_y=decomposition.shear_y,
+            normal=decomposition.normal,
+            fv_tau_x=fv_x,
+            fv_tau_y=fv_y,
+            fv_tau_z=fv_z,
+            contact=contact,
+            degenerate=dipole.degenerate,
+            slip_suspected=False,
+            zeroing=False,
+            calibrated=False,
+        )
+        return self.calibration.apply(estimate) if self.calibration else estimate
+
+    # -- inspection --------------------------------------------------------------------------
+
+    @property
+    def field(self) -> VectorField:
+        """A copy of the latest (filtered) displacement field, mm in frame S."""
+        if self._grid_flow is None:
+            raise RuntimeError("no field yet: the estimator has no reference")
+        return VectorField(self.x_mm, self.y_mm, self._u.copy(), self._v.copy())
+
+    @property
+    def last_decomposition(self) -> NHHDResult | None:
+        """The latest NHHD result (views into buffers that the next push overwrites)."""
+        return self._last_nhhd

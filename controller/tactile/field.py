@@ -1,0 +1,134 @@
+"""Displacement fields on a regular grid in the sensor frame S, and their differential operators.
+
+Frame S (docs/ARCHITECTURE.md): origin at the gel centre, x along image columns (right),
+y along image rows (down), z = x cross y. Positions and displacements are in mm.
+
+Arrays are indexed ``[row, col]``: axis 0 is y, axis 1 is x.
+
+Border handling of every derivative: second-order central differences in the interior,
+first-order one-sided differences on the border rows and columns (as ``numpy.gradient``
+with ``edge_order=1``). The operators write into caller-owned ``out`` arrays so the
+per-frame pipeline allocates nothing.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+MIN_GRID_POINTS = 3
+
+
+def grid_axes_mm(
+    width_px: int, height_px: int, cols: int, rows: int, mm_per_px: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Cell-centre coordinates (x of each column, y of each row) in mm in frame S.
+
+    The image of ``width_px`` x ``height_px`` is cut into ``cols`` x ``rows`` equal cells; a
+    cell's position is its centre, so column j sits at ``((j + 0.5) * width_px / cols -
+    width_px / 2) * mm_per_px`` (the half-cell offset matters: without it the grid is shifted
+    by half a cell and every torque picks up a spurious lever arm).
+    """
+    if cols < MIN_GRID_POINTS or rows < MIN_GRID_POINTS:
+        raise ValueError(
+            f"grid must be at least {MIN_GRID_POINTS}x{MIN_GRID_POINTS} cells, got {cols}x{rows}"
+        )
+    x = ((np.arange(cols) + 0.5) * (width_px / cols) - width_px / 2) * mm_per_px
+    y = ((np.arange(rows) + 0.5) * (height_px / rows) - height_px / 2) * mm_per_px
+    return x, y
+
+
+@dataclass(frozen=True)
+class VectorField:
+    """A 2-D displacement field sampled on a regular grid in frame S.
+
+    ``x_mm`` (cols,) and ``y_mm`` (rows,) are the cell-centre coordinates; ``u_mm`` and
+    ``v_mm`` (rows, cols) the x and y displacement components, in mm.
+    """
+
+    x_mm: np.ndarray
+    y_mm: np.ndarray
+    u_mm: np.ndarray
+    v_mm: np.ndarray
+
+    def __post_init__(self) -> None:
+        shape = (self.y_mm.size, self.x_mm.size)
+        if self.u_mm.shape != shape or self.v_mm.shape != shape:
+            raise ValueError(
+                f"field components must have shape (rows, cols) = {shape}, "
+                f"got u {self.u_mm.shape} and v {self.v_mm.shape}"
+            )
+        if min(shape) < MIN_GRID_POINTS:
+            raise ValueError(f"field grid must be at least 3x3, got {shape}")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, cols)."""
+        return self.u_mm.shape
+
+    @property
+    def spacing_mm(self) -> tuple[float, float]:
+        """Grid spacing (dx, dy) in mm."""
+        return float(self.x_mm[1] - self.x_mm[0]), float(self.y_mm[1] - self.y_mm[0])
+
+    def divergence(self) -> np.ndarray:
+        """du/dx + dv/dy (dimensionless), shape (rows, cols)."""
+        dx, dy = self.spacing_mm
+        return divergence(self.u_mm, self.v_mm, dx, dy, np.empty(self.shape), np.empty(self.shape))
+
+    def curl(self) -> np.ndarray:
+        """z-component of the curl, dv/dx - du/dy (dimensionless), shape (rows, cols)."""
+        dx, dy = self.spacing_mm
+        return curl(self.u_mm, self.v_mm, dx, dy, np.empty(self.shape), np.empty(self.shape))
+
+
+def require_finite(name: str, *arrays: np.ndarray) -> None:
+    """Raise ValueError naming ``name`` if any array holds NaN or inf.
+
+    Checks the sum, which is non-finite exactly when an element is (short of overflow near
+    1e308), so the check allocates nothing.
+    """
+    for array in arrays:
+        if not np.isfinite(array.sum()):
+            raise ValueError(f"{name} contains NaN or inf; expected finite displacements")
+
+
+def d_dx(f: np.ndarray, dx: float, out: np.ndarray) -> np.ndarray:
+    """Derivative along x (axis 1) of ``f`` (rows, cols) with spacing ``dx``, into ``out``."""
+    np.subtract(f[:, 2:], f[:, :-2], out=out[:, 1:-1])
+    out[:, 1:-1] *= 0.5 / dx
+    np.subtract(f[:, 1], f[:, 0], out=out[:, 0])
+    np.subtract(f[:, -1], f[:, -2], out=out[:, -1])
+    out[:, 0] *= 1.0 / dx
+    out[:, -1] *= 1.0 / dx
+    return out
+
+
+def d_dy(f: np.ndarray, dy: float, out: np.ndarray) -> np.ndarray:
+    """Derivative along y (axis 0) of ``f`` (rows, cols) with spacing ``dy``, into ``out``."""
+    np.subtract(f[2:], f[:-2], out=out[1:-1])
+    out[1:-1] *= 0.5 / dy
+    np.subtract(f[1], f[0], out=out[0])
+    np.subtract(f[-1], f[-2], out=out[-1])
+    out[0] *= 1.0 / dy
+    out[-1] *= 1.0 / dy
+    return out
+
+
+def divergence(
+    u: np.ndarray, v: np.ndarray, dx: float, dy: float, out: np.ndarray, work: np.ndarray
+) -> np.ndarray:
+    """du/dx + dv/dy into ``out``; ``work`` is a scratch array of the same shape."""
+    d_dx(u, dx, out)
+    out += d_dy(v, dy, work)
+    return out
+
+
+def curl(
+    u: np.ndarray, v: np.ndarray, dx: float, dy: float, out: np.ndarray, work: np.ndarray
+) -> np.ndarray:
+    """dv/dx - du/dy (z-component of the curl) into ``out``; ``work`` is scratch."""
+    d_dx(v, dx, out)
+    out -= d_dy(u, dy, work)
+    return out

@@ -1,0 +1,197 @@
+"""Natural Helmholtz-Hodge decomposition (NHHD) of a grid field, by FFT convolution.
+
+Bhatia, Pascucci & Bremer, "The Natural Helmholtz-Hodge Decomposition for Open-Boundary Flow
+Analysis", IEEE TVCG 2014; used for tactile force and torque by Zhang et al., RA-L 2019.
+
+For a field v on the grid (frame S, mm), the decomposition is v = d + r + h with
+
+* D = G * div v, d = grad D               -- curl-free, "diverging" part;
+* R = G * curl v, r = (-dR/dy, dR/dx)     -- divergence-free, "rotational" part;
+* h = v - d - r                            -- harmonic part, holds the translation.
+
+G(x) = ln|x| / (2 pi) is the free-space Green's function of the 2-D Laplacian, so the
+potentials need no boundary conditions (the "natural" choice). The convolution is a sum over
+grid cells of area dx*dy; on the cell itself, where ln|x| is singular, G takes its mean over
+the cell (see ``greens_self_term``). Potentials are in mm^2, parts in mm.
+
+The convolution of an R x C grid with the (2R-1) x (2C-1) kernel is exact (no wrap-around)
+when embedded in a 2R x 2C circular FFT, so one call costs O(N log N) for N = R*C points.
+
+Derived quantities (raw units, to be scaled by calibration):
+
+* ``tau_z``: in-plane torque, (1/N) sum_i [(x_i - c_R) x r_i]_z in mm^2, about the extremum
+  c_R of R (the centre of rotation); positive for rotation from +x toward +y.
+* ``shear``: the mean of h, in mm (translation of the contact).
+* ``normal``: the mean outward radial component of d about the extremum c_D of D, in mm;
+  positive when the gel spreads (more pressure) relative to the zeroed reference.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from controller.tactile.field import curl, d_dx, d_dy, divergence, require_finite
+
+_SELF_TERM_SAMPLES = 256
+
+
+def greens_self_term(dx: float, dy: float) -> float:
+    """Mean of ln(r)/(2 pi) over a dx x dy cell centred on the singularity (mm grid).
+
+    Midpoint quadrature on a 256 x 256 sub-grid (the singularity is integrable and never
+    sampled); accurate to about 1e-5 relative, and computed once per grid.
+    """
+    s = (np.arange(_SELF_TERM_SAMPLES) + 0.5) / _SELF_TERM_SAMPLES - 0.5
+    gx, gy = np.meshgrid(s * dx, s * dy)
+    return float(np.log(np.hypot(gx, gy)).mean() / (2.0 * np.pi))
+
+
+def greens_kernel(rows: int, cols: int, dx: float, dy: float) -> np.ndarray:
+    """G at all grid offsets, as a (2*rows, 2*cols) circular array: entry [m mod 2R, n mod 2C]
+    holds G at offset (m*dy, n*dx) for |m| < rows, |n| < cols; the other entries are zero."""
+    m = np.arange(-(rows - 1), rows)
+    n = np.arange(-(cols - 1), cols)
+    off_y, off_x = np.meshgrid(m * dy, n * dx, indexing="ij")
+    r = np.hypot(off_x, off_y)
+    r[rows - 1, cols - 1] = 1.0
+    g = np.log(r) / (2.0 * np.pi)
+    g[rows - 1, cols - 1] = greens_self_term(dx, dy)
+    kernel = np.zeros((2 * rows, 2 * cols))
+    kernel[np.ix_(m % (2 * rows), n % (2 * cols))] = g
+    return kernel
+
+
+@dataclass(frozen=True)
+class NHHDResult:
+    """Parts, potentials and derived quantities of one decomposition.
+
+    The arrays are (rows, cols) views into the decomposer's buffers: they are overwritten by
+    the next call, so copy them to keep them.
+    """
+
+    d_u: np.ndarray
+    d_v: np.ndarray
+    r_u: np.ndarray
+    r_v: np.ndarray
+    h_u: np.ndarray
+    h_v: np.ndarray
+    potential_d: np.ndarray
+    potential_r: np.ndarray
+    div: np.ndarray
+    curl: np.ndarray
+    tau_z: float
+    shear_x: float
+    shear_y: float
+    normal: float
+    rotation_centre_mm: tuple[float, float]
+    source_centre_mm: tuple[float, float]
+
+
+class NHHD:
+    """Natural HHD on a fixed rows x cols grid with spacing (dx, dy) mm and cell centres
+    ``x_mm`` (cols,), ``y_mm`` (rows,) in frame S. Buffers and the kernel's FFT are built once;
+    ``decompose`` allocates no arrays."""
+
+    def __init__(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
+        self.rows, self.cols = y_mm.size, x_mm.size
+        self.dx = float(x_mm[1] - x_mm[0])
+        self.dy = float(y_mm[1] - y_mm[0])
+        self.x_mm, self.y_mm = x_mm, y_mm
+        self._grid_x, self._grid_y = np.meshgrid(x_mm, y_mm)
+        shape = (self.rows, self.cols)
+        padded = (2 * self.rows, 2 * self.cols)
+        cell_area = self.dx * self.dy
+        self._kernel_spectrum = np.fft.rfft2(greens_kernel(*shape, self.dx, self.dy)) * cell_area
+        self._sources = np.zeros((2, *padded))  # [div, curl], zero-padded
+        self._spectrum = np.empty((2, padded[0], padded[1] // 2 + 1), dtype=complex)
+        self._potentials = np.empty((2, *padded))
+        self._buffers = {k: np.empty(shape) for k in ("du", "dv", "ru", "rv", "hu", "hv", "w")}
+        self._lever_x = np.empty(shape)
+        self._lever_y = np.empty(shape)
+        self._radius = np.empty(shape)
+
+    def decompose(self, u: np.ndarray, v: np.ndarray) -> NHHDResult:
+        """Decompose the field (u, v), each (rows, cols) in mm."""
+        if u.shape != (self.rows, self.cols) or v.shape != u.shape:
+            raise ValueError(
+                f"field components must have shape {(self.rows, self.cols)}, "
+                f"got {u.shape} and {v.shape}"
+            )
+        require_finite("displacement field", u, v)
+        b = self._buffers
+        rows, cols = self.rows, self.cols
+        div = divergence(u, v, self.dx, self.dy, self._sources[0, :rows, :cols], b["w"])
+        rot = curl(u, v, self.dx, self.dy, self._sources[1, :rows, :cols], b["w"])
+
+        np.fft.rfft2(self._sources, out=self._spectrum)
+        self._spectrum *= self._kernel_spectrum
+        # irfft2(out=...) does not write into ``out`` for 2-D transforms (NumPy 2.x), so invert
+        # one axis at a time: complex ifft over rows in place, then the real inverse over columns.
+        np.fft.ifft(self._spectrum, axis=-2, out=self._spectrum)
+        np.fft.irfft(self._spectrum, n=self._sources.shape[-1], axis=-1, out=self._potentials)
+        pot_d = self._potentials[0, :rows, :cols]
+        pot_r = self._potentials[1, :rows, :cols]
+
+        d_dx(pot_d, self.dx, b["du"])
+        d_dy(pot_d, self.dy, b["dv"])
+        d_dy(pot_r, self.dy, b["ru"])
+        np.negative(b["ru"], out=b["ru"])
+        d_dx(pot_r, self.dx, b["rv"])
+        np.subtract(u, b["du"], out=b["hu"])
+        b["hu"] -= b["ru"]
+        np.subtract(v, b["dv"], out=b["hv"])
+        b["hv"] -= b["rv"]
+
+        n = rows * cols
+        rotation_centre = self._extremum(pot_r, rot)
+        self._levers(rotation_centre)
+        tau_z = (
+            float(np.vdot(self._lever_x, b["rv"])) - float(np.vdot(self._lever_y, b["ru"]))
+        ) / n
+        source_centre = self._extremum(pot_d, div)
+        self._levers(source_centre)
+        normal = self._mean_radial(b["du"], b["dv"])
+        return NHHDResult(
+            d_u=b["du"],
+            d_v=b["dv"],
+            r_u=b["ru"],
+            r_v=b["rv"],
+            h_u=b["hu"],
+            h_v=b["hv"],
+            potential_d=pot_d,
+            potential_r=pot_r,
+            div=div,
+            curl=rot,
+            tau_z=tau_z,
+            shear_x=float(b["hu"].mean()),
+            shear_y=float(b["hv"].mean()),
+            normal=normal,
+            rotation_centre_mm=rotation_centre,
+            source_centre_mm=source_centre,
+        )
+
+    def _extremum(self, potential: np.ndarray, source: np.ndarray) -> tuple[float, float]:
+        """Grid position (x, y) mm of the potential's extremum. G grows with distance, so a
+        positive source sits in a well (minimum) and a negative one under a peak (maximum).
+        The sign is that of sum(s |s|), which follows the strongest sources: a contact's
+        core, not the weaker opposite-signed ring around it whose total nearly cancels it."""
+        np.abs(source, out=self._buffers["w"])
+        dominant = float(np.vdot(source, self._buffers["w"]))
+        flat = potential.argmin() if dominant >= 0.0 else potential.argmax()
+        row, col = divmod(int(flat), self.cols)
+        return float(self.x_mm[col]), float(self.y_mm[row])
+
+    def _levers(self, centre: tuple[float, float]) -> None:
+        np.subtract(self._grid_x, centre[0], out=self._lever_x)
+        np.subtract(self._grid_y, centre[1], out=self._lever_y)
+
+    def _mean_radial(self, du: np.ndarray, dv: np.ndarray) -> float:
+        """Mean of d . (x - c)/|x - c| over the grid, using (and consuming) the current levers;
+        the point at the centre has a zero lever and contributes nothing."""
+        np.hypot(self._lever_x, self._lever_y, out=self._radius)
+        np.maximum(self._radius, 1e-12 * self.dx, out=self._radius)
+        self._lever_x /= self._radius
+        self._lever_y /= self._radius
+        return (float(np.vdot(self._lever_x, du)) + float(np.vdot(self._lever_y, dv))) / du.size

@@ -1,0 +1,132 @@
+"""Estimator configuration (``configs/estimators/*.yaml``), as frozen validated dataclasses.
+
+Every key is required (see controller/config.py); ``null`` means "the library's default"
+where a field allows it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+from controller.config import load_config, number, resolve_config_path
+
+FlowMethod = Literal["dis", "farneback", "markers"]
+
+
+@dataclass(frozen=True)
+class DisParams:
+    """OpenCV DIS optical flow: a preset, then optional overrides of its tunables."""
+
+    preset: Literal["ultrafast", "fast", "medium"]
+    finest_scale: int | None = number(0, 10)
+    patch_size: int | None = number(3, 64)
+    patch_stride: int | None = number(1, 64)
+    gradient_descent_iterations: int | None = number(1, 1000)
+    variational_refinement_iterations: int | None = number(0, 100)
+    variational_refinement_alpha: float | None = number(0, 1000)
+    variational_refinement_delta: float | None = number(0, 1000)
+    variational_refinement_gamma: float | None = number(0, 1000)
+    use_mean_normalization: bool | None
+    use_spatial_propagation: bool | None
+
+    def __post_init__(self) -> None:
+        if (
+            self.patch_size is not None
+            and self.patch_stride is not None
+            and self.patch_stride > self.patch_size
+        ):
+            raise ValueError(
+                f"key 'patch_stride': expected at most patch_size ({self.patch_size}), "
+                f"got {self.patch_stride}"
+            )
+
+
+@dataclass(frozen=True)
+class FarnebackParams:
+    """OpenCV Farneback dense flow (cv2.calcOpticalFlowFarneback's arguments)."""
+
+    pyr_scale: float = number(0.1, 0.9)
+    levels: int = number(1, 10)
+    winsize: int = number(3, 128)
+    iterations: int = number(1, 50)
+    poly_n: int = number(5, 7)
+    poly_sigma: float = number(0.5, 3.0)
+    gaussian_window: bool
+
+    def __post_init__(self) -> None:
+        if self.poly_n not in (5, 7):
+            raise ValueError(f"key 'poly_n': expected 5 or 7, got {self.poly_n}")
+
+
+@dataclass(frozen=True)
+class MarkerParams:
+    """Sparse tracking of the gel's printed markers with pyramidal Lucas-Kanade.
+
+    Markers are found once in the reference (dark blobs against the smoothed background),
+    tracked from the reference in every frame, and spread onto the grid by normalised
+    Gaussian weights of width ``smoothing_cells`` grid cells.
+    """
+
+    detect_threshold: float = number(1, 255)
+    min_area_px: int = number(1, 10000)
+    max_area_px: int = number(1, 10000)
+    window_px: int = number(5, 101)
+    pyramid_levels: int = number(0, 6)
+    max_iterations: int = number(1, 100)
+    smoothing_cells: float = number(0.1, 5.0)
+    min_markers: int = number(3, 100000)
+
+    def __post_init__(self) -> None:
+        if self.min_area_px > self.max_area_px:
+            raise ValueError(
+                f"key 'min_area_px': expected at most max_area_px ({self.max_area_px}), "
+                f"got {self.min_area_px}"
+            )
+        if self.window_px % 2 == 0:
+            raise ValueError(f"key 'window_px': expected an odd number, got {self.window_px}")
+
+
+@dataclass(frozen=True)
+class FlowConfig:
+    """How the displacement field is measured from images.
+
+    ``color``: ``gray`` runs the flow once on the luminance; ``per_channel`` runs it on each
+    colour channel and averages (the authors' choice). ``scale`` < 1 computes the flow on a
+    downscaled image (vectors are scaled back). ``warm_start`` seeds each frame's dense flow
+    with the previous one (faster convergence on large motion, but history-dependent).
+    """
+
+    method: FlowMethod
+    color: Literal["gray", "per_channel"]
+    scale: float = number(0.125, 1.0)
+    warm_start: bool
+    dis: DisParams
+    farneback: FarnebackParams
+    markers: MarkerParams
+
+
+@dataclass(frozen=True)
+class EstimatorConfig:
+    """The whole frame-to-wrench pipeline.
+
+    ``stride_px``: grid cell size in working-image pixels (the grid has round(W/stride) x
+    round(H/stride) cells; 26.667 gives the authors' 12 x 9 at 320 x 240).
+    ``divergence_of``: the dipole uses the divergence of the raw field or of the NHHD
+    curl-free part. ``ema_alpha``: weight of the newest field in the temporal filter
+    (1 = off). ``reference_frames``: frames averaged into the reference by ``rezero()``.
+    ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
+    """
+
+    flow: FlowConfig
+    stride_px: float = number(4, 160)
+    divergence_of: Literal["raw", "curl_free"]
+    dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
+    ema_alpha: float = number(0.01, 1.0)
+    reference_frames: int = number(1, 1000)
+    contact_threshold_mm: float = number(0, 10)
+
+
+def estimator_config(name_or_path: str) -> EstimatorConfig:
+    """Load ``configs/estimators/NAME.yaml`` (or a YAML path)."""
+    return load_config(EstimatorConfig, resolve_config_path(name_or_path, "estimators"))

@@ -1,0 +1,64 @@
+"""The pipeline's output: one wrench estimate per tactile frame."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class WrenchEstimate:
+    """Torques and forces the gel exerts on the grasped object, in sensor frame S.
+
+    Without a calibration (``calibrated`` False) the values are raw: tau_x, tau_y and the
+    shear in mm, tau_z in mm^2, normal in mm. With one, torques are N*m and forces N.
+
+    * ``tau_x``, ``tau_y``: tilt torques (tactile dipole moment);
+    * ``tau_z``: in-plane torque (NHHD rotational part);
+    * ``shear_x``, ``shear_y``: shear (NHHD harmonic part);
+    * ``normal``: normal-force index (NHHD diverging part), relative to the zeroed grasp;
+    * ``fv_tau_x``, ``fv_tau_y``, ``fv_tau_z``: the FingerVision baseline's torques;
+    * ``t_s``: the frame's timestamp, s.
+
+    Flags: ``contact`` -- the field's mean magnitude exceeds the contact threshold;
+    ``degenerate`` -- the field had no positive or no negative divergence, so the tilt torque
+    is set to zero; ``slip_suspected`` -- the slip detector fired (always False until a slip
+    detector is configured); ``zeroing`` -- the reference is still being captured, all values
+    are zero.
+    """
+
+    t_s: float
+    tau_x: float
+    tau_y: float
+    tau_z: float
+    shear_x: float
+    shear_y: float
+    normal: float
+    fv_tau_x: float
+    fv_tau_y: float
+    fv_tau_z: float
+    contact: bool
+    degenerate: bool
+    slip_suspected: bool
+    zeroing: bool
+    calibrated: bool
+
+    @classmethod
+    def zero(cls, t_s: float, *, zeroing: bool, calibrated: bool) -> WrenchEstimate:
+        """An all-zero estimate (used while the reference is captured)."""
+        return cls(
+            t_s,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            0.0,
+            contact=False,
+            degenerate=True,
+            slip_suspected=False,
+            zeroing=zeroing,
+            calibrated=calibrated,
+        )
