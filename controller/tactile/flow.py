@@ -166,15 +166,17 @@ def detect_markers(gray: np.ndarray, params: MarkerParams) -> np.ndarray:
     """Centres (M, 2) float32 in px (x, y) of the dark markers in a grayscale image.
 
     The background is the image with the markers closed away (grey-level closing with a disk
-    a little larger than the largest marker); a marker is a connected region darker than the
-    background by more than ``detect_threshold`` grey levels, with an area in
+    a little larger than the largest marker). A marker is a connected region darker than the
+    background by more than Otsu's threshold on that darkness (which separates markers from
+    the gel's texture) and at least ``detect_threshold`` grey levels, with an area in
     [min_area_px, max_area_px]. The centre is the darkness-weighted centroid.
     """
     radius = int(np.ceil(np.sqrt(params.max_area_px / np.pi))) + 2
     disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
     background = cv2.morphologyEx(gray, cv2.MORPH_CLOSE, disk)
     darkness = cv2.subtract(background, gray)
-    mask = (darkness > params.detect_threshold).astype(np.uint8)
+    otsu, _ = cv2.threshold(darkness, 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+    mask = (darkness > max(otsu, params.detect_threshold)).astype(np.uint8)
     count, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     areas = stats[1:, cv2.CC_STAT_AREA]
     keep = np.flatnonzero((areas >= params.min_area_px) & (areas <= params.max_area_px)) + 1

@@ -1,0 +1,9 @@
+import numpy as np
+import pytest
+
+from drivers.sim.marker_images import MarkerImageRenderer
+
+
+@pytest.fixture(scope="session")
+def renderer() -> MarkerImageRenderer:
+    return MarkerImageRenderer(rng=np.random.default_rng(3))

@@ -1,0 +1,145 @@
+import tracemalloc
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from controller.config import sensor_profile
+from controller.tactile.calibration import AxisFit, Calibration
+from controller.tactile.estimator import TactileEstimator
+from controller.tactile.settings import estimator_config
+from drivers.sim.synthetic_sequence import phase_patterns
+
+PROFILE = sensor_profile("gelsight_mini")
+CONFIG = estimator_config("default")
+PATTERNS = phase_patterns((240, 320))
+
+
+@pytest.fixture
+def estimator(renderer):
+    est = TactileEstimator(CONFIG, PROFILE)
+    est.set_reference(renderer.render())
+    return est
+
+
+@pytest.mark.parametrize(
+    "pattern,axis,sign",
+    [
+        ("tilt_x", "tau_x", 1),
+        ("tilt_y", "tau_y", 1),
+        ("twist", "tau_z", 1),
+        ("shear", "shear_x", 1),
+    ],
+)
+def test_each_pattern_drives_its_axis_with_the_right_sign(estimator, renderer, pattern, axis, sign):
+    for amplitude in (1.0, -1.0):
+        e = estimator.push(renderer.render(amplitude * PATTERNS[pattern]), 0.0)
+        assert np.sign(getattr(e, axis)) == sign * amplitude
+        assert e.contact and not e.zeroing
+
+
+def test_reference_frame_gives_near_zero_and_no_contact(estimator, renderer):
+    e = estimator.push(renderer.render(), 1.0)
+    assert not e.contact and e.t_s == 1.0
+    assert abs(e.tau_x) < 1e-3 and abs(e.tau_y) < 1e-3
+
+
+def test_rezero_captures_the_mean_of_n_frames(renderer):
+    est = TactileEstimator(CONFIG, PROFILE)
+    pressed = renderer.render(PATTERNS["tilt_x"])
+    first = est.push(pressed, 0.0)  # no reference yet: starts capturing
+    assert first.zeroing and first.tau_x == 0.0
+    est.rezero(3)
+    for i in range(3):
+        assert est.push(pressed, 0.1 * i).zeroing
+    assert est.is_zeroed
+    after = est.push(pressed, 1.0)  # zeroed on the pressed state: no torque left
+    assert abs(after.tau_x) < 1e-3 and not after.zeroing
+
+
+def test_portrait_frames_are_accepted_when_they_match_the_reference(renderer):
+    est = TactileEstimator(CONFIG, PROFILE)
+    portrait = np.ascontiguousarray(renderer.render().transpose(1, 0, 2))
+    est.set_reference(portrait)
+    assert est.field.shape == (16, 12)
+    e = est.push(np.ascontiguousarray(renderer.render(PATTERNS["tilt_x"]).transpose(1, 0, 2)), 0)
+    assert e.tau_y != 0.0  # the image's x is the rig's y now
+    with pytest.raises(ValueError, match="does not match the reference"):
+        est.push(renderer.render(), 0.0)
+
+
+def test_larger_frames_with_the_same_aspect_are_resized(renderer):
+    import cv2
+
+    est = TactileEstimator(CONFIG, PROFILE)
+    big = cv2.resize(renderer.render(), (640, 480))
+    est.set_reference(big)
+    assert est.field.shape == (12, 16)
+
+
+@pytest.mark.parametrize(
+    "frame,message",
+    [
+        (np.zeros((240, 320, 3), np.float32), "uint8"),
+        (np.zeros((240, 320, 2), np.uint8), "shape"),
+        (np.zeros((100, 320, 3), np.uint8), "does not fit sensor profile"),
+    ],
+)
+def test_bad_frames_are_named(frame, message):
+    est = TactileEstimator(CONFIG, PROFILE)
+    with pytest.raises(ValueError, match=message):
+        est.set_reference(frame)
+
+
+def test_ema_filter_smooths_a_step(renderer):
+    est = TactileEstimator(replace(CONFIG, ema_alpha=0.5), PROFILE)
+    est.set_reference(renderer.render())
+    est.push(renderer.render(), 0.0)
+    pressed = renderer.render(PATTERNS["tilt_x"])
+    values = [est.push(pressed, 0.1 * i).tau_x for i in range(1, 8)]
+    direct = TactileEstimator(CONFIG, PROFILE)
+    direct.set_reference(renderer.render())
+    target = direct.push(pressed, 0.0).tau_x
+    assert 0.3 * target < values[0] < 0.7 * target
+    assert values == sorted(values) and values[-1] == pytest.approx(target, rel=0.02)
+
+
+def test_calibration_scales_the_output(estimator, renderer):
+    pressed = renderer.render(PATTERNS["tilt_x"])
+    raw = estimator.push(pressed, 0.0)
+    estimator.calibration = Calibration(
+        "gelsight_mini", "default", {"tau_x": AxisFit(2e-3, 1e-4, 0.0, 1.0, 10)}
+    )
+    cal = estimator.push(pressed, 0.0)
+    assert cal.calibrated and not raw.calibrated
+    assert cal.tau_x == pytest.approx(2e-3 * raw.tau_x + 1e-4)
+    assert cal.tau_y == pytest.approx(raw.tau_y)
+
+
+@pytest.mark.parametrize("method", ["default", "paper", "markers"])
+def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
+    """Steady-state pushes allocate no arrays in our code (only OpenCV's outputs and the
+    returned estimate)."""
+    est = TactileEstimator(estimator_config(method), PROFILE)
+    est.set_reference(renderer.render())
+    frames = [renderer.render(a * PATTERNS["tilt_x"]) for a in (0.3, 0.6, 0.9)]
+    for frame in frames:
+        est.push(frame, 0.0)
+    ours = str(Path(__file__).resolve().parents[2] / "controller")
+    tracemalloc.start()
+    try:
+        before = tracemalloc.take_snapshot()
+        for i in range(30):
+            est.push(frames[i % 3], float(i))
+        after = tracemalloc.take_snapshot()
+    finally:
+        tracemalloc.stop()
+    grown = [
+        stat
+        for stat in after.compare_to(before, "lineno")
+        if stat.traceback[0].filename.startswith(ours) and stat.size_diff > 0
+    ]
+    per_frame_bytes = sum(s.size_diff for s in grown) / 30
+    # The estimate object itself (~200 B) may remain referenced; array buffers would be KBs.
+    assert per_frame_bytes < 512, [str(s) for s in grown[:5]]

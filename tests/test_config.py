@@ -1,0 +1,74 @@
+from pathlib import Path
+
+import pytest
+import yaml
+
+from controller.config import ConfigError, sensor_profile
+from controller.tactile.settings import EstimatorConfig, estimator_config
+
+CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+
+
+@pytest.mark.parametrize(
+    "path", sorted((CONFIGS / "estimators").glob("*.yaml")), ids=lambda p: p.stem
+)
+def test_every_estimator_config_loads(path):
+    assert isinstance(estimator_config(str(path)), EstimatorConfig)
+
+
+@pytest.mark.parametrize("name", ["gelsight_mini", "digit"])
+def test_sensor_profiles_load(name):
+    profile = sensor_profile(name)
+    assert profile.width_px == 320 and profile.height_px == 240
+
+
+def test_mini_profile_scale():
+    assert sensor_profile("gelsight_mini").mm_per_px == pytest.approx(0.0634)
+
+
+def write_variant(tmp_path, edit):
+    data = yaml.safe_load((CONFIGS / "estimators" / "default.yaml").read_text())
+    edit(data)
+    path = tmp_path / "variant.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "edit,message",
+    [
+        (
+            lambda d: d.update(stride_px=2),
+            r"key 'stride_px': expected a number in \[4, 160\], got 2",
+        ),
+        (lambda d: d.pop("ema_alpha"), "missing key 'ema_alpha'"),
+        (lambda d: d.update(colour="gray"), "unknown key 'colour'"),
+        (lambda d: d["flow"].update(method="lucas"), "key 'flow.method': expected one of"),
+        (lambda d: d["flow"]["dis"].update(patch_size="big"), "key 'flow.dis.patch_size'"),
+        (lambda d: d["flow"]["farneback"].update(poly_n=6), "key 'flow.farneback.poly_n'"),
+        (lambda d: d["flow"]["markers"].update(window_px=20), "key 'flow.markers.window_px'"),
+        (
+            lambda d: d["flow"].update(warm_start="yes"),
+            "key 'flow.warm_start': expected true or false",
+        ),
+    ],
+)
+def test_bad_values_name_file_key_and_expectation(tmp_path, edit, message):
+    path = write_variant(tmp_path, edit)
+    with pytest.raises(ConfigError, match=message) as info:
+        estimator_config(str(path))
+    assert str(path) in str(info.value)
+
+
+def test_unknown_config_name_lists_the_known_ones():
+    with pytest.raises(ConfigError, match="default"):
+        estimator_config("no_such_method")
+
+
+def test_missing_and_malformed_files(tmp_path):
+    with pytest.raises(ConfigError, match="cannot read"):
+        sensor_profile(str(tmp_path / "absent.yaml"))
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: [unclosed\n")
+    with pytest.raises(ConfigError, match="not valid YAML"):
+        sensor_profile(str(bad))
