@@ -12,10 +12,10 @@ Two kinds of frames arrive:
 
 Geometry, all in image pixels (x along columns, y along rows):
 
-1. crop: remove ``crop_border_fraction`` of the full-resolution height and width from each
-   border, ``int(size * fraction)`` pixels as gsrobotics' ``crop_and_resize`` does (its
-   GelSight Mini default is 0.15); on a reduced decode the border is that full-resolution
-   count divided by the downscale, rounded;
+1. crop: remove ``crop_border_fraction`` of the height and width from each border,
+   ``int(size * fraction)`` pixels of the decoded image, as gsrobotics' ``crop_and_resize``
+   does (its GelSight Mini default is 0.15); on a reduced decode this matches the
+   full-resolution crop to within one decoded pixel;
 2. resize to the output size with ``INTER_AREA`` (``INTER_LINEAR`` if enlarging);
 3. orientation: DIGIT images are turned as digit-interface's ``Digit.get_frame()`` does by
    default, ``cv2.transpose`` then ``cv2.flip(..., 0)`` (a 90 degree counter-clockwise turn:
@@ -67,23 +67,17 @@ def decode_jpeg(buffer: np.ndarray, downscale: int = 1) -> np.ndarray:
     return image
 
 
-def border_px(size_px: int, fraction: float, downscale: int = 1) -> int:
-    """Pixels cropped from one side of an axis ``size_px`` long in an image decoded at
-    1/``downscale``: ``int(full_size * fraction)`` at full resolution, scaled and rounded."""
-    return round(int(size_px * downscale * fraction) / downscale)
-
-
 def cropped_size(width_px: int, height_px: int, fraction: float, downscale: int) -> tuple[int, int]:
     """(width, height) left after decoding a ``width_px`` x ``height_px`` JPEG at
     1/``downscale`` and cropping ``fraction`` off each border."""
     w, h = math.ceil(width_px / downscale), math.ceil(height_px / downscale)
-    return w - 2 * border_px(w, fraction, downscale), h - 2 * border_px(h, fraction, downscale)
+    return w - 2 * int(w * fraction), h - 2 * int(h * fraction)
 
 
-def crop_borders(image: np.ndarray, fraction: float, downscale: int = 1) -> np.ndarray:
-    """Remove ``fraction`` of the full-resolution size from each border (a view, no copy)."""
+def crop_borders(image: np.ndarray, fraction: float) -> np.ndarray:
+    """Remove ``int(size * fraction)`` pixels from each border (a view, no copy)."""
     h, w = image.shape[:2]
-    by, bx = border_px(h, fraction, downscale), border_px(w, fraction, downscale)
+    by, bx = int(h * fraction), int(w * fraction)
     return image[by : h - by, bx : w - bx]
 
 
@@ -121,19 +115,19 @@ class FrameProcessor:
     def __call__(self, frame: np.ndarray) -> np.ndarray:
         """Raises ValueError on a frame that is neither a JPEG buffer nor a BGR image."""
         if is_jpeg_buffer(frame):
-            image, downscale = decode_jpeg(frame, self.jpeg_downscale), self.jpeg_downscale
+            image = decode_jpeg(frame, self.jpeg_downscale)
         elif frame.ndim == 3 and frame.shape[2] == 3 and frame.dtype == np.uint8:
-            image, downscale = frame, 1
+            image = frame
         else:
             raise ValueError(
                 f"unexpected frame layout {frame.shape} {frame.dtype}: "
                 "expected a JPEG buffer or an H x W x 3 uint8 image"
             )
-        return self.process_decoded(image, downscale)
+        return self.process_decoded(image)
 
-    def process_decoded(self, image: np.ndarray, downscale: int = 1) -> np.ndarray:
-        """Crop, resize and orient an image decoded at 1/``downscale`` of full size."""
-        cropped = crop_borders(image, self.crop_border_fraction, downscale)
+    def process_decoded(self, image: np.ndarray) -> np.ndarray:
+        """Crop, resize and orient a decoded BGR image."""
+        cropped = crop_borders(image, self.crop_border_fraction)
         if self.digit_orientation:
             turned = resize_to(cropped, self.output_height_px, self.output_width_px)
             return orient_like_digit_sdk(turned)
