@@ -58,7 +58,7 @@ class PacedCapture:
     def resume(self) -> None:
         self._running.set()
 
-    def isOpened(self) -> bool:  # noqa: N802
+    def isOpened(self) -> bool:
         return self._inner.isOpened()
 
     def set(self, prop_id: int, value: float) -> bool:
@@ -67,7 +67,7 @@ class PacedCapture:
     def get(self, prop_id: int) -> float:
         return self._inner.get(prop_id)
 
-    def getBackendName(self) -> str:  # noqa: N802
+    def getBackendName(self) -> str:
         return self._inner.getBackendName()
 
     def grab(self) -> bool:
