@@ -1,0 +1,411 @@
+"""GelSight Mini and DIGIT visuotactile cameras through OpenCV's V4L2 backend.
+
+The camera is found by its persistent ``/dev/v4l/by-id`` name (see ``device_lookup``), opened
+with ``cv2.VideoCapture(node, cv2.CAP_V4L2)`` and asked for MJPG, the configured size and rate,
+and a driver queue of ``buffer_count`` buffers. When the V4L2 backend delivers MJPG we switch
+``CAP_PROP_CONVERT_RGB`` off and decode the compressed buffer ourselves at reduced size (see
+``decode``); any other capture (a video file, a YUYV stream) is decoded by OpenCV and only
+cropped, resized and oriented.
+
+Facts the defaults rest on:
+
+* GelSight Mini: one mode only, MJPG 3280 x 2464 at 25 fps (``v4l2-ctl --list-formats-ext``
+  in gelsightinc/gsrobotics issue #36); gsrobotics crops 15 % off each border and resizes to
+  320 x 240 (``GelSightMini`` / ``crop_and_resize`` in ``utilities/``).
+* DIGIT: digit-interface streams QVGA 320 x 240 at 60 fps by default (``DigitHandler.STREAMS``)
+  and turns each frame with ``cv2.transpose`` then ``cv2.flip(frame, 0)``.
+
+A grabber thread keeps only the newest frame and the ``time.monotonic()`` instant its grab
+returned. ``read_latest(max_age_s)`` hands it over, or raises:
+
+* DeviceNotConnectedError: not connected, or the camera was lost (its node disappeared, or
+  ``max_read_failures`` grabs failed in a row);
+* DeviceFaultError: the stream is frozen (``frozen_frame_count`` identical output images in a
+  row), or ``max_read_failures`` frames in a row did not decode;
+* DeviceTimeoutError: the newest frame is older than ``max_age_s`` (the stream stalled).
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Protocol, Self
+
+import cv2
+import numpy as np
+
+from drivers.base import TactileFrame
+from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from drivers.tactile.decode import JPEG_DOWNSCALES, FrameProcessor, cropped_size
+from drivers.tactile.device_lookup import find_capture_node
+from drivers.validation import check_choice, check_range
+
+log = logging.getLogger(__name__)
+
+MODELS = ("gelsight_mini", "digit")
+MAX_V4L2_BUFFERS = 10  # MAX_V4L_BUFFERS in OpenCV's cap_v4l.cpp
+_JOIN_TIMEOUT_S = 2.0
+
+
+class Capture(Protocol):
+    """The part of ``cv2.VideoCapture`` the driver uses."""
+
+    def isOpened(self) -> bool: ...
+
+    def set(self, prop_id: int, value: float) -> bool: ...
+
+    def get(self, prop_id: int) -> float: ...
+
+    def getBackendName(self) -> str: ...
+
+    def grab(self) -> bool: ...
+
+    def retrieve(self) -> tuple[bool, np.ndarray | None]: ...
+
+    def release(self) -> None: ...
+
+
+CaptureFactory = Callable[[str], Capture]
+
+
+def open_v4l2(node: str) -> Capture:
+    """The real transport: an OpenCV V4L2 capture on ``node`` (e.g. ``/dev/video2``)."""
+    return cv2.VideoCapture(node, cv2.CAP_V4L2)
+
+
+def _check_int(name: str, value: object, low: int, high: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ValueError(f"key '{name}': expected an integer in [{low}, {high}], got {value!r}")
+
+
+@dataclass(frozen=True)
+class TactileCameraConfig:
+    """Configuration of one tactile camera (see configs/sensors/*_camera.yaml).
+
+    ``by_id_pattern``: fnmatch pattern for the camera's name in ``by_id_dir``; put the serial
+    number in it when several sensors of one model are plugged in.
+    ``width_px`` x ``height_px`` at ``frame_rate_hz``: the stream requested from the camera.
+    ``output_width_px`` x ``output_height_px``: the size of the delivered image (after the
+    DIGIT orientation, which swaps the axes).
+    ``crop_border_fraction``: share of the full-resolution width and height cut off each border.
+    ``jpeg_downscale``: decode MJPG frames at 1/1, 1/2, 1/4 or 1/8 of full size; the crop must
+    still be at least as large as the output.
+    ``buffer_count``: V4L2 driver buffers (1 = lowest latency).
+    ``frozen_frame_count``: this many identical output images in a row is a frozen stream.
+    ``max_read_failures``: this many failed grabs in a row means the camera is lost (this many
+    undecodable frames in a row is a fault).
+    ``connect_timeout_s``: how long ``connect()`` waits for the first frame.
+    """
+
+    model: str
+    by_id_pattern: str
+    width_px: int
+    height_px: int
+    frame_rate_hz: float
+    output_width_px: int
+    output_height_px: int
+    name: str = "tactile_camera"
+    by_id_dir: str = "/dev/v4l/by-id"
+    crop_border_fraction: float = 0.0
+    jpeg_downscale: int = 1
+    buffer_count: int = 1
+    frozen_frame_count: int = 25
+    max_read_failures: int = 5
+    connect_timeout_s: float = 3.0
+
+    def __post_init__(self) -> None:
+        check_choice("model", self.model, MODELS)
+        for key in ("by_id_pattern", "name", "by_id_dir"):
+            value = getattr(self, key)
+            if not isinstance(value, str) or not value:
+                raise ValueError(f"key '{key}': expected a non-empty string, got {value!r}")
+        _check_int("width_px", self.width_px, 16, 8192)
+        _check_int("height_px", self.height_px, 16, 8192)
+        check_range("frame_rate_hz", self.frame_rate_hz, 1, 1000)
+        _check_int("output_width_px", self.output_width_px, 8, 8192)
+        _check_int("output_height_px", self.output_height_px, 8, 8192)
+        check_range("crop_border_fraction", self.crop_border_fraction, 0.0, 0.49)
+        check_choice("jpeg_downscale", self.jpeg_downscale, JPEG_DOWNSCALES)
+        _check_int("buffer_count", self.buffer_count, 1, MAX_V4L2_BUFFERS)
+        _check_int("frozen_frame_count", self.frozen_frame_count, 2, 100_000)
+        _check_int("max_read_failures", self.max_read_failures, 1, 10_000)
+        check_range("connect_timeout_s", self.connect_timeout_s, 0.05, 60.0)
+        crop_w, crop_h = cropped_size(
+            self.width_px, self.height_px, self.crop_border_fraction, self.jpeg_downscale
+        )
+        out_w, out_h = self.output_width_px, self.output_height_px
+        if self.model == "digit":
+            out_w, out_h = out_h, out_w  # resized before the DIGIT turn
+        if crop_w < out_w or crop_h < out_h:
+            raise ValueError(
+                f"key 'jpeg_downscale': decoding {self.width_px}x{self.height_px} at "
+                f"1/{self.jpeg_downscale} leaves {crop_w}x{crop_h} px after the crop, less than "
+                f"the {out_w}x{out_h} output; use a smaller downscale"
+            )
+
+    def frame_processor(self) -> FrameProcessor:
+        return FrameProcessor(
+            output_width_px=self.output_width_px,
+            output_height_px=self.output_height_px,
+            crop_border_fraction=self.crop_border_fraction,
+            jpeg_downscale=self.jpeg_downscale,
+            digit_orientation=self.model == "digit",
+        )
+
+
+def _fourcc_text(value: float) -> str:
+    code = int(value)
+    return "".join(chr((code >> (8 * i)) & 0xFF) for i in range(4))
+
+
+class _Grabber:
+    """Owns the capture once started: grabs, processes, keeps the newest frame, releases."""
+
+    def __init__(
+        self, capture: Capture, node: str, config: TactileCameraConfig, processor: FrameProcessor
+    ) -> None:
+        self._capture = capture
+        self._node = node
+        self._config = config
+        self._processor = processor
+        self._lock = threading.Lock()
+        self._latest: TactileFrame | None = None
+        self._fault: str | None = None
+        self._lost: str | None = None
+        self._stop = threading.Event()
+        self._ready = threading.Event()  # set on the first frame and when the thread ends
+        self._thread = threading.Thread(
+            target=self._run, name=f"{config.name}-grabber", daemon=True
+        )
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def stop(self) -> bool:
+        """Ask the thread to end and wait for it; False if it is still blocked in a grab."""
+        self._stop.set()
+        self._thread.join(_JOIN_TIMEOUT_S)
+        return not self._thread.is_alive()
+
+    def wait_ready(self, timeout_s: float) -> None:
+        self._ready.wait(timeout_s)
+
+    @property
+    def alive(self) -> bool:
+        return self._thread.is_alive()
+
+    def snapshot(self) -> tuple[TactileFrame | None, str | None, str | None]:
+        """(newest frame, fault, loss), each None when there is none."""
+        with self._lock:
+            return self._latest, self._fault, self._lost
+
+    def _run(self) -> None:
+        try:
+            self._loop()
+        except Exception as exc:  # an OpenCV or programming error: report it, never hang
+            log.exception("%s: grabber thread failed", self._config.name)
+            with self._lock:
+                self._lost = f"grabber thread failed: {exc!r}"
+        finally:
+            self._capture.release()
+            self._ready.set()
+
+    def _lose(self, reason: str) -> None:
+        with self._lock:
+            self._lost = reason
+
+    def _loop(self) -> None:
+        limit = self._config.max_read_failures
+        grab_failures = decode_failures = identical = 0
+        previous: np.ndarray | None = None
+        while not self._stop.is_set():
+            if not self._capture.grab():
+                if not os.path.exists(self._node):
+                    self._lose(f"device node {self._node} is gone (unplugged?)")
+                    return
+                grab_failures += 1
+                if grab_failures >= limit:
+                    self._lose(f"{grab_failures} frame grabs in a row failed on {self._node}")
+                    return
+                continue
+            t_s = time.monotonic()
+            grab_failures = 0
+            ok, raw = self._capture.retrieve()
+            try:
+                if not ok or raw is None:
+                    raise ValueError("retrieve() returned no frame")
+                image = self._processor(raw)
+            except ValueError as exc:
+                decode_failures += 1
+                if decode_failures >= limit:
+                    with self._lock:
+                        self._fault = f"{decode_failures} frames in a row unusable: {exc}"
+                continue
+            decode_failures = 0
+            repeated = previous is not None and np.array_equal(image, previous)
+            identical = identical + 1 if repeated else 1
+            previous = image
+            image.flags.writeable = False
+            fault = None
+            if identical >= self._config.frozen_frame_count:
+                fault = (
+                    f"frozen stream: the last {identical} frames are identical "
+                    "(camera firmware hung?); replug the sensor"
+                )
+            with self._lock:
+                self._latest = TactileFrame(t_s=t_s, image=image)
+                self._fault = fault
+            self._ready.set()
+
+
+class TactileCamera:
+    """A GelSight Mini or DIGIT camera (implements ``drivers.base.TactileSensor``).
+
+    ``capture_factory`` opens a capture on a device node; ``from_config`` uses ``open_v4l2``,
+    tests pass captures on video files. Images are uint8 H x W x 3 BGR, read-only; their x
+    axis (columns) and y axis (rows) are the sensor frame S's in-plane axes.
+    """
+
+    def __init__(self, config: TactileCameraConfig, capture_factory: CaptureFactory) -> None:
+        self.config = config
+        self.name = config.name
+        self._capture_factory = capture_factory
+        self._grabber: _Grabber | None = None
+
+    @classmethod
+    def from_config(cls, config: TactileCameraConfig) -> TactileCamera:
+        return cls(config, open_v4l2)
+
+    @property
+    def is_connected(self) -> bool:
+        grabber = self._grabber
+        return grabber is not None and grabber.alive and grabber.snapshot()[2] is None
+
+    def connect(self) -> None:
+        """Find, open and configure the camera, start grabbing, wait for the first frame.
+
+        Raises DeviceNotConnectedError (no such device, cannot open it) or DeviceTimeoutError
+        (opened, but no frame within ``connect_timeout_s``).
+        """
+        if self.is_connected:
+            return
+        self.disconnect()  # clean up after a lost camera
+        cfg = self.config
+        node = find_capture_node(self.name, cfg.by_id_pattern, cfg.by_id_dir)
+        capture = self._capture_factory(node)
+        if not capture.isOpened():
+            capture.release()
+            raise DeviceNotConnectedError(
+                self.name,
+                f"cannot open {node}: check that you are in the 'video' group and that no "
+                "other program uses the camera",
+            )
+        try:
+            self._configure(capture, node)
+        except BaseException:
+            capture.release()
+            raise
+        grabber = _Grabber(capture, node, cfg, cfg.frame_processor())
+        self._grabber = grabber
+        grabber.start()
+        grabber.wait_ready(cfg.connect_timeout_s)
+        frame, fault, lost = grabber.snapshot()
+        if frame is None:
+            self.disconnect()
+            if lost is not None:
+                raise DeviceNotConnectedError(self.name, f"camera lost while starting: {lost}")
+            detail = f" ({fault})" if fault else ""
+            raise DeviceTimeoutError(
+                self.name,
+                f"opened {node} but got no usable frame within {cfg.connect_timeout_s} s{detail}; "
+                "check the USB bandwidth (one camera per USB 2 controller) and the camera mode",
+            )
+
+    def _configure(self, capture: Capture, node: str) -> None:
+        cfg = self.config
+        capture.set(cv2.CAP_PROP_FOURCC, cv2.VideoWriter.fourcc(*"MJPG"))
+        capture.set(cv2.CAP_PROP_FRAME_WIDTH, cfg.width_px)
+        capture.set(cv2.CAP_PROP_FRAME_HEIGHT, cfg.height_px)
+        capture.set(cv2.CAP_PROP_FPS, cfg.frame_rate_hz)
+        capture.set(cv2.CAP_PROP_BUFFERSIZE, cfg.buffer_count)
+        backend = capture.getBackendName()
+        fourcc = _fourcc_text(capture.get(cv2.CAP_PROP_FOURCC))
+        size = (
+            int(capture.get(cv2.CAP_PROP_FRAME_WIDTH)),
+            int(capture.get(cv2.CAP_PROP_FRAME_HEIGHT)),
+        )
+        # Only V4L2 hands over the compressed buffer with CONVERT_RGB off; FFmpeg would give
+        # the luma plane instead.
+        raw = backend == "V4L2" and fourcc == "MJPG" and capture.set(cv2.CAP_PROP_CONVERT_RGB, 0)
+        log.info(
+            "%s: opened %s with %s, %s %dx%d, %s",
+            self.name,
+            node,
+            backend,
+            fourcc,
+            size[0],
+            size[1],
+            f"decoding MJPG at 1/{cfg.jpeg_downscale}" if raw else "decoded by OpenCV",
+        )
+        if backend == "V4L2" and size != (cfg.width_px, cfg.height_px):
+            log.warning(
+                "%s: asked for %dx%d, the camera streams %dx%d",
+                self.name,
+                cfg.width_px,
+                cfg.height_px,
+                size[0],
+                size[1],
+            )
+
+    def disconnect(self) -> None:
+        """Stop grabbing and release the camera; never raises, safe to call repeatedly."""
+        grabber, self._grabber = self._grabber, None
+        if grabber is not None and not grabber.stop():
+            log.warning(
+                "%s: grabber thread still blocked in a grab after %.1f s; it releases the "
+                "camera when the grab returns",
+                self.name,
+                _JOIN_TIMEOUT_S,
+            )
+
+    def read_latest(self, max_age_s: float) -> TactileFrame:
+        """The newest frame, if it was grabbed at most ``max_age_s`` seconds ago."""
+        if not max_age_s > 0:
+            raise ValueError(f"max_age_s must be > 0, got {max_age_s!r}")
+        grabber = self._grabber
+        if grabber is None:
+            raise DeviceNotConnectedError(self.name, "not connected: call connect() first")
+        frame, fault, lost = grabber.snapshot()
+        if lost is not None:
+            raise DeviceNotConnectedError(
+                self.name, f"camera lost: {lost}; check the cable, then connect() again"
+            )
+        if fault is not None:
+            raise DeviceFaultError(self.name, fault)
+        if frame is None:
+            raise DeviceTimeoutError(self.name, "no frame received yet")
+        age_s = time.monotonic() - frame.t_s
+        if age_s > max_age_s:
+            raise DeviceTimeoutError(
+                self.name,
+                f"newest frame is {age_s * 1e3:.0f} ms old (max {max_age_s * 1e3:.0f} ms): "
+                "the stream stalled",
+            )
+        return frame
+
+    def __enter__(self) -> Self:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.disconnect()
