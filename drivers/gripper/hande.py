@@ -174,6 +174,7 @@ class HandE:
             return
         if not (raw.gACT == 1 and raw.gSTA == regs.GSTA_ACTIVATING):
             # A rising edge of rACT activates and clears faults: clear first, then set.
+            self._requested_position = None  # the reset cancels any go-to command
             self._write_command(act=False, go=False, position=0, speed=0, force=0)
             self._write_command(act=True, go=False, position=0, speed=0, force=0)
         deadline = time.monotonic() + self.config.activation_timeout_s
@@ -215,13 +216,13 @@ class HandE:
         raw = self._read_raw()
         t_s = time.monotonic()
         cfg = self.config
-        # The manual says to ignore gOBJ when gGTO == 0 (no go-to in progress): report
-        # AT_TARGET then, i.e. stopped with no object detected. Until the position request
-        # echo gPR matches the last command, gOBJ still describes the previous one.
-        if raw.gGTO == 0:
-            obj = GripperObject.AT_TARGET
-        elif self._requested_position not in (None, raw.gPR):
+        # Until the position request echo gPR matches the last go-to command, the status
+        # still describes the previous one. The manual says to ignore gOBJ when gGTO == 0
+        # (no go-to in progress): report AT_TARGET then, i.e. stopped, no object detected.
+        if self._requested_position not in (None, raw.gPR):
             obj = GripperObject.MOVING
+        elif raw.gGTO == 0:
+            obj = GripperObject.AT_TARGET
         else:
             obj = GripperObject(raw.gOBJ)
         return GripperStatus(

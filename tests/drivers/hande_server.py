@@ -48,6 +48,7 @@ class SimulatedHandE:
         activation_polls: int = 3,
         object_at: int | None = None,
         activation_fault: bool = False,
+        status_lag_polls: int = 0,
     ) -> None:
         self.slave_id = slave_id
         self.open_limit = open_limit
@@ -56,6 +57,9 @@ class SimulatedHandE:
         self.activation_polls = activation_polls
         self.object_at = object_at  # an object between the fingers stops closing here
         self.activation_fault = activation_fault
+        # A real gripper may report the previous command's status for a moment after a new
+        # command (hence the manual's position request echo): replay it this many polls.
+        self.status_lag_polls = status_lag_polls
         self.silent = False  # True: the gripper stops answering
         self.command_writes: list[list[int]] = []
         self.status_reads = 0
@@ -65,6 +69,8 @@ class SimulatedHandE:
         self._act = self._gto = self._sta = self._obj = self._flt = 0
         self._position = float(open_limit)
         self._polls_left = 0
+        self._stale: list[int] = []
+        self._stale_polls = 0
         self._last_s = time.monotonic()
 
     # -- state set-up for tests ----------------------------------------------------------
@@ -101,6 +107,7 @@ class SimulatedHandE:
     def write_command(self, registers: list[int]) -> None:
         with self._lock:
             self._advance()
+            self._stale, self._stale_polls = self._pack_status(), self.status_lag_polls
             self.command_writes.append(list(registers))
             action = registers[0] >> 8
             act, gto = action & 0x01, (action >> 3) & 0x01
@@ -130,11 +137,18 @@ class SimulatedHandE:
                         self._sta, self._flt = 0, 0x0D
                     else:
                         self._sta = 3
-            status = (self._obj << 6) | (self._sta << 4) | (self._gto << 3) | self._act
-            requested = self._command[1] & 0xFF
-            current = 0x10 if self._gto and self._obj == 0 else 0
-            position = round(self._position)
-            return [status << 8, (self._flt << 8) | requested, (position << 8) | current]
+            if self._stale_polls > 0:
+                self._stale_polls -= 1
+                return list(self._stale)
+            return self._pack_status()
+
+    def _pack_status(self) -> list[int]:
+        """The three status registers for the current state (lock held)."""
+        status = (self._obj << 6) | (self._sta << 4) | (self._gto << 3) | self._act
+        requested = self._command[1] & 0xFF
+        current = 0x10 if self._gto and self._obj == 0 else 0
+        position = round(self._position)
+        return [status << 8, (self._flt << 8) | requested, (position << 8) | current]
 
     def _advance(self) -> None:
         """Move the fingers for the time elapsed since the last access (lock held)."""

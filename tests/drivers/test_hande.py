@@ -136,6 +136,20 @@ def test_move_to_width_and_status_decoding(server):
     assert not status.moving and not status.holding
 
 
+def test_status_is_moving_until_the_position_request_is_echoed():
+    sim = SimulatedHandE(status_lag_polls=2)
+    with HandEServer(sim) as srv, HandE.from_config(config_for(srv.port)) as gripper:
+        gripper.activate()
+        gripper.move(0.040, speed_m_s=0.150, force_n=50.0)
+        first = gripper.wait_until_stopped(timeout_s=3.0)  # not fooled by the stale status
+        gripper.move(0.010, speed_m_s=0.150, force_n=50.0)
+        stale = gripper.read_status()  # the device still reports the previous "at target"
+        second = gripper.wait_until_stopped(timeout_s=3.0)
+    assert first.width_m == pytest.approx(0.040, abs=ONE_COUNT_M)
+    assert stale.moving and stale.object is GripperObject.MOVING
+    assert second.width_m == pytest.approx(0.010, abs=ONE_COUNT_M)
+
+
 def test_object_detection_while_closing():
     sim = SimulatedHandE()
     sim.object_at = sim.count_for_width(0.030)
@@ -150,6 +164,8 @@ def test_object_detection_while_closing():
 def test_fault_is_decoded_and_cleared_by_reactivation(server):
     with HandE.from_config(config_for(server.port)) as gripper:
         gripper.activate()
+        gripper.move(0.045, speed_m_s=0.150, force_n=50.0)
+        gripper.wait_until_stopped(timeout_s=3.0)
         server.gripper.inject_fault(0x0E)
         faulted = gripper.read_status()
         gripper.activate()  # a major fault drops gSTA to 0: activate() resets and re-activates
@@ -157,6 +173,7 @@ def test_fault_is_decoded_and_cleared_by_reactivation(server):
     assert faulted.fault_code == 0x0E and "overcurrent" in faulted.fault_message
     assert not faulted.activated
     assert recovered.activated and recovered.fault_code == 0 and recovered.fault_message == ""
+    assert not recovered.moving  # the reset cancelled the earlier go-to
     assert server.gripper.activations == 2
 
 
