@@ -1,0 +1,536 @@
+"""UFACTORY xArm6 driver (implements ``drivers.base.Arm``) over xarm-python-sdk's ``XArmAPI``.
+
+Units. Our side is SI in the base frame B (m, rad, m/s, rad/s). The SDK speaks mm and,
+for angles, degrees or radians depending on ``is_radian``. ``from_config`` builds
+``XArmAPI(ip, is_radian=True, do_not_open=True)`` and every call passes ``is_radian=True``
+explicitly, so angles cross unchanged (no degree round-off) and the only conversion is
+m <-> mm, done here and nowhere else.
+
+Modes. ``move_to`` uses mode 0 (position, ``set_position``), ``servo_pose`` mode 1 (servo
+Cartesian, ``set_servo_cartesian``), ``move_velocity`` mode 5 (Cartesian velocity,
+``vc_set_cartesian_velocity`` always with a positive ``duration``, the controller's
+watchdog). Entering a mode runs ``motion_enable(True)``, ``set_mode(m)``, ``set_state(0)``,
+the order the SDK documents (``XArmAPI.clean_error``/``set_mode`` docstrings).
+
+Safety envelope. Every target, step and twist passes through ``drivers.arm.envelope``
+before it reaches the SDK (see that module for the policy). Servo streams start from the
+measured pose (projected into the envelope; refused if the arm is more than 1 mm /
+0.01 rad outside); the step per command is bounded by ``max_step_m``/``max_step_rad`` and
+by the maximum speeds times the time since the previous command.
+
+Faults. Every ``(code, value)`` or ``code`` the SDK returns is checked: -1 raises
+DeviceNotConnectedError, reply/motion timeouts (3, 100) DeviceTimeoutError, anything else
+DeviceFaultError; each carries the SDK code and its documented meaning. The SDK's
+error/warning callback (and any failed motion command) latches a fault and stops the arm
+(``set_state(4)``); until ``clear_fault()`` every motion command raises DeviceFaultError.
+Any controller warning counts as a fault: the controller reports rejected commands as
+warnings (e.g. W14, no solution), so the arm is not where it was told to be.
+``read_state`` still works while faulted and reports the controller's codes.
+"""
+
+from __future__ import annotations
+
+import ipaddress
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Any, Self
+
+import numpy as np
+
+from drivers.arm import xarm_codes
+from drivers.arm.envelope import (
+    SafetyEnvelope,
+    clamp_pose,
+    clamp_twist,
+    rotation_from_rpy,
+    servo_target,
+)
+from drivers.base import ArmState, Pose, Twist
+from drivers.errors import (
+    DeviceError,
+    DeviceFaultError,
+    DeviceNotConnectedError,
+    DeviceTimeoutError,
+)
+from drivers.validation import check_range
+
+_LOG = logging.getLogger(__name__)
+
+MM_PER_M = 1000.0
+MODE_POSITION = 0
+MODE_SERVO = 1
+MODE_VELOCITY = 5
+STATE_READY = 0  # set_state(0): motion state
+STATE_STOP = 4  # set_state(4): stop; the controller needs set_state(0) to move again
+MIN_VELOCITY_FIRMWARE = (1, 8, 0)  # vc_set_cartesian_velocity ignores duration before this
+_ENTRY_TOLERANCE_M = 1e-3
+_ENTRY_TOLERANCE_RAD = 1e-2
+
+
+@dataclass(frozen=True)
+class TcpConfig:
+    """The tool on the flange (compliant wrist + gripper + plug).
+
+    ``offset_*``: pose of the TCP (frame T) in the flange frame, xyz in m, rpy in rad.
+    ``load_mass_kg`` and ``load_com_*_m``: mass of everything on the flange and its centre
+    of mass in the flange frame, m.
+    """
+
+    offset_x_m: float
+    offset_y_m: float
+    offset_z_m: float
+    offset_roll_rad: float
+    offset_pitch_rad: float
+    offset_yaw_rad: float
+    load_mass_kg: float
+    load_com_x_m: float
+    load_com_y_m: float
+    load_com_z_m: float
+
+    def __post_init__(self) -> None:
+        for axis in "xyz":
+            check_range(f"offset_{axis}_m", getattr(self, f"offset_{axis}_m"), -0.5, 0.5)
+            check_range(f"load_com_{axis}_m", getattr(self, f"load_com_{axis}_m"), -0.5, 0.5)
+        for angle in ("roll", "pitch", "yaw"):
+            check_range(
+                f"offset_{angle}_rad", getattr(self, f"offset_{angle}_rad"), -math.pi, math.pi
+            )
+        check_range("load_mass_kg", self.load_mass_kg, 0.0, 5.0)  # xArm6 payload: 5 kg
+
+
+@dataclass(frozen=True)
+class XArm6Config:
+    """Configuration of the xArm6 driver (``configs/robot/xarm6.yaml``).
+
+    ``ip``: the control box's IPv4 address. ``servo_rate_hz``: nominal servo streaming rate
+    (50-200 Hz), the step budget of the first command of a stream. ``velocity_timeout_s``:
+    the longest a velocity command may be held (watchdog ceiling). ``move_timeout_s``: the
+    longest a waited position move may take.
+    """
+
+    ip: str
+    servo_rate_hz: float
+    velocity_timeout_s: float
+    move_timeout_s: float
+    tcp: TcpConfig
+    envelope: SafetyEnvelope
+    name: str = "xarm6"
+
+    def __post_init__(self) -> None:
+        try:
+            ipaddress.IPv4Address(self.ip)
+        except (ipaddress.AddressValueError, TypeError):
+            raise ValueError(
+                f"key 'ip': expected an IPv4 address like '192.168.1.185', got {self.ip!r}"
+            ) from None
+        check_range("servo_rate_hz", self.servo_rate_hz, 50, 200)
+        check_range("velocity_timeout_s", self.velocity_timeout_s, 0.01, 1.0)
+        check_range("move_timeout_s", self.move_timeout_s, 0.1, 300.0)
+        if not isinstance(self.tcp, TcpConfig):
+            raise ValueError(f"key 'tcp': expected a TcpConfig, got {self.tcp!r}")
+        if not isinstance(self.envelope, SafetyEnvelope):
+            raise ValueError(f"key 'envelope': expected a SafetyEnvelope, got {self.envelope!r}")
+        if not isinstance(self.name, str) or not self.name:
+            raise ValueError(f"key 'name': expected a non-empty string, got {self.name!r}")
+
+
+class XArm6:
+    """An xArm6 commanded at its TCP in B. ``api`` is an ``xarm.wrapper.XArmAPI`` (or a
+    faithful fake) not yet connected; ``clock`` gives seconds (monotonic) for timestamps
+    and the servo step budget."""
+
+    def __init__(
+        self, config: XArm6Config, api: Any, clock: Callable[[], float] = time.monotonic
+    ) -> None:
+        self.config = config
+        self.name = config.name
+        self._api = api
+        self._clock = clock
+        self._fault_lock = threading.Lock()
+        self._fault: DeviceFaultError | None = None
+        self._mode: int | None = None  # None: not armed (after connect failure or a stop)
+        self._servo_reference: Pose | None = None
+        self._servo_time_s: float | None = None
+
+    @classmethod
+    def from_config(cls, config: XArm6Config) -> XArm6:
+        """The driver over a real ``XArmAPI`` for ``config.ip`` (not connected yet)."""
+        from xarm.wrapper import XArmAPI
+
+        return cls(config, XArmAPI(config.ip, is_radian=True, do_not_open=True))
+
+    # ----------------------------------------------------------------- lifecycle
+
+    @property
+    def is_connected(self) -> bool:
+        return bool(self._api.connected)
+
+    @property
+    def fault(self) -> DeviceFaultError | None:
+        """The latched fault, or None. Motion commands raise while one is latched."""
+        with self._fault_lock:
+            return self._fault
+
+    def connect(self) -> None:
+        """Open the connection, read the controller's codes, arm mode 0 and set the TCP.
+
+        A controller error or warning found here is latched (not raised): the arm stays
+        unarmed and the first motion command says to call ``clear_fault()``.
+        """
+        if self.is_connected:
+            return
+        self._api.register_error_warn_changed_callback(self._on_error_warn)
+        try:
+            self._api.connect()
+        except Exception as exc:  # the SDK raises a bare Exception ('connect socket failed')
+            self._api.release_error_warn_changed_callback(self._on_error_warn)
+            self._api.disconnect()  # closes the socket the SDK opened and left behind
+            raise DeviceNotConnectedError(
+                self.name,
+                f"cannot connect to the controller at {self.config.ip} ({exc}); check that the "
+                "control box is on, the Ethernet link is up and key 'ip' is right",
+            ) from exc
+        try:
+            if not self.is_connected:
+                raise DeviceNotConnectedError(
+                    self.name, f"no connection to the controller at {self.config.ip}"
+                )
+            error, warning = self._read_controller_codes()
+            if error or warning:
+                self._latch(self._controller_fault(error, warning))
+            if self.fault is None:
+                self._arm(MODE_POSITION)
+                self._configure_tcp()
+        except BaseException:
+            self.disconnect()
+            raise
+
+    def disconnect(self) -> None:
+        """Stop any motion (best effort), release the SDK callback and close. Idempotent."""
+        if self.is_connected:
+            code = self._api.set_state(STATE_STOP)
+            if code != 0:
+                _LOG.warning(
+                    "%s: stop before disconnect: %s", self.name, xarm_codes.describe_api_code(code)
+                )
+        self._api.release_error_warn_changed_callback(self._on_error_warn)
+        self._api.disconnect()
+        self._mode = None
+
+    def __enter__(self) -> Self:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.disconnect()
+
+    # ----------------------------------------------------------------- reading
+
+    def read_state(self) -> ArmState:
+        """TCP pose in B (m, rad), joint angles (rad), mode, state and the controller's
+        error/warning codes. Works while a fault is latched."""
+        self._require_connected()
+        tcp = self._read_pose()
+        t_s = self._clock()
+        code, joints = self._api.get_servo_angle(is_radian=True)
+        self._check_reply(code, joints, "get_servo_angle(is_radian=True)")
+        return ArmState(
+            t_s=t_s,
+            tcp=tcp,
+            joints_rad=tuple(float(q) for q in joints[:6]),
+            mode=int(self._api.mode),
+            state=int(self._api.state),
+            error_code=int(self._api.error_code),
+            warning_code=int(self._api.warn_code),
+        )
+
+    # ----------------------------------------------------------------- motion
+
+    def move_to(self, target: Pose, speed_m_s: float, wait: bool = True) -> None:
+        """Linear move (mode 0) to ``target`` clamped into the envelope, at ``speed_m_s``
+        limited to the envelope's maximum; waits up to ``move_timeout_s`` when ``wait``."""
+        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        if not math.isfinite(speed_m_s) or speed_m_s <= 0:
+            raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
+        self._prepare_motion()
+        goal = clamp_pose(target, self.config.envelope)
+        speed = min(speed_m_s, self.config.envelope.max_speed_m_s)
+        self._enter_mode(MODE_POSITION)
+        x, y, z, roll, pitch, yaw = _sdk_pose(goal)
+        code = self._api.set_position(
+            x=x, y=y, z=z, roll=roll, pitch=pitch, yaw=yaw,
+            speed=speed * MM_PER_M, is_radian=True, wait=wait,
+            timeout=self.config.move_timeout_s if wait else None,
+        )  # fmt: skip
+        self._check_motion(code, "set_position")
+
+    def servo_pose(self, target: Pose) -> None:
+        """Stream one servo target (mode 1), clamped into the envelope and stepped from the
+        previous command by at most the step bounds (and speed x elapsed time)."""
+        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        self._prepare_motion()
+        self._enter_mode(MODE_SERVO)
+        env = self.config.envelope
+        now = self._clock()
+        if self._servo_time_s is None:
+            elapsed = 1.0 / self.config.servo_rate_hz
+        else:
+            elapsed = max(0.0, now - self._servo_time_s)
+        command = servo_target(
+            self._servo_reference,
+            target,
+            env,
+            max_step_m=min(env.max_step_m, env.max_speed_m_s * elapsed),
+            max_step_rad=min(env.max_step_rad, env.max_angular_speed_rad_s * elapsed),
+        )
+        code = self._api.set_servo_cartesian(
+            _sdk_pose(command), is_radian=True, is_tool_coord=False
+        )
+        self._check_motion(code, "set_servo_cartesian")
+        self._servo_reference = command
+        self._servo_time_s = now
+
+    def move_velocity(self, twist: Twist, duration_s: float) -> None:
+        """Cartesian velocity (mode 5, in B) held for at most ``duration_s`` (capped at
+        ``velocity_timeout_s``), after which the controller stops by itself."""
+        _require_finite("twist", (*twist.linear_m_s, *twist.angular_rad_s))
+        if not math.isfinite(duration_s) or duration_s <= 0:
+            raise ValueError(
+                f"duration_s: expected a positive number (the SDK reads 0 as 'never stop'), "
+                f"got {duration_s!r}"
+            )
+        self._prepare_motion()
+        duration = min(duration_s, self.config.velocity_timeout_s)
+        self._enter_mode(MODE_VELOCITY)
+        command = clamp_twist(self._read_pose(), twist, duration, self.config.envelope)
+        code = self._api.vc_set_cartesian_velocity(
+            _sdk_twist(command), is_radian=True, is_tool_coord=False, duration=duration
+        )
+        self._check_motion(code, "vc_set_cartesian_velocity")
+
+    def stop(self) -> None:
+        """Controlled stop: zero velocity in mode 5; otherwise ``set_state(4)`` (which also
+        drops queued moves) and re-arm the same mode so the arm holds its position. While a
+        fault is latched it only stops (``set_state(4)``) and stays unarmed."""
+        self._require_connected()
+        if self.fault is not None or self._mode is None:
+            self._safe_stop()
+        elif self._mode == MODE_VELOCITY:
+            code = self._api.vc_set_cartesian_velocity(
+                [0.0] * 6, is_radian=True, is_tool_coord=False,
+                duration=self.config.velocity_timeout_s,
+            )  # fmt: skip
+            self._check_motion(code, "vc_set_cartesian_velocity(zero)")
+        else:
+            mode = self._mode
+            self._check(self._api.set_state(STATE_STOP), "set_state(4)")
+            self._arm(mode)
+
+    def emergency_stop(self) -> None:
+        """The SDK's emergency stop (state 4, queue flushed); latches a fault so motion
+        needs ``clear_fault()``. Raises DeviceFaultError if the controller does not
+        confirm state 4."""
+        self._require_connected()
+        self._api.emergency_stop()  # returns None (xarm/x3/xarm.py: XArm.emergency_stop)
+        self._mode = None
+        self._latch(DeviceFaultError(self.name, "emergency stop requested; call clear_fault()"))
+        state = self._api.state
+        if state != STATE_STOP:
+            raise DeviceFaultError(
+                self.name, f"emergency stop not confirmed: controller state {state}, expected 4"
+            )
+
+    def clear_fault(self) -> None:
+        """Documented recovery: ``clean_error``, ``clean_warn``, check the codes are gone,
+        then ``motion_enable(True)``, ``set_mode(0)``, ``set_state(0)`` and the TCP again."""
+        self._require_connected()
+        # clean_error/clean_warn return the raw reply flag (not passed through the SDK's
+        # _check_code), so 1/2 only say an error/warning was present; the codes are read next.
+        flags = (0, xarm_codes.HAS_ERROR, xarm_codes.HAS_WARNING)
+        code = self._api.clean_error()
+        if code not in flags:
+            self._check(code, "clean_error")
+        code = self._api.clean_warn()
+        if code not in flags:
+            self._check(code, "clean_warn")
+        error, warning = self._read_controller_codes()
+        if error or warning:
+            fault = self._controller_fault(error, warning)
+            raise DeviceFaultError(
+                self.name, f"fault persists after clearing: {fault.message}", fault.code
+            )
+        with self._fault_lock:
+            self._fault = None
+        self._arm(MODE_POSITION)
+        self._configure_tcp()
+
+    # ----------------------------------------------------------------- internals
+
+    def _arm(self, mode: int) -> None:
+        self._mode = None
+        self._servo_reference = None
+        self._servo_time_s = None
+        self._check(self._api.motion_enable(enable=True), "motion_enable(True)")
+        self._check(self._api.set_mode(mode), f"set_mode({mode})")
+        self._check(self._api.set_state(STATE_READY), "set_state(0)")
+        self._mode = mode
+
+    def _enter_mode(self, mode: int) -> None:
+        if mode == MODE_VELOCITY and tuple(self._api.version_number) < MIN_VELOCITY_FIRMWARE:
+            raise DeviceFaultError(
+                self.name,
+                f"firmware {self._api.version_number} ignores the velocity watchdog duration "
+                "(needs >= 1.8.0); refusing velocity mode",
+            )
+        if self._mode != mode:
+            self._arm(mode)
+        if mode == MODE_SERVO and self._servo_reference is None:
+            measured = self._read_pose()
+            start = clamp_pose(measured, self.config.envelope)
+            offset_m = float(np.linalg.norm(np.subtract(measured.xyz_m, start.xyz_m)))
+            turn = rotation_from_rpy(start.rpy_rad) * rotation_from_rpy(measured.rpy_rad).inv()
+            if offset_m > _ENTRY_TOLERANCE_M or turn.magnitude() > _ENTRY_TOLERANCE_RAD:
+                raise DeviceFaultError(
+                    self.name,
+                    f"TCP at {measured} is outside the safety envelope; bring it inside with "
+                    "move_to() before streaming servo targets",
+                )
+            self._servo_reference = start
+
+    def _configure_tcp(self) -> None:
+        tcp = self.config.tcp
+        offset = [
+            tcp.offset_x_m * MM_PER_M, tcp.offset_y_m * MM_PER_M, tcp.offset_z_m * MM_PER_M,
+            tcp.offset_roll_rad, tcp.offset_pitch_rad, tcp.offset_yaw_rad,
+        ]  # fmt: skip
+        self._check(self._api.set_tcp_offset(offset, is_radian=True, wait=True), "set_tcp_offset")
+        com_mm = [
+            tcp.load_com_x_m * MM_PER_M,
+            tcp.load_com_y_m * MM_PER_M,
+            tcp.load_com_z_m * MM_PER_M,
+        ]
+        self._check(self._api.set_tcp_load(tcp.load_mass_kg, com_mm, wait=True), "set_tcp_load")
+
+    def _read_pose(self) -> Pose:
+        code, pose = self._api.get_position(is_radian=True)
+        self._check_reply(code, pose, "get_position(is_radian=True)")
+        return _pose_from_sdk(pose)
+
+    def _read_controller_codes(self) -> tuple[int, int]:
+        code, codes = self._api.get_err_warn_code()
+        self._check(code, "get_err_warn_code")
+        error, warning = codes
+        return int(error), int(warning)
+
+    def _require_connected(self) -> None:
+        if not self.is_connected:
+            raise DeviceNotConnectedError(self.name, "not connected; call connect() first")
+
+    def _prepare_motion(self) -> None:
+        self._require_connected()
+        fault = self.fault
+        if fault is not None:
+            raise DeviceFaultError(
+                self.name, f"fault latched, call clear_fault(): {fault.message}", fault.code
+            )
+
+    def _check(self, code: int, what: str) -> None:
+        if code != 0:
+            raise self._error_for_code(code, what)
+
+    def _check_reply(self, code: int, value: object, what: str) -> None:
+        """A getter's ``(code, value)``: the value is a list only when the code is 0 (when
+        not connected the SDK returns ``(-1, 'xArm is not connect')``)."""
+        self._check(code, what)
+        if not isinstance(value, Sequence) or isinstance(value, str) or len(value) < 6:
+            raise DeviceFaultError(
+                self.name, f"{what} returned {value!r}, expected 6 or more numbers"
+            )
+
+    def _check_motion(self, code: int, what: str) -> None:
+        """A motion command's code: on failure stop the arm, latch faults, and raise."""
+        if code == 0:
+            return
+        error = self._error_for_code(code, what)
+        if isinstance(error, DeviceFaultError):
+            self._latch(error)
+        self._safe_stop()
+        raise error
+
+    def _error_for_code(self, code: int, what: str) -> DeviceError:
+        text = f"{what} failed, {xarm_codes.describe_api_code(code)}"
+        if code == xarm_codes.NOT_CONNECTED:
+            return DeviceNotConnectedError(
+                self.name, f"{text}; check the Ethernet link to {self.config.ip}", code
+            )
+        if code in (xarm_codes.REPLY_TIMEOUT, xarm_codes.WAIT_FINISH_TIMEOUT):
+            return DeviceTimeoutError(self.name, text, code)
+        if code in (xarm_codes.HAS_ERROR, xarm_codes.HAS_WARNING):
+            error, warning = int(self._api.error_code), int(self._api.warn_code)
+            if error or warning:
+                text = f"{text}; {self._controller_fault(error, warning).message}"
+        return DeviceFaultError(self.name, text, code)
+
+    def _controller_fault(self, error: int, warning: int) -> DeviceFaultError:
+        parts = [xarm_codes.describe_controller_error(error)] if error else []
+        if warning:
+            parts.append(xarm_codes.describe_controller_warning(warning))
+        parts.append("the arm was stopped; remove the cause, then call clear_fault()")
+        return DeviceFaultError(self.name, "; ".join(parts), error or warning)
+
+    def _on_error_warn(self, item: dict[str, int]) -> None:
+        """The SDK's error/warning-changed callback (runs on the SDK's report thread)."""
+        error, warning = int(item.get("error_code", 0)), int(item.get("warn_code", 0))
+        if error or warning:
+            self._latch(self._controller_fault(error, warning))
+            self._safe_stop()
+
+    def _latch(self, fault: DeviceFaultError) -> None:
+        with self._fault_lock:
+            if self._fault is None:  # keep the first fault: the root cause
+                self._fault = fault
+
+    def _safe_stop(self) -> None:
+        """Best effort, never raises: stop the arm (state 4); it stays unarmed."""
+        self._mode = None
+        code = self._api.set_state(STATE_STOP)
+        if code != 0:
+            _LOG.warning("%s: safe stop failed: %s", self.name, xarm_codes.describe_api_code(code))
+
+
+def _require_finite(name: str, values: Sequence[float]) -> None:
+    try:
+        finite = all(math.isfinite(float(v)) for v in values)
+    except (TypeError, ValueError):
+        finite = False
+    if not finite:
+        raise ValueError(f"{name}: expected finite numbers, got {tuple(values)!r}")
+
+
+def _sdk_pose(pose: Pose) -> list[float]:
+    """Pose (m, rad) -> the SDK's [x, y, z (mm), roll, pitch, yaw (rad)]."""
+    return [*(float(v) * MM_PER_M for v in pose.xyz_m), *(float(a) for a in pose.rpy_rad)]
+
+
+def _pose_from_sdk(values: Sequence[float]) -> Pose:
+    """The SDK's [x, y, z (mm), roll, pitch, yaw (rad)] -> Pose (m, rad)."""
+    x, y, z, roll, pitch, yaw = (float(v) for v in values[:6])
+    return Pose((x / MM_PER_M, y / MM_PER_M, z / MM_PER_M), (roll, pitch, yaw))
+
+
+def _sdk_twist(twist: Twist) -> list[float]:
+    """Twist (m/s, rad/s) -> the SDK's [vx, vy, vz (mm/s), wx, wy, wz (rad/s)]."""
+    return [
+        *(float(v) * MM_PER_M for v in twist.linear_m_s),
+        *(float(w) for w in twist.angular_rad_s),
+    ]
