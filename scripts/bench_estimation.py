@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import os
 import platform
 import subprocess
 import sys
@@ -38,7 +39,9 @@ FAMILIES = {"smooth": (40.0, 120.0), "contact": (15.0, 40.0)}
 SHAPE_HW = (240, 320)
 
 
-def bump_field(rng: np.random.Generator, amplitude: float, widths: tuple[float, float]) -> np.ndarray:
+def bump_field(
+    rng: np.random.Generator, amplitude: float, widths: tuple[float, float]
+) -> np.ndarray:
     """A forward field (H, W, 2) px: four Gaussian bumps of random direction and the given
     width range, scaled to the peak ``amplitude``."""
     height, width = SHAPE_HW
@@ -77,26 +80,48 @@ def configurations(quick: bool) -> list[tuple[str, EstimatorConfig]]:
     paper = estimator_config("paper")
     fl = default.flow
     fb = paper.flow.farneback
-    plain_dis = replace(fl.dis, finest_scale=None, patch_size=None, patch_stride=None,
-                        gradient_descent_iterations=None, variational_refinement_iterations=None)
+    plain_dis = replace(
+        fl.dis,
+        finest_scale=None,
+        patch_size=None,
+        patch_stride=None,
+        gradient_descent_iterations=None,
+        variational_refinement_iterations=None,
+    )
     configs = [
         ("**paper** (Farneback per-channel w32, 12x9)", paper),
         ("**default** (DIS tuned, gray, 16x12)", default),
+        ("fast (default without spatial propagation)", estimator_config("fast")),
     ]
     if quick:
         return configs
-    dis = [(f"DIS {p} gray, scale {s}",
-            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))))
-           for p in ("ultrafast", "fast", "medium") for s in (1.0, 0.5)]
+    dis = [
+        (
+            f"DIS {p} gray, scale {s}",
+            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
+        )
+        for p in ("ultrafast", "fast", "medium")
+        for s in (1.0, 0.5)
+    ]
     return configs + [
         ("Farneback w32 gray, 12x9", replace(paper, flow=replace(paper.flow, color="gray"))),
-        ("Farneback w12 gray, scale 0.5, 1 level",
-         replace(default, flow=replace(paper.flow, color="gray", scale=0.5,
-                                       farneback=replace(fb, winsize=12, levels=1, iterations=2,
-                                                         poly_sigma=1.1)))),
+        (
+            "Farneback w12 gray, scale 0.5, 1 level",
+            replace(
+                default,
+                flow=replace(
+                    paper.flow,
+                    color="gray",
+                    scale=0.5,
+                    farneback=replace(fb, winsize=12, levels=1, iterations=2, poly_sigma=1.1),
+                ),
+            ),
+        ),
         *dis,
-        ("DIS ultrafast per-channel",
-         replace(default, flow=replace(fl, color="per_channel", dis=plain_dis))),
+        (
+            "DIS ultrafast per-channel",
+            replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
+        ),
         ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
         ("markers (LK on printed markers)", estimator_config("markers")),
         ("default, grid 32x24 (stride 10)", replace(default, stride_px=10)),
@@ -126,8 +151,9 @@ def bench(config: EstimatorConfig, reference: np.ndarray, cases: list[Case], rep
     dx, dy = est._nhhd.dx, est._nhhd.dy
     u, v = np.empty((rows, cols)), np.empty((rows, cols))
     out, work = np.empty((rows, cols)), np.empty((rows, cols))
-    times: dict[str, list[float]] = {k: [] for k in
-                                     ("flow", "pool", "div", "dipole", "nhhd", "baseline", "push")}
+    times: dict[str, list[float]] = {
+        k: [] for k in ("flow", "pool", "div", "dipole", "nhhd", "baseline", "push")
+    }
     errors: dict[str, list[float]] = {family: [] for family in FAMILIES}
     for case in cases:
         flow.measure(case.image, grid)
@@ -168,14 +194,18 @@ def machine() -> str:
     except (OSError, StopIteration):
         model = platform.processor() or "unknown CPU"
     try:
-        rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                             text=True, check=False).stdout.strip()
+        rev = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
+        ).stdout.strip()
     except OSError:
         rev = "unknown"
-    return (f"{model}; {platform.machine()}, {len(__import__('os').sched_getaffinity(0))} cores "
-            f"visible, measured on 1 thread (cv2.setNumThreads(1)); Python {platform.python_version()}, "
-            f"NumPy {np.__version__}, SciPy {scipy.__version__}, OpenCV {cv2.__version__}; "
-            f"git {rev}; {datetime.date.today().isoformat()}")
+    cores = len(os.sched_getaffinity(0))
+    return (
+        f"{model}; {platform.machine()}, {cores} cores visible, measured on 1 thread "
+        f"(cv2.setNumThreads(1)); Python {platform.python_version()}, NumPy {np.__version__}, "
+        f"SciPy {scipy.__version__}, OpenCV {cv2.__version__}; git {rev}; "
+        f"{datetime.date.today().isoformat()}"
+    )
 
 
 def fmt(t: tuple[float, float], unit: float = 1.0, digits: int = 2) -> str:
@@ -193,7 +223,8 @@ def table(results: list[tuple[str, dict]]) -> str:
         pool = fmt(t["pool"]) if "pool" in t else "(in flow)"
         lines.append(
             f"| {label} | {r['grid']} | {fmt(t['flow'])} | {pool} | {fmt(t['div'], 1e3, 0)} "
-            f"| {fmt(t['dipole'], 1e3, 0)} | {fmt(t['nhhd'], 1e3, 0)} | {fmt(t['baseline'], 1e3, 0)} "
+            f"| {fmt(t['dipole'], 1e3, 0)} | {fmt(t['nhhd'], 1e3, 0)} "
+            f"| {fmt(t['baseline'], 1e3, 0)} "
             f"| **{fmt(t['push'])}** | {r['errors']['smooth']:.4f} | {r['errors']['contact']:.4f} "
             f"| **{r['error_all']:.4f}** |"
         )
@@ -212,29 +243,34 @@ def main() -> int:
     for label, config in configurations(args.quick):
         results.append((label, bench(config, reference, cases, 1 if args.quick else args.repeats)))
         t = results[-1][1]
-        print(f"{label:50s} pipeline {fmt(t['times']['push'])} ms  err {t['error_all']:.4f} px",
-              flush=True)
-    report = "\n".join([
-        "# Benchmarks",
-        "",
-        "## Estimation pipeline: latency and field error",
-        "",
-        "Regenerate with `make bench` (`python scripts/bench_estimation.py --write "
-        "docs/BENCHMARKS.md`).",
-        "",
-        f"Machine: {machine()}.",
-        "",
-        f"Latency: median / p90 in ms (µs for the grid operators) per 320x240 frame, over "
-        f"{len(cases)} warps x {args.repeats if not args.quick else 1} passes. Field error: "
-        f"RMSE in px of the grid displacement against the area mean of the true warp over each "
-        f"cell, for {len(cases) // 2} smooth and {len(cases) // 2} contact-like warps with peak "
-        f"displacements {', '.join(str(a) for a in AMPLITUDES_PX)} px. The pipeline column is "
-        "`TactileEstimator.push` (frame to wrench estimate: flow, pooling, NHHD, dipole, "
-        "baseline); stage columns are timed separately.",
-        "",
-        table(results),
-        "",
-    ])
+        print(
+            f"{label:50s} pipeline {fmt(t['times']['push'])} ms  err {t['error_all']:.4f} px",
+            flush=True,
+        )
+    report = "\n".join(
+        [
+            "# Benchmarks",
+            "",
+            "## Estimation pipeline: latency and field error",
+            "",
+            "Regenerate with `make bench` (`python scripts/bench_estimation.py --write "
+            "docs/BENCHMARKS.md`).",
+            "",
+            f"Machine: {machine()}.",
+            "",
+            f"Latency: median / p90 in ms (µs for the grid operators) per 320x240 frame, over "
+            f"{len(cases)} warps x {args.repeats if not args.quick else 1} passes. Field error: "
+            f"RMSE in px of the grid displacement against the area mean of the true warp over "
+            f"each cell, for {len(cases) // 2} smooth and {len(cases) // 2} contact-like warps "
+            f"with peak displacements {', '.join(str(a) for a in AMPLITUDES_PX)} px. The "
+            "pipeline column is "
+            "`TactileEstimator.push` (frame to wrench estimate: flow, pooling, NHHD, dipole, "
+            "baseline); stage columns are timed separately.",
+            "",
+            table(results),
+            "",
+        ]
+    )
     print(report)
     if args.write:
         args.write.parent.mkdir(parents=True, exist_ok=True)
