@@ -13,6 +13,7 @@ per-frame pipeline allocates nothing.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,25 +95,32 @@ def require_finite(name: str, *arrays: np.ndarray) -> None:
             raise ValueError(f"{name} contains NaN or inf; expected finite displacements")
 
 
+@functools.lru_cache(maxsize=64)
+def _difference_weights(n: int, spacing: float) -> np.ndarray:
+    """Per-index factors that turn raw differences into derivatives: 1/h on the two border
+    samples (one-sided), 1/2h inside (central)."""
+    weights = np.full(n, 0.5 / spacing)
+    weights[[0, -1]] = 1.0 / spacing
+    weights.flags.writeable = False
+    return weights
+
+
 def d_dx(f: np.ndarray, dx: float, out: np.ndarray) -> np.ndarray:
-    """Derivative along x (axis 1) of ``f`` (rows, cols) with spacing ``dx``, into ``out``."""
-    np.subtract(f[:, 2:], f[:, :-2], out=out[:, 1:-1])
-    out[:, 1:-1] *= 0.5 / dx
-    np.subtract(f[:, 1], f[:, 0], out=out[:, 0])
-    np.subtract(f[:, -1], f[:, -2], out=out[:, -1])
-    out[:, 0] *= 1.0 / dx
-    out[:, -1] *= 1.0 / dx
+    """Derivative along x (the last axis) of ``f`` (..., rows, cols), spacing ``dx``, into
+    ``out``. Stacked fields (2, rows, cols) are differentiated in one call."""
+    np.subtract(f[..., 2:], f[..., :-2], out=out[..., 1:-1])
+    np.subtract(f[..., 1], f[..., 0], out=out[..., 0])
+    np.subtract(f[..., -1], f[..., -2], out=out[..., -1])
+    out *= _difference_weights(f.shape[-1], dx)
     return out
 
 
 def d_dy(f: np.ndarray, dy: float, out: np.ndarray) -> np.ndarray:
-    """Derivative along y (axis 0) of ``f`` (rows, cols) with spacing ``dy``, into ``out``."""
-    np.subtract(f[2:], f[:-2], out=out[1:-1])
-    out[1:-1] *= 0.5 / dy
-    np.subtract(f[1], f[0], out=out[0])
-    np.subtract(f[-1], f[-2], out=out[-1])
-    out[0] *= 1.0 / dy
-    out[-1] *= 1.0 / dy
+    """Derivative along y (the second-to-last axis) of ``f`` (..., rows, cols), into ``out``."""
+    np.subtract(f[..., 2:, :], f[..., :-2, :], out=out[..., 1:-1, :])
+    np.subtract(f[..., 1, :], f[..., 0, :], out=out[..., 0, :])
+    np.subtract(f[..., -1, :], f[..., -2, :], out=out[..., -1, :])
+    out *= _difference_weights(f.shape[-2], dy)[:, None]
     return out
 
 

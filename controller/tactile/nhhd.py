@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.tactile.field import curl, d_dx, d_dy, divergence, require_finite
+from controller.tactile.field import d_dx, d_dy, require_finite
 
 _SELF_TERM_SAMPLES = 256
 
@@ -107,7 +107,13 @@ class NHHD:
         self._sources = np.zeros((2, *padded))  # [div, curl], zero-padded
         self._spectrum = np.empty((2, padded[0], padded[1] // 2 + 1), dtype=complex)
         self._potentials = np.empty((2, *padded))
-        self._buffers = {k: np.empty(shape) for k in ("du", "dv", "ru", "rv", "hu", "hv", "w")}
+        stacked = (2, *shape)
+        self._uv = np.empty(stacked)  # [u, v]
+        self._field_dx = np.empty(stacked)  # [du/dx, dv/dx]
+        self._field_dy = np.empty(stacked)  # [du/dy, dv/dy]
+        self._potential_dx = np.empty(stacked)  # [dD/dx, dR/dx]
+        self._potential_dy = np.empty(stacked)  # [dD/dy, dR/dy]
+        self._buffers = {k: np.empty(shape) for k in ("hu", "hv", "w")}
         self._lever_x = np.empty(shape)
         self._lever_y = np.empty(shape)
         self._radius = np.empty(shape)
@@ -119,11 +125,17 @@ class NHHD:
                 f"field components must have shape {(self.rows, self.cols)}, "
                 f"got {u.shape} and {v.shape}"
             )
-        require_finite("displacement field", u, v)
+        uv = self._uv
+        np.copyto(uv[0], u)
+        np.copyto(uv[1], v)
+        require_finite("displacement field", uv)
         b = self._buffers
         rows, cols = self.rows, self.cols
-        div = divergence(u, v, self.dx, self.dy, self._sources[0, :rows, :cols], b["w"])
-        rot = curl(u, v, self.dx, self.dy, self._sources[1, :rows, :cols], b["w"])
+        # Derivatives of both components (and below, of both potentials) in one call each.
+        gx = d_dx(uv, self.dx, self._field_dx)
+        gy = d_dy(uv, self.dy, self._field_dy)
+        div = np.add(gx[0], gy[1], out=self._sources[0, :rows, :cols])
+        rot = np.subtract(gx[1], gy[0], out=self._sources[1, :rows, :cols])
 
         np.fft.rfft2(self._sources, out=self._spectrum)
         self._spectrum *= self._kernel_spectrum
@@ -131,33 +143,30 @@ class NHHD:
         # one axis at a time: complex ifft over rows in place, then the real inverse over columns.
         np.fft.ifft(self._spectrum, axis=-2, out=self._spectrum)
         np.fft.irfft(self._spectrum, n=self._sources.shape[-1], axis=-1, out=self._potentials)
-        pot_d = self._potentials[0, :rows, :cols]
-        pot_r = self._potentials[1, :rows, :cols]
+        potentials = self._potentials[:, :rows, :cols]
+        pot_d, pot_r = potentials[0], potentials[1]
 
-        d_dx(pot_d, self.dx, b["du"])
-        d_dy(pot_d, self.dy, b["dv"])
-        d_dy(pot_r, self.dy, b["ru"])
-        np.negative(b["ru"], out=b["ru"])
-        d_dx(pot_r, self.dx, b["rv"])
-        np.subtract(u, b["du"], out=b["hu"])
-        b["hu"] -= b["ru"]
-        np.subtract(v, b["dv"], out=b["hv"])
-        b["hv"] -= b["rv"]
+        pgx = d_dx(potentials, self.dx, self._potential_dx)
+        pgy = d_dy(potentials, self.dy, self._potential_dy)
+        d_u, d_v = pgx[0], pgy[0]  # d = grad D
+        r_u, r_v = np.negative(pgy[1], out=pgy[1]), pgx[1]  # r = (-dR/dy, dR/dx)
+        np.subtract(u, d_u, out=b["hu"])
+        b["hu"] -= r_u
+        np.subtract(v, d_v, out=b["hv"])
+        b["hv"] -= r_v
 
         n = rows * cols
         rotation_centre = self._extremum(pot_r, rot)
         self._levers(rotation_centre)
-        tau_z = (
-            float(np.vdot(self._lever_x, b["rv"])) - float(np.vdot(self._lever_y, b["ru"]))
-        ) / n
+        tau_z = (float(np.vdot(self._lever_x, r_v)) - float(np.vdot(self._lever_y, r_u))) / n
         source_centre = self._extremum(pot_d, div)
         self._levers(source_centre)
-        normal = self._mean_radial(b["du"], b["dv"])
+        normal = self._mean_radial(d_u, d_v)
         return NHHDResult(
-            d_u=b["du"],
-            d_v=b["dv"],
-            r_u=b["ru"],
-            r_v=b["rv"],
+            d_u=d_u,
+            d_v=d_v,
+            r_u=r_u,
+            r_v=r_v,
             h_u=b["hu"],
             h_v=b["hv"],
             potential_d=pot_d,

@@ -20,9 +20,11 @@ METHODS = {
     "dis_ultrafast": (
         replace(
             BASE,
+            scale=1.0,
             dis=replace(
                 BASE.dis,
                 preset="ultrafast",
+                use_mean_normalization=None,
                 finest_scale=None,
                 patch_size=None,
                 patch_stride=None,
