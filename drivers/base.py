@@ -113,6 +113,29 @@ class WrenchSample:
     frame: str
 
 
+class ContextManagedDevice:
+    """Mixin for drivers: ``with device:`` connects on entry and disconnects on exit, also
+    when the body raises. The driver provides ``connect()`` and ``disconnect()``."""
+
+    def connect(self) -> None:
+        raise NotImplementedError
+
+    def disconnect(self) -> None:
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.disconnect()
+
+
 @runtime_checkable
 class Device(Protocol):
     """Lifecycle shared by every device."""

@@ -37,8 +37,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Any, Self
+from typing import Any
 
 import numpy as np
 
@@ -50,7 +49,7 @@ from drivers.arm.envelope import (
     rotation_from_rpy,
     servo_target,
 )
-from drivers.base import ArmState, Pose, Twist
+from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
 from drivers.errors import (
     DeviceError,
     DeviceFaultError,
@@ -139,7 +138,7 @@ class XArm6Config:
             raise ValueError(f"key 'name': expected a non-empty string, got {self.name!r}")
 
 
-class XArm6:
+class XArm6(ContextManagedDevice):
     """An xArm6 commanded at its TCP in B. ``api`` is an ``xarm.wrapper.XArmAPI`` (or a
     faithful fake) not yet connected; ``clock`` gives seconds (monotonic) for timestamps
     and the servo step budget."""
@@ -221,18 +220,6 @@ class XArm6:
         self._api.release_error_warn_changed_callback(self._on_error_warn)
         self._api.disconnect()
         self._mode = None
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     # ----------------------------------------------------------------- reading
 

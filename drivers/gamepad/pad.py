@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import os
 import time
-from types import TracebackType
 from typing import Self
 
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout at import
@@ -35,7 +34,7 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout 
 import pygame  # noqa: E402
 from pygame._sdl2 import controller as sdl_controller  # noqa: E402
 
-from drivers.base import GamepadState  # noqa: E402
+from drivers.base import ContextManagedDevice, GamepadState  # noqa: E402
 from drivers.errors import DeviceNotConnectedError  # noqa: E402
 from drivers.gamepad.mapping import GamepadConfig, axis_value  # noqa: E402
 
@@ -84,7 +83,7 @@ def init_sdl() -> None:
     sdl_controller.init()
 
 
-class PygameGamepad:
+class PygameGamepad(ContextManagedDevice):
     """An Xbox / PS4 / PS5 pad read through SDL's game-controller API.
 
     ``read()`` gives axes and buttons by action name as mapped in ``GamepadConfig``; axes are
@@ -172,18 +171,6 @@ class PygameGamepad:
                 action: pad.get_button(BUTTON_IDS[button]) for action, button in cfg.buttons.items()
             },
         )
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     def _open_first_controller(self) -> sdl_controller.Controller | None:
         for index in range(sdl_controller.get_count()):

@@ -21,10 +21,9 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Any, Self, TypeVar
+from typing import Any, TypeVar
 
-from drivers.base import GripperObject, GripperStatus
+from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.transport import ModbusRtuTransport, RegisterTransport, XArmToolTransport
@@ -87,7 +86,7 @@ class HandEConfig:
         check_range("stroke_m", self.stroke_m, 0.001, 0.2)
 
 
-class HandE:
+class HandE(ContextManagedDevice):
     """Robotiq Hand-E gripper; see the module docstring. Thread-safe."""
 
     def __init__(self, config: HandEConfig, transport: RegisterTransport) -> None:
@@ -150,18 +149,6 @@ class HandE:
     @property
     def is_connected(self) -> bool:
         return self._connected
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     # -- Gripper -----------------------------------------------------------------------
 

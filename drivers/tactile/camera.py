@@ -33,13 +33,12 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Protocol, Self
+from typing import Protocol
 
 import cv2
 import numpy as np
 
-from drivers.base import TactileFrame
+from drivers.base import ContextManagedDevice, TactileFrame
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.tactile.decode import JPEG_DOWNSCALES, FrameProcessor, cropped_size
 from drivers.tactile.device_lookup import find_capture_node
@@ -263,7 +262,7 @@ class _Grabber:
             self._ready.set()
 
 
-class TactileCamera:
+class TactileCamera(ContextManagedDevice):
     """A GelSight Mini or DIGIT camera (implements ``drivers.base.TactileSensor``).
 
     ``capture_factory`` opens a capture on a device node; ``from_config`` uses ``open_v4l2``,
@@ -397,15 +396,3 @@ class TactileCamera:
                 "the stream stalled",
             )
         return frame
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
