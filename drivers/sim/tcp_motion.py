@@ -6,11 +6,14 @@ angular velocity ``w`` (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt
 
 1. ``v_des`` is scaled to the envelope's ``max_speed_m_s`` and each component is capped so
    that the TCP can still stop on the faces of the box: toward a face at distance ``d`` the
-   speed is at most ``sqrt(2 b d) - b dt / 2`` with ``b = max_accel_m_s2 / sqrt(3)``. With the
-   position updated by the new velocity, braking by ``b dt`` per step from that speed stops
-   before the face, and after one step at that speed the bound for the remaining distance
-   still allows braking by ``b dt``; so braking never needs more than ``b dt`` per axis, i.e.
-   ``max_accel_m_s2 * dt`` in norm.
+   speed is at most ``max(sqrt(2 b d) - b dt / 2, min(d / dt, b dt))`` with
+   ``b = max_accel_m_s2 / sqrt(3)``. With the position updated by the new velocity, braking
+   by ``b dt`` per step from that speed stops on or before the face, and after one step at
+   that speed the bound for the remaining distance still allows braking by ``b dt`` (for
+   the square root: with ``x = v / (b dt)`` and ``D = d / (b dt^2)``, ``x <= sqrt(2D) - 1/2``
+   gives ``x - 1 <= sqrt(2 (D - x)) - 1/2``); so braking never needs more than ``b dt`` per
+   axis, i.e. ``max_accel_m_s2 * dt`` in norm. The second term lets the TCP reach a face
+   exactly (a target clamped onto it).
 2. ``v`` moves toward ``v_des`` by at most ``max_accel_m_s2 * dt`` (norm). If that leaves the
    per-axis caps, the new velocity is the point nearest the candidate on the segment from the
    current velocity clipped into the caps (within the acceleration bound, by 1.) to the
@@ -167,9 +170,12 @@ class TcpMotion:
 
 
 def stopping_speed(distance: float, brake: float, dt: float) -> float:
-    """Largest speed toward a wall ``distance`` away that braking by ``brake * dt`` per step
-    stops before the wall: ``sqrt(2 b d) - b dt / 2``, at least 0 (module docstring, 1.)."""
-    return max(math.sqrt(2.0 * brake * max(distance, 0.0)) - 0.5 * brake * dt, 0.0)
+    """Largest speed toward a wall ``distance`` away from which braking by ``brake * dt`` per
+    step stops on or before the wall (module docstring, 1.): ``sqrt(2 b d) - b dt / 2``, or
+    within one step of the wall ``min(d / dt, b dt)`` (reach the wall, or come ``b dt^2``
+    closer, and stop in one more step), whichever is larger."""
+    d = max(distance, 0.0)
+    return max(math.sqrt(2.0 * brake * d) - 0.5 * brake * dt, min(d / dt, brake * dt))
 
 
 def quaternion_from_rpy(rpy_rad: tuple[float, float, float]) -> Quat:
