@@ -10,6 +10,7 @@ Validation rules live on the dataclass fields as metadata, so each schema is dec
 * ``meta(low, high)`` -- a number in a closed range;
 * ``Literal[...]`` type hints -- a choice;
 * nested dataclasses -- sub-mappings, checked recursively;
+* ``Mapping[str, X]`` -- a sub-mapping of any string keys to values of type ``X``;
 * ``X | None`` -- the key must be present, but may be ``null``.
 
 A dataclass may also check cross-field rules in ``__post_init__`` by raising ``ValueError``
@@ -110,6 +111,18 @@ def _convert(hint: Any, value: Any, metadata: Mapping[str, Any], source: str, ke
         return value
     if dataclasses.is_dataclass(hint):
         return build(hint, value, source, prefix=key + ".")
+    if origin is Mapping:
+        key_type, value_type = typing.get_args(hint)
+        if key_type is not str:
+            raise TypeError(f"unsupported mapping key type {key_type!r} for key '{key}'")
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{source}: key '{key}': expected a mapping, got {value!r}")
+        converted = {}
+        for name, item in value.items():
+            if not isinstance(name, str) or not name:
+                raise ConfigError(f"{source}: key '{key}': expected string keys, got {name!r}")
+            converted[name] = _convert(value_type, item, {}, source, f"{key}.{name}")
+        return converted
     if hint is bool:
         if not isinstance(value, bool):
             raise ConfigError(f"{source}: key '{key}': expected true or false, got {value!r}")

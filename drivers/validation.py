@@ -21,3 +21,9 @@ def check_choice(name: str, value: object, choices: Collection[object]) -> None:
     if value not in choices:
         allowed = ", ".join(repr(c) for c in choices)
         raise ValueError(f"key '{name}': expected one of {allowed}, got {value!r}")
+
+
+def check_int(name: str, value: object, low: int, high: int) -> None:
+    """Require an integer (not a bool) with ``low <= value <= high``."""
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise ValueError(f"key '{name}': expected an integer in [{low}, {high}], got {value!r}")

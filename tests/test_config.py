@@ -1,9 +1,11 @@
+from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 import yaml
 
-from controller.config import ConfigError, sensor_profile
+from controller.config import ConfigError, build, number, sensor_profile
 from controller.tactile.settings import EstimatorConfig, estimator_config
 
 CONFIGS = Path(__file__).resolve().parents[1] / "configs"
@@ -72,3 +74,27 @@ def test_missing_and_malformed_files(tmp_path):
     bad.write_text("name: [unclosed\n")
     with pytest.raises(ConfigError, match="not valid YAML"):
         sensor_profile(str(bad))
+
+
+@dataclass(frozen=True)
+class Gains:
+    kp: float = number(0, 10)
+
+
+@dataclass(frozen=True)
+class Table:
+    gains: Mapping[str, Gains]
+
+
+def test_mappings_of_named_entries_are_checked_entry_by_entry():
+    table = build(Table, {"gains": {"x": {"kp": 1}, "y": {"kp": 2.5}}}, source="t.yaml")
+    assert table.gains == {"x": Gains(1.0), "y": Gains(2.5)}
+    for gains, message in [
+        ({"x": {"kp": 11}}, "t.yaml: key 'gains.x.kp': expected a number in [0, 10], got 11"),
+        ({"x": {}}, "t.yaml: missing key 'gains.x.kp'"),
+        ({3: {"kp": 1}}, "t.yaml: key 'gains': expected string keys, got 3"),
+        ([1, 2], "t.yaml: key 'gains': expected a mapping, got [1, 2]"),
+    ]:
+        with pytest.raises(ConfigError) as info:
+            build(Table, {"gains": gains}, source="t.yaml")
+        assert str(info.value) == message

@@ -1,7 +1,8 @@
 """Gamepad mapping: named actions -> SDL game-controller axes and buttons, and axis shaping.
 
-This module needs no SDL: it holds the configuration (``GamepadConfig``), its loading from
-YAML, and the pure function that turns a raw controller axis into an action value.
+This module needs no SDL: it holds the configuration (``GamepadConfig``, loaded from YAML
+like every device config: ``drivers.registry`` and ``controller.config.build``), and the
+pure function that turns a raw controller axis into an action value.
 
 Names are SDL's game-controller names (``SDL_GameControllerGetStringForAxis/Button``), the
 same for Xbox, PS4 (DualShock 4) and PS5 (DualSense) pads: ``a`` is the bottom face button
@@ -25,12 +26,8 @@ Action values are dimensionless in [-1, 1]; the teleoperation layer turns them i
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
-from pathlib import Path
+from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
-
-import yaml
 
 from drivers.validation import check_choice, check_range
 
@@ -106,41 +103,6 @@ class GamepadConfig:
         object.__setattr__(self, "axes", MappingProxyType(dict(self.axes)))
         object.__setattr__(self, "buttons", MappingProxyType(dict(self.buttons)))
 
-    @classmethod
-    def from_dict(cls, data: Mapping[str, Any]) -> GamepadConfig:
-        """Build from the YAML's keys; unknown or missing keys raise ValueError naming them."""
-        _check_keys("", data, {f.name for f in fields(cls)}, required={"axes", "buttons"})
-        axes = data["axes"]
-        if not isinstance(axes, Mapping):
-            raise ValueError(f"key 'axes': expected a mapping of action -> axis, got {axes!r}")
-        bindings = {}
-        for action, entry in axes.items():
-            if not isinstance(entry, Mapping):
-                raise ValueError(f"key 'axes.{action}': expected a mapping, got {entry!r}")
-            _check_keys(f"axes.{action}.", entry, {"axis", "invert", "scale"}, required={"axis"})
-            try:
-                bindings[action] = AxisBinding(**entry)
-            except ValueError as err:
-                raise ValueError(f"axes.{action}: {err}") from err
-        buttons = data["buttons"]
-        if not isinstance(buttons, Mapping):
-            raise ValueError(
-                f"key 'buttons': expected a mapping of action -> button, got {buttons!r}"
-            )
-        return cls(**{**data, "axes": bindings, "buttons": dict(buttons)})
-
-
-def load_gamepad_config(path: str | Path) -> GamepadConfig:
-    """Read a mapping YAML (e.g. ``configs/gamepad/xbox.yaml``); errors name the file."""
-    path = Path(path)
-    data = yaml.safe_load(path.read_text())
-    if not isinstance(data, Mapping):
-        raise ValueError(f"{path}: expected a mapping at the top level, got {data!r}")
-    try:
-        return GamepadConfig.from_dict(data)
-    except ValueError as err:
-        raise ValueError(f"{path}: {err}") from err
-
 
 def axis_value(raw: int, binding: AxisBinding, dead_zone: float) -> float:
     """Action value in [-1, 1] from a raw SDL controller axis reading (see the module doc)."""
@@ -166,15 +128,3 @@ def _check_distinct(key: str, bound: dict[str, str]) -> None:
                 f"key '{key}': actions '{seen[control]}' and '{action}' both use '{control}'"
             )
         seen[control] = action
-
-
-def _check_keys(
-    prefix: str, data: Mapping[str, Any], allowed: set[str], required: set[str]
-) -> None:
-    unknown = sorted(str(k) for k in data if k not in allowed)
-    if unknown:
-        expected = ", ".join(sorted(allowed))
-        raise ValueError(f"unknown key '{prefix}{unknown[0]}': expected one of {expected}")
-    missing = sorted(required - set(data))
-    if missing:
-        raise ValueError(f"missing key '{prefix}{missing[0]}'")

@@ -26,7 +26,8 @@ _LIGHT_GRADIENT = ((25.0, 0.0), (-15.0, 20.0), (-10.0, -20.0))
 class MarkerImageRenderer:
     """Renders (H, W, 3) BGR uint8 images of a marker gel, warped by forward fields.
 
-    ``pitch_px``: marker lattice pitch; ``dot_radius_px``: marker radius; ``jitter_px``:
+    ``pitch_px``: marker lattice pitch (``None``: a gel without printed markers, texture
+    only, as the DIGIT's); ``dot_radius_px``: marker radius; ``jitter_px``:
     random offset of each marker from its lattice site; ``texture_grey``: amplitude of the
     gel's speckle texture. ``rng`` seeds the marker jitter and the texture.
     """
@@ -35,7 +36,7 @@ class MarkerImageRenderer:
         self,
         width_px: int = 320,
         height_px: int = 240,
-        pitch_px: float = 31.5,
+        pitch_px: float | None = 31.5,
         dot_radius_px: float = 4.5,
         jitter_px: float = 1.5,
         texture_grey: float = 12.0,
@@ -43,11 +44,14 @@ class MarkerImageRenderer:
     ) -> None:
         rng = np.random.default_rng(0) if rng is None else rng
         self.shape_hw = (height_px, width_px)
-        cols = np.arange(pitch_px / 2, width_px, pitch_px)
-        rows = np.arange(pitch_px / 2, height_px, pitch_px)
-        cx, cy = np.meshgrid(cols, rows)
-        centres = np.stack([cx.ravel(), cy.ravel()], axis=1)
-        self.marker_centres_px = centres + rng.uniform(-jitter_px, jitter_px, centres.shape)
+        if pitch_px is None:
+            self.marker_centres_px = np.empty((0, 2))
+        else:
+            cols = np.arange(pitch_px / 2, width_px, pitch_px)
+            rows = np.arange(pitch_px / 2, height_px, pitch_px)
+            cx, cy = np.meshgrid(cols, rows)
+            centres = np.stack([cx.ravel(), cy.ravel()], axis=1)
+            self.marker_centres_px = centres + rng.uniform(-jitter_px, jitter_px, centres.shape)
         self._pattern = self._gel_pattern(dot_radius_px, texture_grey, rng)
         self._spline = spline_filter(self._pattern, order=3, mode="mirror")
         self._shading = self._lighting()

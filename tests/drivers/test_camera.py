@@ -18,7 +18,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-import yaml
 
 from drivers.base import TactileFrame, TactileSensor
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
@@ -31,6 +30,7 @@ from drivers.tactile.decode import (
     orient_like_digit_sdk,
 )
 from drivers.tactile.device_lookup import find_capture_node
+from tests.drivers.device_configs import load_device_config
 
 REPO = Path(__file__).resolve().parents[2]
 MINI_ID = "usb-Arducam_Technology_Co.__Ltd._GelSight_Mini_R0B_28F5-K4RR_28F5K4RR-video-index"
@@ -264,8 +264,8 @@ def test_digit_output_size_is_checked_after_the_turn(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("name", ["gelsight_mini_camera.yaml", "digit_camera.yaml"])
 def test_example_configs_load(name: str) -> None:
-    data = yaml.safe_load((REPO / "configs" / "sensors" / name).read_text())
-    config = TactileCameraConfig(**data)
+    config = load_device_config(REPO / "configs" / "sensors" / name, backend="real")
+    assert type(config) is TactileCameraConfig
     assert config.by_id_dir == "/dev/v4l/by-id"
 
 

@@ -14,16 +14,17 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pygame._sdl2 import controller as sdl_controller
 
+from controller.config import ConfigError, build
 from drivers.errors import DeviceNotConnectedError
 from drivers.gamepad import (
     AxisBinding,
     GamepadConfig,
     PygameGamepad,
     axis_value,
-    load_gamepad_config,
 )
 from drivers.gamepad.mapping import AXIS_NAMES, BUTTON_NAMES
 from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, init_sdl
+from tests.drivers.device_configs import load_device_config
 from tests.drivers.virtual_joystick import (
     VIRTUAL_AXES,
     VIRTUAL_BUTTONS,
@@ -58,7 +59,7 @@ def device(sdl):
 
 @pytest.fixture
 def config():
-    return load_gamepad_config(XBOX_YAML)
+    return load_device_config(XBOX_YAML, backend="real")
 
 
 @pytest.fixture
@@ -241,27 +242,29 @@ def test_xbox_yaml_binds_the_safety_buttons(config):
 
 
 GOOD = {
+    "name": "pad",
     "dead_zone": 0.1,
-    "axes": {"vx": {"axis": "lefty", "invert": True}},
+    "axes": {"vx": {"axis": "lefty", "invert": True, "scale": 1.0}},
     "buttons": {"deadman": "leftshoulder", "estop": "b", "hand_back": "y"},
 }
+
+
+def axes(**entry):
+    return {"axes": {"vx": {"axis": "lefty", "invert": False, "scale": 1.0, **entry}}}
 
 
 @pytest.mark.parametrize(
     ("change", "message"),
     [
         ({"dead_zone": 0.6}, "key 'dead_zone': expected a number in [0.0, 0.5]"),
-        ({"axes": {"vx": {"axis": "z"}}}, "axes.vx: key 'axis'"),
+        (axes(axis="z"), "key 'axes.vx.axis'"),
+        (axes(scale=0), "key 'axes.vx.scale': expected a number in (0, 1]"),
+        (axes(scale=2), "key 'axes.vx.scale'"),
+        (axes(invert="yes"), "key 'axes.vx.invert'"),
+        (axes(gain=1), "unknown key 'axes.vx.gain'"),
+        ({"axes": {"vx": {"invert": True, "scale": 1.0}}}, "missing key 'axes.vx.axis'"),
         (
-            {"axes": {"vx": {"axis": "lefty", "scale": 0}}},
-            "key 'scale': expected a number in (0, 1]",
-        ),
-        ({"axes": {"vx": {"axis": "lefty", "scale": 2}}}, "key 'scale'"),
-        ({"axes": {"vx": {"axis": "lefty", "invert": "yes"}}}, "key 'invert'"),
-        ({"axes": {"vx": {"axis": "lefty", "gain": 1}}}, "unknown key 'axes.vx.gain'"),
-        ({"axes": {"vx": {"invert": True}}}, "missing key 'axes.vx.axis'"),
-        (
-            {"axes": {"vx": {"axis": "lefty"}, "vz": {"axis": "lefty"}}},
+            {"axes": {"vx": axes()["axes"]["vx"], "vz": axes()["axes"]["vx"]}},
             "actions 'vx' and 'vz' both use 'lefty'",
         ),
         ({"buttons": {"deadman": "l1", "estop": "b", "hand_back": "y"}}, "key 'buttons.deadman'"),
@@ -274,15 +277,7 @@ GOOD = {
     ],
 )
 def test_config_validation_errors(change, message):
-    with pytest.raises(ValueError) as err:
-        GamepadConfig.from_dict({**GOOD, **change})
+    with pytest.raises(ConfigError) as err:
+        build(GamepadConfig, {**GOOD, **change}, source="pad.yaml")
+    assert str(err.value).startswith("pad.yaml: ")
     assert message in str(err.value)
-
-
-def test_config_missing_key_and_file_name_in_errors(tmp_path):
-    with pytest.raises(ValueError, match="missing key 'buttons'"):
-        GamepadConfig.from_dict({"axes": {}})
-    path = tmp_path / "pad.yaml"
-    path.write_text("axes: {}\nbuttons: {deadman: a, estop: b, hand_back: y}\ndead_zone: -1\n")
-    with pytest.raises(ValueError, match=r"pad\.yaml: key 'dead_zone'"):
-        load_gamepad_config(path)

@@ -11,7 +11,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
@@ -20,6 +19,7 @@ from drivers.arm import SafetyEnvelope, TcpConfig, XArm6, XArm6Config
 from drivers.arm.envelope import rotation_from_rpy, tilt_rad
 from drivers.base import Arm, Pose, Twist
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from tests.drivers.device_configs import load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
 
 CONFIG_FILE = Path(__file__).resolve().parents[2] / "configs" / "robot" / "xarm6.yaml"
@@ -568,11 +568,8 @@ def test_connecting_to_a_closed_loopback_port_raises_not_connected():
 
 
 def test_the_example_config_file_is_valid():
-    data = yaml.safe_load(CONFIG_FILE.read_text())
-    assert data.pop("type") == "xarm6"
-    config = XArm6Config(
-        **{**data, "tcp": TcpConfig(**data["tcp"]), "envelope": SafetyEnvelope(**data["envelope"])}
-    )
+    config = load_device_config(CONFIG_FILE, backend="real")
+    assert type(config) is XArm6Config
     assert 50 <= config.servo_rate_hz <= 200 and config.envelope.max_tilt_rad > 0
 
 

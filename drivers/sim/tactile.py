@@ -1,0 +1,250 @@
+"""Simulated twin of a GelSight Mini / DIGIT camera (implements ``drivers.base.TactileSensor``).
+
+Frames. The twin "captures" frame ``k`` at ``t_k = t_connect + k / frame_rate_hz`` on the
+injected clock (``drivers.sim.clock``). A frame is the marker gel of
+``drivers.sim.marker_images.MarkerImageRenderer`` at the configured output size, warped by
+the forward displacement field (px, (H, W, 2), see that module) that the **field source**
+gives for ``t_k``, plus Gaussian pixel noise of ``noise_grey`` grey levels, rounded to uint8
+BGR (read-only, as the real driver delivers them).
+
+A field source is any callable ``source(t_s) -> field or None`` (``None``: no contact, the
+reference image). Set it with ``set_field_source``; the default is no contact. This is where
+a contact model plugs in (the gel physics simulator of a later issue).
+
+``read_latest(max_age_s)`` has the real driver's semantics: the newest frame captured at or
+before ``now()``, or DeviceTimeoutError when it is older than ``max_age_s`` (e.g. after
+``stall()``); DeviceNotConnectedError before ``connect()`` and after ``unplug()`` ("camera
+lost"); repeated reads of one frame return the same object.
+
+Randomness (marker jitter, gel texture, pixel noise) comes from the injected ``rng``; the
+noise of frame ``k`` is drawn from a generator seeded by (a number drawn once from ``rng``,
+``k``), so a frame does not depend on which earlier frames were read.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from types import TracebackType
+from typing import Self
+
+import numpy as np
+
+from drivers.base import TactileFrame
+from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
+from drivers.sim.clock import Clock, MonotonicClock
+from drivers.sim.marker_images import MarkerImageRenderer
+from drivers.tactile.camera import TactileCameraConfig
+from drivers.validation import check_int, check_range
+
+FieldSource = Callable[[float], np.ndarray | None]
+"""Gives the forward displacement field (H, W, 2) in px at a time in s, or None."""
+
+
+@dataclass(frozen=True)
+class SimTactileSettings:
+    """The ``sim:`` section of a tactile camera YAML.
+
+    ``noise_grey``: standard deviation of the pixel noise, grey levels. ``seed``: seed of the
+    twin's randomness when the registry builds it. ``marker_pitch_px`` and
+    ``marker_radius_px``: the printed marker lattice in the output image, px; both ``None``
+    for a gel without markers (DIGIT).
+    """
+
+    noise_grey: float
+    seed: int
+    marker_pitch_px: float | None
+    marker_radius_px: float | None
+
+    def __post_init__(self) -> None:
+        check_range("noise_grey", self.noise_grey, 0.0, 50.0)
+        check_int("seed", self.seed, 0, 2**32 - 1)
+        if self.marker_pitch_px is None or self.marker_radius_px is None:
+            if self.marker_pitch_px is not None or self.marker_radius_px is not None:
+                raise ValueError(
+                    "key 'marker_radius_px': expected null with marker_pitch_px (no markers) "
+                    "and a number with it, got "
+                    f"marker_pitch_px={self.marker_pitch_px!r}, "
+                    f"marker_radius_px={self.marker_radius_px!r}"
+                )
+            return
+        check_range("marker_pitch_px", self.marker_pitch_px, 4.0, 200.0)
+        check_range("marker_radius_px", self.marker_radius_px, 0.5, self.marker_pitch_px / 2)
+
+
+@dataclass(frozen=True, kw_only=True)
+class SimTactileConfig(TactileCameraConfig):
+    """A tactile camera YAML with ``backend: sim``: the real driver's keys (output size, frame
+    rate, name) plus the ``sim:`` section."""
+
+    sim: SimTactileSettings
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not isinstance(self.sim, SimTactileSettings):
+            raise ValueError(f"key 'sim': expected a SimTactileSettings, got {self.sim!r}")
+
+
+class SimTactileSensor:
+    """The tactile camera twin; see the module docstring. ``clock`` defaults to real time,
+    ``rng`` to ``numpy.random.default_rng(config.sim.seed)``."""
+
+    def __init__(
+        self,
+        config: SimTactileConfig,
+        clock: Clock | None = None,
+        rng: np.random.Generator | None = None,
+        field_source: FieldSource | None = None,
+    ) -> None:
+        self.config = config
+        self.name = config.name
+        self._clock = clock if clock is not None else MonotonicClock()
+        rng = rng if rng is not None else np.random.default_rng(config.sim.seed)
+        sim = config.sim
+        self._renderer = MarkerImageRenderer(
+            width_px=config.output_width_px,
+            height_px=config.output_height_px,
+            pitch_px=sim.marker_pitch_px,
+            dot_radius_px=sim.marker_radius_px or 0.0,
+            rng=rng,
+        )
+        self._noise_seed = int(rng.integers(2**63))
+        self._source = field_source
+        self._present = True
+        self._connected = False
+        self._lost = False
+        self._t0_s = 0.0  # time of frame 0
+        self._stalled_after: int | None = None  # last frame index before a stall
+        self._latest: tuple[int, TactileFrame] | None = None
+
+    @classmethod
+    def from_config(cls, config: SimTactileConfig) -> SimTactileSensor:
+        """The twin on the real-time clock, seeded by ``config.sim.seed``."""
+        return cls(config)
+
+    @property
+    def shape_hw(self) -> tuple[int, int]:
+        """Image height and width, px: the shape a field source must give (plus 2)."""
+        return (self.config.output_height_px, self.config.output_width_px)
+
+    def set_field_source(self, source: FieldSource | None) -> None:
+        """Use ``source(t_s)`` for the displacement field of frames captured from now on."""
+        self._source = source
+
+    # -- lifecycle ---------------------------------------------------------------------
+
+    @property
+    def is_connected(self) -> bool:
+        return self._connected and not self._lost
+
+    def connect(self) -> None:
+        """Start streaming; the first frame is captured now."""
+        if self.is_connected:
+            return
+        if not self._present:
+            raise DeviceNotConnectedError(
+                self.name,
+                f"no capture node ('-index0') in {self.config.by_id_dir} matches "
+                f"{self.config.by_id_pattern!r}: the simulated camera is unplugged",
+            )
+        self._connected, self._lost = True, False
+        self._t0_s = self._clock.now()
+        self._stalled_after = None
+        self._latest = None
+
+    def disconnect(self) -> None:
+        self._connected = False
+        self._latest = None
+
+    def __enter__(self) -> Self:
+        self.connect()
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.disconnect()
+
+    # -- reading -----------------------------------------------------------------------
+
+    def read_latest(self, max_age_s: float) -> TactileFrame:
+        """The newest frame, if it was captured at most ``max_age_s`` seconds ago."""
+        if not max_age_s > 0:
+            raise ValueError(f"max_age_s must be > 0, got {max_age_s!r}")
+        if not self._connected:
+            raise DeviceNotConnectedError(self.name, "not connected: call connect() first")
+        if self._lost:
+            raise DeviceNotConnectedError(
+                self.name,
+                "camera lost: the simulated camera was unplugged; check the cable, then "
+                "connect() again",
+            )
+        now = self._clock.now()
+        index = self._frame_index(now)
+        if self._stalled_after is not None:
+            index = min(index, self._stalled_after)
+        t_s = self._frame_time(index)
+        age_s = now - t_s
+        if age_s > max_age_s:
+            raise DeviceTimeoutError(
+                self.name,
+                f"newest frame is {age_s * 1e3:.0f} ms old (max {max_age_s * 1e3:.0f} ms): "
+                "the stream stalled",
+            )
+        if self._latest is None or self._latest[0] != index:
+            self._latest = (index, TactileFrame(t_s=t_s, image=self._render(index, t_s)))
+        return self._latest[1]
+
+    # -- simulation hooks --------------------------------------------------------------
+
+    def stall(self) -> None:
+        """Stop capturing new frames (the newest one ages), as a hung stream does."""
+        if self._stalled_after is None:
+            self._stalled_after = self._frame_index(self._clock.now())
+
+    def resume(self) -> None:
+        """Capture again after ``stall()``: the next frame is captured now."""
+        if self._stalled_after is None:
+            return
+        next_index = self._stalled_after + 1
+        self._t0_s = self._clock.now() - next_index / self.config.frame_rate_hz
+        self._stalled_after = None
+
+    def unplug(self) -> None:
+        """Pull the cable: reads raise "camera lost" and ``connect()`` fails until ``plug()``."""
+        self._present = False
+        self._lost = self._connected
+
+    def plug(self) -> None:
+        """Plug the camera back in (call ``connect()`` again to stream)."""
+        self._present = True
+
+    # -- internals ---------------------------------------------------------------------
+
+    def _frame_index(self, now: float) -> int:
+        return max(0, math.floor((now - self._t0_s) * self.config.frame_rate_hz + 1e-9))
+
+    def _frame_time(self, index: int) -> float:
+        return self._t0_s + index / self.config.frame_rate_hz
+
+    def _render(self, index: int, t_s: float) -> np.ndarray:
+        field = self._source(t_s) if self._source is not None else None
+        if field is not None:
+            field = np.asarray(field)
+            if field.shape != (*self.shape_hw, 2) or not np.all(np.isfinite(field)):
+                raise ValueError(
+                    f"field source: expected a finite array of shape {(*self.shape_hw, 2)} "
+                    f"(px), got shape {field.shape}"
+                )
+        image = self._renderer.render(field).astype(np.float32)
+        sigma = self.config.sim.noise_grey
+        if sigma > 0:
+            noise_rng = np.random.default_rng((self._noise_seed, index))
+            image += noise_rng.normal(0.0, sigma, image.shape).astype(np.float32)
+        frame = np.clip(np.rint(image), 0, 255).astype(np.uint8)
+        frame.flags.writeable = False
+        return frame

@@ -1,0 +1,267 @@
+"""Kinematics of the simulated TCP: speed- and acceleration-limited motion inside the envelope.
+
+The TCP (frame T) is a rigid body in the base frame B with position ``p`` (m), linear
+velocity ``v`` (m/s), orientation ``q`` (unit quaternion T2B, scalar last as in scipy) and
+angular velocity ``w`` (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt_s``:
+
+1. ``v_des`` is scaled to the envelope's ``max_speed_m_s`` and each component is capped so
+   that the TCP can still stop on the faces of the box: toward a face at distance ``d`` the
+   speed is at most ``max(sqrt(2 b d) - b dt / 2, min(d / dt, b dt))`` with
+   ``b = max_accel_m_s2 / sqrt(3)``. With the position updated by the new velocity, braking
+   by ``b dt`` per step from that speed stops on or before the face, and after one step at
+   that speed the bound for the remaining distance still allows braking by ``b dt`` (for
+   the square root: with ``x = v / (b dt)`` and ``D = d / (b dt^2)``, ``x <= sqrt(2D) - 1/2``
+   gives ``x - 1 <= sqrt(2 (D - x)) - 1/2``); so braking never needs more than ``b dt`` per
+   axis, i.e. ``max_accel_m_s2 * dt`` in norm. The second term lets the TCP reach a face
+   exactly (a target clamped onto it).
+2. ``v`` moves toward ``v_des`` by at most ``max_accel_m_s2 * dt`` (norm). If that leaves the
+   per-axis caps, the new velocity is the point nearest the candidate on the segment from the
+   current velocity clipped into the caps (within the acceleration bound, by 1.) to the
+   candidate. Both ends lie within the speed and acceleration bounds, so the result does too.
+3. ``w`` likewise, with the angular limits; the only wall is the tilt limit, for the tilt
+   rate ``w . a`` (``a`` the horizontal axis about which the tool tilts away from vertical),
+   braking at half the angular acceleration limit (the margin covers the axis turning with
+   the tool's rotation about the vertical).
+4. ``p += v dt``, ``q = exp(w dt) q``; a final projection on the box and the tilt cone only
+   absorbs rounding.
+
+Pure Python floats: the twin steps this at hundreds of Hz, where NumPy's per-call overhead on
+3-vectors would dominate.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+
+from scipy.spatial.transform import Rotation
+
+from drivers.arm.envelope import SafetyEnvelope, clamp_tilt, rotation_from_rpy, rpy_near
+from drivers.base import Pose
+
+Vec = tuple[float, float, float]
+Quat = tuple[float, float, float, float]  # x, y, z, w
+_ZERO: Vec = (0.0, 0.0, 0.0)
+_ROUNDING_RAD = 1e-12
+
+
+class TcpMotion:
+    """The TCP's state and its limited motion; see the module docstring."""
+
+    def __init__(
+        self,
+        envelope: SafetyEnvelope,
+        start: Pose,
+        max_accel_m_s2: float,
+        max_angular_accel_rad_s2: float,
+        dt_s: float,
+    ) -> None:
+        self.envelope = envelope
+        self.dt_s = dt_s
+        self.max_accel_m_s2 = max_accel_m_s2
+        self.max_angular_accel_rad_s2 = max_angular_accel_rad_s2
+        self.position_m: Vec = _vec(start.xyz_m)
+        self.velocity_m_s: Vec = _ZERO
+        self.quaternion: Quat = quaternion_from_rpy(start.rpy_rad)
+        self.angular_rad_s: Vec = _ZERO
+        self._low: Vec = (envelope.x_min_m, envelope.y_min_m, envelope.z_min_m)
+        self._high: Vec = (envelope.x_max_m, envelope.y_max_m, envelope.z_max_m)
+
+    # ----------------------------------------------------------------- queries
+
+    def pose(self, rpy_hint: Vec) -> Pose:
+        """The TCP pose, its roll/pitch/yaw wrapped to lie nearest ``rpy_hint``."""
+        return Pose(self.position_m, rpy_near(Rotation.from_quat(self.quaternion), rpy_hint))
+
+    def tilt_rad(self) -> float:
+        """Angle between the tool z-axis and the downward vertical of B."""
+        zx, zy, zz = _tool_z(self.quaternion)
+        return math.atan2(math.hypot(zx, zy), -zz)
+
+    def at_rest(self, tolerance: float) -> bool:
+        return _norm(self.velocity_m_s) <= tolerance and _norm(self.angular_rad_s) <= tolerance
+
+    def offset_to(self, xyz_m: Vec, quaternion: Quat) -> tuple[Vec, Vec]:
+        """(translation in m, rotation vector in rad) from the TCP to the given pose, in B."""
+        return _sub(xyz_m, self.position_m), rotation_vector_between(self.quaternion, quaternion)
+
+    # ----------------------------------------------------------------- motion
+
+    def approach(
+        self, xyz_m: Vec, quaternion: Quat, speed_m_s: float, angular_speed_rad_s: float
+    ) -> tuple[Vec, Vec]:
+        """Desired velocities toward a goal pose: straight (and along the geodesic) at most
+        at the given speeds, slow enough to stop there at the acceleration limits, and not
+        past it within one step."""
+        dt = self.dt_s
+        delta, turn = self.offset_to(xyz_m, quaternion)
+        distance, angle = _norm(delta), _norm(turn)
+        v_des = w_des = _ZERO
+        if distance > 0:
+            speed = min(speed_m_s, distance / dt, math.sqrt(2.0 * self.max_accel_m_s2 * distance))
+            v_des = _scale(delta, speed / distance)
+        if angle > 0:
+            rate = min(
+                angular_speed_rad_s,
+                angle / dt,
+                math.sqrt(2.0 * self.max_angular_accel_rad_s2 * angle),
+            )
+            w_des = _scale(turn, rate / angle)
+        return v_des, w_des
+
+    def step(self, v_des: Vec, w_des: Vec) -> None:
+        """Advance by ``dt_s`` toward the desired velocities (see the module docstring)."""
+        self.velocity_m_s = self._next_velocity(v_des)
+        self.angular_rad_s = self._next_angular(w_des)
+        dt = self.dt_s
+        moved = _add(self.position_m, _scale(self.velocity_m_s, dt))
+        self.position_m = _clip(moved, self._low, self._high)
+        q = _normalised(_qmul(_qexp(_scale(self.angular_rad_s, dt)), self.quaternion))
+        if self.tilt_rad() > self.envelope.max_tilt_rad + _ROUNDING_RAD:
+            q = _vec4(clamp_tilt(Rotation.from_quat(q), self.envelope.max_tilt_rad).as_quat())
+        self.quaternion = q
+
+    def _next_velocity(self, v_des: Vec) -> Vec:
+        env, dt = self.envelope, self.dt_s
+        brake = self.max_accel_m_s2 / math.sqrt(3.0)
+        p = self.position_m
+        high = tuple(stopping_speed(h - x, brake, dt) for h, x in zip(self._high, p, strict=True))
+        low = tuple(-stopping_speed(x - lo, brake, dt) for lo, x in zip(self._low, p, strict=True))
+        v_des = _clip(_scaled_to(v_des, env.max_speed_m_s), low, high)
+        v = self.velocity_m_s
+        candidate = _add(v, _scaled_to(_sub(v_des, v), self.max_accel_m_s2 * dt))
+        if all(lo <= c <= hi for c, lo, hi in zip(candidate, low, high, strict=True)):
+            return candidate
+        safe = _clip(v, low, high)
+        direction = _sub(candidate, safe)
+        fraction = 1.0
+        for s, d, lo, hi in zip(safe, direction, low, high, strict=True):
+            if d > 0:
+                fraction = min(fraction, (hi - s) / d)
+            elif d < 0:
+                fraction = min(fraction, (lo - s) / d)
+        return _add(safe, _scale(direction, max(0.0, fraction)))
+
+    def _next_angular(self, w_des: Vec) -> Vec:
+        env, dt = self.envelope, self.dt_s
+        w = self.angular_rad_s
+        w_des = _scaled_to(w_des, env.max_angular_speed_rad_s)
+        candidate = _add(w, _scaled_to(_sub(w_des, w), self.max_angular_accel_rad_s2 * dt))
+        brake = self.max_angular_accel_rad_s2 / 2.0
+        limit = stopping_speed(env.max_tilt_rad - self.tilt_rad(), brake, dt)
+        zx, zy, _ = _tool_z(self.quaternion)
+        horizontal = math.hypot(zx, zy)
+        if horizontal < 1e-9:
+            # Pointing straight down: every horizontal rotation tilts the tool. The limit
+            # binds here only for a tilt limit of a few mrad.
+            rate = math.hypot(candidate[0], candidate[1])
+            if rate <= limit:
+                return candidate
+            k = limit / rate
+            return (candidate[0] * k, candidate[1] * k, candidate[2])
+        axis = (zy / horizontal, -zx / horizontal, 0.0)  # (-z_B) x z_T, normalised
+        rate = _dot(candidate, axis)
+        if rate <= limit:
+            return candidate
+        safe = _sub(w, _scale(axis, max(0.0, _dot(w, axis) - limit)))
+        safe_rate = _dot(safe, axis)
+        fraction = (limit - safe_rate) / (rate - safe_rate)
+        return _add(safe, _scale(_sub(candidate, safe), max(0.0, fraction)))
+
+
+def stopping_speed(distance: float, brake: float, dt: float) -> float:
+    """Largest speed toward a wall ``distance`` away from which braking by ``brake * dt`` per
+    step stops on or before the wall (module docstring, 1.): ``sqrt(2 b d) - b dt / 2``, or
+    within one step of the wall ``min(d / dt, b dt)`` (reach the wall, or come ``b dt^2``
+    closer, and stop in one more step), whichever is larger."""
+    d = max(distance, 0.0)
+    return max(math.sqrt(2.0 * brake * d) - 0.5 * brake * dt, min(d / dt, brake * dt))
+
+
+def quaternion_from_rpy(rpy_rad: tuple[float, float, float]) -> Quat:
+    """Unit quaternion (x, y, z, w) of ``Pose.rpy_rad`` (R = Rz @ Ry @ Rx)."""
+    return _vec4(rotation_from_rpy(rpy_rad).as_quat())
+
+
+def rotation_vector_between(start: Quat, end: Quat) -> Vec:
+    """Rotation vector (rad, in B) of the shortest turn taking ``start`` to ``end``."""
+    x, y, z, w = _qmul(end, (-start[0], -start[1], -start[2], start[3]))
+    if w < 0:
+        x, y, z, w = -x, -y, -z, -w
+    s = math.sqrt(x * x + y * y + z * z)
+    if s < 1e-15:
+        return (2.0 * x, 2.0 * y, 2.0 * z)
+    k = 2.0 * math.atan2(s, w) / s
+    return (x * k, y * k, z * k)
+
+
+def _tool_z(q: Quat) -> Vec:
+    x, y, z, w = q
+    return (2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y))
+
+
+def _qmul(a: Quat, b: Quat) -> Quat:
+    ax, ay, az, aw = a
+    bx, by, bz, bw = b
+    return (
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    )
+
+
+def _qexp(rotvec: Vec) -> Quat:
+    angle = _norm(rotvec)
+    if angle < 1e-12:
+        return (0.5 * rotvec[0], 0.5 * rotvec[1], 0.5 * rotvec[2], 1.0)
+    k = math.sin(0.5 * angle) / angle
+    return (rotvec[0] * k, rotvec[1] * k, rotvec[2] * k, math.cos(0.5 * angle))
+
+
+def _normalised(q: Quat) -> Quat:
+    n = math.sqrt(sum(c * c for c in q))
+    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+
+
+def _vec(values: Iterable[float]) -> Vec:
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)
+
+
+def _vec4(values: Iterable[float]) -> Quat:
+    x, y, z, w = (float(v) for v in values)
+    return (x, y, z, w)
+
+
+def _norm(v: Vec) -> float:
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+
+
+def _dot(a: Vec, b: Vec) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _add(a: Vec, b: Vec) -> Vec:
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def _sub(a: Vec, b: Vec) -> Vec:
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def _scale(v: Vec, k: float) -> Vec:
+    return (v[0] * k, v[1] * k, v[2] * k)
+
+
+def _scaled_to(v: Vec, limit: float) -> Vec:
+    n = _norm(v)
+    return _scale(v, limit / n) if n > limit else v
+
+
+def _clip(v: Vec, low: tuple[float, ...], high: tuple[float, ...]) -> Vec:
+    return (
+        min(max(v[0], low[0]), high[0]),
+        min(max(v[1], low[1]), high[1]),
+        min(max(v[2], low[2]), high[2]),
+    )

@@ -1,0 +1,149 @@
+"""scripts/check_hardware.py as a user runs it: one line per device, exit 0/1/2."""
+
+from __future__ import annotations
+
+import importlib.util
+import socket
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+SCRIPT = ROOT / "scripts" / "check_hardware.py"
+CONFIGS = ROOT / "configs"
+SIM_CONFIGS = [
+    CONFIGS / "robot" / "xarm6.yaml",
+    CONFIGS / "gripper" / "hande.yaml",
+    CONFIGS / "sensors" / "gelsight_mini_camera.yaml",
+    CONFIGS / "sensors" / "digit_camera.yaml",
+    CONFIGS / "gamepad" / "xbox.yaml",
+    CONFIGS / "force_torque" / "jig.yaml",
+]
+
+
+def load_script():
+    spec = importlib.util.spec_from_file_location("check_hardware", SCRIPT)
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up there
+    spec.loader.exec_module(module)
+    return module
+
+
+check_hardware = load_script()
+
+
+def variant(tmp_path: Path, source: Path, name: str, **changes) -> str:
+    """A copy of ``source`` with top-level keys changed (a dotted key changes a sub-key)."""
+    data = yaml.safe_load(source.read_text())
+    for key, value in changes.items():
+        *parents, leaf = key.split("__")
+        target = data
+        for parent in parents:
+            target = target[parent]
+        target[leaf] = value
+    path = tmp_path / name
+    path.write_text(yaml.safe_dump(data))
+    return str(path)
+
+
+def test_the_sim_configs_all_report_ok_from_the_command_line():
+    result = subprocess.run(
+        [sys.executable, str(SCRIPT), *map(str, SIM_CONFIGS)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
+    lines = result.stdout.splitlines()
+    assert len(lines) == len(SIM_CONFIGS)
+    for line, path in zip(lines, SIM_CONFIGS, strict=True):
+        assert line.startswith("OK ") and str(path.relative_to(ROOT)) in line
+    assert "TCP at (0.350, 0.000, 0.200) m" in lines[0]
+    assert "320x240 frame" in lines[2] and "240x320 frame" in lines[3]
+    assert result.stderr == ""
+
+
+def test_default_configs_are_the_robot_set(capsys):
+    assert check_hardware.main([]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[1] for line in lines] == ["arm", "gripper", "tactile", "gamepad"]
+
+
+@pytest.mark.parametrize(
+    ("source", "change", "message"),
+    [
+        ("robot/xarm6.yaml", {"servo_rate_hz": 500}, "key 'servo_rate_hz': expected a number"),
+        ("robot/xarm6.yaml", {"sim__max_accel_m_s2": -1}, "key 'sim.max_accel_m_s2'"),
+        ("robot/xarm6.yaml", {"sim__start_z_m": 0.9}, "key 'sim.start_z_m'"),
+        ("gripper/hande.yaml", {"slave_id": 300}, "key 'slave_id'"),
+        ("gamepad/xbox.yaml", {"buttons__deadman": "l1"}, "key 'buttons.deadman'"),
+        ("gamepad/xbox.yaml", {"type": "joystick"}, "unknown device type 'joystick'; known:"),
+        ("sensors/digit_camera.yaml", {"backend": "fake"}, "key 'backend': expected one of"),
+    ],
+)
+def test_a_bad_config_exits_2_with_one_line_naming_file_and_key(
+    tmp_path, capsys, source, change, message
+):
+    bad = variant(tmp_path, CONFIGS / source, "bad.yaml", **change)
+    good = str(CONFIGS / "force_torque" / "jig.yaml")
+    assert check_hardware.main([good, bad]) == 2
+    out, err = capsys.readouterr()
+    assert out == ""  # nothing was probed
+    assert len(err.splitlines()) == 1
+    assert err.startswith(f"check_hardware: error: {bad}: ") and message in err
+
+
+@pytest.mark.parametrize("argv", [["--backend", "fake"], ["--verbose"], ["missing.yaml"]])
+def test_bad_arguments_exit_2_with_one_line(capsys, argv):
+    with pytest.raises(SystemExit) as exit_info:
+        code = check_hardware.main(argv)
+        raise SystemExit(code)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and err.startswith("check_hardware: error: ")
+
+
+def test_a_tool_port_gripper_needs_the_arm(tmp_path, capsys):
+    gripper = variant(tmp_path, CONFIGS / "gripper" / "hande.yaml", "g.yaml", transport="xarm_tool")
+    assert check_hardware.main([gripper, "--backend", "real"]) == 2
+    assert "key 'transport': 'xarm_tool' reaches the gripper through the arm" in (
+        capsys.readouterr().err
+    )
+
+
+def test_absent_real_devices_fail_with_the_drivers_message_and_exit_1(tmp_path, capsys):
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        if probe.connect_ex(("127.0.0.1", 502)) == 0:
+            pytest.skip("something listens on 127.0.0.1:502")
+    paths = [
+        variant(tmp_path, CONFIGS / "robot" / "xarm6.yaml", "arm.yaml", ip="127.0.0.1"),
+        variant(
+            tmp_path, CONFIGS / "gripper" / "hande.yaml", "g.yaml", port=str(tmp_path / "ttyX")
+        ),
+        variant(
+            tmp_path,
+            CONFIGS / "sensors" / "gelsight_mini_camera.yaml",
+            "cam.yaml",
+            by_id_dir=str(tmp_path / "by-id"),
+        ),
+    ]
+    assert check_hardware.main([*paths, "--backend", "real"]) == 1
+    lines = capsys.readouterr().out.splitlines()
+    assert len(lines) == 3
+    assert lines[0].startswith("FAIL arm xarm6/real")
+    assert (
+        "DeviceNotConnectedError: xarm6: cannot connect to the controller at 127.0.0.1" in lines[0]
+    )
+    assert "serial port" in lines[1] and "not found" in lines[1] and "24 V" in lines[1]
+    assert "by-id does not exist" in lines[2] and "'video'" in lines[2]
+
+
+def test_a_sim_only_type_refuses_the_real_backend(capsys):
+    assert (
+        check_hardware.main([str(CONFIGS / "force_torque" / "jig.yaml"), "--backend", "real"]) == 2
+    )
+    assert "has no 'real' driver yet; known: sim" in capsys.readouterr().err
