@@ -36,8 +36,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Self
 
 from drivers.arm.envelope import (
     clamp_pose,
@@ -48,7 +46,7 @@ from drivers.arm.envelope import (
 )
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
-from drivers.base import ArmState, Pose, Twist
+from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.clock import Clock, MonotonicClock
 from drivers.sim.tcp_motion import TcpMotion, quaternion_from_rpy
@@ -130,7 +128,7 @@ class SimArmConfig(XArm6Config):
             )
 
 
-class SimArm:
+class SimArm(ContextManagedDevice):
     """The xArm6 twin; see the module docstring. ``clock`` defaults to real time."""
 
     def __init__(self, config: SimArmConfig, clock: Clock | None = None) -> None:
@@ -189,18 +187,6 @@ class SimArm:
         self._advance()
         self._halt()
         self._connected = False
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     # ----------------------------------------------------------------- reading
 

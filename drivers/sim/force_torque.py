@@ -16,12 +16,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Self
 
 import numpy as np
 
-from drivers.base import Vector3, WrenchSample
+from drivers.base import ContextManagedDevice, Vector3, WrenchSample
 from drivers.errors import DeviceNotConnectedError
 from drivers.sim.clock import Clock, MonotonicClock
 from drivers.validation import check_int, check_range
@@ -82,7 +80,7 @@ def _zero_wrench(t_s: float) -> tuple[Sequence[float], Sequence[float]]:
     return (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
 
 
-class SimForceTorque:
+class SimForceTorque(ContextManagedDevice):
     """The force/torque twin; see the module docstring. ``clock`` defaults to real time,
     ``rng`` to ``numpy.random.default_rng(config.sim.seed)``."""
 
@@ -118,18 +116,6 @@ class SimForceTorque:
 
     def disconnect(self) -> None:
         self._connected = False
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     def read(self) -> WrenchSample:
         """The source's wrench now, plus noise."""

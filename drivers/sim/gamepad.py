@@ -20,10 +20,9 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from types import MappingProxyType, TracebackType
-from typing import Self
+from types import MappingProxyType
 
-from drivers.base import GamepadState
+from drivers.base import ContextManagedDevice, GamepadState
 from drivers.errors import DeviceNotConnectedError
 from drivers.gamepad.mapping import GamepadConfig
 from drivers.sim.clock import Clock, MonotonicClock
@@ -78,7 +77,7 @@ class PadEvent:
         object.__setattr__(self, "buttons", MappingProxyType(dict(self.buttons)))
 
 
-class SimGamepad:
+class SimGamepad(ContextManagedDevice):
     """The gamepad twin; see the module docstring. ``clock`` defaults to real time."""
 
     def __init__(self, config: SimGamepadConfig, clock: Clock | None = None) -> None:
@@ -160,18 +159,6 @@ class SimGamepad:
         return GamepadState(
             t_s=t_s, connected=True, axes=dict(self._axes), buttons=dict(self._buttons)
         )
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     def _apply_due_events(self) -> None:
         elapsed_s = self._clock.now() - self._start_s

@@ -27,10 +27,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Any, Self
+from typing import Any
 
-from drivers.base import GripperObject, GripperStatus
+from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.hande import HandEConfig
@@ -100,7 +99,7 @@ class _Motion:
         return self.speed_m_s * (t_s - self.t_s) >= abs(self.stop_m - self.start_m)
 
 
-class SimGripper:
+class SimGripper(ContextManagedDevice):
     """The Hand-E twin; see the module docstring. ``clock`` defaults to real time."""
 
     def __init__(self, config: SimGripperConfig, clock: Clock | None = None) -> None:
@@ -143,18 +142,6 @@ class SimGripper:
     @property
     def is_connected(self) -> bool:
         return self._connected
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     # -- Gripper -----------------------------------------------------------------------
 

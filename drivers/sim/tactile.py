@@ -26,12 +26,10 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import TracebackType
-from typing import Self
 
 import numpy as np
 
-from drivers.base import TactileFrame
+from drivers.base import ContextManagedDevice, TactileFrame
 from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.clock import Clock, MonotonicClock
 from drivers.sim.marker_images import MarkerImageRenderer
@@ -86,7 +84,7 @@ class SimTactileConfig(TactileCameraConfig):
             raise ValueError(f"key 'sim': expected a SimTactileSettings, got {self.sim!r}")
 
 
-class SimTactileSensor:
+class SimTactileSensor(ContextManagedDevice):
     """The tactile camera twin; see the module docstring. ``clock`` defaults to real time,
     ``rng`` to ``numpy.random.default_rng(config.sim.seed)``."""
 
@@ -156,18 +154,6 @@ class SimTactileSensor:
     def disconnect(self) -> None:
         self._connected = False
         self._latest = None
-
-    def __enter__(self) -> Self:
-        self.connect()
-        return self
-
-    def __exit__(
-        self,
-        exc_type: type[BaseException] | None,
-        exc: BaseException | None,
-        tb: TracebackType | None,
-    ) -> None:
-        self.disconnect()
 
     # -- reading -----------------------------------------------------------------------
 
