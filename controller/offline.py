@@ -36,25 +36,10 @@ from controller.config import ConfigError, sensor_profile
 from controller.tactile.calibration import Calibration
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import estimator_config
-from controller.tactile.wrench import WrenchEstimate
+from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
-CSV_COLUMNS = (
-    "frame",
-    "time_s",
-    "tau_x",
-    "tau_y",
-    "tau_z",
-    "shear_x",
-    "shear_y",
-    "normal",
-    "fv_tau_x",
-    "fv_tau_y",
-    "fv_tau_z",
-    "contact",
-    "degenerate",
-    "latency_ms",
-)
+CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, "contact", "degenerate", "latency_ms")
 PROGRESS_MIN_FRAMES = 100
 
 
@@ -152,26 +137,9 @@ def read_reference(source: FrameSource, start: int, stop: int) -> list[np.ndarra
 
 
 def _row(index: int, t_s: float, estimate: WrenchEstimate, latency_ms: float) -> list[object]:
-    e = estimate
-    values = (
-        e.tau_x,
-        e.tau_y,
-        e.tau_z,
-        e.shear_x,
-        e.shear_y,
-        e.normal,
-        e.fv_tau_x,
-        e.fv_tau_y,
-        e.fv_tau_z,
-    )
-    return [
-        index,
-        f"{t_s:.6f}",
-        *(f"{v:.9g}" for v in values),
-        int(e.contact),
-        int(e.degenerate),
-        f"{latency_ms:.3f}",
-    ]
+    values = (f"{getattr(estimate, name):.9g}" for name in VALUE_FIELDS)
+    flags = (int(estimate.contact), int(estimate.degenerate))
+    return [index, f"{t_s:.6f}", *values, *flags, f"{latency_ms:.3f}"]
 
 
 def estimate_file(

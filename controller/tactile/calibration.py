@@ -21,20 +21,10 @@ import numpy as np
 import yaml
 
 from controller.config import ConfigError, load_yaml
-from controller.tactile.wrench import WrenchEstimate
+from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 
 FORMAT = "tactile-insertion/calibration/v1"
-AXES = (
-    "tau_x",
-    "tau_y",
-    "tau_z",
-    "shear_x",
-    "shear_y",
-    "normal",
-    "fv_tau_x",
-    "fv_tau_y",
-    "fv_tau_z",
-)
+AXES = VALUE_FIELDS
 _MIN_SAMPLES = 3
 
 

@@ -4,6 +4,19 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+# The estimate's values (every field but the timestamp and the flags), in a fixed order.
+VALUE_FIELDS = (
+    "tau_x",
+    "tau_y",
+    "tau_z",
+    "shear_x",
+    "shear_y",
+    "normal",
+    "fv_tau_x",
+    "fv_tau_y",
+    "fv_tau_z",
+)
+
 
 @dataclass(frozen=True, slots=True)
 class WrenchEstimate:

@@ -154,6 +154,29 @@ def servo_target(
     return Pose(_vec3(position), rpy_near(rotation, goal.rpy_rad))
 
 
+def timed_servo_target(
+    previous: Pose,
+    target: Pose,
+    env: SafetyEnvelope,
+    previous_time_s: float | None,
+    now_s: float,
+    servo_rate_hz: float,
+) -> Pose:
+    """``servo_target`` with the step bounded by the envelope's speeds times the time since
+    the previous command (one servo period, ``1 / servo_rate_hz``, for the first command)."""
+    if previous_time_s is None:
+        elapsed_s = 1.0 / servo_rate_hz
+    else:
+        elapsed_s = max(0.0, now_s - previous_time_s)
+    return servo_target(
+        previous,
+        target,
+        env,
+        max_step_m=min(env.max_step_m, env.max_speed_m_s * elapsed_s),
+        max_step_rad=min(env.max_step_rad, env.max_angular_speed_rad_s * elapsed_s),
+    )
+
+
 def clamp_twist(pose: Pose, twist: Twist, duration_s: float, env: SafetyEnvelope) -> Twist:
     """``twist`` (in B) limited so that holding it for ``duration_s`` from ``pose`` respects
     the speed limits, keeps the TCP in the box and does not tilt the tool beyond the limit."""

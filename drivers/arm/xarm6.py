@@ -47,7 +47,7 @@ from drivers.arm.envelope import (
     clamp_pose,
     clamp_twist,
     rotation_from_rpy,
-    servo_target,
+    timed_servo_target,
 )
 from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
 from drivers.errors import (
@@ -269,16 +269,13 @@ class XArm6(ContextManagedDevice):
         self._enter_mode(MODE_SERVO)
         env = self.config.envelope
         now = self._clock()
-        if self._servo_time_s is None:
-            elapsed = 1.0 / self.config.servo_rate_hz
-        else:
-            elapsed = max(0.0, now - self._servo_time_s)
-        command = servo_target(
+        command = timed_servo_target(
             self._servo_reference,
             target,
             env,
-            max_step_m=min(env.max_step_m, env.max_speed_m_s * elapsed),
-            max_step_rad=min(env.max_step_rad, env.max_angular_speed_rad_s * elapsed),
+            self._servo_time_s,
+            now,
+            self.config.servo_rate_hz,
         )
         code = self._api.set_servo_cartesian(
             _sdk_pose(command), is_radian=True, is_tool_coord=False

@@ -41,8 +41,8 @@ from drivers.arm.envelope import (
     clamp_pose,
     clamp_twist,
     rotation_from_rpy,
-    servo_target,
     tilt_rad,
+    timed_servo_target,
 )
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
@@ -236,16 +236,13 @@ class SimArm(ContextManagedDevice):
         now = self._clock.now()
         if self._servo_reference is None:
             self._servo_reference = clamp_pose(self._pose(), env)
-        if self._servo_time_s is None:
-            elapsed = 1.0 / self.config.servo_rate_hz
-        else:
-            elapsed = max(0.0, now - self._servo_time_s)
-        command = servo_target(
+        command = timed_servo_target(
             self._servo_reference,
             target,
             env,
-            max_step_m=min(env.max_step_m, env.max_speed_m_s * elapsed),
-            max_step_rad=min(env.max_step_rad, env.max_angular_speed_rad_s * elapsed),
+            self._servo_time_s,
+            now,
+            self.config.servo_rate_hz,
         )
         self._goal = _Goal.at(command, env.max_speed_m_s)
         self._servo_reference = command
