@@ -169,10 +169,11 @@ def make_device(kind: str, config: Any, **transport: Any) -> Device:
     return driver.device_class.from_config(config, **transport)
 
 
-def make_arm(config: XArm6Config) -> Arm:
+def make_arm(config: XArm6Config, api: Any = None) -> Arm:
     """The arm for ``config``: ``XArm6`` for an ``XArm6Config``, ``SimArm`` for a
-    ``SimArmConfig``."""
-    return cast(Arm, make_device("arm", config))
+    ``SimArmConfig``. ``api``: an ``XArmAPI``-like object to use instead of a new one (the
+    twin ignores it)."""
+    return cast(Arm, make_device("arm", config, api=api))
 
 
 def make_gripper(config: HandEConfig, arm: Any = None) -> Gripper:
@@ -181,9 +182,11 @@ def make_gripper(config: HandEConfig, arm: Any = None) -> Gripper:
     return cast(Gripper, make_device("gripper", config, arm=arm))
 
 
-def make_tactile_sensor(config: TactileCameraConfig) -> TactileSensor:
-    """The tactile camera for ``config``."""
-    return cast(TactileSensor, make_device("tactile", config))
+def make_tactile_sensor(config: TactileCameraConfig, capture_factory: Any = None) -> TactileSensor:
+    """The tactile camera for ``config``. ``capture_factory``: opens a capture for a device
+    node, instead of V4L2 (the twin ignores it)."""
+    transport = {} if capture_factory is None else {"capture_factory": capture_factory}
+    return cast(TactileSensor, make_device("tactile", config, **transport))
 
 
 def make_gamepad(config: GamepadConfig) -> Gamepad:

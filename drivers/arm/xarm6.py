@@ -157,11 +157,14 @@ class XArm6(ContextManagedDevice):
         self._servo_time_s: float | None = None
 
     @classmethod
-    def from_config(cls, config: XArm6Config) -> XArm6:
-        """The driver over a real ``XArmAPI`` for ``config.ip`` (not connected yet)."""
-        from xarm.wrapper import XArmAPI
+    def from_config(cls, config: XArm6Config, api: Any = None) -> XArm6:
+        """The driver over ``api``, by default a real ``XArmAPI`` for ``config.ip`` (not
+        connected yet)."""
+        if api is None:
+            from xarm.wrapper import XArmAPI
 
-        return cls(config, XArmAPI(config.ip, is_radian=True, do_not_open=True))
+            api = XArmAPI(config.ip, is_radian=True, do_not_open=True)
+        return cls(config, api)
 
     # ----------------------------------------------------------------- lifecycle
 

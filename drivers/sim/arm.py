@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from drivers.arm.envelope import (
     clamp_pose,
@@ -158,8 +159,8 @@ class SimArm(ContextManagedDevice):
         self._servo_time_s: float | None = None
 
     @classmethod
-    def from_config(cls, config: SimArmConfig) -> SimArm:
-        """The twin on the real-time clock (not connected yet)."""
+    def from_config(cls, config: SimArmConfig, api: Any = None) -> SimArm:
+        """The twin on the real-time clock (not connected yet); ``api`` is ignored."""
         return cls(config)
 
     # ----------------------------------------------------------------- lifecycle

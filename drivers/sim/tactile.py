@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -117,8 +118,9 @@ class SimTactileSensor(ContextManagedDevice):
         self._latest: tuple[int, TactileFrame] | None = None
 
     @classmethod
-    def from_config(cls, config: SimTactileConfig) -> SimTactileSensor:
-        """The twin on the real-time clock, seeded by ``config.sim.seed``."""
+    def from_config(cls, config: SimTactileConfig, capture_factory: Any = None) -> SimTactileSensor:
+        """The twin on the real-time clock, seeded by ``config.sim.seed``; ``capture_factory``
+        is ignored."""
         return cls(config)
 
     @property

@@ -277,8 +277,11 @@ class TactileCamera(ContextManagedDevice):
         self._grabber: _Grabber | None = None
 
     @classmethod
-    def from_config(cls, config: TactileCameraConfig) -> TactileCamera:
-        return cls(config, open_v4l2)
+    def from_config(
+        cls, config: TactileCameraConfig, capture_factory: CaptureFactory = open_v4l2
+    ) -> TactileCamera:
+        """The camera opened through ``capture_factory`` (V4L2 by default), not connected."""
+        return cls(config, capture_factory)
 
     @property
     def is_connected(self) -> bool:

@@ -480,3 +480,15 @@ def test_no_frame_before_timeout_is_a_timeout(tmp_path: Path) -> None:
     with pytest.raises(DeviceTimeoutError, match="no usable frame within 0.1 s"):
         camera.connect()
     assert not camera.is_connected
+
+
+def test_registry_builds_the_real_driver_for_a_video_peer(tmp_path: Path) -> None:
+    from drivers import registry
+
+    clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(10)])
+    factory, _ = paced_factory(raw=False, rate_hz=60)
+    config = digit_config(by_id_dir(tmp_path, DIGIT_ID, clip))
+    with registry.make_tactile_sensor(config, capture_factory=factory) as camera:
+        assert isinstance(camera, TactileCamera)
+        frame = camera.read_latest(max_age_s=0.5)
+    assert frame.image.shape == (320, 240, 3)

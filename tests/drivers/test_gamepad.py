@@ -281,3 +281,14 @@ def test_config_validation_errors(change, message):
         build(GamepadConfig, {**GOOD, **change}, source="pad.yaml")
     assert str(err.value).startswith("pad.yaml: ")
     assert message in str(err.value)
+
+
+def test_registry_builds_the_real_driver_for_the_virtual_device(device, config):
+    from drivers import registry
+
+    with registry.make_gamepad(config) as pad:
+        assert isinstance(pad, PygameGamepad)
+        device.set_button("leftshoulder", True)
+        device.set_axis("leftx", FULL)
+        state = pad.read()
+    assert state.connected and state.buttons["deadman"] and state.axes["vy"] == -1.0

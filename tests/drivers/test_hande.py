@@ -430,3 +430,21 @@ def test_unit_keyword_follows_the_installed_pymodbus_signature():
     )
     assert transport.read_registers(0x07D0, 3) == [0x3100, 0, 0]
     assert client.calls == [(0x07D0, 3, 9)]
+
+
+def test_registry_builds_the_real_driver_from_the_example_yaml(server):
+    """The example YAML with ``backend: real``, pointed at the pty peer, through the registry."""
+    import dataclasses
+
+    from drivers import registry
+
+    example = load_device_config(CONFIG_FILE, backend="real")
+    config = dataclasses.replace(
+        example, port=server.port, open_count=3, closed_count=230, timeout_s=0.3
+    )
+    with registry.make_gripper(config) as gripper:
+        assert isinstance(gripper, HandE)
+        gripper.activate()
+        gripper.move(0.020, speed_m_s=0.150, force_n=50.0)
+        status = gripper.wait_until_stopped(timeout_s=3.0)
+    assert status.activated and status.width_m == pytest.approx(0.020, abs=ONE_COUNT_M)

@@ -600,3 +600,16 @@ def test_config_validation_names_the_key(change, key):
 def test_tcp_validation_names_the_key(change, key):
     with pytest.raises(ValueError, match=f"key '{key}'"):
         dataclasses.replace(TCP, **change)
+
+
+def test_registry_builds_the_real_driver_from_the_example_yaml():
+    from drivers import registry
+    from tests.drivers.device_configs import CONFIGS, load_device_config
+
+    config = load_device_config(CONFIGS / "robot" / "xarm6.yaml", backend="real")
+    fake = FakeXArmAPI(config.ip, is_radian=True, do_not_open=True)
+    with registry.make_arm(config, api=fake) as arm:
+        assert isinstance(arm, XArm6) and arm.is_connected
+        state = arm.read_state()
+    assert not fake.connected
+    assert len(state.tcp.xyz_m) == 3 and state.error_code == 0
