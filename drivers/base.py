@@ -12,6 +12,7 @@ sensor. Timestamps ``t_s`` are seconds on ``time.monotonic()`` of the reading pr
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import IntEnum
 from types import TracebackType
@@ -101,6 +102,16 @@ class GamepadState:
     connected: bool
     axes: dict[str, float]
     buttons: dict[str, bool]
+
+    @classmethod
+    def unplugged(cls, t_s: float, axes: Iterable[str], buttons: Iterable[str]) -> GamepadState:
+        """The safe state with no pad: every named axis at zero, every button released."""
+        return cls(
+            t_s=t_s,
+            connected=False,
+            axes=dict.fromkeys(axes, 0.0),
+            buttons=dict.fromkeys(buttons, False),
+        )
 
 
 @dataclass(frozen=True)

@@ -154,12 +154,7 @@ class PygameGamepad(ContextManagedDevice):
         pad = self._pad
         cfg = self.config
         if pad is None:
-            return GamepadState(
-                t_s=t_s,
-                connected=False,
-                axes={action: 0.0 for action in cfg.axes},
-                buttons={action: False for action in cfg.buttons},
-            )
+            return GamepadState.unplugged(t_s, cfg.axes, cfg.buttons)
         return GamepadState(
             t_s=t_s,
             connected=True,

@@ -150,12 +150,7 @@ class SimGamepad(ContextManagedDevice):
         self._apply_due_events()
         t_s = self._clock.now()
         if not self._attached:
-            return GamepadState(
-                t_s=t_s,
-                connected=False,
-                axes={action: 0.0 for action in self._axes},
-                buttons={action: False for action in self._buttons},
-            )
+            return GamepadState.unplugged(t_s, self._axes, self._buttons)
         return GamepadState(
             t_s=t_s, connected=True, axes=dict(self._axes), buttons=dict(self._buttons)
         )
