@@ -1,0 +1,76 @@
+"""Fit the torque constants of an estimator on a calibration dataset, recorded or simulated.
+
+    python scripts/calibrate.py DATASET [--method default] [--out calibration.yaml]
+
+Runs the estimator over the dataset's frames (zeroed on its reference interval), fits each
+axis that has segments (c_x, c_y and c_z: our dipole / NHHD torque, and the FingerVision
+baseline's, side by side), prints a table of slope, RMSE (N*mm) and R^2, and writes the
+calibration file (``Calibration.save``) that ``scripts/estimate.py --calibration`` reads.
+Expected failures print one line ``calibrate: error: ...`` and exit with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from controller.config import ConfigError, sensor_profile
+from controller.tactile.calibration import AxisFit
+from controller.tactile.dataset import Dataset
+from controller.tactile.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
+from controller.tactile.settings import estimator_config
+
+
+def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
+    """A markdown table: one row per axis, ours and the baseline side by side."""
+    lines = [
+        "| axis | ours: slope | ours: RMSE (N*mm) | ours: R^2 "
+        "| baseline: slope | baseline: RMSE (N*mm) | baseline: R^2 | samples |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for axis in sorted({axis for axis, _ in fits}):
+        ours, base = fits[(axis, "ours")], fits[(axis, "baseline")]
+        lines.append(
+            f"| tau_{axis} | {ours.slope:.4g} | {ours.rmse * 1e3:.3f} | {ours.r2:.4f} "
+            f"| {base.slope:.4g} | {base.rmse * 1e3:.3f} | {base.r2:.4f} | {ours.samples} |"
+        )
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="calibrate", description="Fit c_x, c_y (and c_z) on a calibration dataset."
+    )
+    parser.add_argument("dataset", type=Path, help="dataset folder (controller/tactile/dataset.py)")
+    parser.add_argument(
+        "--method", default="default", help="estimator configuration name or YAML path"
+    )
+    parser.add_argument("--out", type=Path, default=None, help="calibration YAML to write")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        dataset = Dataset(args.dataset)
+        profile = sensor_profile(dataset.meta.sensor)
+        config = estimator_config(args.method)
+        series = estimate_dataset(dataset, config, profile)
+        fits = fit_dataset(dataset, series)
+        if not fits:
+            raise ConfigError(f"{args.dataset}: the dataset has no segments to fit")
+    except (ConfigError, ValueError) as exc:
+        print(f"calibrate: error: {exc}", file=sys.stderr)
+        return 2
+    print(
+        f"calibrate: {len(dataset)} frames of {args.dataset} ({dataset.meta.sensor}, "
+        f"{args.method}); median estimator time {np.median(series.latency_ms):.2f} ms"
+    )
+    print(fit_table(fits))
+    if args.out is not None:
+        calibration_from_fits(fits, dataset.meta.sensor, args.method).save(args.out)
+        print(f"calibrate: wrote {args.out}")
+    return 0

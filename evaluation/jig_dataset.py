@@ -1,0 +1,101 @@
+"""Simulated calibration datasets: the jig scene rendered frame by frame into the dataset
+format of ``controller.tactile.dataset`` (the same one a recording uses)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Sequence
+from dataclasses import asdict
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from controller.tactile.dataset import DatasetMeta, DatasetWriter, Segment
+from drivers.sim.gel.model import GelModel
+from drivers.sim.jig import Experiment, JigConfig, JigGel, ft_samples, jig_program, tactile_times
+
+
+class FrameRenderer(Protocol):
+    def render(self, field_px: np.ndarray, frame_index: int) -> np.ndarray:
+        """The camera image (H, W, 3) BGR uint8 for a forward image field (px) on a grid
+        of cells covering the image."""
+
+
+def paper_experiments(
+    axes: Sequence[str], amplitudes_nm: Sequence[float], frames_per_axis: int, config: JigConfig
+) -> list[Experiment]:
+    """Experiments that cycle through ``amplitudes_nm`` about each axis until about
+    ``frames_per_axis`` tactile frames have been captured for it."""
+    mean_pulse_s = (
+        config.ramp_min_s
+        + config.ramp_max_s
+        + (config.hold_min_s + config.hold_max_s) / 2
+        + (config.rest_min_s + config.rest_max_s) / 2
+    )
+    seconds = frames_per_axis / config.tactile_rate_hz
+    pulses = max(1, round(seconds / mean_pulse_s / len(amplitudes_nm)))
+    return [Experiment(axis, amplitude, pulses) for axis in axes for amplitude in amplitudes_nm]
+
+
+def write_jig_dataset(
+    folder: Path | str,
+    sensor: str,
+    model: GelModel,
+    renderer: FrameRenderer,
+    experiments: Sequence[Experiment],
+    config: JigConfig,
+    seed: int,
+    extras: dict | None = None,
+) -> dict[str, float]:
+    """Simulate the jig running ``experiments`` and write the dataset to ``folder``.
+    Returns timing: frames, seconds for the physics and for the rendering."""
+    rng = np.random.default_rng(seed)
+    program = jig_program(experiments, config, rng)
+    frame_times = tactile_times(program, config, rng)
+    ft_t, ft_wrench = ft_samples(program, config, rng)
+    meta = DatasetMeta(
+        sensor=sensor,
+        source="simulation",
+        gel_load_factor=config.gel_load_factor,
+        reference=program.reference,
+        open=(0.0, config.open_s),
+        segments=tuple(
+            Segment(s.axis, s.amplitude_nm, s.t_start_s, s.t_end_s) for s in program.segments
+        ),
+        extras={
+            "seed": seed,
+            "object": model.shape.kind,
+            "gel_profile": asdict(model.profile),
+            "jig": asdict(config),
+            **(extras or {}),
+        },
+    )
+    gel = JigGel(model, program, config)
+    physics_s = render_s = 0.0
+    with DatasetWriter(folder, meta, config.tactile_rate_hz) as writer:
+        writer.write_ft(ft_t, ft_wrench)
+        for index, t_s in enumerate(frame_times):
+            start = time.perf_counter()
+            state = gel.state(float(t_s))
+            middle = time.perf_counter()
+            image = renderer.render(state.field_px, index)
+            physics_s += middle - start
+            render_s += time.perf_counter() - middle
+            writer.add_frame(float(t_s), image)
+            carried = state.carried
+            writer.add_truth(
+                {
+                    "t_s": t_s,
+                    "fx_n": carried.fx,
+                    "fy_n": carried.fy,
+                    "fz_n": carried.fz,
+                    "tau_x_nm": carried.tau_x,
+                    "tau_y_nm": carried.tau_y,
+                    "tau_z_nm": carried.tau_z,
+                    "slip_fraction": state.slip_fraction,
+                    "gross_slip": float(state.tangential.gross_slip),
+                    "lifted_off": float(state.lifted_off),
+                }
+            )
+    return {"frames": float(frame_times.size), "physics_s": physics_s, "render_s": render_s}
