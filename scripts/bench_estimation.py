@@ -20,7 +20,7 @@ import platform
 import subprocess
 import sys
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -31,8 +31,9 @@ from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import divergence
 from controller.tactile.flow import DenseGridFlow
-from controller.tactile.settings import EstimatorConfig, estimator_config
+from controller.tactile.settings import EstimatorConfig
 from drivers.sim.marker_images import MarkerImageRenderer, area_mean_field
+from evaluation.configurations import estimator_variants
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)
 FAMILIES = {"smooth": (40.0, 120.0), "contact": (15.0, 40.0)}
@@ -73,62 +74,6 @@ def make_cases(per_amplitude: int, seed: int = 2024) -> tuple[np.ndarray, list[C
         for field in [bump_field(rng, amplitude, widths)]
     ]
     return renderer.render(), cases
-
-
-def configurations(quick: bool) -> list[tuple[str, EstimatorConfig]]:
-    default = estimator_config("default")
-    paper = estimator_config("paper")
-    fl = default.flow
-    fb = paper.flow.farneback
-    plain_dis = replace(
-        fl.dis,
-        finest_scale=None,
-        patch_size=None,
-        patch_stride=None,
-        gradient_descent_iterations=None,
-        variational_refinement_iterations=None,
-    )
-    configs = [
-        ("**paper** (Farneback per-channel w32, 12x9)", paper),
-        ("**default** (DIS tuned, gray, 16x12)", default),
-        ("fast (default without spatial propagation)", estimator_config("fast")),
-    ]
-    if quick:
-        return configs
-    dis = [
-        (
-            f"DIS {p} gray, scale {s}",
-            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
-        )
-        for p in ("ultrafast", "fast", "medium")
-        for s in (1.0, 0.5)
-    ]
-    return configs + [
-        ("Farneback w32 gray, 12x9", replace(paper, flow=replace(paper.flow, color="gray"))),
-        (
-            "Farneback w12 gray, scale 0.5, 1 level",
-            replace(
-                default,
-                flow=replace(
-                    paper.flow,
-                    color="gray",
-                    scale=0.5,
-                    farneback=replace(fb, winsize=12, levels=1, iterations=2, poly_sigma=1.1),
-                ),
-            ),
-        ),
-        *dis,
-        (
-            "DIS ultrafast per-channel",
-            replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
-        ),
-        ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
-        ("markers (LK on printed markers)", estimator_config("markers")),
-        ("default, grid 32x24 (stride 10)", replace(default, stride_px=10)),
-        ("default, grid 12x9 (stride 26.7)", replace(default, stride_px=26.667)),
-        ("default, grid 8x6 (stride 40)", replace(default, stride_px=40)),
-        ("default, NHHD-part divergence", replace(default, divergence_of="curl_free")),
-    ]
 
 
 def timed(fn, *args) -> float:
@@ -240,7 +185,7 @@ def main() -> int:
     cv2.setNumThreads(1)
     reference, cases = make_cases(per_amplitude=1 if args.quick else 3)
     results = []
-    for label, config in configurations(args.quick):
+    for label, config in estimator_variants(args.quick):
         results.append((label, bench(config, reference, cases, 1 if args.quick else args.repeats)))
         t = results[-1][1]
         print(

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 NEWTON_ITERATIONS = 60
-TOLERANCE = 1e-9  # relative residual of the balance equations
+TOLERANCE = 1e-7  # relative residual of the balance equations
 
 
 @dataclass(frozen=True)
@@ -82,14 +82,15 @@ def solve_normal(
 
     v = start.copy() if start is not None else np.array([sag.min() + normal / k.sum(), 0, 0])
     scale = max(abs(normal), 1e-12)
+    lever = float(np.sqrt((basis[1:] ** 2).sum(axis=0).mean()))  # rms lever arm, m
     balanced = False
     for _ in range(NEWTON_ITERATIONS):
         closure = v @ basis - sag
         active = closure > 0
         force = k * np.maximum(closure, 0.0)
         residual = basis @ force - target
-        if np.all(np.abs(residual[0]) <= TOLERANCE * scale) and np.all(
-            np.abs(residual[1:]) <= TOLERANCE * scale * 1e-2
+        if abs(residual[0]) <= TOLERANCE * scale and np.all(
+            np.abs(residual[1:]) <= TOLERANCE * scale * lever
         ):
             balanced = True
             break

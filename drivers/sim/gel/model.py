@@ -73,7 +73,8 @@ class GelState:
 
     @property
     def lifted_off(self) -> bool:
-        """Part of the object's face has separated from the gel where it could touch."""
+        """Part of a flat face has separated from a flat gel where it could touch (cells of
+        zero sag without force); a curved face or a dome changes its patch instead."""
         return bool(np.any(self.footprint.mask & (self.footprint.sag_m == 0) & ~self.in_contact))
 
 
