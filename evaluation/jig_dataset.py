@@ -17,7 +17,7 @@ from drivers.sim.jig import Experiment, JigConfig, JigGel, ft_samples, jig_progr
 
 
 class FrameRenderer(Protocol):
-    def render(self, field_px: np.ndarray, frame_index: int) -> np.ndarray:
+    def render(self, displacement_px: np.ndarray, *, frame_index: int) -> np.ndarray:
         """The camera image (H, W, 3) BGR uint8 for a forward image field (px) on a grid
         of cells covering the image."""
 
@@ -79,7 +79,7 @@ def write_jig_dataset(
             start = time.perf_counter()
             state = gel.state(float(t_s))
             middle = time.perf_counter()
-            image = renderer.render(state.field_px, index)
+            image = renderer.render(state.field_px, frame_index=index)
             physics_s += middle - start
             render_s += time.perf_counter() - middle
             writer.add_frame(float(t_s), image)
