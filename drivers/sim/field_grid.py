@@ -11,19 +11,20 @@ measures. A grid of (h, w) nodes covers an image of (H, W) px in the pixel-centr
 
 so a full-resolution field (h, w) = (H, W) has one node per pixel, and a 48 x 64 physics grid
 over a 240 x 320 image has nodes at x = 2, 7, 12, ... px. Between nodes a field is
-interpolated bicubically (``GridUpsampler``); beyond the outermost nodes (the border strip
+interpolated bilinearly (``GridUpsampler``); beyond the outermost nodes (the border strip
 half a cell wide) it is extrapolated linearly, so affine fields are exact at any resolution.
+(OpenCV's bicubic kernel, a = -0.75, does not reproduce linear functions: it bends an affine
+field by up to 0.005 px at 5 px cells.)
 The grid must have the image's aspect (square cells within 2 %): a transposed field is
 refused.
 """
 
 from __future__ import annotations
 
+import math
+
 import cv2
 import numpy as np
-
-PAD = 2
-"""Rings of linear extrapolation around a grid: as far as bicubic interpolation reaches."""
 
 _ASPECT_TOLERANCE = 0.02
 
@@ -50,7 +51,7 @@ def check_field(displacement_px: np.ndarray, image_hw: tuple[int, int]) -> np.nd
     return field.astype(np.float32, copy=False)
 
 
-def pad_linear(grid: np.ndarray, rings: int = PAD) -> np.ndarray:
+def pad_linear(grid: np.ndarray, rings: int) -> np.ndarray:
     """``grid`` (h, w, C) with ``rings`` extra nodes on each side, extrapolated linearly from
     the two outermost nodes along each axis (float32)."""
     h, w = grid.shape[:2]
@@ -71,32 +72,50 @@ def pad_linear(grid: np.ndarray, rings: int = PAD) -> np.ndarray:
 
 
 class GridUpsampler:
-    """Bicubic interpolation of an (h, w, C) float32 grid onto every pixel of an (H, W) image
-    in the pixel-centre convention, extrapolating linearly beyond the outermost nodes.
+    """Bilinear interpolation of an (h, w, C) float32 grid onto every pixel of an (H, W) image
+    in the pixel-centre convention, extrapolated linearly beyond the outermost nodes, and
+    over ``margin_px`` more pixels around the image: the result is (H + 2m, W + 2m, C) float32,
+    entry (m, m) at pixel (0, 0).
 
     When a cell is a whole number of pixels along both axes this is ``cv2.resize`` of the
     padded grid (exact float weights); otherwise ``cv2.remap`` with precomputed fixed-point
-    maps (positions quantised to 1/32 of a cell)."""
+    maps, whose positions are quantised to 1/32 of a cell (an error below 1/64 of the field's
+    change across a cell)."""
 
-    def __init__(self, grid_hw: tuple[int, int], image_hw: tuple[int, int]) -> None:
+    def __init__(
+        self, grid_hw: tuple[int, int], image_hw: tuple[int, int], margin_px: int = 0
+    ) -> None:
         (h, w), (height, width) = grid_hw, image_hw
-        self.grid_hw, self.image_hw = grid_hw, image_hw
-        self._whole = height % h == 0 and width % w == 0
-        if self._whole:
+        self.grid_hw, self.image_hw, self.margin_px = grid_hw, image_hw, margin_px
+        m = margin_px
+        self._method = "pad"
+        self._rings = m
+        if grid_hw == image_hw:
+            return
+        # rings enough that the margin lies between padded nodes
+        self._rings = r = math.ceil((m + 0.5) * max(h / height, w / width) + 0.5)
+        if height % h == 0 and width % w == 0:
+            self._method = "resize"
             sy, sx = height // h, width // w
-            self._size = ((w + 2 * PAD) * sx, (h + 2 * PAD) * sy)
-            self._crop = (slice(PAD * sy, PAD * sy + height), slice(PAD * sx, PAD * sx + width))
+            self._size = ((w + 2 * r) * sx, (h + 2 * r) * sy)
+            self._crop = (
+                slice(r * sy - m, r * sy - m + height + 2 * m),
+                slice(r * sx - m, r * sx - m + width + 2 * m),
+            )
         else:
-            xs = (np.arange(width) + 0.5) * w / width - 0.5 + PAD
-            ys = (np.arange(height) + 0.5) * h / height - 0.5 + PAD
+            self._method = "remap"
+            xs = (np.arange(-m, width + m) + 0.5) * w / width - 0.5 + r
+            ys = (np.arange(-m, height + m) + 0.5) * h / height - 0.5 + r
             mx, my = np.meshgrid(xs.astype(np.float32), ys.astype(np.float32))
             self._maps = cv2.convertMaps(mx, my, cv2.CV_16SC2)
 
     def __call__(self, grid: np.ndarray) -> np.ndarray:
-        """The grid (h, w, C) at every pixel, (H, W, C) float32."""
-        if grid.shape[:2] == self.image_hw:
+        """The grid (h, w, C) at every pixel and margin pixel, float32."""
+        if self._rings == 0:
             return grid
-        padded = pad_linear(grid)
-        if self._whole:
-            return cv2.resize(padded, self._size, interpolation=cv2.INTER_CUBIC)[self._crop]
-        return cv2.remap(padded, *self._maps, cv2.INTER_CUBIC, borderMode=cv2.BORDER_REPLICATE)
+        padded = pad_linear(grid, self._rings)
+        if self._method == "pad":
+            return padded
+        if self._method == "resize":
+            return cv2.resize(padded, self._size, interpolation=cv2.INTER_LINEAR)[self._crop]
+        return cv2.remap(padded, *self._maps, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)

@@ -8,12 +8,13 @@ converges for smooth fields whose gradient is well below 1 (the error shrinks by
 
 ``BackwardMapper`` is the fast inversion for fields at any grid resolution: it iterates on a
 grid of cells at least ``MIN_CELL_PX`` wide (the field's own grid if coarse enough, else the
-field area-averaged onto one), upsamples that solution bicubically to every pixel, and ends
+field area-averaged onto one), upsamples that solution bilinearly to every pixel, and ends
 with one iteration at full resolution against the field upsampled to every pixel
-(``GridUpsampler``). That last step shrinks the coarse solution's error by |grad u|, so the map
-is the inverse of the upsampled field to within a few thousandths of a px for fields of up
-to 3 px with features 15 px wide, at any input resolution (tests/drivers/test_gel_renderer.py
-checks it). The ground truth of a rendered coarse field is therefore its upsampled field.
+(``GridUpsampler``, extrapolated linearly ``MARGIN_PX`` beyond the image). That last step
+shrinks the coarse solution's error by |grad u|, so the map is the inverse of the upsampled
+field to within a few thousandths of a px for fields of up to 3 px with features 15 px wide,
+at any input resolution (tests/drivers/test_gel_renderer.py checks it against a slow
+reference). The ground truth of a rendered coarse field is therefore its upsampled field.
 The iterations sample u with ``cv2.remap`` (bilinear; positions quantised to 1/32 of a grid
 step), whose error is below |change of u across a step| / 64.
 
@@ -28,13 +29,19 @@ import math
 import cv2
 import numpy as np
 
-from drivers.sim.field_grid import PAD, GridUpsampler, check_field, pad_linear
+from drivers.sim.field_grid import GridUpsampler, check_field, pad_linear
 
 MIN_CELL_PX = 4.0
 """Smallest cell (px) of the grid the fast inversion iterates on."""
 
 ITERATIONS = 6
 """Fixed-point iterations on that grid."""
+
+MARGIN_PX = 8
+"""How far beyond the image the field is extrapolated linearly for the last iteration (px);
+a map that reaches further sees the field at the margin's edge."""
+
+_RINGS = 2  # extrapolated rings around the coarse grid for its iteration
 
 
 class _GridInverter:
@@ -46,12 +53,12 @@ class _GridInverter:
         h, w = grid_hw
         self._cell = (image_hw[1] / w, image_hw[0] / h, 0.0, 0.0)
         self._per_cell = (w / image_hw[1], h / image_hw[0], 0.0, 0.0)
-        ys, xs = np.mgrid[PAD : PAD + h, PAD : PAD + w].astype(np.float32)
+        ys, xs = np.mgrid[_RINGS : _RINGS + h, _RINGS : _RINGS + w].astype(np.float32)
         self._nodes = np.stack([xs, ys], axis=2)  # node positions in the padded grid
 
     def __call__(self, field: np.ndarray) -> np.ndarray:
-        minus_u = pad_linear(cv2.multiply(field, self._per_cell, scale=-1.0))
-        back = minus_u[PAD:-PAD, PAD:-PAD]
+        minus_u = pad_linear(cv2.multiply(field, self._per_cell, scale=-1.0), _RINGS)
+        back = minus_u[_RINGS:-_RINGS, _RINGS:-_RINGS]
         for _ in range(ITERATIONS):
             at = cv2.add(self._nodes, back)
             back = cv2.remap(minus_u, at, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
@@ -68,6 +75,7 @@ class BackwardMapper:
         height, width = image_hw
         ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
         self._pixels = np.stack([xs, ys], axis=2)
+        self._pixels_in_margin = self._pixels + np.float32(MARGIN_PX)
         self._plans: dict[tuple[int, int], tuple] = {}
 
     def __call__(self, displacement_px: np.ndarray) -> np.ndarray:
@@ -76,7 +84,7 @@ class BackwardMapper:
         coarse = field
         if solve_hw != field.shape[:2]:
             coarse = cv2.resize(field, solve_hw[::-1], interpolation=cv2.INTER_AREA)
-        first = cv2.add(self._pixels, upsample_solution(invert(coarse)))
+        first = cv2.add(self._pixels_in_margin, upsample_solution(invert(coarse)))
         u_at = cv2.remap(
             upsample_field(field), first, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE
         )
@@ -92,7 +100,7 @@ class BackwardMapper:
                 solve_hw,
                 _GridInverter(solve_hw, self.image_hw),
                 GridUpsampler(solve_hw, self.image_hw),
-                GridUpsampler(grid_hw, self.image_hw),
+                GridUpsampler(grid_hw, self.image_hw, MARGIN_PX),
             )
             self._plans[grid_hw] = plan
         return plan
@@ -101,9 +109,9 @@ class BackwardMapper:
 def backward_map(displacement_px: np.ndarray, iterations: int = 6) -> tuple[np.ndarray, np.ndarray]:
     """Exact full-resolution inversion: sampling maps (map_x, map_y) float32 (H, W) such that
     image(y) = reference(map(y)) for the forward field u (H, W, 2) px, by the fixed-point
-    iteration on every pixel. Sampling u itself with cv2.remap is precise enough: its 1/32 px
-    position quantisation times the field's small gradient is far below the flow errors of
-    interest."""
+    iteration on every pixel, holding u constant beyond the image. Sampling u itself with
+    cv2.remap is precise enough: its 1/32 px position quantisation times the field's small
+    gradient is far below the flow errors of interest."""
     height, width = displacement_px.shape[:2]
     ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
     u = displacement_px.astype(np.float32)
