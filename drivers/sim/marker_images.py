@@ -1,14 +1,11 @@
-"""Synthetic marker-gel images warped by known displacement fields.
+"""Synthetic marker-gel images with exact sub-pixel truth, and test fields.
 
-A stand-in for a visuotactile camera when the exact displacement must be known: the gel
-carries dark printed markers on a lattice and a fine speckle texture; both move with the gel.
-The coloured LED lighting is fixed to the camera, so it does not move: each colour channel
-is a static shading times the moving gel pattern.
-
-A displacement field here is *forward*: ``u[row, col]`` (px, [..., 0] along x, [..., 1] along
-y) says where the gel point seen at pixel (col, row) in the reference moves to. That is what
-optical flow from the reference to the current image measures. ``render`` inverts it to the
-backward sampling map by fixed-point iteration and resamples the reference gel pattern.
+``MarkerImageRenderer`` is the exact mode of the gel renderer, for flow-accuracy benchmarks
+and tests: the same gel and lighting as ``drivers.sim.gel_renderer.GelRenderer`` (the same
+``rng`` gives the same reference image), warped by a full-resolution forward field
+(drivers/sim/field_grid.py: convention) inverted on every pixel and resampled with cubic
+splines at full float precision, without image effects. It takes about 20 ms a frame;
+``GelRenderer`` is the fast one (1/64 px positions) with effects.
 """
 
 from __future__ import annotations
@@ -17,10 +14,9 @@ import cv2
 import numpy as np
 from scipy.ndimage import map_coordinates, spline_filter
 
-# Static shading of the B, G, R channels: a base level and a gradient direction (the LEDs'
-# positions), in grey levels.
-_LIGHT_BASE = (150.0, 170.0, 160.0)
-_LIGHT_GRADIENT = ((25.0, 0.0), (-15.0, 20.0), (-10.0, -20.0))
+from drivers.sim.field_inverse import backward_map
+from drivers.sim.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
+from drivers.sim.lighting import led_shading, shade
 
 
 class MarkerImageRenderer:
@@ -43,55 +39,22 @@ class MarkerImageRenderer:
         rng: np.random.Generator | None = None,
     ) -> None:
         rng = np.random.default_rng(0) if rng is None else rng
-        self.shape_hw = (height_px, width_px)
-        if pitch_px is None:
-            self.marker_centres_px = np.empty((0, 2))
-        else:
-            cols = np.arange(pitch_px / 2, width_px, pitch_px)
-            rows = np.arange(pitch_px / 2, height_px, pitch_px)
-            cx, cy = np.meshgrid(cols, rows)
-            centres = np.stack([cx.ravel(), cy.ravel()], axis=1)
-            self.marker_centres_px = centres + rng.uniform(-jitter_px, jitter_px, centres.shape)
-        self._pattern = self._gel_pattern(dot_radius_px, texture_grey, rng)
-        self._spline = spline_filter(self._pattern, order=3, mode="mirror")
-        self._shading = self._lighting()
-
-    def _gel_pattern(
-        self, radius: float, texture_grey: float, rng: np.random.Generator
-    ) -> np.ndarray:
-        """Reflectance of the gel in the reference pose, float32 (H, W), about 1 on the gel
-        and about 0.25 inside a marker (soft, anti-aliased edges one pixel wide)."""
-        height, width = self.shape_hw
-        ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
-        darkness = np.zeros((height, width), np.float32)
-        for x, y in self.marker_centres_px:
-            x0, x1 = int(max(0, x - radius - 3)), int(min(width, x + radius + 4))
-            y0, y1 = int(max(0, y - radius - 3)), int(min(height, y + radius + 4))
-            r = np.hypot(xs[y0:y1, x0:x1] - x, ys[y0:y1, x0:x1] - y)
-            np.maximum(
-                darkness[y0:y1, x0:x1],
-                0.5 * (1.0 - np.tanh((r - radius) / 0.7)),
-                out=darkness[y0:y1, x0:x1],
-            )
-        noise = cv2.GaussianBlur(
-            rng.standard_normal((height, width)).astype(np.float32), (0, 0), 1.5
+        self.shape_hw = shape_hw = (height_px, width_px)
+        self.marker_centres_px = (
+            np.empty((0, 2))
+            if pitch_px is None
+            else marker_lattice(shape_hw, pitch_px, jitter_px, rng)
         )
-        noise *= texture_grey / (255.0 * 0.6 * max(float(noise.std()), 1e-6))
-        return (1.0 + noise) * (1.0 - 0.75 * darkness)
-
-    def _lighting(self) -> np.ndarray:
-        height, width = self.shape_hw
-        ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
-        gx, gy = (xs - width / 2) / width, (ys - height / 2) / height
-        planes = [
-            base + ax * gx * 2 + ay * gy * 2 - 20.0 * (gx**2 + gy**2)
-            for base, (ax, ay) in zip(_LIGHT_BASE, _LIGHT_GRADIENT, strict=True)
-        ]
-        return np.stack(planes, axis=2).astype(np.float32)
+        gel_speckle = speckle(shape_hw, texture_grey, rng)
+        self._pattern = reflectance(
+            gel_speckle, marker_coverage(shape_hw, self.marker_centres_px, dot_radius_px)
+        )
+        self._spline = spline_filter(self._pattern, order=3, mode="mirror")
+        self._shading = led_shading(shape_hw)
 
     def render(self, displacement_px: np.ndarray | None = None) -> np.ndarray:
-        """The image after the gel moved by the forward field ``displacement_px`` (H, W, 2);
-        ``None`` renders the reference."""
+        """The image after the gel moved by the forward field ``displacement_px`` (H, W, 2)
+        px; ``None`` renders the reference."""
         pattern = self._pattern
         if displacement_px is not None:
             # Cubic-spline resampling at full float precision: cv2.remap quantises sub-pixel
@@ -100,24 +63,7 @@ class MarkerImageRenderer:
             pattern = map_coordinates(
                 self._spline, [map_y, map_x], order=3, mode="mirror", prefilter=False
             )
-        image = self._shading * pattern[:, :, None]
-        return np.clip(image + 0.5, 0, 255).astype(np.uint8)
-
-
-def backward_map(displacement_px: np.ndarray, iterations: int = 6) -> tuple[np.ndarray, np.ndarray]:
-    """Sampling maps (map_x, map_y) float32 such that image(y) = reference(map(y)), for the
-    forward field u: solves x + u(x) = y for x by fixed-point iteration x <- y - u(x)
-    (converges for smooth fields whose gradient is well below 1). Sampling u itself with
-    cv2.remap is precise enough: its 1/32 px position quantisation times the field's small
-    gradient is far below the flow errors of interest."""
-    height, width = displacement_px.shape[:2]
-    ys, xs = np.mgrid[0:height, 0:width].astype(np.float32)
-    u = displacement_px.astype(np.float32)
-    map_x, map_y = xs - u[..., 0], ys - u[..., 1]
-    for _ in range(iterations):
-        u_at = cv2.remap(u, map_x, map_y, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
-        map_x, map_y = xs - u_at[..., 0], ys - u_at[..., 1]
-    return map_x, map_y
+        return shade(pattern, self._shading)
 
 
 def smooth_random_field(

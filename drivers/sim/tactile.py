@@ -2,9 +2,10 @@
 
 Frames. The twin "captures" frame ``k`` at ``t_k = t_connect + k / frame_rate_hz`` on the
 injected clock (``drivers.sim.clock``). A frame is the marker gel of
-``drivers.sim.marker_images.MarkerImageRenderer`` at the configured output size, warped by
-the forward displacement field (px, (H, W, 2), see that module) that the **field source**
-gives for ``t_k``, plus Gaussian pixel noise of ``noise_grey`` grey levels, rounded to uint8
+``drivers.sim.gel_renderer.GelRenderer`` at the configured output size, warped by the
+forward displacement field that the **field source** gives for ``t_k`` (px, (h, w, 2) at any
+grid resolution with the image's aspect, e.g. the output size or a coarse physics grid; see
+drivers/sim/field_grid.py), plus Gaussian pixel noise of ``noise_grey`` grey levels, as uint8
 BGR (read-only, as the real driver delivers them).
 
 A field source is any callable ``source(t_s) -> field or None`` (``None``: no contact, the
@@ -17,8 +18,8 @@ before ``now()``, or DeviceTimeoutError when it is older than ``max_age_s`` (e.g
 lost"); repeated reads of one frame return the same object.
 
 Randomness (marker jitter, gel texture, pixel noise) comes from the injected ``rng``; the
-noise of frame ``k`` is drawn from a generator seeded by (a number drawn once from ``rng``,
-``k``), so a frame does not depend on which earlier frames were read.
+noise of frame ``k`` depends only on (``rng``'s draws at construction, ``k``), so a frame
+does not depend on which earlier frames were read (drivers/sim/noise_bank.py).
 """
 
 from __future__ import annotations
@@ -33,12 +34,13 @@ import numpy as np
 from drivers.base import ContextManagedDevice, TactileFrame
 from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.clock import Clock, MonotonicClock
-from drivers.sim.marker_images import MarkerImageRenderer
+from drivers.sim.gel_renderer import GelRenderer
+from drivers.sim.image_effects import ImageEffects
 from drivers.tactile.camera import TactileCameraConfig
 from drivers.validation import check_int, check_range
 
 FieldSource = Callable[[float], np.ndarray | None]
-"""Gives the forward displacement field (H, W, 2) in px at a time in s, or None."""
+"""Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""
 
 
 @dataclass(frozen=True)
@@ -101,14 +103,14 @@ class SimTactileSensor(ContextManagedDevice):
         self._clock = clock if clock is not None else MonotonicClock()
         rng = rng if rng is not None else np.random.default_rng(config.sim.seed)
         sim = config.sim
-        self._renderer = MarkerImageRenderer(
+        self._renderer = GelRenderer(
             width_px=config.output_width_px,
             height_px=config.output_height_px,
             pitch_px=sim.marker_pitch_px,
             dot_radius_px=sim.marker_radius_px or 0.0,
+            effects=ImageEffects(noise_grey=sim.noise_grey),
             rng=rng,
         )
-        self._noise_seed = int(rng.integers(2**63))
         self._source = field_source
         self._present = True
         self._connected = False
@@ -125,7 +127,7 @@ class SimTactileSensor(ContextManagedDevice):
 
     @property
     def shape_hw(self) -> tuple[int, int]:
-        """Image height and width, px: the shape a field source must give (plus 2)."""
+        """Image height and width, px: a field source gives (h, w, 2) with this aspect."""
         return (self.config.output_height_px, self.config.output_width_px)
 
     def set_field_source(self, source: FieldSource | None) -> None:
@@ -221,18 +223,9 @@ class SimTactileSensor(ContextManagedDevice):
 
     def _render(self, index: int, t_s: float) -> np.ndarray:
         field = self._source(t_s) if self._source is not None else None
-        if field is not None:
-            field = np.asarray(field)
-            if field.shape != (*self.shape_hw, 2) or not np.all(np.isfinite(field)):
-                raise ValueError(
-                    f"field source: expected a finite array of shape {(*self.shape_hw, 2)} "
-                    f"(px), got shape {field.shape}"
-                )
-        image = self._renderer.render(field).astype(np.float32)
-        sigma = self.config.sim.noise_grey
-        if sigma > 0:
-            noise_rng = np.random.default_rng((self._noise_seed, index))
-            image += noise_rng.normal(0.0, sigma, image.shape).astype(np.float32)
-        frame = np.clip(np.rint(image), 0, 255).astype(np.uint8)
+        try:
+            frame = self._renderer.render(field, frame_index=index)
+        except ValueError as exc:
+            raise ValueError(f"field source: {exc}") from exc
         frame.flags.writeable = False
         return frame

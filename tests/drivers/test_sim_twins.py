@@ -24,7 +24,7 @@ from drivers.sim.clock import ManualClock
 from drivers.sim.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.gamepad import PadEvent, SimGamepad
 from drivers.sim.gripper import SimGripper
-from drivers.sim.marker_images import MarkerImageRenderer
+from drivers.sim.gel_renderer import GelRenderer
 from drivers.sim.tactile import SimTactileSensor
 from tests.drivers.device_configs import CONFIGS, load_device_config
 
@@ -309,7 +309,7 @@ def shear(shape_hw, px):
 
 def test_frames_follow_the_field_source(clock):
     sensor = SimTactileSensor(quiet_mini(noise_grey=0.0), clock, np.random.default_rng(3))
-    reference = MarkerImageRenderer(320, 240, 31.5, 4.5, rng=np.random.default_rng(3))
+    reference = GelRenderer(320, 240, 31.5, 4.5, rng=np.random.default_rng(3))
     with sensor:
         rest = sensor.read_latest(0.1)
         assert rest.image.shape == (240, 320, 3) and not rest.image.flags.writeable
@@ -320,6 +320,17 @@ def test_frames_follow_the_field_source(clock):
     assert pressed.t_s == pytest.approx(0.48)  # the frame of the 25 fps stream before now
     np.testing.assert_array_equal(pressed.image, reference.render(shear((240, 320), 0.96)))
     assert np.abs(pressed.image.astype(int) - rest.image).mean() > 5
+
+
+def test_a_coarse_field_renders_like_the_full_one(clock):
+    sensor = SimTactileSensor(quiet_mini(noise_grey=0.0), clock, np.random.default_rng(3))
+    sensor.set_field_source(lambda t_s: shear((48, 64), 1.3))  # a 5 px physics grid
+    with sensor:
+        coarse = sensor.read_latest(0.1).image
+    full = GelRenderer(320, 240, 31.5, 4.5, rng=np.random.default_rng(3)).render(
+        shear((240, 320), 1.3)
+    )
+    assert np.abs(coarse.astype(int) - full).max() <= 1
 
 
 def test_one_frame_per_period_and_stale_frames_raise(clock):
@@ -372,7 +383,10 @@ def test_noise_is_seeded_and_independent_of_the_read_pattern():
 
 def test_a_field_of_the_wrong_shape_is_refused(clock):
     sensor = SimTactileSensor(MINI, clock, field_source=lambda t_s: np.zeros((10, 10, 2)))
-    with sensor, pytest.raises(ValueError, match=r"\(240, 320, 2\)"):
+    with sensor, pytest.raises(ValueError, match=r"field source: .*\(240, 320, 2\)"):
+        sensor.read_latest(0.1)
+    sensor.set_field_source(lambda t_s: np.zeros((320, 240, 2)))  # transposed
+    with sensor, pytest.raises(ValueError, match="aspect"):
         sensor.read_latest(0.1)
 
 

@@ -1,0 +1,156 @@
+"""Fast seeded marker-gel images for the simulated tactile camera (about 1-2 ms per 320 x 240
+frame on one core; ``python scripts/bench_render.py`` measures it).
+
+The image is the printed gel (drivers/sim/gel_pattern.py) warped by a forward displacement
+field given at any grid resolution with the image's aspect (drivers/sim/field_grid.py: the
+field convention; field_inverse.py: the backward map; image_warp.py: the resampling), then
+the image effects of ``ImageEffects`` (drivers/sim/image_effects.py) in the order light
+takes: static occlusion over the gel (drivers/sim/occlusion.py), optical blur, LED shading
+with its drift (drivers/sim/lighting.py), pixel noise (drivers/sim/noise_bank.py), rounding
+to uint8 BGR.
+
+Sub-pixel truth: the rendered displacement is the field upsampled to every pixel
+(``field_grid.GridUpsampler``; the field itself at full resolution) to within a few
+thousandths of a px plus OpenCV's position quantisation to 1/64 px. ``MarkerImageRenderer``
+(drivers/sim/marker_images.py) inverts full-resolution fields and resamples with cubic splines
+at full float precision (about 20 ms a frame), for benchmarks of sub-pixel flow accuracy.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from drivers.sim.field_inverse import BackwardMapper
+from drivers.sim.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
+from drivers.sim.image_effects import ImageEffects
+from drivers.sim.image_warp import SplineWarper
+from drivers.sim.lighting import drift_rate, led_shading, shade
+from drivers.sim.noise_bank import NoiseBank
+from drivers.sim.occlusion import Occlusion
+
+
+class GelRenderer:
+    """Renders (H, W, 3) BGR uint8 images of a marker gel warped by forward fields.
+
+    The gel: ``pitch_px`` marker lattice pitch (``None``: no printed markers, texture only,
+    as the DIGIT's), ``dot_radius_px`` marker radius, ``jitter_px`` random offset of each
+    marker from its lattice site, ``texture_grey`` amplitude of the speckle (all px or grey
+    levels). ``effects``: see ``ImageEffects`` (none by default). ``rng`` seeds the gel
+    (drawn first, as ``MarkerImageRenderer`` draws it: the same seed gives the same gel) and
+    then one independent stream per effect.
+
+    ``marker_centres_px`` (N, 2) are the (x, y) px of the markers printed and present in the
+    reference; ``dropped_marker_centres_px`` those worn off by marker dropout;
+    ``occlusion_alpha`` (H, W) in [0, 1] the static blobs' cover, or ``None``.
+    """
+
+    def __init__(
+        self,
+        width_px: int = 320,
+        height_px: int = 240,
+        pitch_px: float | None = 31.5,
+        dot_radius_px: float = 4.5,
+        jitter_px: float = 1.5,
+        texture_grey: float = 12.0,
+        effects: ImageEffects | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        rng = np.random.default_rng(0) if rng is None else rng
+        self.effects = effects = ImageEffects() if effects is None else effects
+        self.shape_hw = shape_hw = (height_px, width_px)
+        centres = (
+            np.empty((0, 2))
+            if pitch_px is None
+            else marker_lattice(shape_hw, pitch_px, jitter_px, rng)
+        )
+        gel_speckle = speckle(shape_hw, texture_grey, rng)
+        dropout_seed, occlusion_seed, noise_seed = np.random.SeedSequence(
+            int(rng.integers(2**63))
+        ).spawn(3)
+        dropped = np.zeros(len(centres), bool)
+        n_dropped = round(effects.marker_dropout_fraction * len(centres))
+        dropped[
+            np.random.default_rng(dropout_seed).choice(len(centres), n_dropped, replace=False)
+        ] = True
+        self.marker_centres_px = centres[~dropped]
+        self.dropped_marker_centres_px = centres[dropped]
+        self._gel = SplineWarper(
+            reflectance(
+                gel_speckle, marker_coverage(shape_hw, self.marker_centres_px, dot_radius_px)
+            )
+        )
+        self._occlusion = None
+        if effects.occlusion_count > 0:
+            self._occlusion = Occlusion(
+                shape_hw,
+                effects.occlusion_count,
+                effects.occlusion_size_px,
+                effects.occlusion_reflectance,
+                effects.occlusion_texture,
+                np.random.default_rng(occlusion_seed),
+            )
+        self._noise = None
+        if effects.noise_grey > 0:
+            self._noise = NoiseBank((height_px, width_px, 3), effects.noise_grey, noise_seed)
+        self._shading = led_shading(shape_hw)
+        self._drift_rate = drift_rate(
+            self._shading,
+            effects.drift_gain_per_level,
+            effects.drift_gradient_grey_per_level,
+            effects.drift_gradient_angle_rad,
+        )
+        self._mapper = BackwardMapper(shape_hw)
+
+    @property
+    def occlusion_alpha(self) -> np.ndarray | None:
+        return None if self._occlusion is None else self._occlusion.alpha
+
+    def backward_map(self, displacement_px: np.ndarray) -> np.ndarray:
+        """The reference position (x, y) px that each output pixel shows, (H, W, 2) float32,
+        for the forward field ``displacement_px`` (h, w, 2) px at any grid resolution with
+        the image's aspect (see drivers/sim/field_grid.py)."""
+        return self._mapper(displacement_px)
+
+    def render(
+        self,
+        displacement_px: np.ndarray | None = None,
+        *,
+        frame_index: int = 0,
+        drift: float = 0.0,
+        exposure_start_px: np.ndarray | None = None,
+    ) -> np.ndarray:
+        """The camera image (H, W, 3) uint8 BGR after the gel moved by the forward field
+        ``displacement_px`` (h, w, 2) px (``None``: the reference pose).
+
+        ``frame_index`` (>= 0) picks the frame's pixel noise; ``drift`` is the lighting
+        drift level. With ``exposure_start_px``, the field at the start of the exposure
+        (``None``: the gel did not move during it), the gel is the mean of its warps by
+        ``effects.motion_blur_samples`` fields evenly spaced from that field to
+        ``displacement_px`` (linear in time; either may be ``None`` for zero).
+        """
+        gel = self._moving_gel(displacement_px, exposure_start_px)
+        if self._occlusion is not None:
+            gel = self._occlusion.apply(gel)
+        if self.effects.blur_sigma_px > 0:
+            gel = cv2.GaussianBlur(gel, (0, 0), self.effects.blur_sigma_px)
+        shading = self._shading
+        if drift != 0.0:
+            shading = cv2.scaleAdd(self._drift_rate, float(drift), self._shading)
+        noise = None if self._noise is None else self._noise.frame(frame_index)
+        return shade(gel, shading, noise)
+
+    def _moving_gel(self, end_px: np.ndarray | None, start_px: np.ndarray | None) -> np.ndarray:
+        samples = self.effects.motion_blur_samples
+        if start_px is None or samples == 1:
+            return self._gel.image if end_px is None else self._gel(self._mapper(end_px))
+        start = np.asarray(start_px, np.float32)
+        end = np.zeros_like(start) if end_px is None else np.asarray(end_px, np.float32)
+        if start.shape != end.shape:
+            raise ValueError(
+                f"exposure_start_px: expected the end field's shape {end.shape}, got {start.shape}"
+            )
+        total = np.zeros(self.shape_hw, np.float32)
+        for t in np.linspace(0.0, 1.0, samples, dtype=np.float32):
+            total += self._gel(self._mapper(start + t * (end - start)))
+        return total * np.float32(1.0 / samples)

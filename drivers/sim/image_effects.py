@@ -1,0 +1,79 @@
+"""Configuration of the seeded image effects of ``drivers.sim.gel_renderer.GelRenderer``.
+
+Every effect is off by default. Their randomness comes from the renderer's ``rng`` (one
+independent stream per effect), so a render is a function of (rng seed, inputs, frame index).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from drivers.validation import check_int, check_range
+
+
+@dataclass(frozen=True)
+class ImageEffects:
+    """What degrades a rendered tactile image, in named units.
+
+    Pixel noise: ``noise_grey``, standard deviation of additive Gaussian noise, grey levels;
+    each frame index draws its own noise (drivers/sim/noise_bank.py).
+
+    Lighting drift (drivers/sim/lighting.py), scaled by the ``drift`` level passed to
+    ``render`` (dimensionless; 0 is the reference lighting, e.g. pass minutes since zeroing):
+    ``drift_gain_per_level``, relative gain change of the B, G, R channels per unit level
+    (0.02: 2 % brighter per level); ``drift_gradient_grey_per_level``, grey levels per unit
+    level that a linear shading gradient adds at the image edge it points to (and removes at
+    the opposite edge); ``drift_gradient_angle_rad``, its direction in the image (0: toward
+    +x, the right edge; pi / 2: toward +y, the bottom edge).
+
+    Optical blur: ``blur_sigma_px``, Gaussian sigma, px (0: sharp).
+
+    Motion blur: ``motion_blur_samples``, number of displacement fields averaged over the
+    exposure when ``render`` is given the field at the exposure's start, spaced evenly from
+    that field to the end field (1: an instantaneous exposure at its end, no blur).
+
+    Marker dropout: ``marker_dropout_fraction``, the fraction of printed markers whose ink
+    has worn off (missing from the reference and every frame), rounded to whole markers.
+
+    Occlusion (torn or dirty gel, drivers/sim/occlusion.py): ``occlusion_count`` elliptic
+    blobs with semi-major axis ``occlusion_size_px`` px (semi-minor 50-100 % of it) where
+    the image shows a static region that does not move with the gel (optical flow there is
+    zero), of mean reflectance ``occlusion_reflectance`` (the bare gel is 1: below 1 dark,
+    above 1 bright) with its own speckle of relative amplitude ``occlusion_texture``.
+    """
+
+    noise_grey: float = 0.0
+    drift_gain_per_level: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    drift_gradient_grey_per_level: float = 0.0
+    drift_gradient_angle_rad: float = 0.0
+    blur_sigma_px: float = 0.0
+    motion_blur_samples: int = 1
+    marker_dropout_fraction: float = 0.0
+    occlusion_count: int = 0
+    occlusion_size_px: float = 25.0
+    occlusion_reflectance: float = 0.35
+    occlusion_texture: float = 0.1
+
+    def __post_init__(self) -> None:
+        check_range("noise_grey", self.noise_grey, 0.0, 50.0)
+        if not isinstance(self.drift_gain_per_level, tuple) or len(self.drift_gain_per_level) != 3:
+            raise ValueError(
+                "key 'drift_gain_per_level': expected three numbers (B, G, R), "
+                f"got {self.drift_gain_per_level!r}"
+            )
+        for gain in self.drift_gain_per_level:
+            check_range("drift_gain_per_level", gain, -1.0, 1.0)
+        check_range(
+            "drift_gradient_grey_per_level", self.drift_gradient_grey_per_level, -255.0, 255.0
+        )
+        check_range(
+            "drift_gradient_angle_rad", self.drift_gradient_angle_rad, -2 * math.pi, 2 * math.pi
+        )
+        check_range("blur_sigma_px", self.blur_sigma_px, 0.0, 20.0)
+        check_int("motion_blur_samples", self.motion_blur_samples, 1, 32)
+        check_range("marker_dropout_fraction", self.marker_dropout_fraction, 0.0, 1.0)
+        check_int("occlusion_count", self.occlusion_count, 0, 50)
+        check_range("occlusion_size_px", self.occlusion_size_px, 1.0, 1000.0)
+        check_range("occlusion_reflectance", self.occlusion_reflectance, 0.0, 1.5)
+        check_range("occlusion_texture", self.occlusion_texture, 0.0, 0.5)
