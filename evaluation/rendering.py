@@ -1,0 +1,30 @@
+"""The simulated camera's renderer for a sensor profile, with the evaluation's nominal image
+effects (a little pixel noise, as every camera has)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.config import sensor_profile
+from drivers.sim.gel_renderer import GelRenderer
+from drivers.sim.image_effects import ImageEffects
+
+NOMINAL_EFFECTS = ImageEffects(noise_grey=2.0)
+
+
+def make_renderer(
+    sensor: str, effects: ImageEffects = NOMINAL_EFFECTS, seed: int = 0
+) -> GelRenderer:
+    """A seeded renderer at the sensor's working image size, with printed markers at the
+    sensor's pitch (none for a gel without markers)."""
+    profile = sensor_profile(sensor)
+    pitch_px = (
+        None if profile.marker_pitch_mm is None else profile.marker_pitch_mm / profile.mm_per_px
+    )
+    return GelRenderer(
+        width_px=profile.width_px,
+        height_px=profile.height_px,
+        pitch_px=pitch_px,
+        effects=effects,
+        rng=np.random.default_rng(seed),
+    )

@@ -1,0 +1,317 @@
+"""Stability where methods fail: each condition swept over levels, the error of every method
+against the simulator's true wrench at each level, and each method's breakdown point.
+
+A level runs a short sequence in memory (no dataset): after the grasp and the zeroing
+frames, two alternating torque pulses about x, then y, then z (``SWEEP_AMPLITUDE_NM``
+applied, the live gel carrying half), with the condition applied. The estimates are
+calibrated with the constants fitted on the nominal dataset of the same sensor and object
+(``calibration_runs``), and compared with the torques the gel really carried.
+
+Methods: the dipole (tau_x, tau_y), the NHHD in-plane torque (tau_z) and the FingerVision
+baseline (fv_tau_x, fv_tau_y, fv_tau_z). Per level and method: RMSE (N*mm), R^2 over the
+sequence, and the RMSE normalised by the peak true torque on that axis (NRMSE). A method
+breaks down at the first level where R^2 < 0.9 or the NRMSE exceeds twice its nominal value.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import cv2
+import matplotlib.pyplot as plt
+import numpy as np
+
+from controller.config import sensor_profile
+from controller.tactile.calibration import Calibration
+from controller.tactile.dataset_fit import estimate_frames
+from controller.tactile.settings import estimator_config
+from drivers.sim.image_effects import ImageEffects
+from drivers.sim.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
+from evaluation.rendering import NOMINAL_EFFECTS, make_renderer
+from evaluation.sim_setup import gel_model, jig_config
+
+SWEEP_AMPLITUDE_NM = 0.04
+METHOD_AXES = {  # label -> (estimate field, truth column of (fx, fy, fz, tx, ty, tz))
+    "dipole tau_x": ("tau_x", 3),
+    "dipole tau_y": ("tau_y", 4),
+    "NHHD tau_z": ("tau_z", 5),
+    "baseline tau_x": ("fv_tau_x", 3),
+    "baseline tau_y": ("fv_tau_y", 4),
+    "baseline tau_z": ("fv_tau_z", 5),
+}
+
+
+@dataclass(frozen=True)
+class Setting:
+    """Everything a level can change; the defaults are the nominal case."""
+
+    sensor: str = "gelsight_mini"
+    shape: str = "plate"
+    amplitude_nm: float = SWEEP_AMPLITUDE_NM
+    grip_force_n: float | None = None  # None: the jig's
+    coupling: float = 0.0  # tau_y += k tau_x and tau_x += k tau_y
+    shear_n: float = 0.0  # applied fx once the experiments start
+    twist_nm: float = 0.0  # applied tau_z once the experiments start
+    zero_on: str = "reference"
+    effects: ImageEffects = NOMINAL_EFFECTS
+    drift: float = 0.0  # lighting drift level reached at the end of the sequence
+    ramp_s: float = 0.6
+    exposure_fraction: float = 0.0  # motion blur: exposure as a share of the frame period
+
+
+@dataclass(frozen=True)
+class Condition:
+    name: str
+    unit: str
+    levels: tuple[float, ...]
+    nominal: float
+    setting: Callable[[float], Setting]
+    labels: tuple[str, ...] = field(default=())
+
+    def level_label(self, i: int) -> str:
+        return self.labels[i] if self.labels else f"{self.levels[i]:g}"
+
+
+def _fraction_of_friction(fraction: float) -> Setting:
+    """Applied fx such that the live gel's share is ``fraction`` of mu * grip."""
+    jig = jig_config()
+    capacity = 1.0 * jig.grip_force_n  # friction 1.0 in both gel profiles
+    return Setting(shear_n=fraction * capacity / abs(jig.gel_load_factor))
+
+
+CONDITIONS = (
+    Condition(
+        "torque amplitude",
+        "N*mm applied",
+        (10, 20, 40, 60, 80, 120, 160),
+        40,
+        lambda v: Setting(amplitude_nm=v * 1e-3),
+    ),
+    Condition("grip force", "N", (5, 10, 15, 25, 40), 15, lambda v: Setting(grip_force_n=v)),
+    Condition(
+        "coupled tau_x + tau_y",
+        "k (tau_y += k tau_x)",
+        (0, 0.25, 0.5, 1.0),
+        0,
+        lambda v: Setting(coupling=v),
+    ),
+    Condition("shear force present", "N applied", (0, 1, 2, 4, 8), 0, lambda v: Setting(shear_n=v)),
+    Condition(
+        "in-plane torque present",
+        "N*mm applied",
+        (0, 10, 20, 40, 60),
+        0,
+        lambda v: Setting(twist_nm=v * 1e-3),
+    ),
+    Condition(
+        "slip (shear / friction limit)",
+        "share of mu N",
+        (0, 0.5, 0.8, 0.95, 1.2),
+        0,
+        _fraction_of_friction,
+    ),
+    Condition(
+        "zeroing",
+        "",
+        (0, 1),
+        0,
+        lambda v: Setting(zero_on="reference" if v == 0 else "open"),
+        labels=("after grasp", "none (before grasp)"),
+    ),
+    Condition(
+        "pixel noise",
+        "grey levels",
+        (0, 2, 4, 8, 16),
+        2,
+        lambda v: Setting(effects=ImageEffects(noise_grey=v)),
+    ),
+    Condition(
+        "lighting drift",
+        "gain change",
+        (0, 0.02, 0.05, 0.1, 0.2),
+        0,
+        lambda v: Setting(
+            effects=dataclasses.replace(
+                NOMINAL_EFFECTS,
+                drift_gain_per_level=(1.0, 0.8, 1.2),
+                drift_gradient_grey_per_level=40.0,
+            ),
+            drift=v,
+        ),
+    ),
+    Condition(
+        "marker occlusion",
+        "blobs of 30 px",
+        (0, 1, 2, 4, 8),
+        0,
+        lambda v: Setting(
+            effects=dataclasses.replace(
+                NOMINAL_EFFECTS, occlusion_count=int(v), occlusion_size_px=30.0
+            )
+        ),
+    ),
+    Condition(
+        "fast motion",
+        "ramp time s",
+        (0.6, 0.3, 0.15, 0.08, 0.04),
+        0.6,
+        lambda v: Setting(
+            ramp_s=v,
+            exposure_fraction=0.5,
+            effects=dataclasses.replace(NOMINAL_EFFECTS, motion_blur_samples=4),
+        ),
+    ),
+    Condition(
+        "sensor",
+        "",
+        (0, 1),
+        0,
+        lambda v: Setting(sensor=("gelsight_mini", "digit")[int(v)]),
+        labels=("GelSight Mini", "DIGIT"),
+    ),
+    Condition(
+        "object shape",
+        "",
+        (0, 1, 2),
+        0,
+        lambda v: Setting(shape=("plate", "square_peg", "round_peg")[int(v)]),
+        labels=("plate", "square peg", "round peg"),
+    ),
+)
+
+
+@dataclass(frozen=True)
+class LevelResult:
+    condition: str
+    level: float
+    rmse_nmm: dict[str, float]
+    r2: dict[str, float]
+    nrmse: dict[str, float]
+    frames: int
+
+
+def _program(setting: Setting, jig: JigConfig, rng: np.random.Generator):
+    experiments = [Experiment(axis, setting.amplitude_nm, 2) for axis in ("x", "y", "z")]
+    program = jig_program(experiments, jig, rng)
+    wrench = program.wrench
+    tx, ty = wrench[:, 3].copy(), wrench[:, 4].copy()
+    wrench[:, 4] += setting.coupling * tx
+    wrench[:, 3] += setting.coupling * ty
+    start = program.segments[0].t_start_s
+    ramp = np.clip((program.t_s - start) / 0.5, 0.0, 1.0)
+    ramp = 0.5 - 0.5 * np.cos(math.pi * ramp)
+    wrench[:, 0] += setting.shear_n * ramp
+    wrench[:, 5] += setting.twist_nm * ramp
+    return program
+
+
+def run_level(
+    condition_name: str, index: int, calibrations: dict[str, Calibration], seed: int = 7
+) -> LevelResult:
+    """One level of the condition named ``condition_name`` (run in a worker process),
+    calibrated with ``calibrations["SENSOR-SHAPE"]`` for the level's sensor and object."""
+    condition = next(c for c in CONDITIONS if c.name == condition_name)
+    cv2.setNumThreads(1)
+    level = condition.levels[index]
+    setting = condition.setting(level)
+    base = jig_config()
+    jig = dataclasses.replace(
+        base,
+        grip_force_n=setting.grip_force_n or base.grip_force_n,
+        open_s=0.3,
+        grasp_s=0.3,
+        settle_s=0.6,
+        ramp_min_s=setting.ramp_s,
+        ramp_max_s=setting.ramp_s * 1.2,
+        hold_min_s=0.2,
+        hold_max_s=0.3,
+        rest_min_s=0.2,
+        rest_max_s=0.3,
+    )
+    rng = np.random.default_rng(seed)
+    program = _program(setting, jig, rng)
+    times = tactile_times(program, jig, rng)
+    gel = JigGel(gel_model(setting.sensor, setting.shape), program, jig)
+    renderer = make_renderer(setting.sensor, setting.effects, seed=seed)
+    period = 1.0 / jig.tactile_rate_hz
+    truth = np.empty((times.size, 6))
+    frames = []
+    exposure_gel = JigGel(gel.model, program, jig) if setting.exposure_fraction > 0 else None
+    for index_frame, t in enumerate(times):
+        state = gel.state(float(t))
+        truth[index_frame] = state.carried.as_array()
+        start_field = None
+        if exposure_gel is not None:
+            start_field = exposure_gel.state(float(t) - setting.exposure_fraction * period).field_px
+        drift = setting.drift * float(t) / program.duration_s
+        image = renderer.render(
+            state.field_px, frame_index=index_frame, drift=drift, exposure_start_px=start_field
+        )
+        frames.append((index_frame, float(t), image))
+    interval = program.reference if setting.zero_on == "reference" else (0.0, jig.open_s)
+    reference = [img for _, t, img in frames if interval[0] <= t < interval[1]]
+    profile = sensor_profile(setting.sensor)
+    calibration = calibrations[f"{setting.sensor}-{setting.shape}"]
+    series = estimate_frames(frames, reference, estimator_config("default"), profile)
+    after = series.t_s >= program.segments[0].t_start_s
+    rmse, r2, nrmse = {}, {}, {}
+    for label, (name, column) in METHOD_AXES.items():
+        fit = calibration.axes[name]
+        estimate = fit.apply(series.values[name][after])
+        gt = truth[after, column]
+        error = estimate - gt
+        rmse[label] = float(np.sqrt(np.mean(error**2))) * 1e3
+        total = float(((gt - gt.mean()) ** 2).sum())
+        r2[label] = 1.0 - float(error @ error) / total if total > 0 else float("nan")
+        nrmse[label] = rmse[label] / max(float(np.abs(gt).max()) * 1e3, 1e-9)
+    return LevelResult(condition.name, level, rmse, r2, nrmse, int(times.size))
+
+
+def breakdown(condition: Condition, results: list[LevelResult], method: str) -> str:
+    """The first level (in sweep order, away from nominal) where R^2 < 0.9 or the NRMSE
+    doubles over nominal; "-" when none does."""
+    by_level = {r.level: r for r in results}
+    nominal = by_level[condition.nominal].nrmse[method]
+    for i, level in enumerate(condition.levels):
+        if level == condition.nominal:
+            continue
+        result = by_level[level]
+        if result.r2[method] < 0.9 or result.nrmse[method] > 2.0 * nominal:
+            if by_level[condition.nominal].r2[method] < 0.9:
+                return "fails at nominal"
+            return condition.level_label(i)
+    return "-"
+
+
+def sweep_chart(results: dict[str, list[LevelResult]], path) -> None:
+    """One panel per condition: NRMSE against level for every method."""
+    n = len(CONDITIONS)
+    cols = 4
+    rows = math.ceil(n / cols)
+    fig, grid = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.3 * rows), squeeze=False)
+    for k, condition in enumerate(CONDITIONS):
+        ax = grid[k // cols][k % cols]
+        levels = results[condition.name]
+        xs = np.arange(len(levels))
+        for label in METHOD_AXES:
+            style = "-" if not label.startswith("baseline") else ":"
+            ax.plot(xs, [r.nrmse[label] for r in levels], style, marker="o", ms=3, label=label)
+        ax.set_xticks(
+            xs, [condition.level_label(i) for i in range(len(levels))], fontsize=7, rotation=20
+        )
+        ax.set_yscale("log")
+        ax.set_title(
+            f"{condition.name} ({condition.unit})" if condition.unit else condition.name, fontsize=9
+        )
+        ax.set_ylabel("RMSE / peak torque", fontsize=8)
+        ax.grid(True, alpha=0.3)
+    for k in range(n, rows * cols):
+        grid[k // cols][k % cols].axis("off")
+    handles, labels = grid[0][0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower right", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=80)
+    plt.close(fig)
