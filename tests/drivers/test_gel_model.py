@@ -76,6 +76,23 @@ def arrays(state: GelState) -> dict[str, np.ndarray]:
     }
 
 
+def assert_balanced(m: GelModel, state: GelState, wrench: Wrench, grip_n: float = GRIP_N) -> None:
+    """The contact holds and carries ``wrench`` to the solvers' stated tolerance: the
+    normal balance to TOLERANCE of N (torques with a 1 cm lever), the in-plane one to
+    TOLERANCE of |f_x| + |f_y| + |tau_z| / rho, rho the RMS radius of the loaded cells."""
+    assert state.normal.balanced and not state.tangential.gross_slip
+    loaded = state.in_contact
+    x, y = m.grid.x_m[loaded], m.grid.y_m[loaded]
+    rho = float(np.sqrt(np.mean(x**2 + y**2))) + 1e-9
+    normal = grip_n + wrench.fz
+    in_plane = max(abs(wrench.fx) + abs(wrench.fy) + abs(wrench.tau_z) / rho, 1e-12)
+    tolerance = TOLERANCE * np.array(
+        [in_plane, in_plane, normal, normal * 0.01, normal * 0.01, in_plane * rho]
+    )
+    error = state.carried.as_array() - wrench.as_array()
+    assert np.all(abs(error) <= tolerance), error / tolerance
+
+
 # --- determinism and warm starts ---------------------------------------------------------
 
 LOADED = Wrench(fx=1.2, fy=-0.4, fz=1.0, tau_x=0.003, tau_y=-0.001, tau_z=0.002)
@@ -114,23 +131,6 @@ def test_a_warm_start_reaches_the_cold_answer(profile, kind):
 
 
 # --- balance ------------------------------------------------------------------------------
-
-
-def assert_balanced(m: GelModel, state: GelState, wrench: Wrench, grip_n: float = GRIP_N) -> None:
-    """The contact holds and carries ``wrench`` to the solvers' stated tolerance: the
-    normal balance to TOLERANCE of N (torques with a 1 cm lever), the in-plane one to
-    TOLERANCE of |f_x| + |f_y| + |tau_z| / rho, rho the RMS radius of the loaded cells."""
-    assert state.normal.balanced and not state.tangential.gross_slip
-    loaded = state.in_contact
-    x, y = m.grid.x_m[loaded], m.grid.y_m[loaded]
-    rho = float(np.sqrt(np.mean(x**2 + y**2))) + 1e-9
-    normal = grip_n + wrench.fz
-    in_plane = max(abs(wrench.fx) + abs(wrench.fy) + abs(wrench.tau_z) / rho, 1e-12)
-    tolerance = TOLERANCE * np.array(
-        [in_plane, in_plane, normal, normal * 0.01, normal * 0.01, in_plane * rho]
-    )
-    error = state.carried.as_array() - wrench.as_array()
-    assert np.all(abs(error) <= tolerance), error / tolerance
 
 
 @pytest.mark.parametrize("profile", PROFILES.values(), ids=PROFILES)
