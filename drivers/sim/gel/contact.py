@@ -36,7 +36,8 @@ TOLERANCE = 1e-7  # relative residual of the balance equations
 class NormalContact:
     """``force_n``: normal force of each cell on the object, N (rows, cols);
     ``rigid``: (d0 in m, a, b) of the face's approach; ``balanced``: False when the tilt
-    torque exceeded what the contact can hold (the face tips over its edge)."""
+    torque exceeded what the contact can hold (the face tips over its edge; ``rigid`` has
+    then run off along the tip) or when a load was asked without a normal force to carry it."""
 
     force_n: np.ndarray
     rigid: np.ndarray
@@ -74,11 +75,19 @@ def solve_normal(
     sag = sag_m[cells]
     target = np.array([normal, tau_x, -tau_y])
     if normal <= 0 or k.size == 0:
-        return NormalContact(np.zeros_like(stiffness_n_m), np.zeros(3), balanced=normal <= 0)
+        # No normal force to carry anything: balanced only if nothing was asked.
+        return NormalContact(np.zeros_like(stiffness_n_m), np.zeros(3), not target.any())
 
-    def energy(v: np.ndarray) -> float:
-        gap = np.maximum(v @ basis - sag, 0.0)
-        return 0.5 * float(k @ gap**2) - float(target @ v)
+    def energy_change(v: np.ndarray, dv: np.ndarray) -> float:
+        before = v @ basis - sag
+        closing = dv @ basis
+        after = before + closing
+        squares = np.where(
+            (before > 0) & (after > 0),
+            closing * (before + after),
+            np.maximum(after, 0.0) ** 2 - np.maximum(before, 0.0) ** 2,
+        )
+        return 0.5 * float(k @ squares) - float(target @ dv)
 
     v = start.copy() if start is not None else np.array([sag.min() + normal / k.sum(), 0, 0])
     scale = max(abs(normal), 1e-12)
@@ -101,7 +110,7 @@ def solve_normal(
         hessian = weighted @ basis[:, active].T
         hessian += np.eye(3) * 1e-12 * np.trace(hessian)
         step = np.linalg.solve(hessian, -residual)
-        v = _backtrack(energy, v, step, residual)
+        v = _backtrack(energy_change, v, step, residual)
     force_n = np.zeros_like(stiffness_n_m)
     force_n[cells] = k * np.maximum(v @ basis - sag, 0.0)
     return NormalContact(force_n, v, balanced)
@@ -131,11 +140,26 @@ def solve_tangential(
     def slide(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return v[0] - v[2] * y, v[1] + v[2] * x
 
-    def energy(v: np.ndarray) -> float:
+    def elastic(g: np.ndarray) -> np.ndarray:
+        return np.where(k * g <= limit, 0.5 * k * g**2, limit * g - 0.5 * limit**2 / k)
+
+    def energy_change(v: np.ndarray, dv: np.ndarray) -> float:
         gx, gy = slide(v)
-        g = np.hypot(gx, gy)
-        elastic = np.where(k * g <= limit, 0.5 * k * g**2, limit * g - 0.5 * limit**2 / k)
-        return float(elastic.sum()) + float(target @ v)
+        dgx, dgy = slide(dv)
+        hx, hy = gx + dgx, gy + dgy
+        squares = dgx * (gx + hx) + dgy * (gy + hy)  # |h|^2 - |g|^2
+        g, h = np.hypot(gx, gy), np.hypot(hx, hy)
+        stick_before, stick_after = k * g <= limit, k * h <= limit
+        change = np.where(
+            stick_before & stick_after,
+            0.5 * k * squares,
+            np.where(
+                ~stick_before & ~stick_after,
+                limit * squares / np.maximum(g + h, 1e-30),
+                elastic(h) - elastic(g),
+            ),
+        )
+        return float(change.sum()) + float(target @ dv)
 
     def forces(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         gx, gy = slide(v)
@@ -162,7 +186,7 @@ def solve_tangential(
             break
         hessian = _hessian(v, k, limit, x, y, slide)
         step = np.linalg.solve(hessian, residual)
-        v = _backtrack(energy, v, step, -residual)
+        v = _backtrack(energy_change, v, step, -residual)
     else:
         gross = bool(slip.all()) or capacity < np.hypot(*target[:2])
     fx, fy, slip = forces(v)
@@ -218,13 +242,16 @@ def _beyond_reach(v, x, y, k, limit) -> bool:
     return slide > 1e3 * reach
 
 
-def _backtrack(energy, v: np.ndarray, step: np.ndarray, gradient: np.ndarray) -> np.ndarray:
-    """The Newton step, halved until the energy decreases enough (Armijo)."""
-    e0, slope = energy(v), float(gradient @ step)
-    t = 1.0
+def _backtrack(energy_change, v: np.ndarray, step: np.ndarray, gradient: np.ndarray) -> np.ndarray:
+    """The Newton step, halved until the energy decreases enough (Armijo).
+
+    ``energy_change(v, dv)`` is ``E(v + dv) - E(v)`` summed per cell in a form without
+    cancellation: near the minimum the decrease a step buys is far below the rounding error
+    of ``E`` itself, and comparing two energies there rejects good steps at random.
+    """
+    slope, t = float(gradient @ step), 1.0
     for _ in range(30):
-        candidate = v + t * step
-        if energy(candidate) <= e0 + 1e-4 * t * slope:
-            return candidate
+        if energy_change(v, t * step) <= 1e-4 * t * slope:
+            return v + t * step
         t *= 0.5
     return v + t * step

@@ -13,7 +13,8 @@ needs history (an object that slid keeps its new place) moves the object with
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -110,13 +111,9 @@ class GelModel:
     ) -> GelState:
         """The contact under ``grip_force_n`` (N, >= 0) and ``wrench``; the object's face
         centred at ``offset_m`` and turned by ``angle_rad``; ``start``: a nearby solution to
-        start the solvers from."""
-        values = wrench.as_array()
-        if not np.all(np.isfinite(values)) or not np.isfinite(grip_force_n) or grip_force_n < 0:
-            raise ValueError(
-                f"gel model: expected a finite grip force >= 0 N and a finite wrench, got "
-                f"grip_force_n={grip_force_n!r}, wrench={wrench!r}"
-            )
+        start the solvers from (a tipped or grossly slipping one seeds nothing: it has no
+        rigid-body pose to start from)."""
+        _check_inputs(grip_force_n, wrench, offset_m, angle_rad)
         foot = self.footprint(offset_m, angle_rad)
         x, y = self.grid.x_m, self.grid.y_m
         normal = solve_normal(
@@ -125,7 +122,7 @@ class GelModel:
             foot.sag_m,
             self._normal_k * foot.edge_weight,
             (grip_force_n + wrench.fz, wrench.tau_x, wrench.tau_y),
-            None if start is None else start.normal.rigid,
+            None if start is None or not start.normal.balanced else start.normal.rigid,
         )
         tangential = solve_tangential(
             x,
@@ -149,3 +146,19 @@ class GelModel:
         return GelState(
             normal, tangential, foot, surface, self.layer.image_field_px(surface), carried
         )
+
+
+def _check_inputs(
+    grip_force_n: float, wrench: Wrench, offset_m: tuple[float, float], angle_rad: float
+) -> None:
+    """Raise ValueError naming the first input that is not a finite number (or a negative
+    grip force); a NaN placement would otherwise pass silently as 'no contact'."""
+    if not (math.isfinite(grip_force_n) and grip_force_n >= 0):
+        raise ValueError(
+            f"gel model: grip_force_n: expected a finite force >= 0 N, got {grip_force_n!r}"
+        )
+    named = [(f"wrench.{f.name}", getattr(wrench, f.name)) for f in fields(Wrench)]
+    named += [("offset_m[0]", offset_m[0]), ("offset_m[1]", offset_m[1])]
+    for name, value in [*named, ("angle_rad", angle_rad)]:
+        if not math.isfinite(value):
+            raise ValueError(f"gel model: {name}: expected a finite number, got {value!r}")
