@@ -48,7 +48,7 @@ def check_field(displacement_px: np.ndarray, image_hw: tuple[int, int]) -> np.nd
         )
     if not np.all(np.isfinite(field)):
         raise ValueError("displacement field: expected finite values (px)")
-    return field.astype(np.float32, copy=False)
+    return np.ascontiguousarray(field, dtype=np.float32)
 
 
 def pad_linear(grid: np.ndarray, rings: int) -> np.ndarray:

@@ -42,6 +42,8 @@ class NoiseBank:
 
     def frame(self, index: int) -> np.ndarray:
         """The noise of frame ``index`` (>= 0): a read-only float32 (H, W, C) view, grey levels."""
+        if isinstance(index, bool) or not isinstance(index, int | np.integer) or index < 0:
+            raise ValueError(f"frame_index: expected an integer >= 0, got {index!r}")
         words = np.random.SeedSequence((self._key, index)).generate_state(3)
         image, dy, dx = (int(v) for v in words % (BANK_FRAMES, MARGIN_PX, MARGIN_PX))
         height, width = self.shape[:2]

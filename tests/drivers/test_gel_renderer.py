@@ -249,6 +249,8 @@ def test_effects_are_validated_with_the_key_named():
         ImageEffects(motion_blur_samples=0)
     with pytest.raises(ValueError, match="marker_dropout_fraction"):
         dataclasses.replace(ALL, marker_dropout_fraction=1.5)
+    with pytest.raises(ValueError, match="frame_index"):
+        GelRenderer(effects=ImageEffects(noise_grey=1.0)).render(frame_index=-1)
 
 
 # -- the estimator reads the truth -------------------------------------------------------------
