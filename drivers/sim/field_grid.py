@@ -48,7 +48,7 @@ def check_field(displacement_px: np.ndarray, image_hw: tuple[int, int]) -> np.nd
         )
     if not np.all(np.isfinite(field)):
         raise ValueError("displacement field: expected finite values (px)")
-    return field.astype(np.float32, copy=False)
+    return np.ascontiguousarray(field, dtype=np.float32)
 
 
 def pad_linear(grid: np.ndarray, rings: int) -> np.ndarray:
@@ -58,16 +58,15 @@ def pad_linear(grid: np.ndarray, rings: int) -> np.ndarray:
     r = rings
     out = np.empty((h + 2 * r, w + 2 * r, *grid.shape[2:]), np.float32)
     out[r : r + h, r : r + w] = grid
-    first, last = out[r : r + h, r], out[r : r + h, r + w - 1]
-    step_first = first - out[r : r + h, r + 1]
-    step_last = last - out[r : r + h, r + w - 2]
-    for k in range(1, r + 1):
-        out[r : r + h, r - k] = first + k * step_first
-        out[r : r + h, r + w - 1 + k] = last + k * step_last
-    step_top, step_bottom = out[r] - out[r + 1], out[r + h - 1] - out[r + h - 2]
-    for k in range(1, r + 1):
-        out[r - k] = out[r] + k * step_top
-        out[r + h - 1 + k] = out[r + h - 1] + k * step_bottom
+    steps = np.arange(1, r + 1, dtype=np.float32).reshape(1, r, *([1] * (grid.ndim - 2)))
+    rows = out[r : r + h]
+    rows[:, :r] = grid[:, :1] + steps[:, ::-1] * (grid[:, :1] - grid[:, 1:2])
+    rows[:, r + w :] = grid[:, -1:] + steps * (grid[:, -1:] - grid[:, -2:-1])
+    steps = steps.reshape(r, 1, *steps.shape[2:])
+    out[:r] = out[r : r + 1] + steps[::-1] * (out[r : r + 1] - out[r + 1 : r + 2])
+    out[r + h :] = out[r + h - 1 : r + h] + steps * (
+        out[r + h - 1 : r + h] - out[r + h - 2 : r + h - 1]
+    )
     return out
 
 

@@ -3,7 +3,7 @@
 Drawing 320 x 240 x 3 normals with NumPy takes about 1.5 ms, most of a frame's render budget.
 Instead a ``NoiseBank`` draws ``BANK_FRAMES`` noise images once, each ``MARGIN_PX`` larger
 than the frame along both axes, and frame ``k`` uses a window of one of them at an offset,
-both picked by a generator seeded with (the bank's seed, k). So a frame's noise depends only
+both picked from a ``SeedSequence`` of (the bank's seed, k). So a frame's noise depends only
 on (seed, k), not on which frames were rendered before, and costs nothing to draw.
 
 The price: frames are not fully independent. Two frames share noise values only if they pick
@@ -42,10 +42,10 @@ class NoiseBank:
 
     def frame(self, index: int) -> np.ndarray:
         """The noise of frame ``index`` (>= 0): a read-only float32 (H, W, C) view, grey levels."""
-        pick = np.random.default_rng((self._key, index)).integers(
-            (0, 0, 0), (BANK_FRAMES, MARGIN_PX, MARGIN_PX)
-        )
-        image, dy, dx = (int(v) for v in pick)
+        if isinstance(index, bool) or not isinstance(index, int | np.integer) or index < 0:
+            raise ValueError(f"frame_index: expected an integer >= 0, got {index!r}")
+        words = np.random.SeedSequence((self._key, index)).generate_state(3)
+        image, dy, dx = (int(v) for v in words % (BANK_FRAMES, MARGIN_PX, MARGIN_PX))
         height, width = self.shape[:2]
         window = self._bank[image, dy : dy + height, dx : dx + width]
         window.flags.writeable = False

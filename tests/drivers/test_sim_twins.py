@@ -23,8 +23,8 @@ from drivers.sim.arm import STATE_MOVING, STATE_READY, STATE_STOPPED, SimArm
 from drivers.sim.clock import ManualClock
 from drivers.sim.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.gamepad import PadEvent, SimGamepad
-from drivers.sim.gripper import SimGripper
 from drivers.sim.gel_renderer import GelRenderer
+from drivers.sim.gripper import SimGripper
 from drivers.sim.tactile import SimTactileSensor
 from tests.drivers.device_configs import CONFIGS, load_device_config
 
