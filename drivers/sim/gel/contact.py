@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 NEWTON_ITERATIONS = 60
-TOLERANCE = 1e-7  # relative residual of the balance equations
+TOLERANCE = 1e-9  # relative residual of the balance equations
 
 
 @dataclass(frozen=True)
