@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: install demo test bench lint clean
+.PHONY: install demo test bench evaluate lint clean
 
 install: $(STAMP)
 
@@ -22,6 +22,9 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python scripts/bench_estimation.py --write docs/BENCHMARKS.md
+
+evaluate: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python scripts/evaluate.py --docs docs --work out/evaluate
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
