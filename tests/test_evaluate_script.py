@@ -1,0 +1,21 @@
+"""scripts/evaluate.py --quick end to end (slow: about a minute), and make_dataset's errors."""
+
+import pytest
+
+from evaluation.make_dataset_cli import main as make_dataset_main
+from evaluation.run import main as evaluate_main
+
+
+@pytest.mark.slow
+def test_quick_evaluation_writes_the_report_and_charts(tmp_path):
+    docs = tmp_path / "docs"
+    assert evaluate_main(["--quick", "--docs", str(docs), "--work", str(tmp_path / "w")]) == 0
+    report = (docs / "EVALUATION.md").read_text()
+    assert "## 2. Speed against accuracy" in report
+    for chart in ("pareto.png", "calibration_gelsight_mini-plate.png"):
+        assert (docs / "figures" / chart).stat().st_size > 10_000
+
+
+def test_make_dataset_rejects_an_unknown_sensor(tmp_path, capsys):
+    assert make_dataset_main([str(tmp_path / "d"), "--sensor", "nope"]) == 2
+    assert "unknown sensor configuration" in capsys.readouterr().err
