@@ -17,7 +17,6 @@ import argparse
 import datetime
 import os
 import platform
-import subprocess
 import sys
 import time
 from dataclasses import dataclass
@@ -34,6 +33,7 @@ from controller.tactile.flow import DenseGridFlow
 from controller.tactile.settings import EstimatorConfig
 from drivers.sim.marker_images import MarkerImageRenderer, area_mean_field
 from evaluation.configurations import estimator_variants
+from evaluation.machine import cpu_model, git_revision
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)
 FAMILIES = {"smooth": (40.0, 120.0), "contact": (15.0, 40.0)}
@@ -130,20 +130,7 @@ def bench(config: EstimatorConfig, reference: np.ndarray, cases: list[Case], rep
 
 
 def machine() -> str:
-    try:
-        model = next(
-            line.split(":", 1)[1].strip()
-            for line in Path("/proc/cpuinfo").read_text().splitlines()
-            if line.startswith("model name")
-        )
-    except (OSError, StopIteration):
-        model = platform.processor() or "unknown CPU"
-    try:
-        rev = subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
-        ).stdout.strip()
-    except OSError:
-        rev = "unknown"
+    model, rev = cpu_model(), git_revision()
     cores = len(os.sched_getaffinity(0))
     return (
         f"{model}; {platform.machine()}, {cores} cores visible, measured on 1 thread "
