@@ -136,7 +136,7 @@ CONDITIONS = (
         lambda v: Setting(
             effects=dataclasses.replace(
                 NOMINAL_EFFECTS,
-                drift_gain_per_level=(1.0, 0.8, 1.2),
+                drift_gain_per_level=(1.0, 0.8, 0.9),
                 drift_gradient_grey_per_level=40.0,
             ),
             drift=v,
