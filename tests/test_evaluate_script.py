@@ -19,3 +19,12 @@ def test_quick_evaluation_writes_the_report_and_charts(tmp_path):
 def test_make_dataset_rejects_an_unknown_sensor(tmp_path, capsys):
     assert make_dataset_main([str(tmp_path / "d"), "--sensor", "nope"]) == 2
     assert "unknown sensor configuration" in capsys.readouterr().err
+
+
+def test_every_sweep_level_builds_a_valid_setting():
+    from evaluation.sweeps import CONDITIONS
+
+    for condition in CONDITIONS:
+        assert condition.nominal in condition.levels, condition.name
+        for level in condition.levels:
+            condition.setting(level)  # raises ValueError naming the bad key
