@@ -160,7 +160,7 @@ def solve_tangential(
             hx, hy = gx + dgx, gy + dgy
             h = _length(hx, hy)
             moved = np.flatnonzero(slip | (k * h > limit))  # not sticking throughout
-            sticking = all_stick - _stick_stiffness(k[moved], moments[moved])
+            sticking = all_stick - _stick_stiffness(k[moved], moments[:, moved])
             stuck = float(v @ sticking @ dv) + 0.5 * float(dv @ sticking @ dv)
             # The cell energy is L u - L^2 / 2k + k/2 max(L/k - u, 0)^2 at slide length u:
             # 0.5 k u^2 below the limit, L u - L^2 / 2k beyond it.
@@ -178,24 +178,25 @@ def solve_tangential(
     else:
         v = start.copy()
     capacity = float(limit.sum())
-    radius = float(np.sqrt(np.mean(moments[:, 3] + moments[:, 4]))) + 1e-9  # RMS, m
+    squared_radius = moments[3] + moments[4]
+    radius = float(np.sqrt(squared_radius.mean())) + 1e-9  # RMS, m
     size = max(float(np.abs(target[:2]).sum() + np.abs(target[2]) / radius), 1e-12)
     tolerance = TOLERANCE * size * np.array([1, 1, radius])
     # Beyond reach: the slide is far beyond the largest elastic one, no minimum exists.
     beyond_reach = 1e3 * float(reach.max())
-    extent = float(np.sqrt((moments[:, 3] + moments[:, 4]).max()))
+    extent = float(np.sqrt(squared_radius.max()))
     gross = False
     for _ in range(NEWTON_ITERATIONS):
         gx, gy = slide(v)
         g = _length(gx, gy)
         slip = k * g > limit
         slipping_cells = np.flatnonzero(slip)
-        sticking = all_stick - _stick_stiffness(k[slipping_cells], moments[slipping_cells])
+        sticking = all_stick - _stick_stiffness(k[slipping_cells], moments[:, slipping_cells])
         # A slipping cell pulls with L along -g; its stiffness is (L/|g|)(I - n n^T).
         pull = limit[slipping_cells]
         length = g[slipping_cells]
         nx, ny = gx[slipping_cells] / length, gy[slipping_cells] / length
-        sums = np.stack([pull * nx, pull * ny]) @ moments[slipping_cells, :3]
+        sums = np.stack([pull * nx, pull * ny]) @ moments[:3, slipping_cells].T
         slipping_force = -np.array([sums[0, 0], sums[1, 0], sums[1, 1] - sums[0, 2]])
         residual = slipping_force - sticking @ v - target
         if np.all(np.abs(residual) <= tolerance):
@@ -205,7 +206,7 @@ def solve_tangential(
             break
         a = pull / length
         hessian = sticking + _stiffness(
-            a - a * nx * nx, a - a * ny * ny, -a * nx * ny, moments[slipping_cells]
+            a - a * nx * nx, a - a * ny * ny, -a * nx * ny, moments[:, slipping_cells]
         )
         hessian[_DIAGONAL] += 1e-9 * (hessian[0, 0] + hessian[1, 1] + hessian[2, 2]) * _SHEAR_UNITS
         step = np.linalg.solve(hessian, residual)
@@ -228,21 +229,27 @@ def solve_tangential(
 
 
 def _moment_basis(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Per cell (1, x, y, x^2, y^2, x y), (n, 6): a weight row times it gives its moments."""
-    return np.stack([np.ones_like(x), x, y, x * x, y * y, x * y], axis=1)
+    """Per cell (1, x, y, x^2, y^2, x y), (6, n): its product with a weight per cell gives
+    the weight's moments."""
+    moments = np.empty((6, x.size))
+    moments[0], moments[1], moments[2] = 1.0, x, y
+    np.multiply(x, x, out=moments[3])
+    np.multiply(y, y, out=moments[4])
+    np.multiply(x, y, out=moments[5])
+    return moments
 
 
 def _stiffness(kxx, kyy, kxy, moments: np.ndarray) -> np.ndarray:
     """Sum over cells of J^T K J in (s_x, s_y, phi): K = [[kxx, kxy], [kxy, kyy]] per cell
     and the slide g = J v, J = [[1, 0, -y], [0, 1, x]]."""
-    a, b, c = np.stack([kxx, kyy, kxy]) @ moments
+    a, b, c = np.stack([kxx, kyy, kxy]) @ moments.T
     h02, h12 = c[1] - a[2], b[1] - c[2]
     return np.array([[a[0], c[0], h02], [c[0], b[0], h12], [h02, h12, a[4] - 2 * c[5] + b[3]]])
 
 
 def _stick_stiffness(k: np.ndarray, moments: np.ndarray) -> np.ndarray:
     """``_stiffness`` of sticking cells, K = k I."""
-    m = k @ moments
+    m = moments @ k
     return np.array([[m[0], 0.0, -m[2]], [0.0, m[0], m[1]], [-m[2], m[1], m[3] + m[4]]])
 
 
