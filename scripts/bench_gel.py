@@ -20,8 +20,10 @@ for _name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import argparse  # noqa: E402
 import cProfile  # noqa: E402
+import datetime  # noqa: E402
 import platform  # noqa: E402
 import pstats  # noqa: E402
+import subprocess  # noqa: E402
 import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
@@ -97,9 +99,12 @@ def machine() -> str:
         )
     except (OSError, StopIteration):
         pass
+    rev = subprocess.run(
+        ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
+    ).stdout.strip()
     return (
         f"{model}, one thread; Python {platform.python_version()}, numpy {np.__version__}, "
-        f"scipy {scipy.__version__}"
+        f"scipy {scipy.__version__}; git {rev or 'unknown'}; {datetime.date.today().isoformat()}"
     )
 
 

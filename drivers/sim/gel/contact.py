@@ -30,6 +30,8 @@ import numpy as np
 
 NEWTON_ITERATIONS = 60
 TOLERANCE = 1e-9  # relative residual of the balance equations
+_DIAGONAL = np.diag_indices(3)
+_SHEAR_UNITS = np.array([1.0, 1.0, 1e-6])  # (s_x, s_y in m, phi in rad): phi x 1 mm
 
 
 @dataclass(frozen=True)
@@ -78,17 +80,22 @@ def solve_normal(
         # No normal force to carry anything: balanced only if nothing was asked.
         return NormalContact(np.zeros_like(stiffness_n_m), np.zeros(3), not target.any())
 
-    def energy_change(v: np.ndarray, dv: np.ndarray) -> float:
-        before = v @ basis - sag
-        closing = dv @ basis
-        after = before + closing
-        squares = np.where(
-            (before > 0) & (after > 0),
-            closing * (before + after),
-            np.maximum(after, 0.0) ** 2 - np.maximum(before, 0.0) ** 2,
-        )
-        return 0.5 * float(k @ squares) - float(target @ dv)
+    def energy_change(before: np.ndarray):
+        """E(v + dv) - E(v) from the closure ``before`` at v (see ``_backtrack``)."""
 
+        def change(dv: np.ndarray) -> float:
+            closing = dv @ basis
+            after = before + closing
+            squares = np.where(
+                (before > 0) & (after > 0),
+                closing * (before + after),
+                np.maximum(after, 0.0) ** 2 - np.maximum(before, 0.0) ** 2,
+            )
+            return 0.5 * float(k @ squares) - float(target @ dv)
+
+        return change
+
+    weighted_basis = basis * k
     v = start.copy() if start is not None else np.array([sag.min() + normal / k.sum(), 0, 0])
     scale = max(abs(normal), 1e-12)
     lever = float(np.sqrt((basis[1:] ** 2).sum(axis=0).mean()))  # rms lever arm, m
@@ -106,13 +113,12 @@ def solve_normal(
         if not active.any():
             v[0] += (normal / k.sum()) + (sag - v @ basis).min()
             continue
-        weighted = basis[:, active] * k[active]
-        hessian = weighted @ basis[:, active].T
-        hessian += np.eye(3) * 1e-12 * np.trace(hessian)
+        hessian = (weighted_basis * active) @ basis.T
+        hessian[_DIAGONAL] += 1e-12 * (hessian[0, 0] + hessian[1, 1] + hessian[2, 2])
         step = np.linalg.solve(hessian, -residual)
-        v = _backtrack(energy_change, v, step, residual)
+        v = _backtrack(energy_change(closure), v, step, residual)
     force_n = np.zeros_like(stiffness_n_m)
-    force_n[cells] = k * np.maximum(v @ basis - sag, 0.0)
+    force_n[cells] = force if balanced else k * np.maximum(v @ basis - sag, 0.0)
     return NormalContact(force_n, v, balanced)
 
 
@@ -136,122 +142,135 @@ def solve_tangential(
         return TangentialContact(force_n, slipping, np.zeros(3), gross_slip=gross)
     k, limit = stiffness_n_m[cells], limit_n[cells]
     x, y = x_m[cells], y_m[cells]
+    # Sticking cells are linear (force -k g): their share of the generalized force and
+    # stiffness is the all-stick stiffness less the other cells' share, so each iteration
+    # handles per cell only the few cells that slip.
+    moments = _moment_basis(x, y)
+    all_stick = _stick_stiffness(k, moments)
+    reach = limit / k  # the longest elastic slide of each cell, m
 
     def slide(v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return v[0] - v[2] * y, v[1] + v[2] * x
 
-    def elastic(g: np.ndarray) -> np.ndarray:
-        return np.where(k * g <= limit, 0.5 * k * g**2, limit * g - 0.5 * limit**2 / k)
+    def energy_change(v, gx, gy, g, slip):
+        """E(v + dv) - E(v) given the slide ``gx, gy``, its length ``g`` and the slipping
+        cells at v (see ``_backtrack``)."""
 
-    def energy_change(v: np.ndarray, dv: np.ndarray) -> float:
-        gx, gy = slide(v)
-        dgx, dgy = slide(dv)
-        hx, hy = gx + dgx, gy + dgy
-        squares = dgx * (gx + hx) + dgy * (gy + hy)  # |h|^2 - |g|^2
-        g, h = np.hypot(gx, gy), np.hypot(hx, hy)
-        stick_before, stick_after = k * g <= limit, k * h <= limit
-        change = np.where(
-            stick_before & stick_after,
-            0.5 * k * squares,
-            np.where(
-                ~stick_before & ~stick_after,
-                limit * squares / np.maximum(g + h, 1e-30),
-                elastic(h) - elastic(g),
-            ),
-        )
-        return float(change.sum()) + float(target @ dv)
+        def change(dv: np.ndarray) -> float:
+            dgx, dgy = slide(dv)
+            hx, hy = gx + dgx, gy + dgy
+            h = _length(hx, hy)
+            moved = np.flatnonzero(slip | (k * h > limit))  # not sticking throughout
+            sticking = all_stick - _stick_stiffness(k[moved], moments[:, moved])
+            stuck = float(v @ sticking @ dv) + 0.5 * float(dv @ sticking @ dv)
+            # The cell energy is L u - L^2 / 2k + k/2 max(L/k - u, 0)^2 at slide length u:
+            # 0.5 k u^2 below the limit, L u - L^2 / 2k beyond it.
+            g_m, h_m, reach_m = g[moved], h[moved], reach[moved]
+            squares = dgx[moved] * (gx + hx)[moved] + dgy[moved] * (gy + hy)[moved]
+            longer = squares / (g_m + h_m)  # |h| - |g| without cancellation
+            below = np.maximum(reach_m - h_m, 0.0) ** 2 - np.maximum(reach_m - g_m, 0.0) ** 2
+            per_cell = limit[moved] * longer + 0.5 * k[moved] * below
+            return stuck + float(per_cell.sum()) + float(target @ dv)
 
-    def forces(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        gx, gy = slide(v)
-        g = np.hypot(gx, gy)
-        slip = k * g > limit
-        scale = np.where(slip, limit / np.maximum(g, 1e-30), k)
-        return -scale * gx, -scale * gy, slip
+        return change
 
     if start is None:
-        stick_hessian = _stick_hessian(k, x, y)
-        v = np.linalg.solve(stick_hessian, -target)
+        v = np.linalg.solve(all_stick, -target)
     else:
         v = start.copy()
     capacity = float(limit.sum())
-    size = max(float(np.abs(target[:2]).sum() + np.abs(target[2]) / _radius(x, y)), 1e-12)
+    squared_radius = moments[3] + moments[4]
+    radius = float(np.sqrt(squared_radius.mean())) + 1e-9  # RMS, m
+    size = max(float(np.abs(target[:2]).sum() + np.abs(target[2]) / radius), 1e-12)
+    tolerance = TOLERANCE * size * np.array([1, 1, radius])
+    # Beyond reach: the slide is far beyond the largest elastic one, no minimum exists.
+    beyond_reach = 1e3 * float(reach.max())
+    extent = float(np.sqrt(squared_radius.max()))
     gross = False
     for _ in range(NEWTON_ITERATIONS):
-        fx, fy, slip = forces(v)
-        residual = np.array([fx.sum(), fy.sum(), (x * fy - y * fx).sum()]) - target
-        if np.all(np.abs(residual) <= TOLERANCE * size * np.array([1, 1, _radius(x, y)])):
+        gx, gy = slide(v)
+        g = _length(gx, gy)
+        slip = k * g > limit
+        slipping_cells = np.flatnonzero(slip)
+        sticking = all_stick - _stick_stiffness(k[slipping_cells], moments[:, slipping_cells])
+        # A slipping cell pulls with L along -g; its stiffness is (L/|g|)(I - n n^T).
+        pull = limit[slipping_cells]
+        length = g[slipping_cells]
+        nx, ny = gx[slipping_cells] / length, gy[slipping_cells] / length
+        sums = np.stack([pull * nx, pull * ny]) @ moments[:3, slipping_cells].T
+        slipping_force = -np.array([sums[0, 0], sums[1, 0], sums[1, 1] - sums[0, 2]])
+        residual = slipping_force - sticking @ v - target
+        if np.all(np.abs(residual) <= tolerance):
             break
-        if slip.all() or _beyond_reach(v, x, y, k, limit):
+        if slip.all() or abs(v[0]) + abs(v[1]) + abs(v[2]) * extent > beyond_reach:
             gross = True
             break
-        hessian = _hessian(v, k, limit, x, y, slide)
+        a = pull / length
+        hessian = sticking + _stiffness(
+            a - a * nx * nx, a - a * ny * ny, -a * nx * ny, moments[:, slipping_cells]
+        )
+        hessian[_DIAGONAL] += 1e-9 * (hessian[0, 0] + hessian[1, 1] + hessian[2, 2]) * _SHEAR_UNITS
         step = np.linalg.solve(hessian, residual)
-        v = _backtrack(energy_change, v, step, -residual)
+        v = _backtrack(energy_change(v, gx, gy, g, slip), v, step, -residual)
     else:
         gross = bool(slip.all()) or capacity < np.hypot(*target[:2])
-    fx, fy, slip = forces(v)
+        gx, gy = slide(v)  # where the last step went
+        g = _length(gx, gy)
+        slip = k * g > limit
     if gross:
-        gx, gy = slide(v)
-        g = np.maximum(np.hypot(gx, gy), 1e-30)
+        g = np.maximum(g, 1e-30)
         fx, fy, slip = -limit * gx / g, -limit * gy / g, np.ones_like(slip)
         v = np.full(3, np.nan)  # the object slides: its place is the scene's business
-    force_n[cells, 0], force_n[cells, 1] = fx, fy
+    else:
+        scale = np.where(slip, limit / np.maximum(g, 1e-30), k)
+        fx, fy = -scale * gx, -scale * gy
+    force_n[..., 0][cells], force_n[..., 1][cells] = fx, fy  # (not [cells, 0]: 20x slower)
     slipping[cells] = slip
     return TangentialContact(force_n, slipping, v, gross)
 
 
-def _stick_hessian(k: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    return np.array(
-        [
-            [k.sum(), 0.0, -(k * y).sum()],
-            [0.0, k.sum(), (k * x).sum()],
-            [-(k * y).sum(), (k * x).sum(), (k * (x * x + y * y)).sum()],
-        ]
-    )
+def _moment_basis(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Per cell (1, x, y, x^2, y^2, x y), (6, n): its product with a weight per cell gives
+    the weight's moments."""
+    moments = np.empty((6, x.size))
+    moments[0], moments[1], moments[2] = 1.0, x, y
+    np.multiply(x, x, out=moments[3])
+    np.multiply(y, y, out=moments[4])
+    np.multiply(x, y, out=moments[5])
+    return moments
 
 
-def _hessian(v, k, limit, x, y, slide) -> np.ndarray:
-    """Second derivative of the brush energy in (s_x, s_y, phi)."""
-    gx, gy = slide(v)
-    g = np.maximum(np.hypot(gx, gy), 1e-30)
-    slip = k * g > limit
-    # Per cell, the 2x2 stiffness: k I when sticking, (L/|g|)(I - n n^T) when slipping.
-    a = np.where(slip, limit / g, k)
-    nx, ny = gx / g, gy / g
-    kxx = a - np.where(slip, a * nx * nx, 0.0)
-    kyy = a - np.where(slip, a * ny * ny, 0.0)
-    kxy = -np.where(slip, a * nx * ny, 0.0)
-    # g = J v with J = [[1, 0, -y], [0, 1, x]].
-    h = np.empty((3, 3))
-    h[0, 0], h[1, 1], h[0, 1] = kxx.sum(), kyy.sum(), kxy.sum()
-    h[0, 2] = (-kxx * y + kxy * x).sum()
-    h[1, 2] = (-kxy * y + kyy * x).sum()
-    h[2, 2] = (kxx * y * y - 2 * kxy * x * y + kyy * x * x).sum()
-    h[1, 0], h[2, 0], h[2, 1] = h[0, 1], h[0, 2], h[1, 2]
-    return h + np.eye(3) * 1e-9 * np.trace(h) * np.array([1, 1, 1e-6])
+def _stiffness(kxx, kyy, kxy, moments: np.ndarray) -> np.ndarray:
+    """Sum over cells of J^T K J in (s_x, s_y, phi): K = [[kxx, kxy], [kxy, kyy]] per cell
+    and the slide g = J v, J = [[1, 0, -y], [0, 1, x]]."""
+    a, b, c = np.stack([kxx, kyy, kxy]) @ moments.T
+    h02, h12 = c[1] - a[2], b[1] - c[2]
+    return np.array([[a[0], c[0], h02], [c[0], b[0], h12], [h02, h12, a[4] - 2 * c[5] + b[3]]])
 
 
-def _radius(x: np.ndarray, y: np.ndarray) -> float:
-    return float(np.sqrt(np.mean(x * x + y * y))) + 1e-9
+def _stick_stiffness(k: np.ndarray, moments: np.ndarray) -> np.ndarray:
+    """``_stiffness`` of sticking cells, K = k I."""
+    m = moments @ k
+    return np.array([[m[0], 0.0, -m[2]], [0.0, m[0], m[1]], [-m[2], m[1], m[3] + m[4]]])
 
 
-def _beyond_reach(v, x, y, k, limit) -> bool:
-    """True once the slide is far beyond the largest elastic one: the energy has no minimum."""
-    reach = float((limit / k).max())
-    slide = abs(v[0]) + abs(v[1]) + abs(v[2]) * float(np.sqrt((x * x + y * y).max()))
-    return slide > 1e3 * reach
+def _length(gx: np.ndarray, gy: np.ndarray) -> np.ndarray:
+    """Per cell |(gx, gy)|: sqrt of the sum of squares, several times faster than np.hypot
+    (whose overflow guard slides of micrometres do not need)."""
+    return np.sqrt(gx * gx + gy * gy)
 
 
 def _backtrack(energy_change, v: np.ndarray, step: np.ndarray, gradient: np.ndarray) -> np.ndarray:
     """The Newton step, halved until the energy decreases enough (Armijo).
 
-    ``energy_change(v, dv)`` is ``E(v + dv) - E(v)`` summed per cell in a form without
-    cancellation: near the minimum the decrease a step buys is far below the rounding error
-    of ``E`` itself, and comparing two energies there rejects good steps at random.
+    ``energy_change(dv)`` is ``E(v + dv) - E(v)`` in a form without cancellation (summed per
+    cell, or as a quadratic form for the linear cells): near the minimum the decrease a step
+    buys is far below the rounding error of ``E`` itself, and comparing two energies there
+    rejects good steps at random.
     """
     slope, t = float(gradient @ step), 1.0
     for _ in range(30):
-        if energy_change(v, t * step) <= 1e-4 * t * slope:
+        if energy_change(t * step) <= 1e-4 * t * slope:
             return v + t * step
         t *= 0.5
     return v + t * step

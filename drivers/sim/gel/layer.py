@@ -14,7 +14,7 @@ With ``E``, ``nu`` and a point force (P normal, Q tangential) at the origin, at 
 
 Tractions are cell forces spread over a cell; the ``1/r`` singularity at a cell's own centre
 is replaced by its mean over the cell. The convolution is one FFT per load component and one
-per displacement component on the zero-padded grid.
+per displacement component on the zero-padded grid (batched in one call each way).
 
 The same kernels fix the stiffness of the contact model, so that the two agree on a uniform
 load: the mean compliance of a large uniformly loaded area is ``2 (1 - nu^2) h / E`` normal
@@ -87,20 +87,22 @@ class ElasticLayer:
         pushing the gel toward the camera; ``shear_force_n``: in-plane force each cell
         takes from the object, N (rows, cols, 2)."""
         rows, cols = self.grid.shape
-        shape = self._fft_shape
-        p = fft.rfft2(pressure_force_n, shape, workers=1)
-        qx = fft.rfft2(shear_force_n[..., 0], shape, workers=1)
-        qy = fft.rfft2(shear_force_n[..., 1], shape, workers=1)
+        loads = np.empty((3, rows, cols))
+        loads[0], loads[1:] = pressure_force_n, np.moveaxis(shear_force_n, -1, 0)
+        p, qx, qy = fft.rfft2(loads, self._fft_shape, workers=1)  # one batched transform
         k = self._kernels
-        spectra = (
-            k["xx"] * qx + k["xy"] * qy + k["px"] * p,
-            k["xy"] * qx + k["yy"] * qy + k["py"] * p,
-            k["n"] * p,
-        )
+        spectra = np.empty((3, *p.shape), complex)
+        np.multiply(k["xx"], qx, out=spectra[0])
+        spectra[0] += k["xy"] * qy
+        spectra[0] += k["px"] * p
+        np.multiply(k["xy"], qx, out=spectra[1])
+        spectra[1] += k["yy"] * qy
+        spectra[1] += k["py"] * p
+        np.multiply(k["n"], p, out=spectra[2])
+        full = fft.irfft2(spectra, self._fft_shape, workers=1)
         out = np.empty((rows, cols, 3))
-        for i, spectrum in enumerate(spectra):
-            full = fft.irfft2(spectrum, shape, workers=1)
-            out[..., i] = full[rows - 1 : 2 * rows - 1, cols - 1 : 2 * cols - 1]
+        for i in range(3):
+            out[..., i] = full[i, rows - 1 : 2 * rows - 1, cols - 1 : 2 * cols - 1]
         return out
 
     def image_field_px(self, surface_m: np.ndarray) -> np.ndarray:
