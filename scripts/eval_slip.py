@@ -246,7 +246,10 @@ def _summary(runs: list[tuple[Sequence, list[Frame]]]) -> dict:
     frames = [f for _, fs in runs for f in fs]
     negatives = [f for s, fs in runs if not s.positive for f in fs]
     gross_runs = [fs for _, fs in runs if any(f.gross for f in fs)]
+    incipient_runs = [fs for _, fs in runs if any(f.incipient for f in fs)]
     return {
+        "incipient_delays": [_delay(fs, "incipient", "flag_incipient") for fs in incipient_runs],
+        "gross_delays": [_delay(fs, "gross", "flag_gross") for fs in gross_runs],
         "frames": len(frames),
         "incipient": _precision_recall(frames, "incipient", "flag_incipient"),
         "gross": _precision_recall(frames, "gross", "flag_gross"),
@@ -273,7 +276,7 @@ def evaluate(
     config = estimator_config(method)
     gel = load_config(GelProfile, GEL_PROFILE)
     models = {shape: GelModel(gel, SHAPES[shape]) for shape in objects}
-    groups, sequences_out, all_runs = [], [], []
+    groups, sequences_out, all_runs, tuning_runs = [], [], [], []
     for number, grip in enumerate(grips_n):
         rng = np.random.default_rng(seed + number)
         renderer = MarkerImageRenderer(rng=rng)
@@ -290,6 +293,8 @@ def evaluate(
                 sequences_out.append(_sequence_row(grip, sequence, frames))
             groups.append({"grip_n": grip, "object": shape, "capacity": cap, **_summary(runs)})
             all_runs += runs
+            tuning_runs += runs if number == 0 else []
+    held_out = [run for run in all_runs if all(run is not t for t in tuning_runs)]
     return {
         "method": method,
         "seed": seed,
@@ -297,6 +302,8 @@ def evaluate(
         "groups": groups,
         "sequences": sequences_out,
         "overall": _summary(all_runs),
+        "tuning": _summary(tuning_runs),
+        "held_out": _summary(held_out) if held_out else None,
         "grips_n": grips_n,
         "tuned_on_grip_n": grips_n[0],
     }
@@ -323,6 +330,14 @@ def _fmt(value: float) -> str:
     return "-" if value != value else f"{value:.2f}"
 
 
+def _delays(values: list[int | None]) -> str:
+    """Median delay in frames, and how many sequences were never flagged."""
+    found = [v for v in values if v is not None]
+    median = f"{float(np.median(found)):+.1f}" if found else "-"
+    missed = len(values) - len(found)
+    return median + (f" ({missed} missed)" if missed else "")
+
+
 def _delay_text(value: int | None) -> str:
     return "missed" if value is None else f"{value:+d}"
 
@@ -339,19 +354,30 @@ def markdown(report: dict, seconds: float) -> str:
         + ("; the other grips are held out." if len(report["grips_n"]) > 1 else "."),
         "",
         "Per frame: incipient = slip fraction >= 0.2 or gross slip (flag `slip_suspected`); "
-        "gross = the model's gross slip (flag `slip_gross`). False alarms: share of the "
-        "negative sequences' frames flagged `slip_suspected`.",
+        "gross = the model's gross slip (flag `slip_gross`). Delay: median over the "
+        "sequences of the first flagged minus the first true frame (frames at "
+        f"{sensor_profile(SENSOR).fps_hz:g} Hz). False alarms: share of the negative "
+        "sequences' frames flagged `slip_suspected`.",
         "",
-        "| grip N | object | incipient P | incipient R | gross P | gross R | negatives "
-        "flagged | re-zero after gross | re-zero under load |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| grip N | object | incipient P | incipient R | gross P | gross R | delay incipient "
+        "/ gross | negatives flagged | re-zero after gross | re-zero under load |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
-    for g in [*report["groups"], {"grip_n": "all", "object": "all", **report["overall"]}]:
+    totals = [{"grip_n": "all", "object": "all", **report["overall"]}]
+    if report["held_out"] is not None:
+        tuned = f"{report['tuned_on_grip_n']:g} (tuning)"
+        totals = [
+            {"grip_n": tuned, "object": "all", **report["tuning"]},
+            {"grip_n": "others (held out)", "object": "all", **report["held_out"]},
+            *totals,
+        ]
+    for g in [*report["groups"], *totals]:
         grip = g["grip_n"] if isinstance(g["grip_n"], str) else f"{g['grip_n']:g}"
         lines.append(
             f"| {grip} | {g['object']} | {_fmt(g['incipient']['precision'])} | "
             f"{_fmt(g['incipient']['recall'])} | {_fmt(g['gross']['precision'])} | "
-            f"{_fmt(g['gross']['recall'])} | {g['negative_false_alarm_rate']:.1%} | "
+            f"{_fmt(g['gross']['recall'])} | {_delays(g['incipient_delays'])} / "
+            f"{_delays(g['gross_delays'])} | {g['negative_false_alarm_rate']:.1%} | "
             f"{g['rezero_after_gross']}/{g['gross_sequences']} | "
             f"{g['rezero_under_load_frames']} frames |"
         )
