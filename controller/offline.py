@@ -9,9 +9,10 @@ INPUT is a video file OpenCV can read, or a folder of images read in natural sor
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one.
 
 The CSV has one row per frame: ``frame,time_s,tau_x,tau_y,tau_z,shear_x,shear_y,normal,
-fv_tau_x,fv_tau_y,fv_tau_z,contact,degenerate,latency_ms``. Without a calibration file the
-values are raw (mm, mm^2; see controller/tactile/wrench.py); ``latency_ms`` is the
-estimator's time for that frame.
+fv_tau_x,fv_tau_y,fv_tau_z,contact,degenerate,slip_suspected,slip_gross,rezero_recommended,
+latency_ms``. Without a calibration file the values are raw (mm, mm^2; see
+controller/tactile/wrench.py); the flags are 0 or 1; ``latency_ms`` is the estimator's time
+for that frame.
 
 Expected failures (unreadable input, empty folder, mismatched frame sizes, reference out of
 range, bad configuration) print one line ``estimate: error: ...`` and exit with code 2.
@@ -39,7 +40,8 @@ from controller.tactile.settings import estimator_config
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
-CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, "contact", "degenerate", "latency_ms")
+FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")
+CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, *FLAG_FIELDS, "latency_ms")
 PROGRESS_MIN_FRAMES = 100
 
 
@@ -138,7 +140,7 @@ def read_reference(source: FrameSource, start: int, stop: int) -> list[np.ndarra
 
 def _row(index: int, t_s: float, estimate: WrenchEstimate, latency_ms: float) -> list[object]:
     values = (f"{getattr(estimate, name):.9g}" for name in VALUE_FIELDS)
-    flags = (int(estimate.contact), int(estimate.degenerate))
+    flags = (int(getattr(estimate, name)) for name in FLAG_FIELDS)
     return [index, f"{t_s:.6f}", *values, *flags, f"{latency_ms:.3f}"]
 
 

@@ -53,6 +53,16 @@ def write_variant(tmp_path, edit):
             lambda d: d["flow"].update(warm_start="yes"),
             "key 'flow.warm_start': expected true or false",
         ),
+        (lambda d: d.pop("slip"), "missing key 'slip'"),
+        (
+            lambda d: d["slip"].update(core_fraction=1.5),
+            r"key 'slip.core_fraction': expected a number in \[0.0, 1.0\], got 1.5",
+        ),
+        (
+            lambda d: d["slip"].update(gross_score=0.01),
+            "key 'slip.gross_score': expected at least incipient_score",
+        ),
+        (lambda d: d["slip"]["rezero"].pop("quiet_s"), "missing key 'slip.rezero.quiet_s'"),
     ],
 )
 def test_bad_values_name_file_key_and_expectation(tmp_path, edit, message):

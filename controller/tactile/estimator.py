@@ -2,12 +2,15 @@
 
 frame (uint8 BGR or grey) -> working image -> grid displacement (px, vs the zeroed reference)
 -> mm in frame S -> optional temporal EMA -> NHHD (tau_z, shear, normal) -> dipole (tau_x,
-tau_y) and the FingerVision baseline -> optional calibration.
+tau_y) and the FingerVision baseline -> slip detector and re-zero policy (flags) -> optional
+calibration.
 
 Zeroing: the reference is the mean of ``reference_frames`` frames, captured from the frames
 pushed after ``rezero()`` (or on the first frames if no reference was ever set), or set
 directly with ``set_reference(frames)``. While it is being captured, ``push`` returns zero
-estimates flagged ``zeroing``.
+estimates flagged ``zeroing``. After gross slip the re-zero policy raises
+``rezero_recommended`` once the load is released and the field has settled; with
+``slip.rezero.auto`` the estimator then starts capturing a new reference itself.
 
 Frames may come in either orientation (e.g. 240 x 320 from a DIGIT) and at any size with
 the sensor profile's aspect ratio; they are resized to the profile's resolution in their own
@@ -32,6 +35,7 @@ from controller.tactile.field import VectorField, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
 from controller.tactile.nhhd import NHHD, NHHDResult
 from controller.tactile.settings import EstimatorConfig
+from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
 
 _ASPECT_TOLERANCE = 0.02
@@ -55,6 +59,9 @@ class TactileEstimator:
         self._zeroing_count = 0
         self._grid_flow: GridFlow | None = None
         self._last_nhhd: NHHDResult | None = None
+        self._slip: SlipDetector | None = None
+        self._last_slip: SlipStatus | None = None
+        self._rezero_policy = RezeroPolicy(config.slip.rezero)
 
     # -- reference ---------------------------------------------------------------------------
 
@@ -72,6 +79,7 @@ class TactileEstimator:
         self._zeroing_left = n
         self._zeroing_count = 0
         self._reference_sum = None
+        self._rezero_policy.reset()
 
     def set_reference(self, frames: np.ndarray | Sequence[np.ndarray]) -> None:
         """Use the mean of ``frames`` (one image, or a sequence / stack of images) now."""
@@ -94,6 +102,8 @@ class TactileEstimator:
         self._allocate(height, width, rows, cols)
         self._grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
         self._grid_flow.set_reference(reference)
+        self._rezero_policy.reset()
+        self._last_slip = None
 
     def _allocate(self, height: int, width: int, rows: int, cols: int) -> None:
         x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
@@ -108,6 +118,10 @@ class TactileEstimator:
         self._nhhd = NHHD(x_mm, y_mm)
         self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
         self._baseline = FingerVisionTorque(x_mm, y_mm)
+        # A view on the field buffers, which every push updates in place.
+        self._field_view = VectorField(x_mm, y_mm, self._u, self._v)
+        slip = self.config.slip
+        self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -200,6 +214,12 @@ class TactileEstimator:
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)
         contact = float(self._magnitude.mean()) > self.config.contact_threshold_mm
+        slip = gross = recommended = False
+        if self._slip is not None:
+            status = self._slip.update(self._field_view, decomposition, t_s)
+            self._last_slip = status
+            slip, gross = status.incipient, status.gross
+            recommended = self._rezero_policy.update(status, t_s)
         estimate = WrenchEstimate(
             t_s=t_s,
             tau_x=tau_x,
@@ -213,10 +233,14 @@ class TactileEstimator:
             fv_tau_z=fv_z,
             contact=contact,
             degenerate=dipole.degenerate,
-            slip_suspected=False,
+            slip_suspected=slip,
+            slip_gross=gross,
+            rezero_recommended=recommended,
             zeroing=False,
             calibrated=False,
         )
+        if recommended and self.config.slip.rezero.auto:
+            self.rezero()
         return self.calibration.apply(estimate) if self.calibration else estimate
 
     # -- inspection --------------------------------------------------------------------------
@@ -227,6 +251,16 @@ class TactileEstimator:
         if self._grid_flow is None:
             raise RuntimeError("no field yet: the estimator has no reference")
         return VectorField(self.x_mm, self.y_mm, self._u.copy(), self._v.copy())
+
+    @property
+    def last_slip_status(self) -> SlipStatus | None:
+        """The slip detector's verdict on the latest frame (None: disabled or no frame yet)."""
+        return self._last_slip
+
+    @property
+    def rezero_state(self) -> RezeroState:
+        """The re-zero policy's current state."""
+        return self._rezero_policy.state
 
     @property
     def last_decomposition(self) -> NHHDResult | None:

@@ -107,6 +107,69 @@ class FlowConfig:
 
 
 @dataclass(frozen=True)
+class RezeroConfig:
+    """When the zeroing reference should be refreshed after gross slip
+    (controller/tactile/slip.py: ``RezeroPolicy``).
+
+    After gross slip the policy waits until the tangential field (RMS, mm) has fallen to at
+    most ``load_fraction`` of its peak during the slip (the load is released: back near the
+    post-grasp level) and the whole field has changed by at most ``quiet_change_mm`` (largest
+    cell, frame to frame) for ``quiet_s`` seconds; then it recommends a re-zero. ``auto``:
+    the estimator applies the recommendation itself (captures a new reference).
+    """
+
+    auto: bool
+    load_fraction: float = number(0.0, 1.0)
+    quiet_change_mm: float = number(0.0, 1.0)
+    quiet_s: float = number(0.0, 60.0)
+
+
+@dataclass(frozen=True)
+class SlipConfig:
+    """The slip detector (controller/tactile/slip.py: ``SlipDetector``).
+
+    It watches the divergence-free part of the zeroed field (rotational + harmonic NHHD
+    parts, mm) and, each time that part has moved by ``min_increment_mm`` (largest cell)
+    since the last evaluation, looks at the increment over the contact core: the cells where
+    the tangential field is at least ``core_fraction`` of its largest value. Only loading
+    increments count: their rigid motion must point within acos(``loading_cosine``) of the
+    tangential field's own. The residual of an affine fit to the increment (RMS over the
+    core, relative to the increment's RMS) minus the grasp's stick baseline is the slip
+    score. The baseline is the smallest residual of the first ``baseline_evaluations``
+    evaluations after zeroing, capped at ``baseline_max``.
+
+    * incipient slip: score >= ``incipient_score``;
+    * gross slip: score >= ``gross_score`` and then the tangential field (RMS) stops
+      growing by more than ``growth_tolerance`` (relative) for ``gross_confirm_s`` seconds;
+      it ends when that RMS falls below (1 - ``release_fraction``) of its peak.
+
+    Below ``min_field_mm`` (largest cell of the tangential field) the contact counts as
+    unloaded: no slip. ``enabled`` false: the detector does not run and the flags stay off.
+    """
+
+    enabled: bool
+    min_field_mm: float = number(0.0, 10.0)
+    min_increment_mm: float = number(1e-4, 10.0)
+    core_fraction: float = number(0.0, 1.0)
+    loading_cosine: float = number(-1.0, 1.0)
+    baseline_evaluations: int = number(1, 100)
+    baseline_max: float = number(0.0, 1.0)
+    incipient_score: float = number(0.0, 1.0)
+    gross_score: float = number(0.0, 1.0)
+    gross_confirm_s: float = number(0.0, 10.0)
+    growth_tolerance: float = number(0.0, 1.0)
+    release_fraction: float = number(0.0, 1.0)
+    rezero: RezeroConfig
+
+    def __post_init__(self) -> None:
+        if self.gross_score < self.incipient_score:
+            raise ValueError(
+                f"key 'gross_score': expected at least incipient_score "
+                f"({self.incipient_score}), got {self.gross_score}"
+            )
+
+
+@dataclass(frozen=True)
 class EstimatorConfig:
     """The whole frame-to-wrench pipeline.
 
@@ -116,6 +179,7 @@ class EstimatorConfig:
     curl-free part. ``ema_alpha``: weight of the newest field in the temporal filter
     (1 = off). ``reference_frames``: frames averaged into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
+    ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
     """
 
     flow: FlowConfig
@@ -125,6 +189,7 @@ class EstimatorConfig:
     ema_alpha: float = number(0.01, 1.0)
     reference_frames: int = number(1, 1000)
     contact_threshold_mm: float = number(0, 10)
+    slip: SlipConfig
 
 
 def estimator_config(name_or_path: str) -> EstimatorConfig:

@@ -34,9 +34,12 @@ class WrenchEstimate:
 
     Flags: ``contact`` -- the field's mean magnitude exceeds the contact threshold;
     ``degenerate`` -- the field had no positive or no negative divergence, so the tilt torque
-    is set to zero; ``slip_suspected`` -- the slip detector fired (always False until a slip
-    detector is configured); ``zeroing`` -- the reference is still being captured, all values
-    are zero.
+    is set to zero; ``slip_suspected`` -- the slip detector sees part of the contact slipping
+    (incipient or gross slip); ``slip_gross`` -- it sees the object sliding as a whole;
+    ``rezero_recommended`` -- after gross slip the load was released and the field settled,
+    so the zeroing reference should be refreshed (controller/tactile/slip.py; all three stay
+    False when the detector is disabled); ``zeroing`` -- the reference is still being
+    captured, all values are zero.
     """
 
     t_s: float
@@ -52,6 +55,8 @@ class WrenchEstimate:
     contact: bool
     degenerate: bool
     slip_suspected: bool
+    slip_gross: bool
+    rezero_recommended: bool
     zeroing: bool
     calibrated: bool
 
@@ -72,6 +77,8 @@ class WrenchEstimate:
             contact=False,
             degenerate=True,
             slip_suspected=False,
+            slip_gross=False,
+            rezero_recommended=False,
             zeroing=zeroing,
             calibrated=calibrated,
         )
