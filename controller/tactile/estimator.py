@@ -224,9 +224,10 @@ class TactileEstimator:
             t_s=t_s,
             tau_x=tau_x,
             tau_y=tau_y,
-            tau_z=decomposition.tau_z,
-            shear_x=decomposition.shear_x,
-            shear_y=decomposition.shear_y,
+            # The field follows the contact; the gel's wrench on the object opposes it.
+            tau_z=-decomposition.tau_z,
+            shear_x=-decomposition.shear_x,
+            shear_y=-decomposition.shear_y,
             normal=decomposition.normal,
             fv_tau_x=fv_x,
             fv_tau_y=fv_y,

@@ -5,7 +5,8 @@ Each phase drives one analytic displacement pattern with a smooth back-and-forth
 * ``tilt_x``: a positive 'charge' (gel spreading) toward +y and a negative one toward -y,
   the divergence dipole of a torque about S's x axis; ``tilt_y`` likewise along x, with the
   sign of a torque about y (more pressure toward +x is a negative tau_y);
-* ``twist``: a rigid rotation of the contact patch, positive from +x toward +y (tau_z);
+* ``twist``: a rigid rotation of the contact patch, positive from +x toward +y (the gel's
+  tau_z on the object is then negative);
 * ``shear``: a translation of the contact patch along +x.
 
 The truth is the pattern's signed amplitude in [-1, 1], not a wrench: these are analytic

@@ -28,8 +28,8 @@ def estimator(renderer):
     [
         ("tilt_x", "tau_x", 1),
         ("tilt_y", "tau_y", 1),
-        ("twist", "tau_z", 1),
-        ("shear", "shear_x", 1),
+        ("twist", "tau_z", -1),  # the contact turns +z: the gel holds it back, -z
+        ("shear", "shear_x", -1),  # the contact moves +x: the gel pulls it back, -x
     ],
 )
 def test_each_pattern_drives_its_axis_with_the_right_sign(estimator, renderer, pattern, axis, sign):
