@@ -11,6 +11,8 @@ Methods: the dipole (tau_x, tau_y), the NHHD in-plane torque (tau_z) and the Fin
 baseline (fv_tau_x, fv_tau_y, fv_tau_z). Per level and method: RMSE (N*mm), R^2 over the
 sequence, and the RMSE normalised by the peak true torque on that axis (NRMSE). A method
 breaks down at the first level where R^2 < 0.9 or the NRMSE exceeds twice its nominal value.
+Each level also scores the slip flags per frame against the gel's slip state (the
+definitions of ``evaluation.slip_eval``).
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from drivers.sim.image_effects import ImageEffects
 from drivers.sim.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
 from evaluation.rendering import NOMINAL_EFFECTS, make_renderer
 from evaluation.sim_setup import gel_model, jig_config
+from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, confusion
 
 SWEEP_AMPLITUDE_NM = 0.04
 METHOD_AXES = {  # label -> (estimate field, truth column of (fx, fy, fz, tx, ty, tz))
@@ -191,6 +194,8 @@ class LevelResult:
     r2: dict[str, float]
     nrmse: dict[str, float]
     frames: int
+    slip_counts: dict[str, tuple[int, int, int]]  # "incipient"/"gross" -> (tp, fp, fn)
+    slip_scored_frames: int  # the frames the slip counts cover (from the first pulse on)
 
 
 def _program(setting: Setting, jig: JigConfig, rng: np.random.Generator):
@@ -238,11 +243,15 @@ def run_level(
     renderer = make_renderer(setting.sensor, setting.effects, seed=seed)
     period = 1.0 / jig.tactile_rate_hz
     truth = np.empty((times.size, 6))
+    slipping = np.empty(times.size)  # the gel's slip fraction
+    gross = np.empty(times.size, bool)
     frames = []
     exposure_gel = JigGel(gel.model, program, jig) if setting.exposure_fraction > 0 else None
     for index_frame, t in enumerate(times):
         state = gel.state(float(t))
         truth[index_frame] = state.carried.as_array()
+        slipping[index_frame] = state.slip_fraction
+        gross[index_frame] = state.tangential.gross_slip
         start_field = None
         if exposure_gel is not None:
             start_field = exposure_gel.state(float(t) - setting.exposure_fraction * period).field_px
@@ -267,7 +276,14 @@ def run_level(
         total = float(((gt - gt.mean()) ** 2).sum())
         r2[label] = 1.0 - float(error @ error) / total if total > 0 else float("nan")
         nrmse[label] = rmse[label] / max(float(np.abs(gt).max()) * 1e3, 1e-9)
-    return LevelResult(condition.name, level, rmse, r2, nrmse, int(times.size))
+    incipient = gross | (slipping >= INCIPIENT_SLIP_FRACTION)
+    slip_counts = {
+        "incipient": confusion(incipient[after], series.slip_suspected[after]),
+        "gross": confusion(gross[after], series.slip_gross[after]),
+    }
+    return LevelResult(
+        condition.name, level, rmse, r2, nrmse, int(times.size), slip_counts, int(after.sum())
+    )
 
 
 def breakdown(condition: Condition, results: list[LevelResult], method: str) -> str:

@@ -33,11 +33,13 @@ METHODS = ("ours", "baseline")
 @dataclass(frozen=True)
 class EstimateSeries:
     """Raw estimates of every frame: ``t_s`` (n,), ``values[name]`` (n,) for each of
-    VALUE_FIELDS, ``slip`` (n,) bool, and the estimator's time per frame ``latency_ms``."""
+    VALUE_FIELDS, the slip flags ``slip_suspected`` and ``slip_gross`` (n,) bool, and the
+    estimator's time per frame ``latency_ms``."""
 
     t_s: np.ndarray
     values: dict[str, np.ndarray]
-    slip: np.ndarray
+    slip_suspected: np.ndarray
+    slip_gross: np.ndarray
     latency_ms: np.ndarray
 
 
@@ -51,7 +53,7 @@ def estimate_frames(
     ``reference``."""
     estimator = TactileEstimator(config, profile)
     estimator.set_reference(reference)
-    t_s, rows, slip, latency = [], [], [], []
+    t_s, rows, slip, gross, latency = [], [], [], [], []
     for _, t, image in frames:
         start = time.perf_counter()
         estimate = estimator.push(image, t)
@@ -59,11 +61,13 @@ def estimate_frames(
         t_s.append(t)
         rows.append([getattr(estimate, name) for name in VALUE_FIELDS])
         slip.append(estimate.slip_suspected)
+        gross.append(estimate.slip_gross)
     table = np.array(rows, float).reshape(-1, len(VALUE_FIELDS))
     return EstimateSeries(
         np.array(t_s),
         {name: table[:, i] for i, name in enumerate(VALUE_FIELDS)},
         np.array(slip, bool),
+        np.array(gross, bool),
         np.array(latency),
     )
 

@@ -12,7 +12,7 @@ slides as a whole (gross slip): the traction saturates, so the tangential field 
 growing (or relaxes, when kinetic friction is lower than static friction).
 
 **The features used here**, chosen by measurement on the simulated gel against the
-alternatives below (scripts/eval_slip.py; docs/ARCHITECTURE.md gives the numbers):
+alternatives below (evaluation/slip_eval.py; docs/EVALUATION.md gives the numbers):
 
 1. Only the divergence-free part of the field (the NHHD rotational plus harmonic parts,
    ``t = v - d``) is watched. Normal-load and tilt changes live mostly in the diverging
