@@ -1,6 +1,6 @@
 """Fit the torque constants of an estimator on a calibration dataset, recorded or simulated.
 
-    python scripts/calibrate.py DATASET [--method default] [--out calibration.yaml]
+    python scripts/calibrate.py DATASET [--method NAME] [--out calibration.yaml]
 
 Runs the estimator over the dataset's frames (zeroed on its reference interval), fits each
 axis that has segments (c_x, c_y and c_z: our dipole / NHHD torque, and the FingerVision
@@ -21,7 +21,7 @@ from controller.config import ConfigError, sensor_profile
 from controller.tactile.calibration import AxisFit
 from controller.tactile.dataset import Dataset
 from controller.tactile.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
-from controller.tactile.settings import estimator_config
+from controller.tactile.settings import sensor_estimator
 
 
 def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
@@ -46,7 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("dataset", type=Path, help="dataset folder (controller/tactile/dataset.py)")
     parser.add_argument(
-        "--method", default="default", help="estimator configuration name or YAML path"
+        "--method",
+        default=None,
+        help="estimator configuration name or YAML path (default: the sensor profile's)",
     )
     parser.add_argument("--out", type=Path, default=None, help="calibration YAML to write")
     return parser
@@ -57,7 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         dataset = Dataset(args.dataset)
         profile = sensor_profile(dataset.meta.sensor)
-        config = estimator_config(args.method)
+        method, config = sensor_estimator(profile, args.method)
         series = estimate_dataset(dataset, config, profile)
         fits = fit_dataset(dataset, series)
         if not fits:
@@ -67,10 +69,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     print(
         f"calibrate: {len(dataset)} frames of {args.dataset} ({dataset.meta.sensor}, "
-        f"{args.method}); median estimator time {np.median(series.latency_ms):.2f} ms"
+        f"{method}); median estimator time {np.median(series.latency_ms):.2f} ms"
     )
     print(fit_table(fits))
     if args.out is not None:
-        calibration_from_fits(fits, dataset.meta.sensor, args.method).save(args.out)
+        calibration_from_fits(fits, dataset.meta.sensor, method).save(args.out)
         print(f"calibrate: wrote {args.out}")
     return 0

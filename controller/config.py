@@ -3,7 +3,7 @@
 Every key must be known and present; a value of the wrong type or out of range is an
 error that names the file, the key and what was expected::
 
-    configs/estimators/default.yaml: key 'grid.stride_px': expected a number in [4, 80], got 2
+    configs/estimators/dense.yaml: key 'stride_px': expected a number in [4, 160], got 2
 
 Validation rules live on the dataclass fields as metadata, so each schema is declared once:
 
@@ -150,6 +150,9 @@ class SensorProfile:
     """Geometry of a visuotactile sensor's working image (after the driver's crop/resize).
 
     Positions in the sensor frame S are pixels times ``mm_per_px`` from the image centre.
+    ``marker_pitch_mm``: printed marker pitch (None: no markers). ``estimator``: the sensor's
+    estimator configuration (a name in configs/estimators/ or a YAML path), used whenever a
+    caller names none.
     """
 
     name: str
@@ -158,6 +161,7 @@ class SensorProfile:
     mm_per_px: float = number(1e-4, 1.0)
     fps_hz: float = number(1, 1000)
     marker_pitch_mm: float | None = number(0.1, 20)
+    estimator: str
     description: str
 
 

@@ -1,12 +1,13 @@
 """Offline estimation on recorded tactile video or a folder of images.
 
     python scripts/estimate.py INPUT --reference SPEC --out OUT.csv [--sensor gelsight_mini]
-        [--method default] [--calibration FILE] [--fps F]
+        [--method NAME] [--calibration FILE] [--fps F]
 
 INPUT is a video file OpenCV can read, or a folder of images read in natural sorted order
 (frame_2 before frame_10). SPEC is a frame index (``0``) or a range ``a:b`` whose frames
 (a included, b excluded) are averaged into the zeroing reference. ``--method`` names an
-estimator configuration (configs/estimators/NAME.yaml) or is a path to one.
+estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
+sensor profile's ``estimator`` is used.
 
 The CSV has one row per frame: ``frame,time_s,tau_x,tau_y,tau_z,shear_x,shear_y,normal,
 fv_tau_x,fv_tau_y,fv_tau_z,contact,degenerate,slip_suspected,slip_gross,rezero_recommended,
@@ -36,7 +37,7 @@ from tqdm import tqdm
 from controller.config import ConfigError, sensor_profile
 from controller.tactile.calibration import Calibration
 from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import estimator_config
+from controller.tactile.settings import sensor_estimator
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -149,7 +150,7 @@ def estimate_file(
     out_csv: Path,
     reference: str = "0",
     sensor: str = "gelsight_mini",
-    method: str = "default",
+    method: str | None = None,
     calibration: Path | None = None,
     fps: float | None = None,
 ) -> int:
@@ -158,7 +159,7 @@ def estimate_file(
     if fps is not None and not fps > 0:
         raise InputError(f"--fps {fps}: expected a positive number of frames per second")
     profile = sensor_profile(sensor)
-    config = estimator_config(method)
+    _, config = sensor_estimator(profile, method)
     fit = Calibration.load(calibration) if calibration is not None else None
     source = open_source(input_path)
     rate_hz = fps or source.fps or profile.fps_hz
@@ -220,8 +221,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--method",
-        default="default",
-        help="estimator configuration name (configs/estimators) or YAML path",
+        default=None,
+        help="estimator configuration name (configs/estimators) or YAML path "
+        "(default: the sensor profile's estimator)",
     )
     parser.add_argument(
         "--calibration", type=Path, default=None, help="calibration YAML from scripts/calibrate.py"

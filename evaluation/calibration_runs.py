@@ -22,7 +22,7 @@ from controller.tactile.dataset_fit import (
     fit_dataset,
     segment_mask,
 )
-from controller.tactile.settings import estimator_config
+from controller.tactile.settings import sensor_estimator
 from evaluation.jig_dataset import paper_experiments, write_jig_dataset
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model, jig_config
@@ -55,8 +55,9 @@ class CaseResult:
     slipping_share: float
 
 
-def run_case(case: CalibrationCase, root: Path, estimator: str = "default") -> CaseResult:
-    """Write the case's dataset under ``root``, run the estimator on it and fit."""
+def run_case(case: CalibrationCase, root: Path, estimator: str | None = None) -> CaseResult:
+    """Write the case's dataset under ``root``, run the estimator (None: the sensor's own)
+    on it and fit."""
     config = jig_config()
     folder = root / case.name
     experiments = paper_experiments(case.axes, NOMINAL_AMPLITUDES_NM, case.frames_per_axis, config)
@@ -72,14 +73,16 @@ def run_case(case: CalibrationCase, root: Path, estimator: str = "default") -> C
     )
     timing["total_s"] = time.perf_counter() - start
     dataset = Dataset(folder)
-    series = estimate_dataset(dataset, estimator_config(estimator), sensor_profile(case.sensor))
+    profile = sensor_profile(case.sensor)
+    method, config = sensor_estimator(profile, estimator)
+    series = estimate_dataset(dataset, config, profile)
     fits = fit_dataset(dataset, series)
     truth = dataset.truth or {}
     return CaseResult(
         case,
         folder,
         fits,
-        calibration_from_fits(fits, case.sensor, estimator),
+        calibration_from_fits(fits, case.sensor, method),
         series,
         timing,
         float(np.mean(truth.get("lifted_off", [0.0]))),

@@ -1,19 +1,26 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
-paper's, our default, and one-knob variants (flow method and preset, image scale, grey or
+paper's, the Mini's default (its profile's ``estimator``), the dense-flow default for gels
+without markers, and one-knob variants (flow method and preset, image scale, grey or
 per-channel, grid stride, divergence of the raw field or of its NHHD part, temporal filter).
-Labels in bold mark the paper's and the default configuration."""
+``PAPER`` and ``DEFAULT`` are the labels of the paper's and the default configuration."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from controller.tactile.settings import EstimatorConfig, estimator_config
+from controller.config import sensor_profile
+from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
+
+PAPER = "**paper** (Farneback per-channel w32, 12x9)"
+DEFAULT = "**default** (Mini: LK on printed markers, 16x12)"
+DENSE = "dense (DIS tuned, gray, 16x12; no-marker default)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
-    default = estimator_config("default")
+    _, default = sensor_estimator(sensor_profile("gelsight_mini"))
+    dense = estimator_config("dense")
     paper = estimator_config("paper")
-    fl = default.flow
+    fl = dense.flow
     fb = paper.flow.farneback
     plain_dis = replace(
         fl.dis,
@@ -23,27 +30,24 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         gradient_descent_iterations=None,
         variational_refinement_iterations=None,
     )
-    configs = [
-        ("**paper** (Farneback per-channel w32, 12x9)", paper),
-        ("**default** (DIS tuned, gray, 16x12)", default),
-        ("fast (default without spatial propagation)", estimator_config("fast")),
-    ]
+    configs = [(PAPER, paper), (DEFAULT, default), (DENSE, dense)]
     if quick:
         return configs
     dis = [
         (
             f"DIS {p} gray, scale {s}",
-            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
+            replace(dense, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
         )
         for p in ("ultrafast", "fast", "medium")
         for s in (1.0, 0.5)
     ]
     return configs + [
+        ("fast (dense without spatial propagation)", estimator_config("fast")),
         ("Farneback w32 gray, 12x9", replace(paper, flow=replace(paper.flow, color="gray"))),
         (
             "Farneback w12 gray, scale 0.5, 1 level",
             replace(
-                default,
+                dense,
                 flow=replace(
                     paper.flow,
                     color="gray",
@@ -55,10 +59,10 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         *dis,
         (
             "DIS ultrafast per-channel",
-            replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
+            replace(dense, flow=replace(fl, color="per_channel", dis=plain_dis)),
         ),
-        ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
-        ("markers (LK on printed markers)", estimator_config("markers")),
+        ("dense, warm start", replace(dense, flow=replace(fl, warm_start=True))),
+        ("dense, NHHD-part divergence", replace(dense, divergence_of="curl_free")),
         ("default, grid 32x24 (stride 10)", replace(default, stride_px=10)),
         ("default, grid 12x9 (stride 26.7)", replace(default, stride_px=26.667)),
         ("default, grid 8x6 (stride 40)", replace(default, stride_px=40)),

@@ -1,6 +1,6 @@
 """Score the estimator's slip flags on the simulated gel (evaluation/slip_eval.py).
 
-    python scripts/eval_slip.py [--method default] [--grips 10,7,14] [--seed 11]
+    python scripts/eval_slip.py [--method NAME] [--grips 10,7,14] [--seed 11]
         [--noise-grey 1.0] [--objects plate,square_peg] [--quick] [--out SLIP.md]
 
 ``make evaluate`` runs the same evaluation and puts its tables in docs/EVALUATION.md; this
@@ -22,7 +22,9 @@ from evaluation.slip_report import slip_tables
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="eval_slip", description=__doc__.splitlines()[0])
-    parser.add_argument("--method", default="default", help="estimator configuration")
+    parser.add_argument(
+        "--method", default=None, help="estimator configuration (default: the Mini's own)"
+    )
     parser.add_argument(
         "--grips",
         default=",".join(f"{g:g}" for g in GRIPS_N),

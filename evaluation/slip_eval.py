@@ -38,7 +38,7 @@ import numpy as np
 
 from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import EstimatorConfig, estimator_config
+from controller.tactile.settings import EstimatorConfig, sensor_estimator
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.gel_renderer import GelRenderer
 from drivers.sim.image_effects import ImageEffects
@@ -253,23 +253,25 @@ def _summary(runs) -> dict:
 
 @dataclass(frozen=True)
 class GripRuns:
-    """Every sequence run at one grip force: per object, its capacity and its runs."""
+    """Every sequence run at one grip force with the estimator ``method``: per object, its
+    capacity and its runs."""
 
     grip_n: float
+    method: str
     groups: tuple[tuple[str, Capacity, tuple[tuple[Sequence, tuple[Frame, ...]], ...]], ...]
 
 
 def run_grip(
     grip_n: float,
     seed: int,
-    method: str = "default",
+    method: str | None = None,
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
 ) -> GripRuns:
     """Run every sequence of every object at one grip force (one worker's job). ``quick``:
     only the first positive and the first negative sequence of each object (a smoke test)."""
-    config = estimator_config(method)
+    method, config = sensor_estimator(sensor_profile(SENSOR), method)
     renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed=seed)
     groups = []
     for shape in objects:
@@ -283,10 +285,10 @@ def run_grip(
             for sequence in chosen
         )
         groups.append((shape, cap, runs))
-    return GripRuns(grip_n, tuple(groups))
+    return GripRuns(grip_n, method, tuple(groups))
 
 
-def report(grip_runs: list[GripRuns], method: str, seed: int, noise_grey: float) -> dict:
+def report(grip_runs: list[GripRuns], seed: int, noise_grey: float) -> dict:
     """Per-group and overall precision/recall, delays and re-zero checks; the first grip's
     runs are the tuning set, the others held out."""
     groups, sequences_out, tuning, held_out = [], [], [], []
@@ -298,7 +300,7 @@ def report(grip_runs: list[GripRuns], method: str, seed: int, noise_grey: float)
             sequences_out += [_sequence_row(grip.grip_n, s, frames) for s, frames in runs]
             (tuning if number == 0 else held_out).extend(runs)
     return {
-        "method": method,
+        "method": grip_runs[0].method,
         "seed": seed,
         "noise_grey": noise_grey,
         "groups": groups,
@@ -312,7 +314,7 @@ def report(grip_runs: list[GripRuns], method: str, seed: int, noise_grey: float)
 
 
 def evaluate(
-    method: str = "default",
+    method: str | None = None,
     grips_n: tuple[float, ...] = GRIPS_N,
     seed: int = 11,
     noise_grey: float = 1.0,
@@ -324,7 +326,7 @@ def evaluate(
         run_grip(grip, seed + k, method, noise_grey, objects, quick)
         for k, grip in enumerate(grips_n)
     ]
-    return report(runs, method, seed, noise_grey)
+    return report(runs, seed, noise_grey)
 
 
 def _sequence_row(grip: float, sequence: Sequence, frames) -> dict:

@@ -27,7 +27,7 @@ from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField, grid_axes_mm
 from controller.tactile.nhhd import NHHD
-from controller.tactile.settings import estimator_config
+from controller.tactile.settings import sensor_estimator
 from controller.tactile.slip import SlipDetector
 from drivers.sim.marker_images import MarkerImageRenderer
 
@@ -42,7 +42,7 @@ def _stats_us(samples: list[float]) -> str:
 
 
 def bench_update(frames: int) -> dict[str, str]:
-    config = estimator_config("default").slip
+    config = sensor_estimator(sensor_profile("gelsight_mini"))[1].slip
     x_mm, y_mm = grid_axes_mm(320, 240, 16, 12, 0.0634)
     gx, gy = np.meshgrid(x_mm, y_mm)
     core = np.exp(-(gx**2 + gy**2) / (2 * 3.0**2))
@@ -67,7 +67,7 @@ def bench_update(frames: int) -> dict[str, str]:
 
 
 def bench_push(frames: int) -> dict[str, str]:
-    config = estimator_config("default")
+    config = sensor_estimator(sensor_profile("gelsight_mini"))[1]
     renderer = MarkerImageRenderer(rng=np.random.default_rng(5))
     ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
     core = np.exp(-((xs - 160) ** 2 + (ys - 120) ** 2) / (2 * 60.0**2))

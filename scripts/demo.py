@@ -18,6 +18,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.config import sensor_profile
 from controller.offline import InputError, estimate_file
 from controller.plotting import plot_series_against_truth
 from drivers.sim.marker_images import MarkerImageRenderer
@@ -35,9 +36,12 @@ AXES = (
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=Path("out/demo"))
-    parser.add_argument("--method", default="default", help="estimator configuration")
+    parser.add_argument(
+        "--method", default=None, help="estimator configuration (default: the Mini profile's)"
+    )
     parser.add_argument("--seed", type=int, default=7)
     args = parser.parse_args()
+    method = args.method or sensor_profile("gelsight_mini").estimator
 
     frames_dir = args.out / "frames"
     frames_dir.mkdir(parents=True, exist_ok=True)
@@ -60,7 +64,7 @@ def main() -> int:
 
     out_csv = args.out / "estimates.csv"
     try:
-        estimate_file(frames_dir, out_csv, reference="0:5", method=args.method, fps=25.0)
+        estimate_file(frames_dir, out_csv, reference="0:5", method=method, fps=25.0)
     except InputError as exc:
         print(f"demo: error: {exc}", file=sys.stderr)
         return 2
@@ -75,6 +79,8 @@ def main() -> int:
     print(f"demo: wrote {out_csv}")
     print("  Each estimate is scaled to its pattern by least squares within that pattern's phase;")
     print("  r: correlation there; cross-talk: largest scaled response during the other phases.")
+    print("  The twist and shear patterns move the contact; the gel's torque and force on the")
+    print("  object oppose that motion, so ours reads r = -1 there (docs/ARCHITECTURE.md).")
     panels = []
     for est, name, baseline in AXES:
         estimates = {}
@@ -90,9 +96,9 @@ def main() -> int:
             estimates[f"{label} {col} (x{scale:.3g})"] = scale * values
         panels.append((name, truth[name], estimates))
     median_ms = float(np.median(column["latency_ms"]))
-    print(f"  median estimator latency {median_ms:.2f} ms/frame (config '{args.method}')")
+    print(f"  median estimator latency {median_ms:.2f} ms/frame (config '{method}')")
     png = args.out / "estimates.png"
-    title = f"Synthetic sequence, estimator '{args.method}' (each series scaled within its phase)"
+    title = f"Synthetic sequence, estimator '{method}' (each series scaled within its phase)"
     plot_series_against_truth(column["time_s"], panels, png, title)
     print(f"demo: wrote {png}")
     return 0

@@ -115,7 +115,7 @@ class TactileEstimator:
         self._work = np.empty((rows, cols))
         self._magnitude = np.empty((rows, cols))
         self._filtered = False
-        self._nhhd = NHHD(x_mm, y_mm)
+        self._nhhd = NHHD(x_mm, y_mm, self.config.tau_z_about)
         self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
         self._baseline = FingerVisionTorque(x_mm, y_mm)
         # A view on the field buffers, which every push updates in place.

@@ -19,8 +19,12 @@ when embedded in a 2R x 2C circular FFT, so one call costs O(N log N) for N = R*
 
 Derived quantities (raw units, to be scaled by calibration):
 
-* ``tau_z``: in-plane torque, (1/N) sum_i [(x_i - c_R) x r_i]_z in mm^2, about the extremum
-  c_R of R (the centre of rotation); positive for rotation from +x toward +y.
+* ``tau_z``: in-plane torque of the rotational part, (1/N) sum_i [(x_i - c) x r_i]_z in mm^2,
+  positive for rotation from +x toward +y. The origin c is the gel centre (``tau_z_about``
+  "gel_centre", the default: the axis the wrench is expressed about) or the extremum c_R of
+  R, the centre of rotation (``"rotation_centre"``, as Zhang et al.). The extremum jumps from
+  cell to cell and moves with shear and tilt, so a torque about it mixes those in: on the
+  simulated jig (docs/EVALUATION.md) it lowers R^2 under tilt pulses and shear.
 * ``shear``: the mean of h, in mm (translation of the contact).
 * ``normal``: the mean outward radial component of d about the extremum c_D of D, in mm;
   positive when the gel spreads (more pressure) relative to the zeroed reference.
@@ -29,6 +33,7 @@ Derived quantities (raw units, to be scaled by calibration):
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -94,7 +99,17 @@ class NHHD:
     ``x_mm`` (cols,), ``y_mm`` (rows,) in frame S. Buffers and the kernel's FFT are built once;
     ``decompose`` allocates no arrays."""
 
-    def __init__(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
+    def __init__(
+        self,
+        x_mm: np.ndarray,
+        y_mm: np.ndarray,
+        tau_z_about: Literal["gel_centre", "rotation_centre"] = "gel_centre",
+    ) -> None:
+        if tau_z_about not in ("gel_centre", "rotation_centre"):
+            raise ValueError(
+                f"tau_z_about must be 'gel_centre' or 'rotation_centre', got {tau_z_about!r}"
+            )
+        self.tau_z_about = tau_z_about
         self.rows, self.cols = y_mm.size, x_mm.size
         self.dx = float(x_mm[1] - x_mm[0])
         self.dy = float(y_mm[1] - y_mm[0])
@@ -157,7 +172,7 @@ class NHHD:
 
         n = rows * cols
         rotation_centre = self._extremum(pot_r, rot)
-        self._levers(rotation_centre)
+        self._levers(rotation_centre if self.tau_z_about == "rotation_centre" else (0.0, 0.0))
         tau_z = (float(np.vdot(self._lever_x, r_v)) - float(np.vdot(self._lever_y, r_u))) / n
         source_centre = self._extremum(pot_d, div)
         self._levers(source_centre)

@@ -9,7 +9,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from controller.config import load_config, number, resolve_config_path
+from controller.config import (
+    ConfigError,
+    SensorProfile,
+    load_config,
+    number,
+    resolve_config_path,
+)
 
 FlowMethod = Literal["dis", "farneback", "markers"]
 
@@ -176,8 +182,10 @@ class EstimatorConfig:
     ``stride_px``: grid cell size in working-image pixels (the grid has round(W/stride) x
     round(H/stride) cells; 26.667 gives the authors' 12 x 9 at 320 x 240).
     ``divergence_of``: the dipole uses the divergence of the raw field or of the NHHD
-    curl-free part. ``ema_alpha``: weight of the newest field in the temporal filter
-    (1 = off). ``reference_frames``: frames averaged into the reference by ``rezero()``.
+    curl-free part. ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre or the
+    rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``: weight of
+    the newest field in the temporal filter (1 = off). ``reference_frames``: frames averaged
+    into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
     ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
     """
@@ -186,6 +194,7 @@ class EstimatorConfig:
     stride_px: float = number(4, 160)
     divergence_of: Literal["raw", "curl_free"]
     dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
+    tau_z_about: Literal["gel_centre", "rotation_centre"]
     ema_alpha: float = number(0.01, 1.0)
     reference_frames: int = number(1, 1000)
     contact_threshold_mm: float = number(0, 10)
@@ -195,3 +204,19 @@ class EstimatorConfig:
 def estimator_config(name_or_path: str) -> EstimatorConfig:
     """Load ``configs/estimators/NAME.yaml`` (or a YAML path)."""
     return load_config(EstimatorConfig, resolve_config_path(name_or_path, "estimators"))
+
+
+def sensor_estimator(
+    profile: SensorProfile, name_or_path: str | None = None
+) -> tuple[str, EstimatorConfig]:
+    """The configuration ``name_or_path``, or with None the sensor's own (its profile's
+    ``estimator``), as (name, config). Marker tracking needs printed markers: asking for it
+    on a sensor without (``marker_pitch_mm: null``) is a ConfigError."""
+    name = name_or_path or profile.estimator
+    config = estimator_config(name)
+    if config.flow.method == "markers" and profile.marker_pitch_mm is None:
+        raise ConfigError(
+            f"estimator '{name}' tracks printed markers, but sensor '{profile.name}' has none "
+            "(marker_pitch_mm: null); choose a dense-flow estimator such as 'dense'"
+        )
+    return name, config

@@ -12,7 +12,7 @@ from controller.tactile.settings import estimator_config
 from drivers.sim.synthetic_sequence import phase_patterns
 
 PROFILE = sensor_profile("gelsight_mini")
-CONFIG = estimator_config("default")
+CONFIG = estimator_config("dense")
 PATTERNS = phase_patterns((240, 320))
 
 
@@ -109,7 +109,7 @@ def test_calibration_scales_the_output(estimator, renderer):
     pressed = renderer.render(PATTERNS["tilt_x"])
     raw = estimator.push(pressed, 0.0)
     estimator.calibration = Calibration(
-        "gelsight_mini", "default", {"tau_x": AxisFit(2e-3, 1e-4, 0.0, 1.0, 10)}
+        "gelsight_mini", "dense", {"tau_x": AxisFit(2e-3, 1e-4, 0.0, 1.0, 10)}
     )
     cal = estimator.push(pressed, 0.0)
     assert cal.calibrated and not raw.calibrated
@@ -117,7 +117,7 @@ def test_calibration_scales_the_output(estimator, renderer):
     assert cal.tau_y == pytest.approx(raw.tau_y)
 
 
-@pytest.mark.parametrize("method", ["default", "paper", "markers"])
+@pytest.mark.parametrize("method", ["dense", "paper", "markers"])
 def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     """Steady-state pushes allocate no arrays in our code (only OpenCV's outputs and the
     returned estimate)."""

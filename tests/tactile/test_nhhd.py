@@ -77,6 +77,33 @@ def test_rotation_goes_to_the_rotational_part_with_positive_tau_z():
     assert nhhd.decompose(-u, -v).tau_z == pytest.approx(-r.tau_z)
 
 
+def test_an_off_centre_rotation_has_nearly_the_same_torque_about_either_origin():
+    centre_x, centre_y = X_MM[9], Y_MM[5]
+    patch = np.exp(-((GRID_X - centre_x) ** 2 + (GRID_Y - centre_y) ** 2) / (2 * 2.0**2))
+    u, v = -0.01 * (GRID_Y - centre_y) * patch, 0.01 * (GRID_X - centre_x) * patch
+    about_gel = nhhd.decompose(u, v).tau_z
+    about_rotation = NHHD(X_MM, Y_MM, "rotation_centre").decompose(u, v).tau_z
+    # A local rotation carries no net rotational flow, so moving the origin changes little.
+    assert about_gel == pytest.approx(about_rotation, rel=0.1)
+
+
+def test_tilt_keystone_gives_no_torque_about_the_gel_centre():
+    """Indentation growing along y magnifies the image more there, u = (x, y) a y / D: its
+    curl, -a x / D, is odd in x, so it has no torque about the gel centre; about the
+    rotational potential's extremum, off to one side, it does."""
+    a = 0.002
+    u, v = a * GRID_X * GRID_Y, a * GRID_Y * GRID_Y
+    about_gel = nhhd.decompose(u, v).tau_z
+    about_rotation = NHHD(X_MM, Y_MM, "rotation_centre").decompose(u, v).tau_z
+    assert abs(about_gel) < 1e-12
+    assert abs(about_rotation) > 1e-3
+
+
+def test_unknown_torque_origin_raises():
+    with pytest.raises(ValueError, match="tau_z_about"):
+        NHHD(X_MM, Y_MM, "somewhere")
+
+
 def test_expansion_goes_to_the_diverging_part_with_positive_normal():
     u, v = source(X_MM[6], Y_MM[6], q=0.05)
     r = nhhd.decompose(u, v)
