@@ -3,7 +3,7 @@
 Every key must be known and present; a value of the wrong type or out of range is an
 error that names the file, the key and what was expected::
 
-    configs/estimators/dense.yaml: key 'stride_px': expected a number in [4, 160], got 2
+    configs/estimators/default.yaml: key 'stride_px': expected a number in [4, 160], got 2
 
 Validation rules live on the dataclass fields as metadata, so each schema is declared once:
 

@@ -1,26 +1,23 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
-paper's, the Mini's default (its profile's ``estimator``), the dense-flow default for gels
-without markers, and one-knob variants (flow method and preset, image scale, grey or
-per-channel, grid stride, divergence of the raw field or of its NHHD part, temporal filter).
-``PAPER`` and ``DEFAULT`` are the labels of the paper's and the default configuration."""
+paper's, the default (the sensor profiles' ``estimator``), and one-knob variants of the
+default (flow method and preset, image scale, grey or per-channel, grid stride, divergence
+of the raw field or of its NHHD part, the dipole's pooling, temporal filter). ``PAPER`` and
+``DEFAULT`` are the labels of the paper's and the default configuration."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from controller.config import sensor_profile
-from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
+from controller.tactile.settings import EstimatorConfig, estimator_config
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
-DEFAULT = "**default** (Mini: LK on printed markers, 16x12)"
-DENSE = "dense (DIS tuned, gray, 16x12; no-marker default)"
+DEFAULT = "**default** (DIS tuned, gray, 16x12, dipole on 8x6 curl-free)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
-    _, default = sensor_estimator(sensor_profile("gelsight_mini"))
-    dense = estimator_config("dense")
+    default = estimator_config("default")
     paper = estimator_config("paper")
-    fl = dense.flow
+    fl = default.flow
     fb = paper.flow.farneback
     plain_dis = replace(
         fl.dis,
@@ -29,25 +26,29 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         patch_stride=None,
         gradient_descent_iterations=None,
         variational_refinement_iterations=None,
+        use_spatial_propagation=None,
     )
-    configs = [(PAPER, paper), (DEFAULT, default), (DENSE, dense)]
+    configs = [(PAPER, paper), (DEFAULT, default), ("markers", estimator_config("markers"))]
     if quick:
         return configs
-    dis = [
+
+    def dis(**change) -> EstimatorConfig:
+        return replace(default, flow=replace(fl, dis=replace(fl.dis, **change)))
+
+    presets = [
         (
             f"DIS {p} gray, scale {s}",
-            replace(dense, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
+            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
         )
         for p in ("ultrafast", "fast", "medium")
         for s in (1.0, 0.5)
     ]
     return configs + [
-        ("fast (dense without spatial propagation)", estimator_config("fast")),
         ("Farneback w32 gray, 12x9", replace(paper, flow=replace(paper.flow, color="gray"))),
         (
             "Farneback w12 gray, scale 0.5, 1 level",
             replace(
-                dense,
+                default,
                 flow=replace(
                     paper.flow,
                     color="gray",
@@ -56,16 +57,29 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
                 ),
             ),
         ),
-        *dis,
+        *presets,
         (
             "DIS ultrafast per-channel",
-            replace(dense, flow=replace(fl, color="per_channel", dis=plain_dis)),
+            replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
         ),
-        ("dense, warm start", replace(dense, flow=replace(fl, warm_start=True))),
-        ("dense, NHHD-part divergence", replace(dense, divergence_of="curl_free")),
+        ("default, DIS spatial propagation", dis(use_spatial_propagation=True)),
+        ("default, DIS patches every 6 px", dis(patch_stride=6)),
+        ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
         ("default, grid 32x24 (stride 10)", replace(default, stride_px=10)),
-        ("default, grid 12x9 (stride 26.7)", replace(default, stride_px=26.667)),
-        ("default, grid 8x6 (stride 40)", replace(default, stride_px=40)),
-        ("default, NHHD-part divergence", replace(default, divergence_of="curl_free")),
+        (
+            "default, grid 8x6 (stride 40), no pooling",
+            replace(default, stride_px=40, dipole_pool=1),
+        ),
+        ("default, dipole on the 16x12 grid", replace(default, dipole_pool=1)),
+        ("default, raw-field divergence", replace(default, divergence_of="raw")),
+        (
+            "default, raw divergence, 16x12 (the previous default)",
+            replace(
+                default,
+                divergence_of="raw",
+                dipole_pool=1,
+                flow=replace(fl, dis=replace(fl.dis, use_spatial_propagation=True)),
+            ),
+        ),
         ("default, EMA 0.6 (the paper's filter)", replace(default, ema_alpha=0.6)),
     ]

@@ -32,14 +32,18 @@ def calibration_table(results: list[CaseResult]) -> list[str]:
 
 def pareto_table(points: list[ParetoPoint]) -> list[str]:
     on_front = {p.label for p in front(points)}
+    datasets = list(points[0].rmse_by_dataset)
     lines = [
-        "| configuration | median ms | p90 ms | tilt RMSE (N*mm) | worst R^2 | on the front |",
-        "|---|---|---|---|---|---|",
+        "| configuration | median ms | p90 ms | tilt RMSE (N*mm) | "
+        + " | ".join(f"RMSE {name}" for name in datasets)
+        + " | worst R^2 | on the front |",
+        "|---|---|---|---|" + "---|" * len(datasets) + "---|---|",
     ]
     for p in sorted(points, key=lambda p: p.latency_ms):
+        per_dataset = " | ".join(f"{p.rmse_by_dataset[name]:.3f}" for name in datasets)
         lines.append(
-            f"| {p.label} | {p.latency_ms:.2f} | {p.p90_ms:.2f} | {p.rmse_nmm:.3f} "
-            f"| {p.r2:.4f} | {'yes' if p.label in on_front else ''} |"
+            f"| {p.label} | {p.latency_ms:.2f} | {p.p90_ms:.2f} | **{p.rmse_nmm:.3f}** | "
+            f"{per_dataset} | {p.r2:.4f} | {'yes' if p.label in on_front else ''} |"
         )
     return lines
 

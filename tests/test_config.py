@@ -29,7 +29,7 @@ def test_mini_profile_scale():
 
 
 def write_variant(tmp_path, edit):
-    data = yaml.safe_load((CONFIGS / "estimators" / "dense.yaml").read_text())
+    data = yaml.safe_load((CONFIGS / "estimators" / "default.yaml").read_text())
     edit(data)
     path = tmp_path / "variant.yaml"
     path.write_text(yaml.safe_dump(data))
@@ -73,20 +73,19 @@ def test_bad_values_name_file_key_and_expectation(tmp_path, edit, message):
 
 
 def test_unknown_config_name_lists_the_known_ones():
-    with pytest.raises(ConfigError, match="dense, .*markers"):
+    with pytest.raises(ConfigError, match="default, .*markers"):
         estimator_config("no_such_method")
 
 
 def test_each_sensor_names_its_estimator_and_markers_need_a_marker_gel(tmp_path):
     mini, digit = sensor_profile("gelsight_mini"), sensor_profile("digit")
-    assert sensor_estimator(mini)[0] == "markers"
-    assert sensor_estimator(digit)[0] == "dense"
+    assert sensor_estimator(mini)[0] == sensor_estimator(digit)[0] == "default"
     assert sensor_estimator(mini, "paper") == ("paper", estimator_config("paper"))
     with pytest.raises(ConfigError, match="sensor 'digit' has none"):
         sensor_estimator(digit, "markers")
     unmarked = tmp_path / "unmarked_mini.yaml"
     data = yaml.safe_load((CONFIGS / "sensors" / "gelsight_mini.yaml").read_text())
-    unmarked.write_text(yaml.safe_dump({**data, "marker_pitch_mm": None}))
+    unmarked.write_text(yaml.safe_dump({**data, "marker_pitch_mm": None, "estimator": "markers"}))
     with pytest.raises(ConfigError, match="tracks printed markers"):
         sensor_estimator(sensor_profile(str(unmarked)))
     del data["estimator"]

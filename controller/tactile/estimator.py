@@ -31,9 +31,9 @@ from controller.config import SensorProfile
 from controller.tactile.baseline import FingerVisionTorque
 from controller.tactile.calibration import Calibration
 from controller.tactile.dipole import DipoleMomentCalculator
-from controller.tactile.field import VectorField, divergence, grid_axes_mm
+from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
-from controller.tactile.nhhd import NHHD, NHHDResult
+from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
 from controller.tactile.settings import EstimatorConfig
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
@@ -116,12 +116,48 @@ class TactileEstimator:
         self._magnitude = np.empty((rows, cols))
         self._filtered = False
         self._nhhd = NHHD(x_mm, y_mm, self.config.tau_z_about)
-        self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
+        self._allocate_dipole(x_mm, y_mm)
         self._baseline = FingerVisionTorque(x_mm, y_mm)
         # A view on the field buffers, which every push updates in place.
         self._field_view = VectorField(x_mm, y_mm, self._u, self._v)
         slip = self.config.slip
         self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
+
+    def _allocate_dipole(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
+        """The dipole's grid: the field's, or its ``dipole_pool`` x ``dipole_pool`` blocks."""
+        k = self.config.dipole_pool
+        rows, cols = y_mm.size, x_mm.size
+        if rows % k or cols % k:
+            raise ValueError(
+                f"dipole_pool {k} must divide the estimator grid of {cols} x {rows} cells "
+                f"(set by stride_px {self.config.stride_px:g})"
+            )
+        x_coarse = x_mm.reshape(cols // k, k).mean(axis=1)
+        y_coarse = y_mm.reshape(rows // k, k).mean(axis=1)
+        coarse = (rows // k, cols // k)
+        self._pooled = (np.empty(coarse), np.empty(coarse))
+        self._coarse_div = np.empty(coarse)
+        self._coarse_work = np.empty(coarse)
+        self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse) if k > 1 else None
+        self._dipole = DipoleMomentCalculator(x_coarse, y_coarse, self.config.dipole_origin)
+
+    def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
+        """The divergence the dipole sees: of the raw field or of its curl-free part, on the
+        field's grid, or on its blocks (the field block-averaged, then decomposed on that
+        coarser grid: exactly what an estimator with that grid would compute)."""
+        k = self.config.dipole_pool
+        raw = self.config.divergence_of == "raw"
+        if k == 1:
+            if raw:
+                return decomposition.div
+            dx, dy = self._nhhd.dx, self._nhhd.dy
+            d_u, d_v = decomposition.d_u, decomposition.d_v
+            return divergence(d_u, d_v, dx, dy, self._div, self._work)
+        u, v = block_mean(self._u, k, self._pooled[0]), block_mean(self._v, k, self._pooled[1])
+        if not raw:
+            u, v = self._coarse_curl_free(u, v)
+        dx, dy = k * self._nhhd.dx, k * self._nhhd.dy
+        return divergence(u, v, dx, dy, self._coarse_div, self._coarse_work)
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -204,12 +240,7 @@ class TactileEstimator:
     def _estimate(self, t_s: float) -> WrenchEstimate:
         decomposition = self._nhhd.decompose(self._u, self._v)
         self._last_nhhd = decomposition
-        if self.config.divergence_of == "raw":
-            div = decomposition.div
-        else:
-            dx, dy = self._nhhd.dx, self._nhhd.dy
-            div = divergence(decomposition.d_u, decomposition.d_v, dx, dy, self._div, self._work)
-        dipole = self._dipole(div)
+        dipole = self._dipole(self._tilt_divergence(decomposition))
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)

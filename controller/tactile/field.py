@@ -140,3 +140,10 @@ def curl(
     d_dx(v, dx, out)
     out -= d_dy(u, dy, work)
     return out
+
+
+def block_mean(array: np.ndarray, k: int, out: np.ndarray) -> np.ndarray:
+    """Mean over k x k blocks of a (rows, cols) array into ``out`` (rows / k, cols / k); both
+    sizes must be multiples of k. k = 1 copies."""
+    rows, cols = array.shape
+    return np.mean(array.reshape(rows // k, k, cols // k, k), axis=(1, 3), out=out)

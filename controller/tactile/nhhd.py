@@ -37,7 +37,7 @@ from typing import Literal
 
 import numpy as np
 
-from controller.tactile.field import d_dx, d_dy, require_finite
+from controller.tactile.field import d_dx, d_dy, divergence, require_finite
 
 _SELF_TERM_SAMPLES = 256
 
@@ -219,3 +219,33 @@ class NHHD:
         self._lever_x /= self._radius
         self._lever_y /= self._radius
         return (float(np.vdot(self._lever_x, du)) + float(np.vdot(self._lever_y, dv))) / du.size
+
+
+class CurlFreePart:
+    """The NHHD's curl-free part alone, d = grad(G * div v), on a fixed grid (as ``NHHD``).
+
+    For callers that need no other part, on small grids: the convolution is one product with
+    a dense (N, N) Green's matrix, N = rows * cols (the same sum over cells as ``NHHD``'s FFT,
+    which is faster only for large grids). ``__call__`` allocates no arrays."""
+
+    def __init__(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
+        rows, cols = y_mm.size, x_mm.size
+        self.dx = float(x_mm[1] - x_mm[0])
+        self.dy = float(y_mm[1] - y_mm[0])
+        kernel = greens_kernel(rows, cols, self.dx, self.dy) * (self.dx * self.dy)
+        r, c = np.divmod(np.arange(rows * cols), cols)
+        self._green = kernel[
+            (r[:, None] - r[None, :]) % (2 * rows), (c[:, None] - c[None, :]) % (2 * cols)
+        ]
+        shape = (rows, cols)
+        self._div = np.empty(shape)
+        self._work = np.empty(shape)
+        self._potential = np.empty(shape)
+        self._d_u = np.empty(shape)
+        self._d_v = np.empty(shape)
+
+    def __call__(self, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(d_u, d_v) mm for the field (u, v) mm, as views into this object's buffers."""
+        div = divergence(u, v, self.dx, self.dy, self._div, self._work)
+        np.matmul(self._green, div.reshape(-1), out=self._potential.reshape(-1))
+        return d_dx(self._potential, self.dx, self._d_u), d_dy(self._potential, self.dy, self._d_v)

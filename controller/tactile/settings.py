@@ -182,10 +182,14 @@ class EstimatorConfig:
     ``stride_px``: grid cell size in working-image pixels (the grid has round(W/stride) x
     round(H/stride) cells; 26.667 gives the authors' 12 x 9 at 320 x 240).
     ``divergence_of``: the dipole uses the divergence of the raw field or of the NHHD
-    curl-free part. ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre or the
-    rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``: weight of
-    the newest field in the temporal filter (1 = off). ``reference_frames``: frames averaged
-    into the reference by ``rezero()``.
+    curl-free part. ``dipole_pool``: the dipole works on the field block-averaged over
+    ``dipole_pool`` x ``dipole_pool`` cells (and decomposed again on that grid for the
+    curl-free part), as an estimator with a k times larger stride would, while tau_z, the
+    shear and the slip detector keep the full grid (1: the grid itself; it must divide the
+    grid's rows and columns). ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre
+    or the rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``:
+    weight of the newest field in the temporal filter (1 = off). ``reference_frames``:
+    frames averaged into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
     ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
     """
@@ -195,6 +199,7 @@ class EstimatorConfig:
     divergence_of: Literal["raw", "curl_free"]
     dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
     tau_z_about: Literal["gel_centre", "rotation_centre"]
+    dipole_pool: int = number(1, 8)
     ema_alpha: float = number(0.01, 1.0)
     reference_frames: int = number(1, 1000)
     contact_threshold_mm: float = number(0, 10)
@@ -217,6 +222,6 @@ def sensor_estimator(
     if config.flow.method == "markers" and profile.marker_pitch_mm is None:
         raise ConfigError(
             f"estimator '{name}' tracks printed markers, but sensor '{profile.name}' has none "
-            "(marker_pitch_mm: null); choose a dense-flow estimator such as 'dense'"
+            "(marker_pitch_mm: null); choose a dense-flow estimator such as 'default'"
         )
     return name, config

@@ -262,7 +262,7 @@ def test_the_estimator_recovers_the_area_mean_of_a_coarse_field(effects):
     renderer = GelRenderer(effects=effects, rng=np.random.default_rng(12))
     for index, amplitude in enumerate((1.0, 2.0), start=1):
         field = smooth_grid((48, 64), amplitude, seed=20 + index)
-        estimator = TactileEstimator(estimator_config("dense"), profile)
+        estimator = TactileEstimator(estimator_config("default"), profile)
         estimator.set_reference(renderer.render(frame_index=0))
         estimator.push(renderer.render(field, frame_index=index), 0.0)
         grid = estimator.field
@@ -277,7 +277,7 @@ def test_optical_flow_is_as_accurate_on_fast_renders_as_on_exact_ones():
     warps = [smooth_random_field(HW, amplitude, rng) for amplitude in (0.1, 0.5, 2.0)]
 
     def flow_errors(renderer):
-        flow = make_grid_flow(estimator_config("dense").flow, HW, 12, 16)
+        flow = make_grid_flow(estimator_config("default").flow, HW, 12, 16)
         flow.set_reference(renderer.render())
         out = np.empty((12, 16, 2))
         errors = []

@@ -12,7 +12,7 @@ from controller.tactile.settings import estimator_config
 from drivers.sim.synthetic_sequence import phase_patterns
 
 PROFILE = sensor_profile("gelsight_mini")
-CONFIG = estimator_config("dense")
+CONFIG = estimator_config("default")
 PATTERNS = phase_patterns((240, 320))
 
 
@@ -109,7 +109,7 @@ def test_calibration_scales_the_output(estimator, renderer):
     pressed = renderer.render(PATTERNS["tilt_x"])
     raw = estimator.push(pressed, 0.0)
     estimator.calibration = Calibration(
-        "gelsight_mini", "dense", {"tau_x": AxisFit(2e-3, 1e-4, 0.0, 1.0, 10)}
+        "gelsight_mini", "default", {"tau_x": AxisFit(2e-3, 1e-4, 0.0, 1.0, 10)}
     )
     cal = estimator.push(pressed, 0.0)
     assert cal.calibrated and not raw.calibrated
@@ -117,7 +117,31 @@ def test_calibration_scales_the_output(estimator, renderer):
     assert cal.tau_y == pytest.approx(raw.tau_y)
 
 
-@pytest.mark.parametrize("method", ["dense", "paper", "markers"])
+@pytest.mark.parametrize("divergence_of", ["raw", "curl_free"])
+def test_pooled_dipole_equals_the_dipole_on_the_coarser_grid(renderer, divergence_of):
+    """The flow pooled over 40 px cells is the 2 x 2 block mean of the 20 px cells' flow, so
+    a dipole on 2 x 2 blocks of the 16 x 12 field is the dipole of an 8 x 6 estimator."""
+    reference, pressed = renderer.render(), renderer.render(PATTERNS["tilt_y"])
+    config = replace(CONFIG, divergence_of=divergence_of)
+    pooled = TactileEstimator(replace(config, dipole_pool=2), PROFILE)
+    coarse = TactileEstimator(replace(config, stride_px=40, dipole_pool=1), PROFILE)
+    fine = TactileEstimator(replace(config, dipole_pool=1), PROFILE)
+    for est in (pooled, coarse, fine):
+        est.set_reference(reference)
+    p, c, f = (est.push(pressed, 0.0) for est in (pooled, coarse, fine))
+    assert (p.tau_x, p.tau_y) == pytest.approx((c.tau_x, c.tau_y), rel=1e-6, abs=1e-9)
+    assert p.tau_y != pytest.approx(f.tau_y, rel=1e-3)  # it is not the fine grid's
+    assert p.tau_z == pytest.approx(f.tau_z)  # the NHHD keeps the full grid
+    assert pooled.field.shape == (12, 16)
+
+
+def test_dipole_pool_must_divide_the_grid(renderer):
+    est = TactileEstimator(replace(CONFIG, dipole_pool=3), PROFILE)  # 16 x 12: 3 fails
+    with pytest.raises(ValueError, match="dipole_pool 3 must divide the estimator grid of 16 x 12"):
+        est.set_reference(renderer.render())
+
+
+@pytest.mark.parametrize("method", ["default", "paper", "markers"])
 def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     """Steady-state pushes allocate no arrays in our code (only OpenCV's outputs and the
     returned estimate)."""

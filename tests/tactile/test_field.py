@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from controller.tactile.field import VectorField, grid_axes_mm, require_finite
+from controller.tactile.field import VectorField, block_mean, grid_axes_mm, require_finite
 from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM
 
 
@@ -56,3 +56,12 @@ def test_nan_field_is_named_in_the_error():
 def test_shape_mismatch_is_rejected():
     with pytest.raises(ValueError, match="shape"):
         VectorField(X_MM, Y_MM, np.zeros((3, 3)), np.zeros((3, 3)))
+
+
+def test_block_mean_averages_each_block():
+    a = np.arange(24.0).reshape(4, 6)
+    out = np.empty((2, 3))
+    assert block_mean(a, 2, out) is out
+    assert out[0, 0] == pytest.approx((0 + 1 + 6 + 7) / 4)
+    assert out[1, 2] == pytest.approx((16 + 17 + 22 + 23) / 4)
+    assert np.array_equal(block_mean(a, 1, np.empty((4, 6))), a)

@@ -10,12 +10,12 @@ from controller.tactile.settings import estimator_config
 from drivers.sim.marker_images import area_mean_field, smooth_random_field
 
 ROWS, COLS = 12, 16
-BASE = estimator_config("dense").flow
+BASE = estimator_config("default").flow
 PAPER = estimator_config("paper").flow
 # Tolerances: grid RMSE in px over warps with peak 0.1-3 px (docs/BENCHMARKS.md has the
 # measured errors; these bounds leave about 2x headroom).
 METHODS = {
-    "dense": (BASE, 0.08),
+    "default": (BASE, 0.08),
     "paper_farneback_per_channel": (PAPER, 0.08),
     "dis_ultrafast": (
         replace(

@@ -4,7 +4,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from controller.tactile.field import VectorField, grid_axes_mm
-from controller.tactile.nhhd import NHHD, greens_self_term
+from controller.tactile.nhhd import NHHD, CurlFreePart, greens_self_term
 from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, source
 
 nhhd = NHHD(X_MM, Y_MM)
@@ -157,3 +157,14 @@ def test_self_term_matches_a_finer_quadrature():
     gx, gy = np.meshgrid(s * a, s * a)
     expected = np.log(np.hypot(gx, gy)).mean() / (2 * np.pi)
     assert greens_self_term(a, a) == pytest.approx(expected, rel=1e-4)
+
+
+@pytest.mark.parametrize("cols,rows", [(16, 12), (8, 6), (7, 11)])
+def test_curl_free_part_alone_matches_the_decomposition(cols, rows):
+    x_mm, y_mm = grid_axes_mm(320, 240, cols, rows, 0.0634)
+    u, v = random_field(cols * rows, (rows, cols))
+    whole = NHHD(x_mm, y_mm).decompose(u, v)
+    d_u, d_v = CurlFreePart(x_mm, y_mm)(u, v)
+    scale = np.abs(whole.d_u).max()
+    assert np.abs(d_u - whole.d_u).max() < 1e-10 * scale
+    assert np.abs(d_v - whole.d_v).max() < 1e-10 * scale

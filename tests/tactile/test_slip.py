@@ -25,7 +25,7 @@ from controller.tactile.slip import (
 )
 from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_pair
 
-CONFIG = estimator_config("dense")
+CONFIG = estimator_config("default")
 SLIP = CONFIG.slip
 REZERO = SLIP.rezero
 NHHD_GRID = NHHD(X_MM, Y_MM)
