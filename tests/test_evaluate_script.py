@@ -11,7 +11,8 @@ def test_quick_evaluation_writes_the_report_and_charts(tmp_path):
     docs = tmp_path / "docs"
     assert evaluate_main(["--quick", "--docs", str(docs), "--work", str(tmp_path / "w")]) == 0
     report = (docs / "EVALUATION.md").read_text()
-    assert "## 2. Speed against accuracy" in report
+    assert "## 2. Speed against accuracy" in report and "## 4. Slip detection" in report
+    assert "| 10 (tuning) | all |" not in report and "| all | all |" in report  # one grip
     for chart in ("pareto.png", "calibration_gelsight_mini-plate.png"):
         assert (docs / "figures" / chart).stat().st_size > 10_000
 

@@ -123,8 +123,14 @@ class LoadProgram:
         return float(self.t_s[-1])
 
     def applied(self, t_s: float) -> np.ndarray:
-        """The applied wrench (6,) at ``t_s``."""
-        return np.array([np.interp(t_s, self.t_s, column) for column in self.wrench.T])
+        """The applied wrench (6,) at ``t_s``, held constant beyond the program's ends (as
+        ``np.interp``; one binary search for all six columns, so the cost does not grow with
+        the program's length)."""
+        i = int(np.searchsorted(self.t_s, t_s, side="right"))
+        if i <= 0 or i >= self.t_s.size:
+            return self.wrench[0 if i <= 0 else -1].copy()
+        share = (t_s - self.t_s[i - 1]) / (self.t_s[i] - self.t_s[i - 1])
+        return self.wrench[i - 1] + share * (self.wrench[i] - self.wrench[i - 1])
 
     def grip(self, t_s: float) -> float:
         return float(np.interp(t_s, self.t_s, self.grip_n))

@@ -73,3 +73,10 @@ def test_bad_jig_values_name_the_key():
         dataclasses.replace(config, ramp_min_s=2.0, ramp_max_s=1.0)
     with pytest.raises(ValueError, match="axis"):
         Experiment("w", 0.01, 1)
+
+
+def test_applied_interpolates_like_numpy_and_holds_beyond_the_ends():
+    program = jig_program([Experiment("x", 0.04, 2)], jig_config(), np.random.default_rng(3))
+    for t in (-1.0, 0.0, 0.0013, 1.234567, program.duration_s / 2, program.duration_s, 1e6):
+        expected = [np.interp(t, program.t_s, column) for column in program.wrench.T]
+        assert np.allclose(program.applied(t), expected, rtol=0, atol=1e-15)
