@@ -45,6 +45,8 @@ class ParetoPoint:
 
 @dataclass(frozen=True)
 class Accuracy:
+    """What a worker measures for one configuration (the fields as in ``ParetoPoint``)."""
+
     label: str
     rmse_nmm: float
     r2: float
