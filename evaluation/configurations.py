@@ -67,7 +67,7 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         ("default, DIS spatial propagation", dis(use_spatial_propagation=True)),
         ("default, DIS patches every 6 px", dis(patch_stride=6)),
         ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
-        ("default, dipole on 4x3 blocks", replace(default, dipole_pool=4)),
+        ("coarse_dipole (default, dipole on 4x3 blocks)", estimator_config("coarse_dipole")),
         ("default, dipole on the 16x12 grid", replace(default, dipole_pool=1)),
         ("default, raw-field divergence", replace(default, divergence_of="raw")),
         (

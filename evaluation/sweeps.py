@@ -219,10 +219,15 @@ def _program(setting: Setting, jig: JigConfig, rng: np.random.Generator):
 
 
 def run_level(
-    condition_name: str, index: int, calibrations: dict[str, Calibration], seed: int = 7
+    condition_name: str,
+    index: int,
+    calibrations: dict[str, Calibration],
+    estimator: str | None = None,
+    seed: int = 7,
 ) -> LevelResult:
-    """One level of the condition named ``condition_name`` (run in a worker process),
-    calibrated with ``calibrations["SENSOR-SHAPE"]`` for the level's sensor and object."""
+    """One level of the condition named ``condition_name`` (run in a worker process) with
+    the ``estimator`` configuration (None: each sensor's own), calibrated with
+    ``calibrations["SENSOR-SHAPE"]`` for the level's sensor and object."""
     condition = next(c for c in CONDITIONS if c.name == condition_name)
     cv2.setNumThreads(1)
     level = condition.levels[index]
@@ -269,7 +274,7 @@ def run_level(
     reference = [img for _, t, img in frames if interval[0] <= t < interval[1]]
     profile = sensor_profile(setting.sensor)
     calibration = calibrations[f"{setting.sensor}-{setting.shape}"]
-    _, config = sensor_estimator(profile)
+    _, config = sensor_estimator(profile, estimator)
     series = estimate_frames(frames, reference, config, profile)
     variants = {
         label: estimate_frames(frames, reference, dataclasses.replace(config, **change), profile)
