@@ -23,6 +23,8 @@ import time
 from multiprocessing import get_context
 from pathlib import Path
 
+from controller.config import ConfigError, sensor_profile
+from controller.tactile.settings import sensor_estimator
 from evaluation import slip_eval
 from evaluation.calibration_runs import (
     CalibrationCase,
@@ -84,6 +86,11 @@ def main(argv: list[str] | None = None) -> int:
         "compares its fixed set",
     )
     args = parser.parse_args(argv)
+    try:  # a bad --estimator fails here, not in a worker
+        for sensor in {case.sensor for case in CASES}:
+            sensor_estimator(sensor_profile(sensor), args.estimator)
+    except ConfigError as exc:
+        parser.error(str(exc))
     _one_thread()
     began = time.perf_counter()
     figures = args.docs / "figures"

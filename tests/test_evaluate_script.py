@@ -17,6 +17,17 @@ def test_quick_evaluation_writes_the_report_and_charts(tmp_path):
         assert (docs / "figures" / chart).stat().st_size > 10_000
 
 
+@pytest.mark.parametrize(
+    "estimator,message",
+    [("nope", "unknown estimator configuration 'nope'"), ("markers", "has none")],
+)
+def test_evaluate_rejects_a_bad_estimator_before_any_work(tmp_path, capsys, estimator, message):
+    with pytest.raises(SystemExit) as stop:
+        evaluate_main(["--estimator", estimator, "--docs", str(tmp_path), "--work", str(tmp_path)])
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+    assert not (tmp_path / "EVALUATION.md").exists()
+
+
 def test_make_dataset_rejects_an_unknown_sensor(tmp_path, capsys):
     assert make_dataset_main([str(tmp_path / "d"), "--sensor", "nope"]) == 2
     assert "unknown sensor configuration" in capsys.readouterr().err
