@@ -134,12 +134,13 @@ class TactileEstimator:
             )
         x_coarse = x_mm.reshape(cols // k, k).mean(axis=1)
         y_coarse = y_mm.reshape(rows // k, k).mean(axis=1)
-        coarse = (rows // k, cols // k)
-        self._pooled = (np.empty(coarse), np.empty(coarse))
-        self._coarse_div = np.empty(coarse)
-        self._coarse_work = np.empty(coarse)
-        self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse) if k > 1 else None
         self._dipole = DipoleMomentCalculator(x_coarse, y_coarse, self.config.dipole_origin)
+        if k > 1:  # buffers of the pooled path (k = 1 uses the field's own)
+            coarse = (rows // k, cols // k)
+            self._pooled = (np.empty(coarse), np.empty(coarse))
+            self._coarse_div = np.empty(coarse)
+            self._coarse_work = np.empty(coarse)
+            self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse)
 
     def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the
