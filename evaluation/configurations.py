@@ -1,19 +1,19 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
 paper's, the default (the sensor profiles' ``estimator``), and one-knob variants of the
 default (flow method and preset, image scale, grey or per-channel, grid stride, divergence
-of the raw field or of its NHHD part, the dipole's pooling, temporal filter). The grid stride is
-varied through the dipole's grid: pooling is exact (tests/tactile/test_estimator.py), so a
-flow grid of 8x6, or of 32x24 pooled 4x4, gives the default's tilt torque exactly. ``PAPER`` and
+of the raw field or of its NHHD part, the dipole's grid, temporal filter). The grid stride
+is varied through the dipole's grid: with square blocks pooling is exact
+(tests/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and
 ``DEFAULT`` are the labels of the paper's and the default configuration."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
-from controller.tactile.settings import EstimatorConfig, estimator_config
+from controller.tactile.settings import DipoleGrid, EstimatorConfig, estimator_config
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
-DEFAULT = "**default** (DIS tuned, gray, 16x12, dipole on 8x6 curl-free)"
+DEFAULT = "**default** (DIS tuned, gray, 16x12, dipole on 4x4 curl-free)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
@@ -65,18 +65,19 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
             replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
         ),
         ("default, DIS spatial propagation", dis(use_spatial_propagation=True)),
-        ("default, DIS patches every 6 px", dis(patch_stride=6)),
+        ("default, DIS patches every 4 px", dis(patch_stride=4)),
+        ("default, DIS patches every 8 px", dis(patch_stride=8)),
         ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
-        ("coarse_dipole (default, dipole on 4x3 blocks)", estimator_config("coarse_dipole")),
-        ("default, dipole on the 16x12 grid", replace(default, dipole_pool=1)),
+        ("default, dipole on 4x3 blocks", replace(default, dipole_grid=DipoleGrid(4, 3))),
+        ("default, dipole on 8x6 blocks", replace(default, dipole_grid=DipoleGrid(8, 6))),
+        ("default, dipole on the 16x12 grid", replace(default, dipole_grid=None)),
         ("default, raw-field divergence", replace(default, divergence_of="raw")),
         (
-            "default, raw divergence, 16x12 (the previous default)",
+            "session 3's default (patches every 4 px, dipole on 8x6)",
             replace(
                 default,
-                divergence_of="raw",
-                dipole_pool=1,
-                flow=replace(fl, dis=replace(fl.dis, use_spatial_propagation=True)),
+                dipole_grid=DipoleGrid(8, 6),
+                flow=replace(fl, dis=replace(fl.dis, patch_stride=4)),
             ),
         ),
         ("default, EMA 0.6 (the paper's filter)", replace(default, ema_alpha=0.6)),

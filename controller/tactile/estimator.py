@@ -124,40 +124,45 @@ class TactileEstimator:
         self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
 
     def _allocate_dipole(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
-        """The dipole's grid: the field's, or its ``dipole_pool`` x ``dipole_pool`` blocks."""
-        k = self.config.dipole_pool
+        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells)."""
+        grid = self.config.dipole_grid
         rows, cols = y_mm.size, x_mm.size
-        if rows % k or cols % k:
+        if grid is None:
+            self._dipole_block = (1, 1)
+            self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
+            return
+        if rows % grid.rows or cols % grid.cols:
             raise ValueError(
-                f"dipole_pool {k} must divide the estimator grid of {cols} x {rows} cells "
-                f"(set by stride_px {self.config.stride_px:g})"
+                f"dipole_grid {grid.cols} x {grid.rows} must divide the estimator grid of "
+                f"{cols} x {rows} cells (set by stride_px {self.config.stride_px:g})"
             )
-        x_coarse = x_mm.reshape(cols // k, k).mean(axis=1)
-        y_coarse = y_mm.reshape(rows // k, k).mean(axis=1)
+        self._dipole_block = (rows // grid.rows, cols // grid.cols)
+        x_coarse = x_mm.reshape(grid.cols, -1).mean(axis=1)
+        y_coarse = y_mm.reshape(grid.rows, -1).mean(axis=1)
         self._dipole = DipoleMomentCalculator(x_coarse, y_coarse, self.config.dipole_origin)
-        if k > 1:  # buffers of the pooled path (k = 1 uses the field's own)
-            coarse = (rows // k, cols // k)
-            self._pooled = (np.empty(coarse), np.empty(coarse))
-            self._coarse_div = np.empty(coarse)
-            self._coarse_work = np.empty(coarse)
-            self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse)
+        coarse = (grid.rows, grid.cols)
+        self._pooled = (np.empty(coarse), np.empty(coarse))
+        self._coarse_div = np.empty(coarse)
+        self._coarse_work = np.empty(coarse)
+        self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse)
 
     def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the
-        field's grid, or on its blocks (the field block-averaged, then decomposed on that
-        coarser grid: exactly what an estimator with that grid would compute)."""
-        k = self.config.dipole_pool
+        field's grid, or on ``dipole_grid`` (the field block-averaged, then decomposed on
+        that coarser grid)."""
+        block = self._dipole_block
         raw = self.config.divergence_of == "raw"
-        if k == 1:
+        if block == (1, 1):
             if raw:
                 return decomposition.div
             dx, dy = self._nhhd.dx, self._nhhd.dy
             d_u, d_v = decomposition.d_u, decomposition.d_v
             return divergence(d_u, d_v, dx, dy, self._div, self._work)
-        u, v = block_mean(self._u, k, self._pooled[0]), block_mean(self._v, k, self._pooled[1])
+        u = block_mean(self._u, block, self._pooled[0])
+        v = block_mean(self._v, block, self._pooled[1])
         if not raw:
             u, v = self._coarse_curl_free(u, v)
-        dx, dy = k * self._nhhd.dx, k * self._nhhd.dy
+        dx, dy = block[1] * self._nhhd.dx, block[0] * self._nhhd.dy
         return divergence(u, v, dx, dy, self._coarse_div, self._coarse_work)
 
     # -- frames ------------------------------------------------------------------------------

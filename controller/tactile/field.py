@@ -142,8 +142,11 @@ def curl(
     return out
 
 
-def block_mean(array: np.ndarray, k: int, out: np.ndarray) -> np.ndarray:
-    """Mean over k x k blocks of a (rows, cols) array into ``out`` (rows / k, cols / k); both
-    sizes must be multiples of k. k = 1 copies."""
+def block_mean(array: np.ndarray, block: tuple[int, int], out: np.ndarray) -> np.ndarray:
+    """Mean over blocks of ``block`` = (rows, cols) cells of a (rows, cols) array into ``out``;
+    the array's sizes must be multiples of the block's. A block of (1, 1) copies."""
     rows, cols = array.shape
-    return np.mean(array.reshape(rows // k, k, cols // k, k), axis=(1, 3), out=out)
+    k_rows, k_cols = block
+    return np.mean(
+        array.reshape(rows // k_rows, k_rows, cols // k_cols, k_cols), axis=(1, 3), out=out
+    )

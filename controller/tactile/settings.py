@@ -176,17 +176,26 @@ class SlipConfig:
 
 
 @dataclass(frozen=True)
+class DipoleGrid:
+    """The grid the dipole works on: ``cols`` x ``rows`` cells over the whole image, each a
+    block of the field's cells (so each must divide the field grid's count)."""
+
+    cols: int = number(3, 64)
+    rows: int = number(3, 64)
+
+
+@dataclass(frozen=True)
 class EstimatorConfig:
     """The whole frame-to-wrench pipeline.
 
     ``stride_px``: grid cell size in working-image pixels (the grid has round(W/stride) x
     round(H/stride) cells; 26.667 gives the authors' 12 x 9 at 320 x 240).
     ``divergence_of``: the dipole uses the divergence of the raw field or of the NHHD
-    curl-free part. ``dipole_pool``: the dipole works on the field block-averaged over
-    ``dipole_pool`` x ``dipole_pool`` cells (and decomposed again on that grid for the
-    curl-free part), as an estimator with a k times larger stride would, while tau_z, the
-    shear and the slip detector keep the full grid (1: the grid itself; it must divide the
-    grid's rows and columns). ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre
+    curl-free part. ``dipole_grid``: the dipole works on the field block-averaged to
+    this coarser grid (and decomposed again there for the curl-free part), while tau_z, the
+    shear and the slip detector keep the full grid (null: the full grid itself). With square
+    blocks this is exactly what an estimator with a proportionally larger stride computes.
+    ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre
     or the rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``:
     weight of the newest field in the temporal filter (1 = off). ``reference_frames``:
     frames averaged into the reference by ``rezero()``.
@@ -199,7 +208,7 @@ class EstimatorConfig:
     divergence_of: Literal["raw", "curl_free"]
     dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
     tau_z_about: Literal["gel_centre", "rotation_centre"]
-    dipole_pool: int = number(1, 8)
+    dipole_grid: DipoleGrid | None
     ema_alpha: float = number(0.01, 1.0)
     reference_frames: int = number(1, 1000)
     contact_threshold_mm: float = number(0, 10)

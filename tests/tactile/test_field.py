@@ -61,7 +61,9 @@ def test_shape_mismatch_is_rejected():
 def test_block_mean_averages_each_block():
     a = np.arange(24.0).reshape(4, 6)
     out = np.empty((2, 3))
-    assert block_mean(a, 2, out) is out
+    assert block_mean(a, (2, 2), out) is out
     assert out[0, 0] == pytest.approx((0 + 1 + 6 + 7) / 4)
     assert out[1, 2] == pytest.approx((16 + 17 + 22 + 23) / 4)
-    assert np.array_equal(block_mean(a, 1, np.empty((4, 6))), a)
+    assert np.array_equal(block_mean(a, (1, 1), np.empty((4, 6))), a)
+    wide = block_mean(a, (4, 3), np.empty((1, 2)))  # blocks of 4 rows x 3 columns
+    assert wide[0, 1] == pytest.approx(np.mean(a[:, 3:]))

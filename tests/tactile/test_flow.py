@@ -15,7 +15,7 @@ PAPER = estimator_config("paper").flow
 # Tolerances: grid RMSE in px over warps with peak 0.1-3 px (docs/BENCHMARKS.md has the
 # measured errors; these bounds leave about 2x headroom).
 METHODS = {
-    "default": (BASE, 0.08),
+    "default": (BASE, 0.15),  # 8 px patches every 6 px: 0.086 px at the 3 px warp
     "paper_farneback_per_channel": (PAPER, 0.08),
     "dis_ultrafast": (
         replace(
