@@ -3,8 +3,8 @@ paper's, the default (the sensor profiles' ``estimator``), and one-knob variants
 default (flow method and preset, image scale, grey or per-channel, grid stride, divergence
 of the raw field or of its NHHD part, the dipole's grid, temporal filter). The grid stride
 is varied through the dipole's grid: with square blocks pooling is exact
-(tests/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and
-``DEFAULT`` are the labels of the paper's and the default configuration."""
+(tests/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole exactly.
+``PAPER`` and ``DEFAULT`` are the labels of the paper's and the default configuration."""
 
 from __future__ import annotations
 
