@@ -125,3 +125,12 @@ def test_mappings_of_named_entries_are_checked_entry_by_entry():
         with pytest.raises(ConfigError) as info:
             build(Table, {"gains": gains}, source="t.yaml")
         assert str(info.value) == message
+
+
+def test_a_dipole_grid_that_does_not_divide_the_sensors_field_grid_is_refused(tmp_path):
+    text = (CONFIGS / "estimators" / "default.yaml").read_text()
+    bad = tmp_path / "bad_grid.yaml"
+    bad.write_text(text.replace("{cols: 4, rows: 4}", "{cols: 5, rows: 4}"))
+    message = "dipole_grid 5 x 4 must divide the estimator grid of 16 x 12 cells"
+    with pytest.raises(ConfigError, match=message):
+        sensor_estimator(sensor_profile("gelsight_mini"), str(bad))

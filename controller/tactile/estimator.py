@@ -34,7 +34,7 @@ from controller.tactile.dipole import DipoleMomentCalculator
 from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
 from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
-from controller.tactile.settings import EstimatorConfig
+from controller.tactile.settings import EstimatorConfig, dipole_grid_mismatch, field_grid
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
 
@@ -97,8 +97,7 @@ class TactileEstimator:
     def _install_reference(self, mean_image: np.ndarray) -> None:
         reference = np.clip(mean_image + 0.5, 0, 255).astype(np.uint8)
         height, width = reference.shape[:2]
-        rows = max(3, round(height / self.config.stride_px))
-        cols = max(3, round(width / self.config.stride_px))
+        rows, cols = field_grid(self.config, height, width)
         self._allocate(height, width, rows, cols)
         self._grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
         self._grid_flow.set_reference(reference)
@@ -131,11 +130,9 @@ class TactileEstimator:
             self._dipole_block = (1, 1)
             self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
             return
-        if rows % grid.rows or cols % grid.cols:
-            raise ValueError(
-                f"dipole_grid {grid.cols} x {grid.rows} must divide the estimator grid of "
-                f"{cols} x {rows} cells (set by stride_px {self.config.stride_px:g})"
-            )
+        mismatch = dipole_grid_mismatch(self.config, rows, cols)
+        if mismatch:
+            raise ValueError(mismatch)
         self._dipole_block = (rows // grid.rows, cols // grid.cols)
         x_coarse = x_mm.reshape(grid.cols, -1).mean(axis=1)
         y_coarse = y_mm.reshape(grid.rows, -1).mean(axis=1)

@@ -220,12 +220,32 @@ def estimator_config(name_or_path: str) -> EstimatorConfig:
     return load_config(EstimatorConfig, resolve_config_path(name_or_path, "estimators"))
 
 
+def field_grid(config: EstimatorConfig, height_px: int, width_px: int) -> tuple[int, int]:
+    """(rows, cols) of the estimator's field grid on a working image of that size."""
+    rows = max(3, round(height_px / config.stride_px))
+    cols = max(3, round(width_px / config.stride_px))
+    return rows, cols
+
+
+def dipole_grid_mismatch(config: EstimatorConfig, rows: int, cols: int) -> str | None:
+    """Why ``config.dipole_grid`` cannot pool a field grid of ``rows`` x ``cols`` cells, or
+    None if it can (each of its counts must divide the field grid's)."""
+    grid = config.dipole_grid
+    if grid is None or (rows % grid.rows == 0 and cols % grid.cols == 0):
+        return None
+    return (
+        f"dipole_grid {grid.cols} x {grid.rows} must divide the estimator grid of "
+        f"{cols} x {rows} cells (set by stride_px {config.stride_px:g})"
+    )
+
+
 def sensor_estimator(
     profile: SensorProfile, name_or_path: str | None = None
 ) -> tuple[str, EstimatorConfig]:
     """The configuration ``name_or_path``, or with None the sensor's own (its profile's
     ``estimator``), as (name, config). Marker tracking needs printed markers: asking for it
-    on a sensor without (``marker_pitch_mm: null``) is a ConfigError."""
+    on a sensor without (``marker_pitch_mm: null``) is a ConfigError, and so is a
+    ``dipole_grid`` that does not divide the field grid at the sensor's resolution."""
     name = name_or_path or profile.estimator
     config = estimator_config(name)
     if config.flow.method == "markers" and profile.marker_pitch_mm is None:
@@ -233,4 +253,9 @@ def sensor_estimator(
             f"estimator '{name}' tracks printed markers, but sensor '{profile.name}' has none "
             "(marker_pitch_mm: null); choose a dense-flow estimator such as 'default'"
         )
+    mismatch = dipole_grid_mismatch(
+        config, *field_grid(config, profile.height_px, profile.width_px)
+    )
+    if mismatch:
+        raise ConfigError(f"estimator '{name}' on sensor '{profile.name}': {mismatch}")
     return name, config
