@@ -19,9 +19,9 @@ force/torque sensor) has only the sim backend.
 
 Loading (the drivers do not import ``controller``; a script joins the two)::
 
-    data = controller.config.load_yaml(path)
+    data = drivers.config.load_yaml(path)
     selection = registry.select(data)                     # or select(data, backend="real")
-    cfg = controller.config.build(selection.config_class, selection.keys, source=str(path))
+    cfg = drivers.config.build(selection.config_class, selection.keys, source=str(path))
     with registry.make_device(selection.kind, cfg) as device: ...
 
 ``make_arm(cfg)`` etc. return the device for an already-built config, not connected; the
@@ -39,11 +39,11 @@ from drivers.base import Arm, Device, ForceTorqueSensor, Gamepad, Gripper, Tacti
 from drivers.gamepad.mapping import GamepadConfig
 from drivers.gamepad.pad import PygameGamepad
 from drivers.gripper.hande import HandE, HandEConfig
-from drivers.sim.arm import SimArm, SimArmConfig
-from drivers.sim.force_torque import SimForceTorque, SimForceTorqueConfig
-from drivers.sim.gamepad import SimGamepad, SimGamepadConfig
-from drivers.sim.gripper import SimGripper, SimGripperConfig
-from drivers.sim.tactile import SimTactileConfig, SimTactileSensor
+from drivers.sim.twins.arm import SimArm, SimArmConfig
+from drivers.sim.twins.force_torque import SimForceTorque, SimForceTorqueConfig
+from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
+from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
+from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
 from drivers.tactile.camera import TactileCamera, TactileCameraConfig
 
 BACKENDS = ("sim", "real")

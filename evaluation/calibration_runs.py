@@ -11,10 +11,12 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.config import sensor_profile
 from controller.tactile.calibration import AxisFit, Calibration
-from controller.tactile.dataset import Dataset
-from controller.tactile.dataset_fit import (
+from controller.tactile.settings import sensor_estimator
+from drivers.config import sensor_profile
+from evaluation.jig_dataset import paper_experiments, write_jig_dataset
+from evaluation.offline.dataset import Dataset
+from evaluation.offline.dataset_fit import (
     TORQUE_AXES,
     EstimateSeries,
     calibration_from_fits,
@@ -22,8 +24,6 @@ from controller.tactile.dataset_fit import (
     fit_dataset,
     segment_mask,
 )
-from controller.tactile.settings import sensor_estimator
-from evaluation.jig_dataset import paper_experiments, write_jig_dataset
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model, jig_config
 

@@ -1,5 +1,5 @@
 """Simulated calibration datasets: the jig scene rendered frame by frame into the dataset
-format of ``controller.tactile.dataset`` (the same one a recording uses)."""
+format of ``evaluation.offline.dataset`` (the same one a recording uses)."""
 
 from __future__ import annotations
 
@@ -11,9 +11,16 @@ from typing import Protocol
 
 import numpy as np
 
-from controller.tactile.dataset import DatasetMeta, DatasetWriter, Segment
 from drivers.sim.gel.model import GelModel
-from drivers.sim.jig import Experiment, JigConfig, JigGel, ft_samples, jig_program, tactile_times
+from drivers.sim.scenes.jig import (
+    Experiment,
+    JigConfig,
+    JigGel,
+    ft_samples,
+    jig_program,
+    tactile_times,
+)
+from evaluation.offline.dataset import DatasetMeta, DatasetWriter, Segment
 
 
 class FrameRenderer(Protocol):

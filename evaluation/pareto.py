@@ -16,15 +16,15 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.config import sensor_profile
-from controller.tactile.dataset import Dataset
-from controller.tactile.dataset_fit import (
+from controller.tactile.settings import EstimatorConfig
+from drivers.config import sensor_profile
+from evaluation.offline.dataset import Dataset
+from evaluation.offline.dataset_fit import (
     estimate_frames,
     fit_dataset,
     reference_frames,
     segment_mask,
 )
-from controller.tactile.settings import EstimatorConfig
 
 PARETO_AXES = ("x", "y")
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.config import sensor_profile
-from drivers.sim.gel_renderer import GelRenderer
-from drivers.sim.image_effects import ImageEffects
+from drivers.config import sensor_profile
+from drivers.sim.render.gel_renderer import GelRenderer
+from drivers.sim.render.image_effects import ImageEffects
 
 NOMINAL_EFFECTS = ImageEffects(noise_grey=2.0)
 

@@ -23,8 +23,8 @@ import time
 from multiprocessing import get_context
 from pathlib import Path
 
-from controller.config import ConfigError, sensor_profile
 from controller.tactile.settings import sensor_estimator
+from drivers.config import ConfigError, sensor_profile
 from evaluation import slip_eval
 from evaluation.calibration_runs import (
     CalibrationCase,

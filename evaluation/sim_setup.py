@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from controller.config import load_config, resolve_config_path
+from drivers.config import load_config, resolve_config_path
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import SHAPES, GelProfile
-from drivers.sim.jig import JigConfig
+from drivers.sim.scenes.jig import JigConfig
 
 SENSORS = ("gelsight_mini", "digit")
 

@@ -27,12 +27,12 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.config import sensor_profile
 from controller.tactile.calibration import Calibration
-from controller.tactile.dataset_fit import estimate_frames
 from controller.tactile.settings import sensor_estimator
-from drivers.sim.image_effects import ImageEffects
-from drivers.sim.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
+from drivers.config import sensor_profile
+from drivers.sim.render.image_effects import ImageEffects
+from drivers.sim.scenes.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
+from evaluation.offline.dataset_fit import estimate_frames
 from evaluation.rendering import NOMINAL_EFFECTS, make_renderer
 from evaluation.sim_setup import gel_model, jig_config
 from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, confusion

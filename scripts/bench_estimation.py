@@ -27,11 +27,11 @@ import cv2
 import numpy as np
 import scipy
 
-from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.flow import DenseGridFlow
 from controller.tactile.settings import EstimatorConfig
-from drivers.sim.marker_images import MarkerImageRenderer, area_mean_field
+from drivers.config import sensor_profile
+from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
 from evaluation.configurations import estimator_variants
 from evaluation.machine import cpu_model, git_revision
 

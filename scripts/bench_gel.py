@@ -30,7 +30,7 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 
-from controller.config import load_config  # noqa: E402
+from drivers.config import load_config  # noqa: E402
 from drivers.sim.gel.model import GelModel, Wrench  # noqa: E402
 from drivers.sim.gel.profile import SHAPES, GelProfile  # noqa: E402
 

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Speed of the simulated tactile camera's image renderer, 320 x 240, on one thread.
 
-Median and p90 ms per rendered frame of ``drivers.sim.gel_renderer.GelRenderer`` for a coarse
+Median and p90 ms per rendered frame of ``drivers.sim.render.gel_renderer.GelRenderer`` for a coarse
 48 x 64 field (a physics grid of 5 px cells) and a full-resolution 240 x 320 field, without
 effects, with all the static effects (pixel noise, lighting drift, blur, marker dropout,
 occlusion) and with motion blur; then the stages of the plain coarse render, and the exact
@@ -28,18 +28,18 @@ from pathlib import Path  # noqa: E402
 import cv2  # noqa: E402
 import numpy as np  # noqa: E402
 
-from drivers.sim.field_inverse import BackwardMapper  # noqa: E402
-from drivers.sim.gel_pattern import (  # noqa: E402
+from drivers.sim.render.field_inverse import BackwardMapper  # noqa: E402
+from drivers.sim.render.gel_pattern import (  # noqa: E402
     marker_coverage,
     marker_lattice,
     reflectance,
     speckle,
 )
-from drivers.sim.gel_renderer import GelRenderer  # noqa: E402
-from drivers.sim.image_effects import ImageEffects  # noqa: E402
-from drivers.sim.image_warp import SplineWarper  # noqa: E402
-from drivers.sim.lighting import led_shading, shade  # noqa: E402
-from drivers.sim.marker_images import MarkerImageRenderer, smooth_random_field  # noqa: E402
+from drivers.sim.render.gel_renderer import GelRenderer  # noqa: E402
+from drivers.sim.render.image_effects import ImageEffects  # noqa: E402
+from drivers.sim.render.image_warp import SplineWarper  # noqa: E402
+from drivers.sim.render.lighting import led_shading, shade  # noqa: E402
+from drivers.sim.render.marker_images import MarkerImageRenderer, smooth_random_field  # noqa: E402
 
 SHAPE_HW = (240, 320)
 GRIDS = {"48x64": (48, 64), "240x320": SHAPE_HW}

@@ -32,10 +32,10 @@ from contextlib import contextmanager, nullcontext, redirect_stdout
 from dataclasses import dataclass
 from typing import Any, NoReturn
 
-from controller.config import CONFIG_ROOT, ConfigError, build, load_yaml
 from drivers import registry
 from drivers.arm import xarm_codes
 from drivers.base import Arm, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
+from drivers.config import CONFIG_ROOT, ConfigError, build, load_yaml
 from drivers.errors import DeviceError, DeviceFaultError, DeviceNotConnectedError
 
 DEFAULT_CONFIGS = (

@@ -2,10 +2,10 @@
 """The offline estimator demo on a synthetic tactile sequence the project renders itself.
 
 Renders a marker-gel image sequence (tilt about x, tilt about y, twist, shear; see
-drivers/sim/synthetic_sequence.py) into OUT/frames/, runs the offline estimator on it exactly
-as on a recording (controller/offline.py), and writes OUT/estimates.csv, OUT/truth.csv and
-OUT/estimates.png, then prints how well each estimate follows its pattern (correlation),
-for the dipole/NHHD estimates and the FingerVision baseline side by side.
+drivers/sim/scenes/synthetic_sequence.py) into OUT/frames/, runs the offline estimator on it
+exactly as on a recording (evaluation/offline/estimate_cli.py), and writes OUT/estimates.csv,
+OUT/truth.csv and OUT/estimates.png, then prints how well each estimate follows its pattern
+(correlation), for the dipole/NHHD estimates and the FingerVision baseline side by side.
 """
 
 from __future__ import annotations
@@ -18,11 +18,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from controller.config import sensor_profile
-from controller.offline import InputError, estimate_file
-from controller.plotting import plot_series_against_truth
-from drivers.sim.marker_images import MarkerImageRenderer
-from drivers.sim.synthetic_sequence import PHASES, demo_sequence
+from drivers.config import sensor_profile
+from drivers.sim.render.marker_images import MarkerImageRenderer
+from drivers.sim.scenes.synthetic_sequence import PHASES, demo_sequence
+from evaluation.offline.estimate_cli import InputError, estimate_file
+from evaluation.offline.plotting import plot_series_against_truth
 
 # (estimate column, phase, baseline column or None)
 AXES = (

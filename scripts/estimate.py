@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Offline torque estimation on recorded tactile frames; see controller/offline.py."""
+"""Offline torque estimation on recorded tactile frames; see evaluation/offline/estimate_cli.py."""
 
 import sys
 
-from controller.offline import main
+from evaluation.offline.estimate_cli import main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -20,8 +20,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from controller.config import ConfigError, load_yaml
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
+from drivers.config import ConfigError, load_yaml
 
 FORMAT = "tactile-insertion/calibration/v1"
 AXES = VALUE_FIELDS

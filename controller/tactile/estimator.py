@@ -27,7 +27,6 @@ from collections.abc import Sequence
 import cv2
 import numpy as np
 
-from controller.config import SensorProfile
 from controller.tactile.baseline import FingerVisionTorque
 from controller.tactile.calibration import Calibration
 from controller.tactile.dipole import DipoleMomentCalculator
@@ -37,6 +36,7 @@ from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
 from controller.tactile.settings import EstimatorConfig, dipole_grid_mismatch, field_grid
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
+from drivers.config import SensorProfile
 
 _ASPECT_TOLERANCE = 0.02
 

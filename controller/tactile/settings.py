@@ -1,6 +1,6 @@
 """Estimator configuration (``configs/estimators/*.yaml``), as frozen validated dataclasses.
 
-Every key is required (see controller/config.py); ``null`` means "the library's default"
+Every key is required (see drivers/config.py); ``null`` means "the library's default"
 where a field allows it.
 """
 
@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from controller.config import (
+from drivers.config import (
     ConfigError,
     SensorProfile,
     load_config,

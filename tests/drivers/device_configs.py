@@ -1,12 +1,12 @@
-"""Load a device YAML as a script does: ``drivers.registry.select`` then ``controller.config``."""
+"""Load a device YAML as a script does: ``drivers.registry.select`` then ``drivers.config``."""
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
 
-from controller.config import build, load_yaml
 from drivers import registry
+from drivers.config import build, load_yaml
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

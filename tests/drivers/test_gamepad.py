@@ -14,7 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pygame._sdl2 import controller as sdl_controller
 
-from controller.config import ConfigError, build
+from drivers.config import ConfigError, build
 from drivers.errors import DeviceNotConnectedError
 from drivers.gamepad import (
     AxisBinding,

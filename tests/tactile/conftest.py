@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from drivers.sim.marker_images import MarkerImageRenderer
+from drivers.sim.render.marker_images import MarkerImageRenderer
 
 
 @pytest.fixture(scope="session")

@@ -1,8 +1,8 @@
 import numpy as np
 import pytest
 
-from controller.config import ConfigError
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
+from drivers.config import ConfigError
 
 
 def series(rng, slope=0.004, offset=0.0, noise=0.0):

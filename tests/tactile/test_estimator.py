@@ -5,11 +5,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.config import sensor_profile
 from controller.tactile.calibration import AxisFit, Calibration
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import DipoleGrid, estimator_config
-from drivers.sim.synthetic_sequence import phase_patterns
+from drivers.config import sensor_profile
+from drivers.sim.scenes.synthetic_sequence import phase_patterns
 
 PROFILE = sensor_profile("gelsight_mini")
 CONFIG = estimator_config("default")

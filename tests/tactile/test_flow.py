@@ -7,7 +7,7 @@ import pytest
 
 from controller.tactile.flow import DenseGridFlow, detect_markers, make_grid_flow
 from controller.tactile.settings import estimator_config
-from drivers.sim.marker_images import area_mean_field, smooth_random_field
+from drivers.sim.render.marker_images import area_mean_field, smooth_random_field
 
 ROWS, COLS = 12, 16
 BASE = estimator_config("default").flow

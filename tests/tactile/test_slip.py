@@ -10,7 +10,6 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField
 from controller.tactile.nhhd import NHHD
@@ -23,6 +22,7 @@ from controller.tactile.slip import (
     SlipStatus,
     next_rezero_state,
 )
+from drivers.config import sensor_profile
 from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_pair
 
 CONFIG = estimator_config("default")

@@ -1,19 +1,18 @@
 """Fast seeded marker-gel images for the simulated tactile camera (about 1-2 ms per 320 x 240
 frame on one core; ``python scripts/bench_render.py`` measures it).
 
-The image is the printed gel (drivers/sim/gel_pattern.py) warped by a forward displacement
-field given at any grid resolution with the image's aspect (drivers/sim/field_grid.py: the
+The image is the printed gel (drivers/sim/render/gel_pattern.py) warped by a forward displacement
+field given at any grid resolution with the image's aspect (drivers/sim/render/field_grid.py: the
 field convention; field_inverse.py: the backward map; image_warp.py: the resampling), then
-the image effects of ``ImageEffects`` (drivers/sim/image_effects.py) in the order light
-takes: static occlusion over the gel (drivers/sim/occlusion.py), optical blur, LED shading
-with its drift (drivers/sim/lighting.py), pixel noise (drivers/sim/noise_bank.py), rounding
-to uint8 BGR.
+the image effects of ``ImageEffects`` (render/image_effects.py) in the order light takes:
+static occlusion over the gel (render/occlusion.py), optical blur, LED shading with its drift
+(render/lighting.py), pixel noise (render/noise_bank.py), rounding to uint8 BGR.
 
 Sub-pixel truth: the rendered displacement is the field upsampled to every pixel
 (``field_grid.GridUpsampler``; the field itself at full resolution) to within a few
 thousandths of a px plus OpenCV's position quantisation to 1/64 px. ``MarkerImageRenderer``
-(drivers/sim/marker_images.py) inverts full-resolution fields and resamples with cubic splines
-at full float precision (about 20 ms a frame), for benchmarks of sub-pixel flow accuracy.
+(render/marker_images.py) inverts full-resolution fields and resamples with cubic
+splines at full float precision (about 20 ms a frame), for benchmarks of sub-pixel flow accuracy.
 """
 
 from __future__ import annotations
@@ -21,13 +20,13 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from drivers.sim.field_inverse import BackwardMapper
-from drivers.sim.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
-from drivers.sim.image_effects import ImageEffects
-from drivers.sim.image_warp import SplineWarper
-from drivers.sim.lighting import drift_rate, led_shading, shade
-from drivers.sim.noise_bank import NoiseBank
-from drivers.sim.occlusion import Occlusion
+from drivers.sim.render.field_inverse import BackwardMapper
+from drivers.sim.render.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
+from drivers.sim.render.image_effects import ImageEffects
+from drivers.sim.render.image_warp import SplineWarper
+from drivers.sim.render.lighting import drift_rate, led_shading, shade
+from drivers.sim.render.noise_bank import NoiseBank
+from drivers.sim.render.occlusion import Occlusion
 
 
 class GelRenderer:
@@ -109,7 +108,7 @@ class GelRenderer:
     def backward_map(self, displacement_px: np.ndarray) -> np.ndarray:
         """The reference position (x, y) px that each output pixel shows, (H, W, 2) float32,
         for the forward field ``displacement_px`` (h, w, 2) px at any grid resolution with
-        the image's aspect (see drivers/sim/field_grid.py)."""
+        the image's aspect (see drivers/sim/render/field_grid.py)."""
         return self._mapper(displacement_px)
 
     def render(

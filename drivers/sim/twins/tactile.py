@@ -1,11 +1,11 @@
 """Simulated twin of a GelSight Mini / DIGIT camera (implements ``drivers.base.TactileSensor``).
 
 Frames. The twin "captures" frame ``k`` at ``t_k = t_connect + k / frame_rate_hz`` on the
-injected clock (``drivers.sim.clock``). A frame is the marker gel of
-``drivers.sim.gel_renderer.GelRenderer`` at the configured output size, warped by the
+injected clock (``drivers.clock``). A frame is the marker gel of
+``drivers.sim.render.gel_renderer.GelRenderer`` at the configured output size, warped by the
 forward displacement field that the **field source** gives for ``t_k`` (px, (h, w, 2) at any
 grid resolution with the image's aspect, e.g. the output size or a coarse physics grid; see
-drivers/sim/field_grid.py), plus Gaussian pixel noise of ``noise_grey`` grey levels, as uint8
+drivers/sim/render/field_grid.py), plus Gaussian pixel noise of ``noise_grey`` grey levels, as uint8
 BGR (read-only, as the real driver delivers them).
 
 A field source is any callable ``source(t_s) -> field or None`` (``None``: no contact, the
@@ -19,7 +19,7 @@ lost"); repeated reads of one frame return the same object.
 
 Randomness (marker jitter, gel texture, pixel noise) comes from the injected ``rng``; the
 noise of frame ``k`` depends only on (``rng``'s draws at construction, ``k``), so a frame
-does not depend on which earlier frames were read (drivers/sim/noise_bank.py).
+does not depend on which earlier frames were read (drivers/sim/render/noise_bank.py).
 """
 
 from __future__ import annotations
@@ -32,10 +32,10 @@ from typing import Any
 import numpy as np
 
 from drivers.base import ContextManagedDevice, TactileFrame
+from drivers.clock import Clock, MonotonicClock
 from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
-from drivers.sim.clock import Clock, MonotonicClock
-from drivers.sim.gel_renderer import GelRenderer
-from drivers.sim.image_effects import ImageEffects
+from drivers.sim.render.gel_renderer import GelRenderer
+from drivers.sim.render.image_effects import ImageEffects
 from drivers.tactile.camera import TactileCameraConfig
 from drivers.validation import check_int, check_range
 

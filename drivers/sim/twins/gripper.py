@@ -20,7 +20,7 @@ It behaves as ``drivers.gripper.hande.HandE`` reads the real gripper:
 * ``set_responding(False)`` makes the gripper silent (wrong baud rate, cut cable): every
   call raises the DeviceTimeoutError the real driver raises after its retries.
 
-Time is the injected clock's (``drivers.sim.clock``); motion is computed in closed form.
+Time is the injected clock's (``drivers.clock``); motion is computed in closed form.
 """
 
 from __future__ import annotations
@@ -30,10 +30,10 @@ from dataclasses import dataclass
 from typing import Any
 
 from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
+from drivers.clock import Clock, MonotonicClock
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.hande import HandEConfig
-from drivers.sim.clock import Clock, MonotonicClock
 from drivers.validation import check_range
 
 _POLL_PERIOD_S = 0.02  # as the real driver polls during activation

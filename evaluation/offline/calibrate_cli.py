@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.config import ConfigError, sensor_profile
 from controller.tactile.calibration import AxisFit
-from controller.tactile.dataset import Dataset
-from controller.tactile.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 from controller.tactile.settings import sensor_estimator
+from drivers.config import ConfigError, sensor_profile
+from evaluation.offline.dataset import Dataset
+from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 
 
 def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
@@ -44,7 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="calibrate", description="Fit c_x, c_y (and c_z) on a calibration dataset."
     )
-    parser.add_argument("dataset", type=Path, help="dataset folder (controller/tactile/dataset.py)")
+    parser.add_argument("dataset", type=Path, help="dataset folder (evaluation/offline/dataset.py)")
     parser.add_argument(
         "--method",
         default=None,

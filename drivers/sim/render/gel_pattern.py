@@ -3,7 +3,7 @@
 Coordinates are px in the image: x along the columns (right), y along the rows (down), pixel
 centres at integers. The gel carries dark printed markers (anti-aliased discs with sub-pixel
 centres on a jittered square lattice) and a fine speckle texture; its reflectance is about 1
-on the bare gel and about 0.25 inside a marker. The LED lighting (drivers/sim/lighting.py)
+on the bare gel and about 0.25 inside a marker. The LED lighting (drivers/sim/render/lighting.py)
 turns reflectance into grey levels.
 """
 

@@ -16,12 +16,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.config import ConfigError, load_config
+from drivers.config import ConfigError, load_config
 from drivers.sim.gel.contact import TOLERANCE
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.gel.profile import SHAPES, GelProfile, ObjectShape
 
-SENSORS = Path(__file__).resolve().parents[2] / "configs" / "sensors"
+SENSORS = Path(__file__).resolve().parents[3] / "configs" / "sensors"
 MINI = load_config(GelProfile, SENSORS / "gelsight_mini_gel.yaml")
 DIGIT = load_config(GelProfile, SENSORS / "digit_gel.yaml")
 PROFILES = {"mini": MINI, "digit": DIGIT}

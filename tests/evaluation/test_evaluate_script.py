@@ -2,7 +2,7 @@
 
 import pytest
 
-from evaluation.make_dataset_cli import main as make_dataset_main
+from evaluation.offline.make_dataset_cli import main as make_dataset_main
 from evaluation.run import main as evaluate_main
 
 

@@ -1,4 +1,4 @@
-"""Write a simulated calibration dataset (the jig scene; format: controller/tactile/dataset.py).
+"""Write a simulated calibration dataset (the jig scene; format: evaluation/offline/dataset.py).
 
     python scripts/make_dataset.py OUT [--sensor gelsight_mini|digit] [--object plate|
         square_peg|round_peg] [--axes x y z] [--amplitudes-nmm 20 40 60]
@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from controller.config import ConfigError
+from drivers.config import ConfigError
 from drivers.sim.gel.profile import SHAPES
 from evaluation.jig_dataset import paper_experiments, write_jig_dataset
 from evaluation.rendering import make_renderer

@@ -2,7 +2,7 @@
 
 The calibration jig's ground truth. No real force/torque driver exists yet, so this twin is
 the only backend of its registry type. Each ``read()`` returns the wrench that the **wrench
-source** gives for the clock's ``now()`` (``drivers.sim.clock``), plus independent Gaussian
+source** gives for the clock's ``now()`` (``drivers.clock``), plus independent Gaussian
 noise per component (``force_noise_n``, ``torque_noise_nm``) drawn from the injected ``rng``
 in call order, in the configured ``frame``.
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from drivers.base import ContextManagedDevice, Vector3, WrenchSample
+from drivers.clock import Clock, MonotonicClock
 from drivers.errors import DeviceNotConnectedError
-from drivers.sim.clock import Clock, MonotonicClock
 from drivers.validation import check_int, check_range
 
 WrenchSource = Callable[[float], tuple[Sequence[float], Sequence[float]]]

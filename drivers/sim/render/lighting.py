@@ -1,7 +1,7 @@
 """The sensor's coloured LED lighting, fixed to the camera, and the final grey levels.
 
 Each BGR channel of the image is a static shading (grey levels, float32 (H, W, 3)) times the
-gel's reflectance (drivers/sim/gel_pattern.py) at that pixel. The shading does not move with
+gel's reflectance (drivers/sim/render/gel_pattern.py) at that pixel. The shading does not move with
 the gel. Lighting drift (LEDs warming up, a sagging supply) changes it slowly: a gain per
 channel and a linear gradient across the image, both proportional to a dimensionless drift
 level ``d`` (0: the lighting of the reference frames)::

@@ -9,11 +9,11 @@ import cv2
 import numpy as np
 import pytest
 
-from controller.offline import CSV_COLUMNS, main
-from drivers.sim.marker_images import MarkerImageRenderer
-from drivers.sim.synthetic_sequence import phase_patterns
+from drivers.sim.render.marker_images import MarkerImageRenderer
+from drivers.sim.scenes.synthetic_sequence import phase_patterns
+from evaluation.offline.estimate_cli import CSV_COLUMNS, main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture(scope="module")

@@ -5,10 +5,10 @@ from pathlib import Path
 import pytest
 import yaml
 
-from controller.config import ConfigError, build, number, sensor_profile
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
+from drivers.config import ConfigError, build, number, sensor_profile
 
-CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 
 @pytest.mark.parametrize(

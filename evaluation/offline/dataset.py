@@ -34,7 +34,7 @@ import cv2
 import numpy as np
 import yaml
 
-from controller.config import ConfigError, load_yaml
+from drivers.config import ConfigError, load_yaml
 
 FORMAT = "tactile-insertion/dataset/v1"
 VIDEO, FRAMES_CSV, FT_CSV, TRUTH_CSV, META = (

@@ -17,15 +17,15 @@ from scipy.spatial.transform import Rotation
 from drivers import registry
 from drivers.arm.envelope import clamp_pose, rotation_from_rpy, tilt_rad
 from drivers.base import GripperObject, Pose, Twist
+from drivers.clock import ManualClock
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
-from drivers.sim.arm import STATE_MOVING, STATE_READY, STATE_STOPPED, SimArm
-from drivers.sim.clock import ManualClock
-from drivers.sim.force_torque import SimForceTorque, scripted_wrench
-from drivers.sim.gamepad import PadEvent, SimGamepad
-from drivers.sim.gel_renderer import GelRenderer
-from drivers.sim.gripper import SimGripper
-from drivers.sim.tactile import SimTactileSensor
+from drivers.sim.render.gel_renderer import GelRenderer
+from drivers.sim.twins.arm import STATE_MOVING, STATE_READY, STATE_STOPPED, SimArm
+from drivers.sim.twins.force_torque import SimForceTorque, scripted_wrench
+from drivers.sim.twins.gamepad import PadEvent, SimGamepad
+from drivers.sim.twins.gripper import SimGripper
+from drivers.sim.twins.tactile import SimTactileSensor
 from tests.drivers.device_configs import CONFIGS, load_device_config
 
 ARM = load_device_config(CONFIGS / "robot" / "xarm6.yaml")

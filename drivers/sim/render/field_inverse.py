@@ -1,4 +1,4 @@
-"""Backward sampling maps from forward displacement fields (drivers/sim/field_grid.py: the
+"""Backward sampling maps from forward displacement fields (drivers/sim/render/field_grid.py: the
 field convention).
 
 Rendering needs the inverse of a forward field u: for each output pixel y the reference
@@ -19,7 +19,7 @@ The iterations sample u with ``cv2.remap`` (bilinear; positions quantised to 1/3
 step), whose error is below |change of u across a step| / 64.
 
 ``backward_map`` is the plain full-resolution iteration (about 3 ms at 320 x 240), used by
-the exact spline renderer (drivers/sim/marker_images.py).
+the exact spline renderer (drivers/sim/render/marker_images.py).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ import math
 import cv2
 import numpy as np
 
-from drivers.sim.field_grid import GridUpsampler, check_field, pad_linear
+from drivers.sim.render.field_grid import GridUpsampler, check_field, pad_linear
 
 MIN_CELL_PX = 4.0
 """Smallest cell (px) of the grid the fast inversion iterates on."""

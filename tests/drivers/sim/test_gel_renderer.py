@@ -1,7 +1,7 @@
 """The fast gel renderer: field convention at any resolution, seeded effects, flow truth.
 
 Truth comes from analytic fields (affine fields have affine inverses), the exact full-
-resolution inversion and spline renderer (drivers/sim/marker_images.py), and the project's
+resolution inversion and spline renderer (drivers/sim/render/marker_images.py), and the project's
 own estimator (controller.tactile.estimator) as the reader of the rendered images.
 """
 
@@ -14,15 +14,19 @@ import numpy as np
 import pytest
 from scipy.ndimage import map_coordinates
 
-from controller.config import sensor_profile
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.flow import make_grid_flow
 from controller.tactile.settings import estimator_config
-from drivers.sim.field_grid import GridUpsampler
-from drivers.sim.field_inverse import MARGIN_PX, BackwardMapper
-from drivers.sim.gel_renderer import GelRenderer
-from drivers.sim.image_effects import ImageEffects
-from drivers.sim.marker_images import MarkerImageRenderer, area_mean_field, smooth_random_field
+from drivers.config import sensor_profile
+from drivers.sim.render.field_grid import GridUpsampler
+from drivers.sim.render.field_inverse import MARGIN_PX, BackwardMapper
+from drivers.sim.render.gel_renderer import GelRenderer
+from drivers.sim.render.image_effects import ImageEffects
+from drivers.sim.render.marker_images import (
+    MarkerImageRenderer,
+    area_mean_field,
+    smooth_random_field,
+)
 
 HW = (240, 320)
 # 5 px cells (a physics grid), 4 px, 16/3 px (not a whole number of pixels), full resolution

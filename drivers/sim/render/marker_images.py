@@ -1,9 +1,9 @@
 """Synthetic marker-gel images with exact sub-pixel truth, and test fields.
 
 ``MarkerImageRenderer`` is the exact mode of the gel renderer, for flow-accuracy benchmarks
-and tests: the same gel and lighting as ``drivers.sim.gel_renderer.GelRenderer`` (the same
+and tests: the same gel and lighting as ``drivers.sim.render.gel_renderer.GelRenderer`` (the same
 ``rng`` gives the same reference image), warped by a full-resolution forward field
-(drivers/sim/field_grid.py: convention) inverted on every pixel and resampled with cubic
+(drivers/sim/render/field_grid.py: convention) inverted on every pixel and resampled with cubic
 splines at full float precision, without image effects. It takes about 20 ms a frame;
 ``GelRenderer`` is the fast one (1/64 px positions) with effects.
 """
@@ -14,9 +14,9 @@ import cv2
 import numpy as np
 from scipy.ndimage import map_coordinates, spline_filter
 
-from drivers.sim.field_inverse import backward_map
-from drivers.sim.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
-from drivers.sim.lighting import led_shading, shade
+from drivers.sim.render.field_inverse import backward_map
+from drivers.sim.render.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
+from drivers.sim.render.lighting import led_shading, shade
 
 
 class MarkerImageRenderer:

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 import yaml
 
-from controller.calibrate_cli import main as calibrate_main
-from controller.config import ConfigError
 from controller.tactile.calibration import Calibration
-from controller.tactile.dataset import META, Dataset
-from drivers.sim.jig import Experiment
-from drivers.sim.marker_images import MarkerImageRenderer
+from drivers.config import ConfigError
+from drivers.sim.render.marker_images import MarkerImageRenderer
+from drivers.sim.scenes.jig import Experiment
 from evaluation.jig_dataset import write_jig_dataset
+from evaluation.offline.calibrate_cli import main as calibrate_main
+from evaluation.offline.dataset import META, Dataset
 from evaluation.sim_setup import gel_model, jig_config
 
 

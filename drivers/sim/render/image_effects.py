@@ -1,4 +1,4 @@
-"""Configuration of the seeded image effects of ``drivers.sim.gel_renderer.GelRenderer``.
+"""Configuration of the seeded image effects of ``drivers.sim.render.gel_renderer.GelRenderer``.
 
 Every effect is off by default. Their randomness comes from the renderer's ``rng`` (one
 independent stream per effect), so a render is a function of (rng seed, inputs, frame index).
@@ -17,9 +17,9 @@ class ImageEffects:
     """What degrades a rendered tactile image, in named units.
 
     Pixel noise: ``noise_grey``, standard deviation of additive Gaussian noise, grey levels;
-    each frame index draws its own noise (drivers/sim/noise_bank.py).
+    each frame index draws its own noise (drivers/sim/render/noise_bank.py).
 
-    Lighting drift (drivers/sim/lighting.py), scaled by the ``drift`` level passed to
+    Lighting drift (drivers/sim/render/lighting.py), scaled by the ``drift`` level passed to
     ``render`` (dimensionless; 0 is the reference lighting, e.g. pass minutes since zeroing):
     ``drift_gain_per_level``, relative gain change of the B, G, R channels per unit level
     (0.02: 2 % brighter per level); ``drift_gradient_grey_per_level``, grey levels per unit
@@ -36,7 +36,7 @@ class ImageEffects:
     Marker dropout: ``marker_dropout_fraction``, the fraction of printed markers whose ink
     has worn off (missing from the reference and every frame), rounded to whole markers.
 
-    Occlusion (torn or dirty gel, drivers/sim/occlusion.py): ``occlusion_count`` elliptic
+    Occlusion (torn or dirty gel, drivers/sim/render/occlusion.py): ``occlusion_count`` elliptic
     blobs with semi-major axis ``occlusion_size_px`` px (semi-minor 50-100 % of it) where
     the image shows a static region that does not move with the gel (optical flow there is
     zero), of mean reflectance ``occlusion_reflectance`` (the bare gel is 1: below 1 dark,

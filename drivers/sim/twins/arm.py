@@ -17,11 +17,11 @@ velocity_timeout_s)``), then the TCP tracks the result:
 * velocity: the clamped twist until the watchdog deadline, then zero.
 
 The twin also keeps the TCP inside the envelope whatever the command stream, braking
-before the faces of the box and the tilt limit (``drivers.sim.tcp_motion``), so no
+before the faces of the box and the tilt limit (``drivers.sim.twins.tcp_motion``), so no
 overshoot of a clamped target leaves the envelope.
 
 Time. The state is integrated in fixed steps of ``1 / control_rate_hz`` up to the injected
-clock's ``now()`` at the start of every call (see ``drivers.sim.clock``). ``move_to`` with
+clock's ``now()`` at the start of every call (see ``drivers.clock``). ``move_to`` with
 ``wait=True`` sleeps on the clock until the goal is reached, or raises DeviceTimeoutError
 (code 100, as the SDK's wait) after ``move_timeout_s``. ``ArmState.t_s`` is the time of the
 last integration step.
@@ -48,9 +48,9 @@ from drivers.arm.envelope import (
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
 from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
+from drivers.clock import Clock, MonotonicClock
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
-from drivers.sim.clock import Clock, MonotonicClock
-from drivers.sim.tcp_motion import TcpMotion, quaternion_from_rpy
+from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
 from drivers.validation import check_range
 
 MODE_POSITION = 0
