@@ -58,7 +58,6 @@ class TactileEstimator:
         self._reference_sum: np.ndarray | None = None
         self._zeroing_count = 0
         self._grid_flow: GridFlow | None = None
-        self._last_nhhd: NHHDResult | None = None
         self._slip: SlipDetector | None = None
         self._last_slip: SlipStatus | None = None
         self._rezero_policy = RezeroPolicy(config.slip.rezero)
@@ -242,7 +241,6 @@ class TactileEstimator:
 
     def _estimate(self, t_s: float) -> WrenchEstimate:
         decomposition = self._nhhd.decompose(self._u, self._v)
-        self._last_nhhd = decomposition
         dipole = self._dipole(self._tilt_divergence(decomposition))
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
@@ -296,8 +294,3 @@ class TactileEstimator:
     def rezero_state(self) -> RezeroState:
         """The re-zero policy's current state."""
         return self._rezero_policy.state
-
-    @property
-    def last_decomposition(self) -> NHHDResult | None:
-        """The latest NHHD result (views into buffers that the next push overwrites)."""
-        return self._last_nhhd

@@ -268,8 +268,3 @@ class MarkerGridFlow:
         self._numerator /= self._denominator[:, None]
         out.reshape(-1, 2)[:] = self._numerator
         return out
-
-    @property
-    def tracked_fraction(self) -> float:
-        """Fraction of the reference markers tracked in the last frame."""
-        return float(self._valid.mean()) if len(self.markers_px) else 0.0
