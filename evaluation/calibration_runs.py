@@ -11,9 +11,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.tactile.calibration import AxisFit, Calibration
-from controller.tactile.settings import sensor_estimator
-from drivers.config import sensor_profile
+from controller.tactile import Calibration, estimator_for_sensor
+from controller.tactile.calibration import AxisFit
 from evaluation.jig_dataset import paper_experiments, write_jig_dataset
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import (
@@ -73,16 +72,15 @@ def run_case(case: CalibrationCase, root: Path, estimator: str | None = None) ->
     )
     timing["total_s"] = time.perf_counter() - start
     dataset = Dataset(folder)
-    profile = sensor_profile(case.sensor)
-    method, config = sensor_estimator(profile, estimator)
-    series = estimate_dataset(dataset, config, profile)
+    tactile = estimator_for_sensor(case.sensor, estimator)
+    series = estimate_dataset(dataset, tactile)
     fits = fit_dataset(dataset, series)
     truth = dataset.truth or {}
     return CaseResult(
         case,
         folder,
         fits,
-        calibration_from_fits(fits, case.sensor, method),
+        calibration_from_fits(fits, case.sensor, tactile.config_name),
         series,
         timing,
         float(np.mean(truth.get("lifted_off", [0.0]))),

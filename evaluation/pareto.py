@@ -16,7 +16,7 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.tactile.settings import EstimatorConfig
+from controller.tactile import EstimatorConfig, TactileEstimator
 from drivers.config import sensor_profile
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import (
@@ -65,7 +65,7 @@ def accuracy(folders: tuple[Path, ...], label: str, config: EstimatorConfig) -> 
         )
         frames = (f for f in dataset.frames() if tilt[f[0]])
         reference = reference_frames(dataset, dataset.meta.reference)
-        series = estimate_frames(frames, reference, config, sensor_profile(dataset.meta.sensor))
+        series = estimate_frames(frames, reference, _estimator(config, dataset))
         fits = fit_dataset(dataset, series)
         by_dataset[folder.name] = float(np.mean([fits[(a, "ours")].rmse for a in PARETO_AXES]))
         worst = min([worst, *(fits[(a, "ours")].r2 for a in PARETO_AXES)])
@@ -82,8 +82,13 @@ def latency(folder: Path, config: EstimatorConfig, frames: int) -> tuple[float, 
     chosen = (f for f in dataset.frames() if f[1] >= start)
     sample = [next(chosen) for _ in range(min(frames, int((dataset.frame_t_s >= start).sum())))]
     reference = reference_frames(dataset, dataset.meta.reference)
-    series = estimate_frames(sample, reference, config, sensor_profile(dataset.meta.sensor))
+    series = estimate_frames(sample, reference, _estimator(config, dataset))
     return float(np.median(series.latency_ms)), float(np.percentile(series.latency_ms, 90))
+
+
+def _estimator(config: EstimatorConfig, dataset: Dataset) -> TactileEstimator:
+    """An estimator with ``config`` (one of the compared set) for the dataset's sensor."""
+    return TactileEstimator(config, sensor_profile(dataset.meta.sensor))
 
 
 def front(points: list[ParetoPoint]) -> list[ParetoPoint]:

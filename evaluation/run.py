@@ -23,8 +23,8 @@ import time
 from multiprocessing import get_context
 from pathlib import Path
 
-from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError, sensor_profile
+from controller.tactile import estimator_for_sensor
+from drivers.config import ConfigError
 from evaluation import slip_eval
 from evaluation.calibration_runs import (
     CalibrationCase,
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:  # a bad --estimator fails here, not in a worker
         for sensor in {case.sensor for case in CASES}:
-            sensor_estimator(sensor_profile(sensor), args.estimator)
+            estimator_for_sensor(sensor, args.estimator)
     except ConfigError as exc:
         parser.error(str(exc))
     _one_thread()

@@ -36,9 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import EstimatorConfig, sensor_estimator
-from drivers.config import sensor_profile
+from controller.tactile import TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
@@ -162,20 +160,18 @@ def run_sequence(
     sequence: Sequence,
     model: GelModel,
     cap: Capacity,
-    config: EstimatorConfig,
+    estimator: TactileEstimator,
     renderer: GelRenderer,
 ) -> list[Frame]:
     """Drive the model through the sequence (the object slides while in gross slip), render
-    and estimate each frame."""
-    profile = sensor_profile(SENSOR)
-    estimator = TactileEstimator(config, profile)
+    and estimate each frame (the estimator zeroed on the grasp's first frame)."""
     rest = model.solve(sequence.grips_n[0], Wrench())
     estimator.set_reference(renderer.render(rest.field_px, frame_index=0))
     offset, angle, frames = np.zeros(2), 0.0, []
     for index, (grip, wrench) in enumerate(zip(sequence.grips_n, sequence.wrenches, strict=True)):
         state = model.solve(grip, wrench, offset_m=(offset[0], offset[1]), angle_rad=angle)
         image = renderer.render(state.field_px, frame_index=index + 1)
-        estimate = estimator.push(image, index / profile.fps_hz)
+        estimate = estimator.push(image, index / estimator.profile.fps_hz)
         force = float(np.hypot(wrench.fx, wrench.fy))
         gross = state.tangential.gross_slip
         load = max(force / cap.force_n, abs(wrench.tau_z) / cap.torque_nm)
@@ -271,7 +267,7 @@ def run_grip(
 ) -> GripRuns:
     """Run every sequence of every object at one grip force (one worker's job). ``quick``:
     only the first positive and the first negative sequence of each object (a smoke test)."""
-    method, config = sensor_estimator(sensor_profile(SENSOR), method)
+    estimator = estimator_for_sensor(SENSOR, method)
     renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed=seed)
     groups = []
     for shape in objects:
@@ -281,11 +277,11 @@ def run_grip(
         if quick:
             chosen = [chosen[0], next(s for s in chosen if not s.positive)]
         runs = tuple(
-            (sequence, tuple(run_sequence(sequence, model, cap, config, renderer)))
+            (sequence, tuple(run_sequence(sequence, model, cap, estimator, renderer)))
             for sequence in chosen
         )
         groups.append((shape, cap, runs))
-    return GripRuns(grip_n, method, tuple(groups))
+    return GripRuns(grip_n, estimator.config_name, tuple(groups))
 
 
 def report(grip_runs: list[GripRuns], seed: int, noise_grey: float) -> dict:

@@ -27,9 +27,7 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.tactile.calibration import Calibration
-from controller.tactile.settings import sensor_estimator
-from drivers.config import sensor_profile
+from controller.tactile import Calibration, TactileEstimator, estimator_for_sensor
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.scenes.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
 from evaluation.offline.dataset_fit import estimate_frames
@@ -272,12 +270,15 @@ def run_level(
         frames.append((index_frame, float(t), image))
     interval = program.reference if setting.zero_on == "reference" else (0.0, jig.open_s)
     reference = [img for _, t, img in frames if interval[0] <= t < interval[1]]
-    profile = sensor_profile(setting.sensor)
     calibration = calibrations[f"{setting.sensor}-{setting.shape}"]
-    _, config = sensor_estimator(profile, estimator)
-    series = estimate_frames(frames, reference, config, profile)
+    tactile = estimator_for_sensor(setting.sensor, estimator)
+    series = estimate_frames(frames, reference, tactile)
     variants = {
-        label: estimate_frames(frames, reference, dataclasses.replace(config, **change), profile)
+        label: estimate_frames(
+            frames,
+            reference,
+            TactileEstimator(dataclasses.replace(tactile.config, **change), tactile.profile),
+        )
         for label, change in METHOD_CONFIG.items()
     }
     after = series.t_s >= program.segments[0].t_start_s

@@ -23,12 +23,10 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.field import VectorField, grid_axes_mm
+from controller.tactile import TactileEstimator, VectorField, estimator_for_sensor
+from controller.tactile.field import grid_axes_mm
 from controller.tactile.nhhd import NHHD
-from controller.tactile.settings import sensor_estimator
 from controller.tactile.slip import SlipDetector
-from drivers.config import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -42,7 +40,7 @@ def _stats_us(samples: list[float]) -> str:
 
 
 def bench_update(frames: int) -> dict[str, str]:
-    config = sensor_estimator(sensor_profile("gelsight_mini"))[1].slip
+    config = estimator_for_sensor("gelsight_mini").config.slip
     x_mm, y_mm = grid_axes_mm(320, 240, 16, 12, 0.0634)
     gx, gy = np.meshgrid(x_mm, y_mm)
     core = np.exp(-(gx**2 + gy**2) / (2 * 3.0**2))
@@ -67,7 +65,7 @@ def bench_update(frames: int) -> dict[str, str]:
 
 
 def bench_push(frames: int) -> dict[str, str]:
-    config = sensor_estimator(sensor_profile("gelsight_mini"))[1]
+    base = estimator_for_sensor("gelsight_mini")
     renderer = MarkerImageRenderer(rng=np.random.default_rng(5))
     ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
     core = np.exp(-((xs - 160) ** 2 + (ys - 120) ** 2) / (2 * 60.0**2))
@@ -78,8 +76,8 @@ def bench_push(frames: int) -> dict[str, str]:
         images.append(renderer.render(field))
     results = {}
     for label, enabled in (("push, detector on", True), ("push, detector off", False)):
-        slip = replace(config.slip, enabled=enabled)
-        est = TactileEstimator(replace(config, slip=slip), sensor_profile("gelsight_mini"))
+        slip = replace(base.config.slip, enabled=enabled)
+        est = TactileEstimator(replace(base.config, slip=slip), base.profile)
         est.set_reference(renderer.render())
         samples = []
         for i in range(frames):

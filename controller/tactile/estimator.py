@@ -23,6 +23,7 @@ must (its flow outputs) and the returned estimate.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 
 import cv2
 import numpy as np
@@ -33,26 +34,50 @@ from controller.tactile.dipole import DipoleMomentCalculator
 from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
 from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
-from controller.tactile.settings import EstimatorConfig, dipole_grid_mismatch, field_grid
+from controller.tactile.settings import (
+    EstimatorConfig,
+    dipole_grid_mismatch,
+    field_grid,
+    sensor_estimator,
+)
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
-from drivers.config import SensorProfile
+from drivers.config import SensorProfile, sensor_profile
 
 _ASPECT_TOLERANCE = 0.02
 
 
+def estimator_for_sensor(
+    sensor: SensorProfile | str | Path,
+    estimator: str | Path | None = None,
+    calibration: Calibration | None = None,
+) -> TactileEstimator:
+    """The estimator for ``sensor`` (a profile, or a name in configs/sensors/ or a YAML path)
+    with the configuration ``estimator`` (a name in configs/estimators/ or a YAML path; None:
+    the profile's own ``estimator:``), optionally calibrated. A configuration that does not
+    suit the sensor (marker tracking without printed markers, a ``dipole_grid`` that does not
+    divide the field grid) is a ConfigError naming both; so is a missing or invalid file."""
+    profile = sensor if isinstance(sensor, SensorProfile) else sensor_profile(str(sensor))
+    name, config = sensor_estimator(profile, None if estimator is None else str(estimator))
+    return TactileEstimator(config, profile, calibration, config_name=name)
+
+
 class TactileEstimator:
-    """Frame-to-wrench pipeline for one sensor (see module docstring)."""
+    """Frame-to-wrench pipeline for one sensor (see module docstring). ``config_name``: the
+    configuration's name or YAML path, for reports (``estimator_for_sensor`` sets it; None for
+    a configuration built in code)."""
 
     def __init__(
         self,
         config: EstimatorConfig,
         profile: SensorProfile,
         calibration: Calibration | None = None,
+        config_name: str | None = None,
     ) -> None:
         self.config = config
         self.profile = profile
         self.calibration = calibration
+        self.config_name = config_name
         self._frame_shape: tuple[int, ...] | None = None
         self._zeroing_left = 0
         self._reference_sum: np.ndarray | None = None

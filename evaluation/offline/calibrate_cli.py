@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
-from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError, sensor_profile
+from drivers.config import ConfigError
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 
@@ -58,9 +58,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     try:
         dataset = Dataset(args.dataset)
-        profile = sensor_profile(dataset.meta.sensor)
-        method, config = sensor_estimator(profile, args.method)
-        series = estimate_dataset(dataset, config, profile)
+        estimator = estimator_for_sensor(dataset.meta.sensor, args.method)
+        method = estimator.config_name
+        series = estimate_dataset(dataset, estimator)
         fits = fit_dataset(dataset, series)
         if not fits:
             raise ConfigError(f"{args.dataset}: the dataset has no segments to fit")

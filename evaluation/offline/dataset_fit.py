@@ -14,11 +14,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controller.tactile import TactileEstimator
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import EstimatorConfig
 from controller.tactile.wrench import VALUE_FIELDS
-from drivers.config import SensorProfile
 from evaluation.offline.dataset import Dataset
 
 # axis -> (our estimate, the baseline's, the torque column of a (fx..tau_z) row)
@@ -46,12 +44,10 @@ class EstimateSeries:
 def estimate_frames(
     frames: Iterable[tuple[int, float, np.ndarray]],
     reference: list[np.ndarray],
-    config: EstimatorConfig,
-    profile: SensorProfile,
+    estimator: TactileEstimator,
 ) -> EstimateSeries:
     """Estimates for ``frames`` ((index, t_s, image) tuples) against the mean of
-    ``reference``."""
-    estimator = TactileEstimator(config, profile)
+    ``reference`` (which replaces the estimator's)."""
     estimator.set_reference(reference)
     t_s, rows, slip, gross, latency = [], [], [], [], []
     for _, t, image in frames:
@@ -82,14 +78,14 @@ def reference_frames(dataset: Dataset, interval: tuple[float, float]) -> list[np
 
 
 def estimate_dataset(
-    dataset: Dataset, config: EstimatorConfig, profile: SensorProfile, zero_on: str = "reference"
+    dataset: Dataset, estimator: TactileEstimator, zero_on: str = "reference"
 ) -> EstimateSeries:
     """Estimates for every frame, zeroed on the ``reference`` interval (after the grasp) or
     on the ``open`` one (before it: no zeroing after the grasp)."""
     interval = dataset.meta.reference if zero_on == "reference" else dataset.meta.open
     if interval is None:
         raise ValueError(f"{dataset.folder}: the dataset has no '{zero_on}' interval")
-    return estimate_frames(dataset.frames(), reference_frames(dataset, interval), config, profile)
+    return estimate_frames(dataset.frames(), reference_frames(dataset, interval), estimator)
 
 
 def segment_mask(dataset: Dataset, t_s: np.ndarray, axis: str) -> np.ndarray:

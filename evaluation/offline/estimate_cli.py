@@ -34,11 +34,9 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from controller.tactile.calibration import Calibration
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import sensor_estimator
-from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from drivers.config import ConfigError, sensor_profile
+from controller.tactile import Calibration, WrenchEstimate, estimator_for_sensor
+from controller.tactile.wrench import VALUE_FIELDS
+from drivers.config import ConfigError
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")
@@ -158,13 +156,11 @@ def estimate_file(
     start, stop = parse_reference(reference)
     if fps is not None and not fps > 0:
         raise InputError(f"--fps {fps}: expected a positive number of frames per second")
-    profile = sensor_profile(sensor)
-    _, config = sensor_estimator(profile, method)
     fit = Calibration.load(calibration) if calibration is not None else None
+    estimator = estimator_for_sensor(sensor, method, fit)
     source = open_source(input_path)
-    rate_hz = fps or source.fps or profile.fps_hz
+    rate_hz = fps or source.fps or estimator.profile.fps_hz
 
-    estimator = TactileEstimator(config, profile, fit)
     reference_frames = read_reference(source, start, stop)
     try:
         estimator.set_reference(reference_frames)

@@ -5,10 +5,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from controller.tactile.calibration import AxisFit, Calibration
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import DipoleGrid, estimator_config
-from drivers.config import sensor_profile
+from controller.tactile import Calibration, TactileEstimator, estimator_config, estimator_for_sensor
+from controller.tactile.calibration import AxisFit
+from controller.tactile.settings import DipoleGrid
+from drivers.config import CONFIG_ROOT, ConfigError, sensor_profile
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
 
 PROFILE = sensor_profile("gelsight_mini")
@@ -18,9 +18,22 @@ PATTERNS = phase_patterns((240, 320))
 
 @pytest.fixture
 def estimator(renderer):
-    est = TactileEstimator(CONFIG, PROFILE)
+    est = estimator_for_sensor(PROFILE, "default")
     est.set_reference(renderer.render())
     return est
+
+
+def test_estimator_for_sensor_takes_the_profiles_own_or_the_named_configuration(tmp_path):
+    own = estimator_for_sensor("digit")
+    assert own.config_name == own.profile.estimator and own.profile.name == "digit"
+    assert own.config == estimator_config(own.profile.estimator) and own.calibration is None
+    path = tmp_path / "mine.yaml"
+    path.write_text((CONFIG_ROOT / "estimators" / "paper.yaml").read_text())
+    named = estimator_for_sensor(PROFILE, path, Calibration("gelsight_mini", "mine", {}))
+    assert named.config == estimator_config("paper") and named.config_name == str(path)
+    assert named.profile is PROFILE and named.calibration.estimator == "mine"
+    with pytest.raises(ConfigError, match="sensor 'digit' has none"):
+        estimator_for_sensor("digit", "markers")
 
 
 @pytest.mark.parametrize(
@@ -160,7 +173,7 @@ def test_the_dipole_grid_must_divide_the_field_grid(renderer):
 def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     """Steady-state pushes allocate no arrays in our code (only OpenCV's outputs and the
     returned estimate)."""
-    est = TactileEstimator(estimator_config(method), PROFILE)
+    est = estimator_for_sensor(PROFILE, method)
     est.set_reference(renderer.render())
     frames = [renderer.render(a * PATTERNS["tilt_x"]) for a in (0.3, 0.6, 0.9)]
     for frame in frames:

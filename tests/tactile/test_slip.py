@@ -10,8 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.field import VectorField
+from controller.tactile import TactileEstimator, VectorField, estimator_for_sensor
 from controller.tactile.nhhd import NHHD
 from controller.tactile.settings import estimator_config
 from controller.tactile.slip import (
@@ -247,7 +246,7 @@ def push_all(est, images, t0):
 
 def test_estimator_flags_slip_gross_slip_and_recommends_a_rezero(renderer, slipping):
     stick, slip = slipping
-    est = TactileEstimator(CONFIG, sensor_profile("gelsight_mini"))
+    est = estimator_for_sensor("gelsight_mini", "default")
     est.set_reference(renderer.render())
     estimates = push_all(est, stick + slip + [slip[-1]] * 3, 0.0)
     assert not any(e.slip_suspected for e in estimates[:4])

@@ -14,9 +14,8 @@ import numpy as np
 import pytest
 from scipy.ndimage import map_coordinates
 
-from controller.tactile.estimator import TactileEstimator
+from controller.tactile import estimator_config, estimator_for_sensor
 from controller.tactile.flow import make_grid_flow
-from controller.tactile.settings import estimator_config
 from drivers.config import sensor_profile
 from drivers.sim.render.field_grid import GridUpsampler
 from drivers.sim.render.field_inverse import MARGIN_PX, BackwardMapper
@@ -266,7 +265,7 @@ def test_the_estimator_recovers_the_area_mean_of_a_coarse_field(effects):
     renderer = GelRenderer(effects=effects, rng=np.random.default_rng(12))
     for index, amplitude in enumerate((1.0, 2.0), start=1):
         field = smooth_grid((48, 64), amplitude, seed=20 + index)
-        estimator = TactileEstimator(estimator_config("default"), profile)
+        estimator = estimator_for_sensor(profile, "default")
         estimator.set_reference(renderer.render(frame_index=0))
         estimator.push(renderer.render(field, frame_index=index), 0.0)
         grid = estimator.field
