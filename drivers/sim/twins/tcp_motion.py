@@ -1,8 +1,8 @@
 """Kinematics of the simulated TCP: speed- and acceleration-limited motion inside the envelope.
 
 The TCP (frame T) is a rigid body in the base frame B with position ``p`` (m), linear
-velocity ``v`` (m/s), orientation ``q`` (unit quaternion T2B, scalar last as in scipy) and
-angular velocity ``w`` (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt_s``:
+velocity ``v`` (m/s), orientation ``R`` (T2B, a scipy ``Rotation``) and angular velocity ``w``
+(rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt_s``:
 
 1. ``v_des`` is scaled to the envelope's ``max_speed_m_s`` and each component is capped so
    that the TCP can still stop on the faces of the box: toward a face at distance ``d`` the
@@ -22,11 +22,13 @@ angular velocity ``w`` (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt
    rate ``w . a`` (``a`` the horizontal axis about which the tool tilts away from vertical),
    braking at half the angular acceleration limit (the margin covers the axis turning with
    the tool's rotation about the vertical).
-4. ``p += v dt``, ``q = exp(w dt) q``; a final projection on the box and the tilt cone only
-   absorbs rounding.
+4. ``p += v dt``, ``R = exp(w dt) R``; a final projection on the box and the tilt cone
+   (``drivers.arm.envelope.clamp_tilt``) only absorbs rounding.
 
-Pure Python floats: the twin steps this at hundreds of Hz, where NumPy's per-call overhead on
-3-vectors would dominate.
+Vectors are tuples of Python floats: the twin steps this at hundreds of Hz, where NumPy's
+per-call overhead on 3-vectors would dominate. Orientations are scipy Rotations, with the
+envelope's helpers (roll/pitch/yaw, tilt, tilt clamp); quaternions (x, y, z, w) only name a
+goal orientation.
 """
 
 from __future__ import annotations
@@ -36,7 +38,13 @@ from collections.abc import Iterable
 
 from scipy.spatial.transform import Rotation
 
-from drivers.arm.envelope import SafetyEnvelope, clamp_tilt, rotation_from_rpy, rpy_near
+from drivers.arm.envelope import (
+    SafetyEnvelope,
+    clamp_tilt,
+    rotation_from_rpy,
+    rpy_near,
+    tilt_rad,
+)
 from drivers.base import Pose
 
 Vec = tuple[float, float, float]
@@ -62,7 +70,7 @@ class TcpMotion:
         self.max_angular_accel_rad_s2 = max_angular_accel_rad_s2
         self.position_m: Vec = _vec(start.xyz_m)
         self.velocity_m_s: Vec = _ZERO
-        self.quaternion: Quat = quaternion_from_rpy(start.rpy_rad)
+        self.rotation: Rotation = rotation_from_rpy(start.rpy_rad)
         self.angular_rad_s: Vec = _ZERO
         self._low: Vec = (envelope.x_min_m, envelope.y_min_m, envelope.z_min_m)
         self._high: Vec = (envelope.x_max_m, envelope.y_max_m, envelope.z_max_m)
@@ -71,19 +79,16 @@ class TcpMotion:
 
     def pose(self, rpy_hint: Vec) -> Pose:
         """The TCP pose, its roll/pitch/yaw wrapped to lie nearest ``rpy_hint``."""
-        return Pose(self.position_m, rpy_near(Rotation.from_quat(self.quaternion), rpy_hint))
-
-    def tilt_rad(self) -> float:
-        """Angle between the tool z-axis and the downward vertical of B."""
-        zx, zy, zz = _tool_z(self.quaternion)
-        return math.atan2(math.hypot(zx, zy), -zz)
+        return Pose(self.position_m, rpy_near(self.rotation, rpy_hint))
 
     def at_rest(self, tolerance: float) -> bool:
         return _norm(self.velocity_m_s) <= tolerance and _norm(self.angular_rad_s) <= tolerance
 
     def offset_to(self, xyz_m: Vec, quaternion: Quat) -> tuple[Vec, Vec]:
-        """(translation in m, rotation vector in rad) from the TCP to the given pose, in B."""
-        return _sub(xyz_m, self.position_m), rotation_vector_between(self.quaternion, quaternion)
+        """(translation in m, rotation vector in rad) from the TCP to the given pose, in B: the
+        rotation vector of the shortest turn (angle at most pi)."""
+        turn = Rotation.from_quat(quaternion) * self.rotation.inv()
+        return _sub(xyz_m, self.position_m), _vec(turn.as_rotvec())
 
     # ----------------------------------------------------------------- motion
 
@@ -116,10 +121,10 @@ class TcpMotion:
         dt = self.dt_s
         moved = _add(self.position_m, _scale(self.velocity_m_s, dt))
         self.position_m = _clip(moved, self._low, self._high)
-        q = _normalised(_qmul(_qexp(_scale(self.angular_rad_s, dt)), self.quaternion))
-        if self.tilt_rad() > self.envelope.max_tilt_rad + _ROUNDING_RAD:
-            q = _vec4(clamp_tilt(Rotation.from_quat(q), self.envelope.max_tilt_rad).as_quat())
-        self.quaternion = q
+        turned = Rotation.from_rotvec(_scale(self.angular_rad_s, dt)) * self.rotation
+        if tilt_rad(self.rotation) > self.envelope.max_tilt_rad + _ROUNDING_RAD:
+            turned = clamp_tilt(turned, self.envelope.max_tilt_rad)
+        self.rotation = turned
 
     def _next_velocity(self, v_des: Vec) -> Vec:
         env, dt = self.envelope, self.dt_s
@@ -148,8 +153,8 @@ class TcpMotion:
         w_des = _scaled_to(w_des, env.max_angular_speed_rad_s)
         candidate = _add(w, _scaled_to(_sub(w_des, w), self.max_angular_accel_rad_s2 * dt))
         brake = self.max_angular_accel_rad_s2 / 2.0
-        limit = stopping_speed(env.max_tilt_rad - self.tilt_rad(), brake, dt)
-        zx, zy, _ = _tool_z(self.quaternion)
+        limit = stopping_speed(env.max_tilt_rad - tilt_rad(self.rotation), brake, dt)
+        zx, zy, _ = _vec(self.rotation.as_matrix()[:, 2])  # the tool's z-axis in B
         horizontal = math.hypot(zx, zy)
         if horizontal < 1e-9:
             # Pointing straight down: every horizontal rotation tilts the tool. The limit
@@ -180,58 +185,13 @@ def stopping_speed(distance: float, brake: float, dt: float) -> float:
 
 def quaternion_from_rpy(rpy_rad: tuple[float, float, float]) -> Quat:
     """Unit quaternion (x, y, z, w) of ``Pose.rpy_rad`` (R = Rz @ Ry @ Rx)."""
-    return _vec4(rotation_from_rpy(rpy_rad).as_quat())
-
-
-def rotation_vector_between(start: Quat, end: Quat) -> Vec:
-    """Rotation vector (rad, in B) of the shortest turn taking ``start`` to ``end``."""
-    x, y, z, w = _qmul(end, (-start[0], -start[1], -start[2], start[3]))
-    if w < 0:
-        x, y, z, w = -x, -y, -z, -w
-    s = math.sqrt(x * x + y * y + z * z)
-    if s < 1e-15:
-        return (2.0 * x, 2.0 * y, 2.0 * z)
-    k = 2.0 * math.atan2(s, w) / s
-    return (x * k, y * k, z * k)
-
-
-def _tool_z(q: Quat) -> Vec:
-    x, y, z, w = q
-    return (2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y))
-
-
-def _qmul(a: Quat, b: Quat) -> Quat:
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (
-        aw * bx + ax * bw + ay * bz - az * by,
-        aw * by - ax * bz + ay * bw + az * bx,
-        aw * bz + ax * by - ay * bx + az * bw,
-        aw * bw - ax * bx - ay * by - az * bz,
-    )
-
-
-def _qexp(rotvec: Vec) -> Quat:
-    angle = _norm(rotvec)
-    if angle < 1e-12:
-        return (0.5 * rotvec[0], 0.5 * rotvec[1], 0.5 * rotvec[2], 1.0)
-    k = math.sin(0.5 * angle) / angle
-    return (rotvec[0] * k, rotvec[1] * k, rotvec[2] * k, math.cos(0.5 * angle))
-
-
-def _normalised(q: Quat) -> Quat:
-    n = math.sqrt(sum(c * c for c in q))
-    return (q[0] / n, q[1] / n, q[2] / n, q[3] / n)
+    x, y, z, w = (float(c) for c in rotation_from_rpy(rpy_rad).as_quat())
+    return (x, y, z, w)
 
 
 def _vec(values: Iterable[float]) -> Vec:
     x, y, z = (float(v) for v in values)
     return (x, y, z)
-
-
-def _vec4(values: Iterable[float]) -> Quat:
-    x, y, z, w = (float(v) for v in values)
-    return (x, y, z, w)
 
 
 def _norm(v: Vec) -> float:
