@@ -50,7 +50,6 @@ from drivers.base import Pose
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # x, y, z, w
 _ZERO: Vec = (0.0, 0.0, 0.0)
-_ROUNDING_RAD = 1e-12
 
 
 class TcpMotion:
@@ -122,9 +121,7 @@ class TcpMotion:
         moved = _add(self.position_m, _scale(self.velocity_m_s, dt))
         self.position_m = _clip(moved, self._low, self._high)
         turned = Rotation.from_rotvec(_scale(self.angular_rad_s, dt)) * self.rotation
-        if tilt_rad(self.rotation) > self.envelope.max_tilt_rad + _ROUNDING_RAD:
-            turned = clamp_tilt(turned, self.envelope.max_tilt_rad)
-        self.rotation = turned
+        self.rotation = clamp_tilt(turned, self.envelope.max_tilt_rad)
 
     def _next_velocity(self, v_des: Vec) -> Vec:
         env, dt = self.envelope, self.dt_s
