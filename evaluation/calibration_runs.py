@@ -154,25 +154,13 @@ def timeseries_chart(result: CaseResult, path: Path, seconds: float = 40.0) -> N
             lw=1,
             label="F/T ground truth",
         )
-        ours = result.fits[(axis, "ours")].apply(result.series.values[ours_name]) * 1e3
-        base = result.fits[(axis, "baseline")].apply(result.series.values[base_name]) * 1e3
-        ax.plot(
-            t[window] - start,
-            ours[window],
-            ".-",
-            ms=3,
-            lw=0.8,
-            label="dipole" if axis != "z" else "NHHD",
+        series = (
+            ("ours", ours_name, "dipole" if axis != "z" else "NHHD", 1.0),
+            ("baseline", base_name, "FingerVision baseline", 0.7),
         )
-        ax.plot(
-            t[window] - start,
-            base[window],
-            ".-",
-            ms=3,
-            lw=0.8,
-            alpha=0.7,
-            label="FingerVision baseline",
-        )
+        for method, name, label, alpha in series:
+            values = result.fits[(axis, method)].apply(result.series.values[name]) * 1e3
+            ax.plot(t[window] - start, values[window], ".-", ms=3, lw=0.8, alpha=alpha, label=label)
         ax.set_ylabel(f"tau_{axis} (N*mm)")
         ax.legend(fontsize=8, loc="upper right")
     grid[-1][0].set_xlabel("time in the experiment (s)")
