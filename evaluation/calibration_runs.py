@@ -13,7 +13,7 @@ import numpy as np
 
 from controller.tactile.calibration import AxisFit, Calibration
 from controller.tactile.settings import sensor_estimator
-from drivers.config import sensor_profile
+from drivers.tactile.profile import sensor_profile
 from evaluation.jig_dataset import paper_experiments, write_jig_dataset
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import (

@@ -24,7 +24,8 @@ from multiprocessing import get_context
 from pathlib import Path
 
 from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError, sensor_profile
+from drivers.config import ConfigError
+from drivers.tactile.profile import sensor_profile
 from evaluation import slip_eval
 from evaluation.calibration_runs import (
     CalibrationCase,

@@ -38,10 +38,10 @@ import numpy as np
 
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import EstimatorConfig, sensor_estimator
-from drivers.config import sensor_profile
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
+from drivers.tactile.profile import sensor_profile
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model
 

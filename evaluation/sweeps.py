@@ -29,9 +29,9 @@ import numpy as np
 
 from controller.tactile.calibration import Calibration
 from controller.tactile.settings import sensor_estimator
-from drivers.config import sensor_profile
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.scenes.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
+from drivers.tactile.profile import sensor_profile
 from evaluation.offline.dataset_fit import estimate_frames
 from evaluation.rendering import NOMINAL_EFFECTS, make_renderer
 from evaluation.sim_setup import gel_model, jig_config

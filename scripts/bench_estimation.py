@@ -30,8 +30,8 @@ import scipy
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.flow import DenseGridFlow
 from controller.tactile.settings import EstimatorConfig
-from drivers.config import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
+from drivers.tactile.profile import sensor_profile
 from evaluation.configurations import estimator_variants
 from evaluation.machine import cpu_model, git_revision
 

@@ -30,12 +30,10 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 import scipy  # noqa: E402
 
-from drivers.config import load_config  # noqa: E402
 from drivers.sim.gel.model import GelModel, Wrench  # noqa: E402
-from drivers.sim.gel.profile import SHAPES, GelProfile  # noqa: E402
+from drivers.sim.gel.profile import SHAPES, gel_profile  # noqa: E402
 
-ROOT = Path(__file__).resolve().parents[1]
-PROFILES = ("gelsight_mini_gel", "digit_gel")
+PROFILES = ("gelsight_mini", "digit")
 STAGES = {
     "normal": "solve_normal",
     "tangential": "solve_tangential",
@@ -120,7 +118,7 @@ def main() -> int:
     print(header + " normal | tangential | layer | camera |")
     print("|" + "---|" * (header.count("|") - 1 + len(STAGES)))
     for name in PROFILES:
-        profile = load_config(GelProfile, ROOT / "configs" / "sensors" / f"{name}.yaml")
+        profile = gel_profile(name)
         for kind, shape in SHAPES.items():
             model = GelModel(profile, shape)
             run(model, steps[:20], warm=True)  # caches and first-call costs

@@ -28,8 +28,8 @@ from controller.tactile.field import VectorField, grid_axes_mm
 from controller.tactile.nhhd import NHHD
 from controller.tactile.settings import sensor_estimator
 from controller.tactile.slip import SlipDetector
-from drivers.config import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
+from drivers.tactile.profile import sensor_profile
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_estimation import machine  # noqa: E402  (the sibling script's machine line)

@@ -18,9 +18,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from drivers.config import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import PHASES, demo_sequence
+from drivers.tactile.profile import sensor_profile
 from evaluation.offline.estimate_cli import InputError, estimate_file
 from evaluation.offline.plotting import plot_series_against_truth
 

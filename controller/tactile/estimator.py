@@ -36,7 +36,7 @@ from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
 from controller.tactile.settings import EstimatorConfig, dipole_grid_mismatch, field_grid
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
-from drivers.config import SensorProfile
+from drivers.tactile.profile import SensorProfile
 
 _ASPECT_TOLERANCE = 0.02
 

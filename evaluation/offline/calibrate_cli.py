@@ -19,7 +19,8 @@ import numpy as np
 
 from controller.tactile.calibration import AxisFit
 from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError, sensor_profile
+from drivers.config import ConfigError
+from drivers.tactile.profile import sensor_profile
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 

@@ -18,7 +18,7 @@ from controller.tactile.calibration import AxisFit, Calibration, fit_axis
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import EstimatorConfig
 from controller.tactile.wrench import VALUE_FIELDS
-from drivers.config import SensorProfile
+from drivers.tactile.profile import SensorProfile
 from evaluation.offline.dataset import Dataset
 
 # axis -> (our estimate, the baseline's, the torque column of a (fx..tau_z) row)

@@ -38,7 +38,8 @@ from controller.tactile.calibration import Calibration
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import sensor_estimator
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from drivers.config import ConfigError, sensor_profile
+from drivers.config import ConfigError
+from drivers.tactile.profile import sensor_profile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")

@@ -6,7 +6,8 @@ import pytest
 import yaml
 
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
-from drivers.config import ConfigError, build, number, sensor_profile
+from drivers.config import Config, ConfigError, build, number
+from drivers.tactile.profile import sensor_profile
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -104,12 +105,12 @@ def test_missing_and_malformed_files(tmp_path):
 
 
 @dataclass(frozen=True)
-class Gains:
+class Gains(Config):
     kp: float = number(0, 10)
 
 
 @dataclass(frozen=True)
-class Table:
+class Table(Config):
     gains: Mapping[str, Gains]
 
 

@@ -8,8 +8,8 @@ import pytest
 from controller.tactile.calibration import AxisFit, Calibration
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import DipoleGrid, estimator_config
-from drivers.config import sensor_profile
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
+from drivers.tactile.profile import sensor_profile
 
 PROFILE = sensor_profile("gelsight_mini")
 CONFIG = estimator_config("default")
