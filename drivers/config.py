@@ -1,29 +1,37 @@
-"""Configuration: YAML files loaded into frozen, validated dataclasses.
+"""Configuration: YAML files loaded into frozen dataclasses that validate themselves.
 
-Every key must be known and present; a value of the wrong type or out of range is an
-error that names the file, the key and what was expected::
+One mechanism serves the controller, the drivers and evaluation (it lives in ``drivers`` so
+that every layer may import it). A configuration class derives from ``Config`` and declares
+each key once, on its dataclass field:
+
+* ``float``/``int`` annotations with ``number(low, high)`` -- a finite number (an integer
+  for ``int``) in the closed range ``[low, high]``; a bool is never a number;
+* ``Literal[...]`` -- a choice; ``bool`` -- true or false; ``str`` -- a non-empty string;
+* a nested ``Config`` class -- a sub-mapping, checked recursively;
+* ``Mapping[str, X]`` -- a sub-mapping of any string keys to ``X`` (stored read-only);
+* ``tuple[X, X, X]`` -- a fixed-length sequence (a YAML list);
+* ``X | None`` -- the key may be ``null``.
+
+The declarations are checked whenever an instance is made, by ``build`` from YAML or
+directly in code (``HandEConfig(timeout_s=9)`` raises ``ValueError: key 'timeout_s':
+expected a number in [0.005, 5.0], got 9``). Cross-field rules go in ``__post_init__``,
+which runs after the field checks, and raise ``ValueError`` starting with ``key '<name>'``.
+
+Loading from YAML adds the file: every key must be known and present (defaults serve code,
+not files), and an error names the file, the dotted key path and what was expected::
 
     configs/estimators/default.yaml: key 'stride_px': expected a number in [4, 160], got 2
-
-Validation rules live on the dataclass fields as metadata, so each schema is declared once:
-
-* ``meta(low, high)`` -- a number in a closed range;
-* ``Literal[...]`` type hints -- a choice;
-* nested dataclasses -- sub-mappings, checked recursively;
-* ``Mapping[str, X]`` -- a sub-mapping of any string keys to values of type ``X``;
-* ``X | None`` -- the key must be present, but may be ``null``.
-
-A dataclass may also check cross-field rules in ``__post_init__`` by raising ``ValueError``
-starting with ``key '<name>'``; the loader prefixes the file name and the key path.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
+import numbers
 import types
 import typing
 from collections.abc import Mapping
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -32,142 +40,306 @@ import yaml
 T = TypeVar("T")
 
 CONFIG_ROOT = Path(__file__).resolve().parent.parent / "configs"
+_RANGE = "range"
+_SHOWN_CHARS = 80  # longest value repr quoted in a message
 
 
 class ConfigError(ValueError):
     """A configuration file is unreadable, or a key is unknown, missing or out of range."""
 
 
-def meta(low: float, high: float) -> dict[str, Any]:
-    """Field metadata declaring the closed range ``[low, high]`` of a numeric key."""
-    return {"range": (low, high)}
+def number(low: float, high: float, *, default: Any = dataclasses.MISSING) -> Any:
+    """A numeric dataclass field restricted to ``[low, high]`` (an integer if annotated
+    ``int``); ``default`` serves construction in code (a YAML file must give every key)."""
+    return dataclasses.field(default=default, metadata={_RANGE: (low, high)})
 
 
-def number(low: float, high: float) -> Any:
-    """A required numeric dataclass field restricted to ``[low, high]``."""
-    return field(metadata=meta(low, high))
+class Config:
+    """Base of every configuration dataclass: construction checks the declared fields.
+
+    Subclasses are ``@dataclass(frozen=True)``; a subclass's own ``__post_init__`` (its
+    cross-field rules) runs after the checks of every field, which run once per instance.
+    Values are normalised on the way: an int given for a ``float`` becomes a float, a list
+    for a tuple a tuple, a mapping a read-only mapping.
+    """
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        rules = cls.__dict__.get("__post_init__")
+
+        def __post_init__(self: Config) -> None:
+            if type(self) is cls:
+                _check_fields(self)
+            if rules is not None:
+                rules(self)
+            else:
+                super(cls, self).__post_init__()
+
+        cls.__post_init__ = __post_init__  # type: ignore[method-assign]
+
+    def __post_init__(self) -> None:
+        """The end of the chain: no rules of its own."""
+
+
+def check_number(
+    key: str, value: Any, low: float = -math.inf, high: float = math.inf, integer: bool = False
+) -> Any:
+    """``value`` as a float (an int with ``integer``) if it is a finite number in
+    ``[low, high]``; otherwise ValueError ``key '<key>': expected a number in [low, high]``.
+    The check behind every ``number`` field, for ranges known only at run time."""
+    kind = numbers.Integral if integer else numbers.Real
+    converted: float | None = None
+    if isinstance(value, kind) and not isinstance(value, bool):
+        try:
+            converted = int(value) if integer else float(value)
+        except OverflowError:
+            converted = None
+    if converted is None or not math.isfinite(converted) or not low <= converted <= high:
+        bounded = math.isfinite(low) or math.isfinite(high)
+        what = "an integer" if integer else "a number" if bounded else "a finite number"
+        where = f" in [{low}, {high}]" if bounded else ""
+        raise ValueError(f"key '{key}': expected {what}{where}, got {show(value)}")
+    return converted
+
+
+def show(value: Any) -> str:
+    """``repr(value)`` cut to a readable length, for one-line messages."""
+    text = repr(value)
+    return text if len(text) <= _SHOWN_CHARS else text[: _SHOWN_CHARS - 3] + "..."
+
+
+@functools.cache
+def _field_specs(cls: type) -> tuple[tuple[str, Any, tuple[float, float] | None], ...]:
+    hints = typing.get_type_hints(cls)
+    return tuple(
+        (f.name, hints[f.name], f.metadata.get(_RANGE))
+        for f in dataclasses.fields(cls)
+        if f.init
+    )
+
+
+def _check_fields(config: Config) -> None:
+    for name, hint, bounds in _field_specs(type(config)):
+        value = getattr(config, name)
+        checked = _check(hint, value, name, bounds)
+        if checked is not value:
+            object.__setattr__(config, name, checked)
+
+
+def _check(hint: Any, value: Any, key: str, bounds: tuple[float, float] | None) -> Any:
+    """``value`` checked against the type ``hint`` (and ``bounds`` for its numbers),
+    normalised; ValueError naming ``key`` otherwise."""
+    origin = typing.get_origin(hint)
+    if origin in (typing.Union, types.UnionType):
+        options = _optional_of(hint, key)
+        return None if value is None else _check(options, value, key, bounds)
+    if origin is Literal:
+        for choice in typing.get_args(hint):
+            if _kind(value) is _kind(choice) and value == choice:
+                return choice
+        allowed = ", ".join(repr(c) for c in typing.get_args(hint))
+        raise ValueError(f"key '{key}': expected one of {allowed}, got {show(value)}")
+    if hint is bool:
+        if not isinstance(value, bool):
+            raise ValueError(f"key '{key}': expected true or false, got {show(value)}")
+        return value
+    if hint in (int, float):
+        low, high = bounds if bounds is not None else (-math.inf, math.inf)
+        return check_number(key, value, low, high, integer=hint is int)
+    if hint is str:
+        if not isinstance(value, str) or not value:
+            raise ValueError(f"key '{key}': expected a non-empty string, got {show(value)}")
+        return value
+    if isinstance(hint, type) and issubclass(hint, Config):
+        if not isinstance(value, hint):
+            raise ValueError(f"key '{key}': expected a {hint.__name__}, got {show(value)}")
+        return value
+    if origin is Mapping:
+        return _check_mapping(hint, value, key, bounds)
+    if origin is tuple:
+        return _check_tuple(hint, value, key, bounds)
+    raise TypeError(f"unsupported configuration type {hint!r} for key '{key}'")
+
+
+def _check_mapping(hint: Any, value: Any, key: str, bounds: tuple[float, float] | None) -> Any:
+    key_type, value_type = typing.get_args(hint)
+    if key_type is not str:
+        raise TypeError(f"unsupported mapping key type {key_type!r} for key '{key}'")
+    if not isinstance(value, Mapping):
+        raise ValueError(f"key '{key}': expected a mapping, got {show(value)}")
+    checked = {}
+    for name, item in value.items():
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"key '{key}': expected string keys, got {show(name)}")
+        checked[name] = _check(value_type, item, f"{key}.{name}", bounds)
+    return types.MappingProxyType(checked)
+
+
+def _check_tuple(hint: Any, value: Any, key: str, bounds: tuple[float, float] | None) -> Any:
+    item_types = typing.get_args(hint)
+    if not isinstance(value, tuple | list) or len(value) != len(item_types):
+        raise ValueError(f"key '{key}': expected {len(item_types)} items, got {show(value)}")
+    return tuple(
+        _check(t, v, f"{key}[{i}]", bounds)
+        for i, (t, v) in enumerate(zip(item_types, value, strict=True))
+    )
+
+
+def _optional_of(hint: Any, key: str) -> Any:
+    options = [a for a in typing.get_args(hint) if a is not type(None)]
+    if len(options) != 1 or len(typing.get_args(hint)) != 2:
+        raise TypeError(f"unsupported configuration type {hint!r} for key '{key}'")
+    return options[0]
+
+
+def _kind(value: Any) -> type:
+    """bool, int, float or the value's own type: a choice matches only its own kind."""
+    if isinstance(value, bool):
+        return bool
+    if isinstance(value, numbers.Integral):
+        return int
+    if isinstance(value, numbers.Real):
+        return float
+    return type(value)
+
+
+# -- YAML ----------------------------------------------------------------------------
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, refusing a key given twice in one mapping."""
+
+    def construct_mapping(self, node: Any, deep: bool = False) -> Any:
+        if isinstance(node, yaml.MappingNode):
+            seen: set[Any] = set()
+            for key_node, _ in node.value:
+                if key_node.tag == "tag:yaml.org,2002:merge":
+                    continue  # merged keys may be overridden: that is what a merge is for
+                key = self.construct_object(key_node, deep=True)
+                if not isinstance(key, typing.Hashable):
+                    continue  # PyYAML reports it
+                if key in seen:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"key {show(key)} given twice", key_node.start_mark
+                    )
+                seen.add(key)
+        return super().construct_mapping(node, deep=deep)
 
 
 def load_yaml(path: Path | str) -> dict[str, Any]:
-    """Read a YAML mapping; raise ConfigError naming the file if it is missing or malformed."""
+    """The top-level mapping of the YAML file at ``path``; ConfigError naming the file if it
+    is missing, not UTF-8 text, not valid YAML (with line and column), empty or not a
+    mapping."""
     path = Path(path)
     try:
-        text = path.read_text()
+        raw = path.read_bytes()
     except OSError as exc:
-        raise ConfigError(f"{path}: cannot read configuration file ({exc.strerror})") from None
+        reason = exc.strerror or type(exc).__name__
+        raise ConfigError(f"{path}: cannot read configuration file ({reason})") from None
     try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConfigError(f"{path}: not valid YAML ({exc})") from None
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ConfigError(
+            f"{path}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} at offset {exc.start})"
+        ) from None
+    try:
+        data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader
+    except yaml.MarkedYAMLError as exc:
+        raise ConfigError(_yaml_message(path, exc)) from None
+    except yaml.reader.ReaderError as exc:
+        line, column = _line_column(text, exc.position)
+        char = exc.character
+        code = f"#x{char:04x}" if isinstance(char, int) else show(char)
+        raise ConfigError(
+            f"{path}: line {line}, column {column}: not valid YAML: "
+            f"unacceptable character {code} ({exc.reason})"
+        ) from None
+    except (yaml.YAMLError, ValueError, TypeError, AttributeError, RecursionError) as exc:
+        # PyYAML's constructors raise plain Python errors on a few malformed scalars
+        # (e.g. the timestamp 2020-13-45, or a tagged !!float x).
+        raise ConfigError(f"{path}: not valid YAML ({_one_line(str(exc))})") from None
+    if data is None:
+        raise ConfigError(f"{path}: empty configuration file; expected a mapping of keys")
     if not isinstance(data, dict):
-        raise ConfigError(f"{path}: expected a mapping of keys at the top level")
+        raise ConfigError(
+            f"{path}: expected a mapping of keys at the top level, got {show(data)}"
+        )
     return data
 
 
+def _yaml_message(path: Path, exc: yaml.MarkedYAMLError) -> str:
+    mark = exc.problem_mark or exc.context_mark
+    where = f" line {mark.line + 1}, column {mark.column + 1}:" if mark is not None else ""
+    what = exc.problem or exc.context or "parse error"
+    return f"{path}:{where} not valid YAML: {_one_line(what)}"
+
+
+def _line_column(text: str, position: int) -> tuple[int, int]:
+    line = text.count("\n", 0, position) + 1
+    return line, position - (text.rfind("\n", 0, position) + 1) + 1
+
+
+def _one_line(message: str) -> str:
+    return " ".join(message.split())
+
+
 def load_config(cls: type[T], path: Path | str) -> T:
-    """Load the YAML file at ``path`` into the dataclass ``cls``, validating every key."""
+    """Load the YAML file at ``path`` into the ``Config`` class ``cls``, checking every key."""
     return build(cls, load_yaml(path), source=str(path))
 
 
 def build(cls: type[T], data: Mapping[str, Any], source: str, prefix: str = "") -> T:
-    """Build dataclass ``cls`` from ``data``; errors name ``source`` and the dotted key path."""
+    """Build the ``Config`` class ``cls`` from ``data``; errors are ConfigErrors naming
+    ``source`` and the dotted key path (``prefix`` is the path of ``data`` itself)."""
+    if not (isinstance(cls, type) and issubclass(cls, Config) and dataclasses.is_dataclass(cls)):
+        raise TypeError(f"{cls!r} is not a Config dataclass")
     if not isinstance(data, Mapping):
-        raise ConfigError(f"{source}: key '{prefix.rstrip('.')}': expected a mapping")
+        where = f"key '{prefix.rstrip('.')}': " if prefix else ""
+        raise ConfigError(f"{source}: {where}expected a mapping, got {show(data)}")
     hints = typing.get_type_hints(cls)
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
-    unknown = sorted(set(data) - set(fields))
+    fields = [f.name for f in dataclasses.fields(cls) if f.init]
+    unknown = sorted((key for key in data if key not in fields), key=str)
     if unknown:
         raise ConfigError(
             f"{source}: unknown key '{prefix}{unknown[0]}'; expected one of: " + ", ".join(fields)
         )
     kwargs: dict[str, Any] = {}
-    for name, f in fields.items():
-        key = prefix + name
+    for name in fields:
         if name not in data:
-            raise ConfigError(f"{source}: missing key '{key}'")
-        kwargs[name] = _convert(hints[name], data[name], f.metadata, source, key)
+            raise ConfigError(f"{source}: missing key '{prefix}{name}'")
+        kwargs[name] = _from_yaml(hints[name], data[name], source, prefix + name)
     try:
         return cls(**kwargs)
+    except ConfigError:
+        raise
     except ValueError as exc:
         raise ConfigError(f"{source}: {_prefixed(str(exc), prefix)}") from None
 
 
+def _from_yaml(hint: Any, value: Any, source: str, key: str) -> Any:
+    """Structure from YAML: sub-mappings of nested classes built, lists made tuples; the
+    values themselves are checked by the classes."""
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        if value is None:
+            return None
+        hint = _optional_of(hint, key)
+    origin = typing.get_origin(hint)
+    if isinstance(hint, type) and dataclasses.is_dataclass(hint):
+        if not isinstance(value, Mapping):
+            raise ConfigError(f"{source}: key '{key}': expected a mapping, got {show(value)}")
+        return build(hint, value, source, prefix=key + ".")
+    if origin is Mapping and isinstance(value, Mapping):
+        if not all(isinstance(name, str) for name in value):
+            return value  # the class names the bad key
+        item = typing.get_args(hint)[1]
+        return {name: _from_yaml(item, v, source, f"{key}.{name}") for name, v in value.items()}
+    if origin is tuple and isinstance(value, list):
+        return tuple(value)
+    return value
+
+
 def _prefixed(message: str, prefix: str) -> str:
     return message.replace("key '", f"key '{prefix}", 1) if prefix else message
-
-
-def _convert(hint: Any, value: Any, metadata: Mapping[str, Any], source: str, key: str) -> Any:
-    origin = typing.get_origin(hint)
-    if origin in (typing.Union, types.UnionType):
-        options = [a for a in typing.get_args(hint) if a is not type(None)]
-        if value is None and len(options) < len(typing.get_args(hint)):
-            return None
-        return _convert(options[0], value, metadata, source, key)
-    if origin is Literal:
-        choices = typing.get_args(hint)
-        if value not in choices:
-            allowed = ", ".join(repr(c) for c in choices)
-            raise ConfigError(f"{source}: key '{key}': expected one of {allowed}, got {value!r}")
-        return value
-    if dataclasses.is_dataclass(hint):
-        return build(hint, value, source, prefix=key + ".")
-    if origin is Mapping:
-        key_type, value_type = typing.get_args(hint)
-        if key_type is not str:
-            raise TypeError(f"unsupported mapping key type {key_type!r} for key '{key}'")
-        if not isinstance(value, Mapping):
-            raise ConfigError(f"{source}: key '{key}': expected a mapping, got {value!r}")
-        converted = {}
-        for name, item in value.items():
-            if not isinstance(name, str) or not name:
-                raise ConfigError(f"{source}: key '{key}': expected string keys, got {name!r}")
-            converted[name] = _convert(value_type, item, {}, source, f"{key}.{name}")
-        return converted
-    if hint is bool:
-        if not isinstance(value, bool):
-            raise ConfigError(f"{source}: key '{key}': expected true or false, got {value!r}")
-        return value
-    if hint in (int, float):
-        ok_type = isinstance(value, int) if hint is int else isinstance(value, int | float)
-        if isinstance(value, bool) or not ok_type:
-            kind = "an integer" if hint is int else "a number"
-            raise ConfigError(f"{source}: key '{key}': expected {kind}, got {value!r}")
-        low, high = metadata.get("range", (-float("inf"), float("inf")))
-        if not low <= value <= high:
-            raise ConfigError(
-                f"{source}: key '{key}': expected a number in [{low}, {high}], got {value!r}"
-            )
-        return hint(value)
-    if hint is str:
-        if not isinstance(value, str) or not value:
-            raise ConfigError(f"{source}: key '{key}': expected a non-empty string, got {value!r}")
-        return value
-    raise TypeError(f"unsupported configuration type {hint!r} for key '{key}'")
-
-
-@dataclass(frozen=True)
-class SensorProfile:
-    """Geometry of a visuotactile sensor's working image (after the driver's crop/resize).
-
-    Positions in the sensor frame S are pixels times ``mm_per_px`` from the image centre.
-    ``marker_pitch_mm``: printed marker pitch (None: no markers). ``estimator``: the sensor's
-    estimator configuration (a name in configs/estimators/ or a YAML path), used whenever a
-    caller names none.
-    """
-
-    name: str
-    width_px: int = number(16, 4096)
-    height_px: int = number(16, 4096)
-    mm_per_px: float = number(1e-4, 1.0)
-    fps_hz: float = number(1, 1000)
-    marker_pitch_mm: float | None = number(0.1, 20)
-    estimator: str
-    description: str
-
-
-def sensor_profile(name_or_path: str) -> SensorProfile:
-    """Load a sensor profile by name (``configs/sensors/NAME.yaml``) or by file path."""
-    return load_config(SensorProfile, resolve_config_path(name_or_path, "sensors"))
 
 
 def resolve_config_path(name_or_path: str, folder: str) -> Path:

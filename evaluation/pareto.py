@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controller.tactile import EstimatorConfig, TactileEstimator
-from drivers.config import sensor_profile
+from drivers.tactile.profile import sensor_profile
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import (
     estimate_frames,

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from drivers.config import sensor_profile
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
+from drivers.tactile.profile import sensor_profile
 
 NOMINAL_EFFECTS = ImageEffects(noise_grey=2.0)
 
@@ -18,13 +18,10 @@ def make_renderer(
     """A seeded renderer at the sensor's working image size, with printed markers at the
     sensor's pitch (none for a gel without markers)."""
     profile = sensor_profile(sensor)
-    pitch_px = (
-        None if profile.marker_pitch_mm is None else profile.marker_pitch_mm / profile.mm_per_px
-    )
     return GelRenderer(
         width_px=profile.width_px,
         height_px=profile.height_px,
-        pitch_px=pitch_px,
+        pitch_px=profile.marker_pitch_px,
         effects=effects,
         rng=np.random.default_rng(seed),
     )

@@ -4,16 +4,10 @@ from __future__ import annotations
 
 from drivers.config import load_config, resolve_config_path
 from drivers.sim.gel.model import GelModel
-from drivers.sim.gel.profile import SHAPES, GelProfile
+from drivers.sim.gel.profile import SHAPES, gel_profile
 from drivers.sim.scenes.jig import JigConfig
 
 SENSORS = ("gelsight_mini", "digit")
-
-
-def gel_profile(sensor: str) -> GelProfile:
-    """The simulated gel of a sensor: configs/sensors/SENSOR_gel.yaml (or a YAML path)."""
-    path = resolve_config_path(sensor if sensor.endswith(".yaml") else f"{sensor}_gel", "sensors")
-    return load_config(GelProfile, path)
 
 
 def gel_model(sensor: str, shape: str) -> GelModel:

@@ -42,7 +42,7 @@ from controller.tactile.settings import (
 )
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
-from drivers.config import SensorProfile, sensor_profile
+from drivers.tactile.profile import SensorProfile, sensor_profile
 
 _ASPECT_TOLERANCE = 0.02
 

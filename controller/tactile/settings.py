@@ -1,7 +1,7 @@
 """Estimator configuration (``configs/estimators/*.yaml``), as frozen validated dataclasses.
 
-Every key is required (see drivers/config.py); ``null`` means "the library's default"
-where a field allows it.
+Declared and checked as every configuration is (drivers/config.py); every key is required in
+a file, and ``null`` means "the library's default" where a field allows it.
 """
 
 from __future__ import annotations
@@ -9,19 +9,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from drivers.config import (
-    ConfigError,
-    SensorProfile,
-    load_config,
-    number,
-    resolve_config_path,
-)
+from drivers.config import Config, ConfigError, load_config, number, resolve_config_path
+from drivers.tactile.profile import SensorProfile
 
 FlowMethod = Literal["dis", "farneback", "markers"]
 
 
 @dataclass(frozen=True)
-class DisParams:
+class DisParams(Config):
     """OpenCV DIS optical flow: a preset, then optional overrides of its tunables."""
 
     preset: Literal["ultrafast", "fast", "medium"]
@@ -49,24 +44,20 @@ class DisParams:
 
 
 @dataclass(frozen=True)
-class FarnebackParams:
+class FarnebackParams(Config):
     """OpenCV Farneback dense flow (cv2.calcOpticalFlowFarneback's arguments)."""
 
     pyr_scale: float = number(0.1, 0.9)
     levels: int = number(1, 10)
     winsize: int = number(3, 128)
     iterations: int = number(1, 50)
-    poly_n: int = number(5, 7)
+    poly_n: Literal[5, 7]
     poly_sigma: float = number(0.5, 3.0)
     gaussian_window: bool
 
-    def __post_init__(self) -> None:
-        if self.poly_n not in (5, 7):
-            raise ValueError(f"key 'poly_n': expected 5 or 7, got {self.poly_n}")
-
 
 @dataclass(frozen=True)
-class MarkerParams:
+class MarkerParams(Config):
     """Sparse tracking of the gel's printed markers with pyramidal Lucas-Kanade.
 
     Markers are found once in the reference (dark blobs against the smoothed background),
@@ -94,7 +85,7 @@ class MarkerParams:
 
 
 @dataclass(frozen=True)
-class FlowConfig:
+class FlowConfig(Config):
     """How the displacement field is measured from images.
 
     ``color``: ``gray`` runs the flow once on the luminance; ``per_channel`` runs it on each
@@ -113,7 +104,7 @@ class FlowConfig:
 
 
 @dataclass(frozen=True)
-class RezeroConfig:
+class RezeroConfig(Config):
     """When the zeroing reference should be refreshed after gross slip
     (controller/tactile/slip.py: ``RezeroPolicy``).
 
@@ -131,7 +122,7 @@ class RezeroConfig:
 
 
 @dataclass(frozen=True)
-class SlipConfig:
+class SlipConfig(Config):
     """The slip detector (controller/tactile/slip.py: ``SlipDetector``).
 
     It watches the divergence-free part of the zeroed field (rotational + harmonic NHHD
@@ -176,7 +167,7 @@ class SlipConfig:
 
 
 @dataclass(frozen=True)
-class DipoleGrid:
+class DipoleGrid(Config):
     """The grid the dipole works on: ``cols`` x ``rows`` cells over the whole image, each a
     block of the field's cells (so each must divide the field grid's count)."""
 
@@ -185,7 +176,7 @@ class DipoleGrid:
 
 
 @dataclass(frozen=True)
-class EstimatorConfig:
+class EstimatorConfig(Config):
     """The whole frame-to-wrench pipeline.
 
     ``stride_px``: grid cell size in working-image pixels (the grid has round(W/stride) x

@@ -32,13 +32,14 @@ Policy, applied by the arm driver to every command whatever the caller sends:
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 from drivers.base import Pose, Twist
-from drivers.validation import check_range
+from drivers.config import Config, number
 
 _DOWN_B = np.array([0.0, 0.0, -1.0])
 _ROUNDING_RAD = 1e-12  # tilts this close to the limit count as within (float round-off)
@@ -46,36 +47,29 @@ _TWIST_TILT_SAMPLES = 8  # points along the velocity horizon at which the tilt i
 
 
 @dataclass(frozen=True)
-class SafetyEnvelope:
+class SafetyEnvelope(Config):
     """Limits on the TCP: a box in B (m), speeds, the step per servo command, the tilt."""
 
-    x_min_m: float
-    x_max_m: float
-    y_min_m: float
-    y_max_m: float
-    z_min_m: float
-    z_max_m: float
-    max_speed_m_s: float
-    max_angular_speed_rad_s: float
-    max_step_m: float
-    max_step_rad: float
-    max_tilt_rad: float
+    x_min_m: float = number(-2.0, 2.0)
+    x_max_m: float = number(-2.0, 2.0)
+    y_min_m: float = number(-2.0, 2.0)
+    y_max_m: float = number(-2.0, 2.0)
+    z_min_m: float = number(-2.0, 2.0)
+    z_max_m: float = number(-2.0, 2.0)
+    max_speed_m_s: float = number(1e-4, 1.0)
+    max_angular_speed_rad_s: float = number(1e-4, math.pi)
+    max_step_m: float = number(1e-6, 0.05)
+    max_step_rad: float = number(1e-6, 0.5)
+    max_tilt_rad: float = number(0.0, math.pi / 2)
 
     def __post_init__(self) -> None:
         for axis in "xyz":
             low, high = f"{axis}_min_m", f"{axis}_max_m"
-            check_range(low, getattr(self, low), -2.0, 2.0)
-            check_range(high, getattr(self, high), -2.0, 2.0)
             if not getattr(self, low) < getattr(self, high):
                 raise ValueError(
                     f"key '{high}': expected a number greater than {low} "
                     f"({getattr(self, low)!r}), got {getattr(self, high)!r}"
                 )
-        check_range("max_speed_m_s", self.max_speed_m_s, 1e-4, 1.0)
-        check_range("max_angular_speed_rad_s", self.max_angular_speed_rad_s, 1e-4, math.pi)
-        check_range("max_step_m", self.max_step_m, 1e-6, 0.05)
-        check_range("max_step_rad", self.max_step_rad, 1e-6, 0.5)
-        check_range("max_tilt_rad", self.max_tilt_rad, 0.0, math.pi / 2)
 
     @property
     def box_min_m(self) -> np.ndarray:
@@ -84,6 +78,18 @@ class SafetyEnvelope:
     @property
     def box_max_m(self) -> np.ndarray:
         return np.array([self.x_max_m, self.y_max_m, self.z_max_m])
+
+
+def require_finite(name: str, values: Iterable[float]) -> None:
+    """Refuse a command holding anything but finite numbers (ValueError naming it), before
+    it reaches the envelope's clamps, which would carry a NaN through."""
+    values = tuple(values)
+    try:
+        finite = all(math.isfinite(float(v)) for v in values)
+    except (TypeError, ValueError):
+        finite = False
+    if not finite:
+        raise ValueError(f"{name}: expected finite numbers, got {values!r}")
 
 
 def rotation_from_rpy(rpy_rad: tuple[float, float, float] | np.ndarray) -> Rotation:

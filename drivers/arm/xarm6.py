@@ -46,17 +46,18 @@ from drivers.arm.envelope import (
     SafetyEnvelope,
     clamp_pose,
     clamp_twist,
+    require_finite,
     rotation_from_rpy,
     timed_servo_target,
 )
 from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
+from drivers.config import Config, number
 from drivers.errors import (
     DeviceError,
     DeviceFaultError,
     DeviceNotConnectedError,
     DeviceTimeoutError,
 )
-from drivers.validation import check_range
 
 _LOG = logging.getLogger(__name__)
 
@@ -72,7 +73,7 @@ _ENTRY_TOLERANCE_RAD = 1e-2
 
 
 @dataclass(frozen=True)
-class TcpConfig:
+class TcpConfig(Config):
     """The tool on the flange (compliant wrist + gripper + plug).
 
     ``offset_*``: pose of the TCP (frame T) in the flange frame, xyz in m, rpy in rad.
@@ -80,30 +81,20 @@ class TcpConfig:
     of mass in the flange frame, m.
     """
 
-    offset_x_m: float
-    offset_y_m: float
-    offset_z_m: float
-    offset_roll_rad: float
-    offset_pitch_rad: float
-    offset_yaw_rad: float
-    load_mass_kg: float
-    load_com_x_m: float
-    load_com_y_m: float
-    load_com_z_m: float
-
-    def __post_init__(self) -> None:
-        for axis in "xyz":
-            check_range(f"offset_{axis}_m", getattr(self, f"offset_{axis}_m"), -0.5, 0.5)
-            check_range(f"load_com_{axis}_m", getattr(self, f"load_com_{axis}_m"), -0.5, 0.5)
-        for angle in ("roll", "pitch", "yaw"):
-            check_range(
-                f"offset_{angle}_rad", getattr(self, f"offset_{angle}_rad"), -math.pi, math.pi
-            )
-        check_range("load_mass_kg", self.load_mass_kg, 0.0, 5.0)  # xArm6 payload: 5 kg
+    offset_x_m: float = number(-0.5, 0.5)
+    offset_y_m: float = number(-0.5, 0.5)
+    offset_z_m: float = number(-0.5, 0.5)
+    offset_roll_rad: float = number(-math.pi, math.pi)
+    offset_pitch_rad: float = number(-math.pi, math.pi)
+    offset_yaw_rad: float = number(-math.pi, math.pi)
+    load_mass_kg: float = number(0.0, 5.0)  # xArm6 payload: 5 kg
+    load_com_x_m: float = number(-0.5, 0.5)
+    load_com_y_m: float = number(-0.5, 0.5)
+    load_com_z_m: float = number(-0.5, 0.5)
 
 
 @dataclass(frozen=True)
-class XArm6Config:
+class XArm6Config(Config):
     """Configuration of the xArm6 driver (``configs/robot/xarm6.yaml``).
 
     ``ip``: the control box's IPv4 address. ``servo_rate_hz``: nominal servo streaming rate
@@ -113,9 +104,9 @@ class XArm6Config:
     """
 
     ip: str
-    servo_rate_hz: float
-    velocity_timeout_s: float
-    move_timeout_s: float
+    servo_rate_hz: float = number(50, 200)
+    velocity_timeout_s: float = number(0.01, 1.0)
+    move_timeout_s: float = number(0.1, 300.0)
     tcp: TcpConfig
     envelope: SafetyEnvelope
     name: str = "xarm6"
@@ -127,15 +118,6 @@ class XArm6Config:
             raise ValueError(
                 f"key 'ip': expected an IPv4 address like '192.168.1.185', got {self.ip!r}"
             ) from None
-        check_range("servo_rate_hz", self.servo_rate_hz, 50, 200)
-        check_range("velocity_timeout_s", self.velocity_timeout_s, 0.01, 1.0)
-        check_range("move_timeout_s", self.move_timeout_s, 0.1, 300.0)
-        if not isinstance(self.tcp, TcpConfig):
-            raise ValueError(f"key 'tcp': expected a TcpConfig, got {self.tcp!r}")
-        if not isinstance(self.envelope, SafetyEnvelope):
-            raise ValueError(f"key 'envelope': expected a SafetyEnvelope, got {self.envelope!r}")
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"key 'name': expected a non-empty string, got {self.name!r}")
 
 
 class XArm6(ContextManagedDevice):
@@ -249,7 +231,7 @@ class XArm6(ContextManagedDevice):
     def move_to(self, target: Pose, speed_m_s: float, wait: bool = True) -> None:
         """Linear move (mode 0) to ``target`` clamped into the envelope, at ``speed_m_s``
         limited to the envelope's maximum; waits up to ``move_timeout_s`` when ``wait``."""
-        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        require_finite("target", (*target.xyz_m, *target.rpy_rad))
         if not math.isfinite(speed_m_s) or speed_m_s <= 0:
             raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
         self._prepare_motion()
@@ -267,7 +249,7 @@ class XArm6(ContextManagedDevice):
     def servo_pose(self, target: Pose) -> None:
         """Stream one servo target (mode 1), clamped into the envelope and stepped from the
         previous command by at most the step bounds (and speed x elapsed time)."""
-        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        require_finite("target", (*target.xyz_m, *target.rpy_rad))
         self._prepare_motion()
         self._enter_mode(MODE_SERVO)
         env = self.config.envelope
@@ -290,7 +272,7 @@ class XArm6(ContextManagedDevice):
     def move_velocity(self, twist: Twist, duration_s: float) -> None:
         """Cartesian velocity (mode 5, in B) held for at most ``duration_s`` (capped at
         ``velocity_timeout_s``), after which the controller stops by itself."""
-        _require_finite("twist", (*twist.linear_m_s, *twist.angular_rad_s))
+        require_finite("twist", (*twist.linear_m_s, *twist.angular_rad_s))
         if not math.isfinite(duration_s) or duration_s <= 0:
             raise ValueError(
                 f"duration_s: expected a positive number (the SDK reads 0 as 'never stop'), "
@@ -493,15 +475,6 @@ class XArm6(ContextManagedDevice):
         code = self._api.set_state(STATE_STOP)
         if code != 0:
             _LOG.warning("%s: safe stop failed: %s", self.name, xarm_codes.describe_api_code(code))
-
-
-def _require_finite(name: str, values: Sequence[float]) -> None:
-    try:
-        finite = all(math.isfinite(float(v)) for v in values)
-    except (TypeError, ValueError):
-        finite = False
-    if not finite:
-        raise ValueError(f"{name}: expected finite numbers, got {tuple(values)!r}")
 
 
 def _sdk_pose(pose: Pose) -> list[float]:

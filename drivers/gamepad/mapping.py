@@ -25,19 +25,20 @@ Action values are dimensionless in [-1, 1]; the teleoperation layer turns them i
 
 from __future__ import annotations
 
+import typing
 from collections.abc import Mapping
 from dataclasses import dataclass
-from types import MappingProxyType
+from typing import Literal
 
-from drivers.validation import check_choice, check_range
+from drivers.config import Config, number
 
-STICK_AXES = ("leftx", "lefty", "rightx", "righty")
-TRIGGER_AXES = ("lefttrigger", "righttrigger")
-AXIS_NAMES = STICK_AXES + TRIGGER_AXES
-BUTTON_NAMES = (
+AxisName = Literal["leftx", "lefty", "rightx", "righty", "lefttrigger", "righttrigger"]
+ButtonName = Literal[
     "a", "b", "x", "y", "back", "guide", "start", "leftstick", "rightstick",
     "leftshoulder", "rightshoulder", "dpup", "dpdown", "dpleft", "dpright",
-)  # fmt: skip
+]  # fmt: skip
+AXIS_NAMES: tuple[str, ...] = typing.get_args(AxisName)
+BUTTON_NAMES: tuple[str, ...] = typing.get_args(ButtonName)
 SAFETY_BUTTONS = ("deadman", "estop", "hand_back")
 """Button actions every mapping must bind: ``deadman`` (motion commands count only while it
 is held), ``estop`` (request a stop; a software request, not a safety-rated e-stop) and
@@ -48,27 +49,23 @@ MAX_DEAD_ZONE = 0.5
 
 
 @dataclass(frozen=True)
-class AxisBinding:
+class AxisBinding(Config):
     """One analog action: the SDL axis it reads, whether its sign is flipped, and its gain.
 
     ``scale`` multiplies the shaped value, 0 < scale <= 1, so actions stay in [-1, 1].
     """
 
-    axis: str
+    axis: AxisName
     invert: bool = False
-    scale: float = 1.0
+    scale: float = number(0.0, 1.0, default=1.0)
 
     def __post_init__(self) -> None:
-        check_choice("axis", self.axis, AXIS_NAMES)
-        if not isinstance(self.invert, bool):
-            raise ValueError(f"key 'invert': expected true or false, got {self.invert!r}")
-        check_range("scale", self.scale, 0.0, 1.0)
         if self.scale == 0:
             raise ValueError("key 'scale': expected a number in (0, 1], got 0")
 
 
 @dataclass(frozen=True)
-class GamepadConfig:
+class GamepadConfig(Config):
     """The pad's mapping.
 
     ``axes``: action name -> ``AxisBinding`` (e.g. ``vx``, ``vy``, ``vz``, ``wz``).
@@ -79,29 +76,20 @@ class GamepadConfig:
     """
 
     axes: Mapping[str, AxisBinding]
-    buttons: Mapping[str, str]
-    dead_zone: float = 0.15
+    buttons: Mapping[str, ButtonName]
+    dead_zone: float = number(0.0, MAX_DEAD_ZONE, default=0.15)
     name: str = "gamepad"
 
     def __post_init__(self) -> None:
-        check_range("dead_zone", self.dead_zone, 0.0, MAX_DEAD_ZONE)
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"key 'name': expected a non-empty string, got {self.name!r}")
-        for action, binding in self.axes.items():
+        for action in self.axes:
             _check_action_name(f"axes.{action}", action)
-            if not isinstance(binding, AxisBinding):
-                raise ValueError(f"key 'axes.{action}': expected an AxisBinding, got {binding!r}")
         _check_distinct("axes", {action: b.axis for action, b in self.axes.items()})
-        for action, button in self.buttons.items():
+        for action in self.buttons:
             _check_action_name(f"buttons.{action}", action)
-            check_choice(f"buttons.{action}", button, BUTTON_NAMES)
         missing = [action for action in SAFETY_BUTTONS if action not in self.buttons]
         if missing:
             raise ValueError(f"key 'buttons': missing required action(s) {', '.join(missing)}")
         _check_distinct("buttons", dict(self.buttons))
-        # Freeze the tables too: a frozen dataclass holding mutable dicts is not frozen.
-        object.__setattr__(self, "axes", MappingProxyType(dict(self.axes)))
-        object.__setattr__(self, "buttons", MappingProxyType(dict(self.buttons)))
 
 
 def axis_value(raw: int, binding: AxisBinding, dead_zone: float) -> float:

@@ -21,28 +21,21 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, TypeVar
+from typing import Any, Literal, TypeVar
 
 from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
+from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.transport import ModbusRtuTransport, RegisterTransport, XArmToolTransport
-from drivers.validation import check_choice, check_range
 
 T = TypeVar("T")
 
-TRANSPORTS = ("serial", "xarm_tool")
-BAUDRATES = (9600, 19200, 38400, 57600, 115200)
 _POLL_PERIOD_S = 0.02  # status polling while waiting for activation or motion
 
 
-def _check_int(name: str, value: object, low: int, high: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ValueError(f"key '{name}': expected an integer in [{low}, {high}], got {value!r}")
-
-
 @dataclass(frozen=True)
-class HandEConfig:
+class HandEConfig(Config):
     """Configuration of the Hand-E driver (configs/gripper/hande.yaml).
 
     ``transport``: ``"serial"`` (USB-RS485 adapter at ``port``) or ``"xarm_tool"`` (the
@@ -52,38 +45,24 @@ class HandEConfig:
     """
 
     name: str = "hande"
-    transport: str = "serial"
+    transport: Literal["serial", "xarm_tool"] = "serial"
     port: str = "/dev/ttyUSB0"
-    baudrate: int = 115200
-    slave_id: int = 9
-    timeout_s: float = 0.1
-    retries: int = 2
-    max_rate_hz: float = 200.0
-    activation_timeout_s: float = 5.0
-    open_count: int = 0
-    closed_count: int = 255
-    stroke_m: float = 0.050
+    baudrate: Literal[9600, 19200, 38400, 57600, 115200] = 115200
+    slave_id: int = number(1, 247, default=9)
+    timeout_s: float = number(0.005, 5.0, default=0.1)
+    retries: int = number(0, 10, default=2)
+    max_rate_hz: float = number(1.0, 200.0, default=200.0)
+    activation_timeout_s: float = number(0.1, 30.0, default=5.0)
+    open_count: int = number(0, 254, default=0)
+    closed_count: int = number(1, 255, default=255)
+    stroke_m: float = number(0.001, 0.2, default=0.050)
 
     def __post_init__(self) -> None:
-        if not isinstance(self.name, str) or not self.name:
-            raise ValueError(f"key 'name': expected a non-empty string, got {self.name!r}")
-        check_choice("transport", self.transport, TRANSPORTS)
-        if self.transport == "serial" and (not isinstance(self.port, str) or not self.port):
-            raise ValueError(f"key 'port': expected a serial device path, got {self.port!r}")
-        check_choice("baudrate", self.baudrate, BAUDRATES)
-        _check_int("slave_id", self.slave_id, 1, 247)
-        check_range("timeout_s", self.timeout_s, 0.005, 5.0)
-        _check_int("retries", self.retries, 0, 10)
-        check_range("max_rate_hz", self.max_rate_hz, 1.0, 200.0)
-        check_range("activation_timeout_s", self.activation_timeout_s, 0.1, 30.0)
-        _check_int("open_count", self.open_count, 0, 254)
-        _check_int("closed_count", self.closed_count, 1, 255)
         if self.closed_count <= self.open_count:
             raise ValueError(
                 f"key 'closed_count': expected more than open_count={self.open_count}, "
                 f"got {self.closed_count}"
             )
-        check_range("stroke_m", self.stroke_m, 0.001, 0.2)
 
 
 class HandE(ContextManagedDevice):

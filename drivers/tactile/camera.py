@@ -33,20 +33,19 @@ import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Literal, Protocol
 
 import cv2
 import numpy as np
 
 from drivers.base import ContextManagedDevice, TactileFrame
+from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
-from drivers.tactile.decode import JPEG_DOWNSCALES, FrameProcessor, cropped_size
+from drivers.tactile.decode import FrameProcessor, JpegDownscale, cropped_size
 from drivers.tactile.device_lookup import find_capture_node
-from drivers.validation import check_choice, check_range
 
 log = logging.getLogger(__name__)
 
-MODELS = ("gelsight_mini", "digit")
 MAX_V4L2_BUFFERS = 10  # MAX_V4L_BUFFERS in OpenCV's cap_v4l.cpp
 _JOIN_TIMEOUT_S = 2.0
 
@@ -77,13 +76,8 @@ def open_v4l2(node: str) -> Capture:
     return cv2.VideoCapture(node, cv2.CAP_V4L2)
 
 
-def _check_int(name: str, value: object, low: int, high: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise ValueError(f"key '{name}': expected an integer in [{low}, {high}], got {value!r}")
-
-
 @dataclass(frozen=True)
-class TactileCameraConfig:
+class TactileCameraConfig(Config):
     """Configuration of one tactile camera (see configs/sensors/*_camera.yaml).
 
     ``by_id_pattern``: fnmatch pattern for the camera's name in ``by_id_dir``; put the serial
@@ -101,39 +95,23 @@ class TactileCameraConfig:
     ``connect_timeout_s``: how long ``connect()`` waits for the first frame.
     """
 
-    model: str
+    model: Literal["gelsight_mini", "digit"]
     by_id_pattern: str
-    width_px: int
-    height_px: int
-    frame_rate_hz: float
-    output_width_px: int
-    output_height_px: int
+    width_px: int = number(16, 8192)
+    height_px: int = number(16, 8192)
+    frame_rate_hz: float = number(1, 1000)
+    output_width_px: int = number(8, 8192)
+    output_height_px: int = number(8, 8192)
     name: str = "tactile_camera"
     by_id_dir: str = "/dev/v4l/by-id"
-    crop_border_fraction: float = 0.0
-    jpeg_downscale: int = 1
-    buffer_count: int = 1
-    frozen_frame_count: int = 25
-    max_read_failures: int = 5
-    connect_timeout_s: float = 3.0
+    crop_border_fraction: float = number(0.0, 0.49, default=0.0)
+    jpeg_downscale: JpegDownscale = 1
+    buffer_count: int = number(1, MAX_V4L2_BUFFERS, default=1)
+    frozen_frame_count: int = number(2, 100_000, default=25)
+    max_read_failures: int = number(1, 10_000, default=5)
+    connect_timeout_s: float = number(0.05, 60.0, default=3.0)
 
     def __post_init__(self) -> None:
-        check_choice("model", self.model, MODELS)
-        for key in ("by_id_pattern", "name", "by_id_dir"):
-            value = getattr(self, key)
-            if not isinstance(value, str) or not value:
-                raise ValueError(f"key '{key}': expected a non-empty string, got {value!r}")
-        _check_int("width_px", self.width_px, 16, 8192)
-        _check_int("height_px", self.height_px, 16, 8192)
-        check_range("frame_rate_hz", self.frame_rate_hz, 1, 1000)
-        _check_int("output_width_px", self.output_width_px, 8, 8192)
-        _check_int("output_height_px", self.output_height_px, 8, 8192)
-        check_range("crop_border_fraction", self.crop_border_fraction, 0.0, 0.49)
-        check_choice("jpeg_downscale", self.jpeg_downscale, JPEG_DOWNSCALES)
-        _check_int("buffer_count", self.buffer_count, 1, MAX_V4L2_BUFFERS)
-        _check_int("frozen_frame_count", self.frozen_frame_count, 2, 100_000)
-        _check_int("max_read_failures", self.max_read_failures, 1, 10_000)
-        check_range("connect_timeout_s", self.connect_timeout_s, 0.05, 60.0)
         crop_w, crop_h = cropped_size(
             self.width_px, self.height_px, self.crop_border_fraction, self.jpeg_downscale
         )

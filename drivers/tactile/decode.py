@@ -25,12 +25,15 @@ Geometry, all in image pixels (x along columns, y along rows):
 from __future__ import annotations
 
 import math
+import typing
 from dataclasses import dataclass
+from typing import Literal
 
 import cv2
 import numpy as np
 
-JPEG_DOWNSCALES = (1, 2, 4, 8)
+JpegDownscale = Literal[1, 2, 4, 8]
+JPEG_DOWNSCALES = typing.get_args(JpegDownscale)
 _IMREAD_FLAGS = {
     1: cv2.IMREAD_COLOR,
     2: cv2.IMREAD_REDUCED_COLOR_2,

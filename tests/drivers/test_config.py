@@ -1,12 +1,22 @@
+import dataclasses
+import importlib
+import math
+import pkgutil
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Literal
 
 import pytest
 import yaml
 
+import drivers.config as config_module
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
-from drivers.config import ConfigError, build, number, sensor_profile
+from drivers.config import Config, ConfigError, build, load_config, load_yaml, number
+from drivers.gripper.hande import HandEConfig
+from drivers.sim.scenes.jig import JigConfig
+from drivers.tactile.profile import sensor_profile
+from tests.drivers.device_configs import load_device_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -104,12 +114,12 @@ def test_missing_and_malformed_files(tmp_path):
 
 
 @dataclass(frozen=True)
-class Gains:
+class Gains(Config):
     kp: float = number(0, 10)
 
 
 @dataclass(frozen=True)
-class Table:
+class Table(Config):
     gains: Mapping[str, Gains]
 
 
@@ -134,3 +144,205 @@ def test_a_dipole_grid_that_does_not_divide_the_sensors_field_grid_is_refused(tm
     message = "dipole_grid 5 x 4 must divide the estimator grid of 16 x 12 cells"
     with pytest.raises(ConfigError, match=message):
         sensor_estimator(sensor_profile("gelsight_mini"), str(bad))
+
+
+# -- one mechanism: the same declarations checked from YAML and in code ----------------
+
+
+@dataclass(frozen=True)
+class Knobs(Config):
+    count: int = number(1, 100)
+    slope: float = number(-1.0, 1.0)
+    unbounded: float
+    mode: Literal["fast", "slow"]
+    baud: Literal[9600, 115200]
+    enabled: bool
+    label: str
+    gain: Gains | None
+    rgb: tuple[float, float, float] = number(0.0, 1.0)
+    weights: Mapping[str, float] = number(0.0, 10.0)
+
+
+GOOD_KNOBS = {
+    "count": 3,
+    "slope": 0.5,
+    "unbounded": -1e9,
+    "mode": "fast",
+    "baud": 9600,
+    "enabled": False,
+    "label": "x",
+    "gain": {"kp": 2},
+    "rgb": [0.1, 0.2, 0.3],
+    "weights": {"a": 1},
+}
+
+
+def knobs_in_code(**change):
+    values = {**GOOD_KNOBS, "gain": Gains(2), **change}
+    return Knobs(**values)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"slope": True}, "key 'slope': expected a number in [-1.0, 1.0], got True"),
+        ({"count": True}, "key 'count': expected an integer in [1, 100], got True"),
+        ({"count": 1.5}, "key 'count': expected an integer in [1, 100], got 1.5"),
+        ({"count": 2.0}, "key 'count': expected an integer in [1, 100], got 2.0"),
+        ({"count": 0}, "key 'count': expected an integer in [1, 100], got 0"),
+        ({"count": "3"}, "key 'count': expected an integer in [1, 100], got '3'"),
+        ({"slope": math.nan}, "key 'slope': expected a number in [-1.0, 1.0], got nan"),
+        ({"unbounded": math.inf}, "key 'unbounded': expected a finite number, got inf"),
+        ({"unbounded": 10**400}, "key 'unbounded': expected a finite number, got 1000"),
+        ({"mode": "medium"}, "key 'mode': expected one of 'fast', 'slow', got 'medium'"),
+        ({"baud": True}, "key 'baud': expected one of 9600, 115200, got True"),
+        ({"baud": 9600.0}, "key 'baud': expected one of 9600, 115200, got 9600.0"),
+        ({"enabled": 1}, "key 'enabled': expected true or false, got 1"),
+        ({"label": ""}, "key 'label': expected a non-empty string, got ''"),
+        ({"label": 5}, "key 'label': expected a non-empty string, got 5"),
+        ({"rgb": (0.1, 0.2)}, "key 'rgb': expected 3 items, got (0.1, 0.2)"),
+        ({"rgb": (0.1, 0.2, 1.5)}, "key 'rgb[2]': expected a number in [0.0, 1.0], got 1.5"),
+        ({"weights": {"a": -1}}, "key 'weights.a': expected a number in [0.0, 10.0], got -1"),
+        ({"weights": {"": 1}}, "key 'weights': expected string keys, got ''"),
+    ],
+)
+def test_one_declaration_checks_code_and_files_alike(change, message):
+    with pytest.raises(ValueError) as in_code:
+        knobs_in_code(**change)
+    assert str(in_code.value).startswith(message)
+    with pytest.raises(ConfigError) as from_file:
+        build(Knobs, {**GOOD_KNOBS, **change}, source="k.yaml")
+    assert str(from_file.value).startswith(f"k.yaml: {message}")
+
+
+def test_nested_classes_are_checked_in_code_and_built_from_files():
+    with pytest.raises(ValueError, match=r"key 'gain': expected a Gains, got \{'kp': 2\}"):
+        knobs_in_code(gain={"kp": 2})
+    with pytest.raises(ConfigError, match=r"k.yaml: key 'gain': expected a mapping, got 3"):
+        build(Knobs, {**GOOD_KNOBS, "gain": 3}, source="k.yaml")
+    with pytest.raises(ConfigError, match=r"k.yaml: key 'gain.kp': expected a number"):
+        build(Knobs, {**GOOD_KNOBS, "gain": {"kp": 11}}, source="k.yaml")
+    assert build(Knobs, {**GOOD_KNOBS, "gain": None}, source="k.yaml").gain is None
+
+
+def test_values_are_normalised_and_frozen():
+    built = build(Knobs, GOOD_KNOBS, source="k.yaml")
+    assert built == knobs_in_code()
+    assert type(built.slope) is float and type(knobs_in_code(slope=1).slope) is float
+    assert built.rgb == (0.1, 0.2, 0.3) and isinstance(built.rgb, tuple)
+    assert type(built.weights["a"]) is float
+    with pytest.raises(TypeError):
+        built.weights["b"] = 1.0  # type: ignore[index]
+    assert built.gain == Gains(2.0)
+
+
+def test_a_bad_value_in_a_driver_config_names_the_key_in_code_too():
+    with pytest.raises(ValueError, match=r"key 'timeout_s': expected a number in \[0.005, 5.0\]"):
+        HandEConfig(timeout_s=9)
+    with pytest.raises(ValueError, match=r"key 'retries': expected an integer in \[0, 10\]"):
+        HandEConfig(retries=True)
+    with pytest.raises(ValueError, match=r"key 'baudrate': expected one of 9600"):
+        HandEConfig(baudrate=True)
+
+
+def test_a_yaml_true_is_never_a_number(tmp_path):
+    data = yaml.safe_load((CONFIGS / "scenes" / "calibration_jig.yaml").read_text())
+    path = tmp_path / "jig.yaml"
+    path.write_text(yaml.safe_dump({**data, "gel_load_factor": True}))
+    with pytest.raises(ConfigError) as info:
+        load_config(JigConfig, path)
+    assert str(info.value) == (
+        f"{path}: key 'gel_load_factor': expected a number in [-1.0, 1.0], got True"
+    )
+
+
+def test_cross_field_rules_run_after_the_field_checks():
+    # a wrong type is reported by the field check, never as a TypeError of a later rule
+    with pytest.raises(ValueError, match=r"key 'closed_count': expected an integer"):
+        HandEConfig(closed_count="255")
+    with pytest.raises(ValueError, match="key 'closed_count': expected more than open_count"):
+        HandEConfig(open_count=10, closed_count=10)
+
+
+def test_subclass_rules_and_checks_run_once_each(monkeypatch):
+    calls = []
+    real = config_module._check_fields
+    monkeypatch.setattr(config_module, "_check_fields", lambda c: calls.append(c) or real(c))
+    twin = load_device_config(CONFIGS / "gripper" / "hande.yaml")
+    assert calls == [twin.sim, twin]
+    with pytest.raises(ValueError, match="key 'sim.start_width_m'"):  # the subclass's rule
+        dataclasses.replace(twin, stroke_m=0.01)
+    with pytest.raises(ValueError, match="key 'closed_count'"):  # the base class's rule
+        dataclasses.replace(twin, open_count=200, closed_count=100)
+
+
+def test_every_declared_range_sits_on_a_config_class():
+    """A ``number()`` field on a plain dataclass would never be checked."""
+    unchecked = []
+    for package in ("controller", "drivers", "evaluation"):
+        root = importlib.import_module(package)
+        for info in pkgutil.walk_packages(root.__path__, f"{package}."):
+            module = importlib.import_module(info.name)
+            for obj in vars(module).values():
+                if not (isinstance(obj, type) and dataclasses.is_dataclass(obj)):
+                    continue
+                if issubclass(obj, Config):
+                    continue
+                if any("range" in f.metadata for f in dataclasses.fields(obj)):
+                    unchecked.append(f"{obj.__module__}.{obj.__qualname__}")
+    assert not unchecked
+
+
+def test_build_refuses_a_class_that_does_not_check_itself():
+    @dataclass(frozen=True)
+    class Plain:
+        kp: float = number(0, 10)
+
+    with pytest.raises(TypeError, match="not a Config dataclass"):
+        build(Plain, {"kp": 1}, source="p.yaml")
+
+
+# -- the loader: any file gives a ConfigError naming it ---------------------------------
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        (b"\xff\xfe\x00b\x00i\x00n", r"not a UTF-8 text file \(byte 0xff at offset 0\)"),
+        (b"", "empty configuration file; expected a mapping of keys"),
+        (b"# only a comment\n", "empty configuration file"),
+        (b"- 1\n- 2\n", r"expected a mapping of keys at the top level, got \[1, 2\]"),
+        (b"just text\n", "expected a mapping of keys at the top level, got 'just text'"),
+        (b"name: [unclosed\n", "line 2, column 1: not valid YAML: expected ',' or ']'"),
+        (b"a: 1\nb:\n  c: 2\n c: 3\n", "line 4, column 2: not valid YAML"),
+        (b"a: 1\na: 2\n", "line 2, column 1: not valid YAML: key 'a' given twice"),
+        (b'a: "\x07"\n', r"line 1, column 5: not valid YAML: unacceptable character #x0007"),
+        (b"a: 2020-13-45\n", r"not valid YAML \(month must be in 1..12\)"),
+        (b"a: !!python/object:os.system x\n", "line 1, column 4: not valid YAML"),
+    ],
+)
+def test_unreadable_files_give_one_line_naming_the_file(tmp_path, content, message):
+    path = tmp_path / "sensor.yaml"
+    path.write_bytes(content)
+    with pytest.raises(ConfigError, match=message) as info:
+        sensor_profile(str(path))
+    text = str(info.value)
+    assert text.startswith(f"{path}: ") and "\n" not in text
+
+
+def test_a_folder_or_a_missing_file_is_unreadable(tmp_path):
+    for path in (tmp_path, tmp_path / "absent.yaml"):
+        with pytest.raises(ConfigError, match=f"{path}: cannot read configuration file"):
+            load_yaml(path)
+
+
+def test_yaml_merge_keys_still_work(tmp_path):
+    path = tmp_path / "merge.yaml"
+    path.write_text("base: &b {x: 1, y: 2}\nderived:\n  <<: *b\n  y: 3\n")
+    assert load_yaml(path)["derived"] == {"x": 1, "y": 3}
+
+
+def test_long_values_are_cut_in_messages():
+    with pytest.raises(ValueError) as info:
+        knobs_in_code(label=["x" * 50] * 20)
+    assert len(str(info.value)) < 150 and str(info.value).endswith("...")

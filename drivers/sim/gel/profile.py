@@ -1,9 +1,10 @@
 """Gel profiles and grasped-object shapes of the gel simulator (SI units: m, Pa, N).
 
 A ``GelProfile`` is the simulated half of a sensor profile: the camera's working image (the
-same size and scale as ``configs/sensors/NAME.yaml``) plus the gel's mechanics. Profiles live
-in ``configs/sensors/NAME_gel.yaml``; docs/SIMULATION.md explains each parameter, its
-default and its source. The elastic gains are parameters on purpose: the simulator is meant
+size and scale of the sensor profile ``configs/sensors/NAME.yaml``, the one source of a
+sensor's geometry) plus the gel's mechanics, which live in ``configs/sensors/NAME_gel.yaml``
+(``gel_profile`` joins the two); docs/SIMULATION.md explains each parameter, its default
+and its source. The elastic gains are parameters on purpose: the simulator is meant
 to be right about trends (where lift-off and slip begin, how the field changes shape), not
 about absolute gains, which every real sensor needs a calibration for.
 """
@@ -11,16 +12,21 @@ about absolute gains, which every real sensor needs a calibration for.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Literal
 
-from drivers.validation import check_choice, check_int, check_range
+from drivers.config import CONFIG_ROOT, Config, ConfigError, build, load_yaml, number, show
+from drivers.tactile.profile import FOLDER, sensor_names, sensor_profile
+
+GEL_SUFFIX = "_gel"
+GEOMETRY_KEYS = ("width_px", "height_px", "mm_per_px")
+"""The keys of a ``GelProfile`` that its sensor profile gives (a gel YAML may not repeat them)."""
 
 ObjectKind = Literal["plate", "square_peg", "round_peg"]
-OBJECT_KINDS = ("plate", "square_peg", "round_peg")
 
 
 @dataclass(frozen=True)
-class GelProfile:
+class GelProfile(Config):
     """A sensor's gel and camera, frame S (x right, y down in the image, origin at the centre).
 
     Image: ``width_px`` x ``height_px`` at ``mm_per_px``; the physics grid has square cells
@@ -37,40 +43,26 @@ class GelProfile:
     """
 
     name: str
-    width_px: int
-    height_px: int
-    mm_per_px: float
-    cell_px: int
-    gel_width_m: float
-    gel_height_m: float
-    thickness_m: float
-    young_modulus_pa: float
-    poisson_ratio: float
-    dome_radius_m: float | None
-    edge_softening_m: float
-    friction: float
-    camera_distance_m: float
+    width_px: int = number(16, 4096)
+    height_px: int = number(16, 4096)
+    mm_per_px: float = number(1e-3, 1.0)
+    cell_px: int = number(1, 64)
+    gel_width_m: float = number(1e-3, 0.2)
+    gel_height_m: float = number(1e-3, 0.2)
+    thickness_m: float = number(1e-4, 0.02)
+    young_modulus_pa: float = number(1e3, 1e8)
+    poisson_ratio: float = number(0.0, 0.499)
+    dome_radius_m: float | None = number(1e-3, 10.0)
+    edge_softening_m: float = number(0.0, 0.02)
+    friction: float = number(0.01, 5.0)
+    camera_distance_m: float = number(1e-3, 1.0)
 
     def __post_init__(self) -> None:
-        check_int("width_px", self.width_px, 16, 4096)
-        check_int("height_px", self.height_px, 16, 4096)
-        check_range("mm_per_px", self.mm_per_px, 1e-3, 1.0)
-        check_int("cell_px", self.cell_px, 1, 64)
         if self.width_px % self.cell_px or self.height_px % self.cell_px:
             raise ValueError(
                 f"key 'cell_px': expected a divisor of width_px and height_px "
                 f"({self.width_px}, {self.height_px}), got {self.cell_px}"
             )
-        check_range("gel_width_m", self.gel_width_m, 1e-3, 0.2)
-        check_range("gel_height_m", self.gel_height_m, 1e-3, 0.2)
-        check_range("thickness_m", self.thickness_m, 1e-4, 0.02)
-        check_range("young_modulus_pa", self.young_modulus_pa, 1e3, 1e8)
-        check_range("poisson_ratio", self.poisson_ratio, 0.0, 0.499)
-        if self.dome_radius_m is not None:
-            check_range("dome_radius_m", self.dome_radius_m, 1e-3, 10.0)
-        check_range("edge_softening_m", self.edge_softening_m, 0.0, 0.02)
-        check_range("friction", self.friction, 0.01, 5.0)
-        check_range("camera_distance_m", self.camera_distance_m, 1e-3, 1.0)
 
     @property
     def cell_m(self) -> float:
@@ -78,8 +70,40 @@ class GelProfile:
         return self.cell_px * self.mm_per_px * 1e-3
 
 
+def gel_profile(name_or_path: str) -> GelProfile:
+    """The simulated gel of sensor ``NAME`` (``configs/sensors/NAME_gel.yaml``) or of a gel
+    YAML path: the file's mechanics, and the working image (``GEOMETRY_KEYS``) of the sensor
+    profile its ``name`` key names. ConfigError naming the file if it repeats the geometry."""
+    path = Path(name_or_path)
+    if path.suffix not in (".yaml", ".yml"):
+        path = CONFIG_ROOT / FOLDER / f"{name_or_path}{GEL_SUFFIX}.yaml"
+        if not path.exists():
+            gels = [n for n in sensor_names() if (path.parent / f"{n}{GEL_SUFFIX}.yaml").exists()]
+            raise ConfigError(
+                f"unknown sensor configuration '{name_or_path}' (no gel profile {path.name}); "
+                f"expected one of: {', '.join(gels)} (or a path to a gel .yaml file)"
+            )
+    data = load_yaml(path)
+    for key in GEOMETRY_KEYS:
+        if key in data:
+            raise ConfigError(
+                f"{path}: key '{key}' comes from the sensor profile "
+                f"(configs/sensors/NAME.yaml, NAME the key 'name'); remove it here"
+            )
+    if "name" not in data:
+        raise ConfigError(f"{path}: missing key 'name'")
+    if data["name"] not in sensor_names():
+        raise ConfigError(
+            f"{path}: key 'name': expected the name of a sensor profile "
+            f"({', '.join(sensor_names())}), got {show(data['name'])}"
+        )
+    sensor = sensor_profile(data["name"])
+    geometry = {key: getattr(sensor, key) for key in GEOMETRY_KEYS}
+    return build(GelProfile, {**data, **geometry}, source=str(path))
+
+
 @dataclass(frozen=True)
-class ObjectShape:
+class ObjectShape(Config):
     """The grasped object's face against the gel.
 
     ``kind``: ``plate`` (a flat face larger than the gel), ``square_peg`` (a flat face
@@ -88,13 +112,8 @@ class ObjectShape:
     """
 
     kind: ObjectKind
-    width_m: float
+    width_m: float = number(1e-3, 0.2)
     axis: Literal["x", "y"]
-
-    def __post_init__(self) -> None:
-        check_choice("kind", self.kind, OBJECT_KINDS)
-        check_range("width_m", self.width_m, 1e-3, 0.2)
-        check_choice("axis", self.axis, ("x", "y"))
 
 
 PLATE = ObjectShape("plate", 0.05, "y")

@@ -9,11 +9,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from drivers.validation import check_int, check_range
+from drivers.config import Config, number
 
 
 @dataclass(frozen=True)
-class ImageEffects:
+class ImageEffects(Config):
     """What degrades a rendered tactile image, in named units.
 
     Pixel noise: ``noise_grey``, standard deviation of additive Gaussian noise, grey levels;
@@ -43,37 +43,14 @@ class ImageEffects:
     above 1 bright) with its own speckle of relative amplitude ``occlusion_texture``.
     """
 
-    noise_grey: float = 0.0
-    drift_gain_per_level: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    drift_gradient_grey_per_level: float = 0.0
-    drift_gradient_angle_rad: float = 0.0
-    blur_sigma_px: float = 0.0
-    motion_blur_samples: int = 1
-    marker_dropout_fraction: float = 0.0
-    occlusion_count: int = 0
-    occlusion_size_px: float = 25.0
-    occlusion_reflectance: float = 0.35
-    occlusion_texture: float = 0.1
-
-    def __post_init__(self) -> None:
-        check_range("noise_grey", self.noise_grey, 0.0, 50.0)
-        if not isinstance(self.drift_gain_per_level, tuple) or len(self.drift_gain_per_level) != 3:
-            raise ValueError(
-                "key 'drift_gain_per_level': expected three numbers (B, G, R), "
-                f"got {self.drift_gain_per_level!r}"
-            )
-        for gain in self.drift_gain_per_level:
-            check_range("drift_gain_per_level", gain, -1.0, 1.0)
-        check_range(
-            "drift_gradient_grey_per_level", self.drift_gradient_grey_per_level, -255.0, 255.0
-        )
-        check_range(
-            "drift_gradient_angle_rad", self.drift_gradient_angle_rad, -2 * math.pi, 2 * math.pi
-        )
-        check_range("blur_sigma_px", self.blur_sigma_px, 0.0, 20.0)
-        check_int("motion_blur_samples", self.motion_blur_samples, 1, 32)
-        check_range("marker_dropout_fraction", self.marker_dropout_fraction, 0.0, 1.0)
-        check_int("occlusion_count", self.occlusion_count, 0, 50)
-        check_range("occlusion_size_px", self.occlusion_size_px, 1.0, 1000.0)
-        check_range("occlusion_reflectance", self.occlusion_reflectance, 0.0, 1.5)
-        check_range("occlusion_texture", self.occlusion_texture, 0.0, 0.5)
+    noise_grey: float = number(0.0, 50.0, default=0.0)
+    drift_gain_per_level: tuple[float, float, float] = number(-1.0, 1.0, default=(0.0, 0.0, 0.0))
+    drift_gradient_grey_per_level: float = number(-255.0, 255.0, default=0.0)
+    drift_gradient_angle_rad: float = number(-2 * math.pi, 2 * math.pi, default=0.0)
+    blur_sigma_px: float = number(0.0, 20.0, default=0.0)
+    motion_blur_samples: int = number(1, 32, default=1)
+    marker_dropout_fraction: float = number(0.0, 1.0, default=0.0)
+    occlusion_count: int = number(0, 50, default=0)
+    occlusion_size_px: float = number(1.0, 1000.0, default=25.0)
+    occlusion_reflectance: float = number(0.0, 1.5, default=0.35)
+    occlusion_texture: float = number(0.0, 0.5, default=0.1)

@@ -27,73 +27,55 @@ from typing import Literal
 
 import numpy as np
 
+from drivers.config import Config, check_number, number
 from drivers.sim.gel.model import GelModel, GelState, Wrench
-from drivers.validation import check_choice, check_int, check_range
 
-AXES = ("x", "y", "z")
 _AXIS_COLUMN = {"x": 3, "y": 4, "z": 5}  # torque columns of a (fx, fy, fz, tx, ty, tz) row
 _PROGRAM_RATE_HZ = 500.0
 
 
 @dataclass(frozen=True)
-class JigConfig:
+class JigConfig(Config):
     """``configs/scenes/calibration_jig.yaml``: timing in s, forces N, torques N*m."""
 
-    grip_force_n: float
-    gel_load_factor: float
-    tactile_rate_hz: float
-    tactile_jitter_s: float
-    ft_rate_hz: float
-    ft_force_noise_n: float
-    ft_torque_noise_nm: float
-    open_s: float
-    grasp_s: float
-    settle_s: float
-    ramp_min_s: float
-    ramp_max_s: float
-    hold_min_s: float
-    hold_max_s: float
-    rest_min_s: float
-    rest_max_s: float
-    amplitude_spread: float
-    crosstalk: float
-    stray_force_n: float
+    grip_force_n: float = number(0.1, 200.0)
+    gel_load_factor: float = number(-1.0, 1.0)
+    tactile_rate_hz: float = number(1.0, 1000.0)
+    tactile_jitter_s: float = number(0.0, 0.25)  # and at most a quarter frame period
+    ft_rate_hz: float = number(1.0, 10000.0)
+    ft_force_noise_n: float = number(0.0, 10.0)
+    ft_torque_noise_nm: float = number(0.0, 1.0)
+    open_s: float = number(0.0, 60.0)
+    grasp_s: float = number(0.0, 60.0)
+    settle_s: float = number(0.0, 60.0)
+    ramp_min_s: float = number(0.0, 60.0)
+    ramp_max_s: float = number(0.0, 60.0)
+    hold_min_s: float = number(0.0, 60.0)
+    hold_max_s: float = number(0.0, 60.0)
+    rest_min_s: float = number(0.0, 60.0)
+    rest_max_s: float = number(0.0, 60.0)
+    amplitude_spread: float = number(0.0, 0.9)
+    crosstalk: float = number(0.0, 1.0)
+    stray_force_n: float = number(0.0, 50.0)
 
     def __post_init__(self) -> None:
-        check_range("grip_force_n", self.grip_force_n, 0.1, 200.0)
-        check_range("gel_load_factor", self.gel_load_factor, -1.0, 1.0)
-        check_range("tactile_rate_hz", self.tactile_rate_hz, 1.0, 1000.0)
-        check_range("tactile_jitter_s", self.tactile_jitter_s, 0.0, 0.25 / self.tactile_rate_hz)
-        check_range("ft_rate_hz", self.ft_rate_hz, 1.0, 10000.0)
-        check_range("ft_force_noise_n", self.ft_force_noise_n, 0.0, 10.0)
-        check_range("ft_torque_noise_nm", self.ft_torque_noise_nm, 0.0, 1.0)
-        for name in ("open_s", "grasp_s", "settle_s"):
-            check_range(name, getattr(self, name), 0.0, 60.0)
+        check_number("tactile_jitter_s", self.tactile_jitter_s, 0.0, 0.25 / self.tactile_rate_hz)
         for low, high in (
             ("ramp_min_s", "ramp_max_s"),
             ("hold_min_s", "hold_max_s"),
             ("rest_min_s", "rest_max_s"),
         ):
-            check_range(low, getattr(self, low), 0.0, 60.0)
-            check_range(high, getattr(self, high), getattr(self, low), 60.0)
-        check_range("amplitude_spread", self.amplitude_spread, 0.0, 0.9)
-        check_range("crosstalk", self.crosstalk, 0.0, 1.0)
-        check_range("stray_force_n", self.stray_force_n, 0.0, 50.0)
+            check_number(high, getattr(self, high), getattr(self, low), 60.0)
 
 
 @dataclass(frozen=True)
-class Experiment:
+class Experiment(Config):
     """Alternating torque pulses about S's ``axis`` up to ``amplitude_nm`` (N*m, applied by
     the hand), ``pulses`` of them."""
 
     axis: Literal["x", "y", "z"]
-    amplitude_nm: float
-    pulses: int
-
-    def __post_init__(self) -> None:
-        check_choice("axis", self.axis, AXES)
-        check_range("amplitude_nm", self.amplitude_nm, 0.0, 10.0)
-        check_int("pulses", self.pulses, 1, 100000)
+    amplitude_nm: float = number(0.0, 10.0)
+    pulses: int = number(1, 100000)
 
 
 @dataclass(frozen=True)

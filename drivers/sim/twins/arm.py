@@ -41,6 +41,7 @@ from typing import Any
 from drivers.arm.envelope import (
     clamp_pose,
     clamp_twist,
+    require_finite,
     rotation_from_rpy,
     tilt_rad,
     timed_servo_target,
@@ -49,9 +50,9 @@ from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
 from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
 from drivers.clock import Clock, MonotonicClock
+from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
-from drivers.validation import check_range
 
 MODE_POSITION = 0
 MODE_SERVO = 1
@@ -65,7 +66,7 @@ _AT_REST = 1e-9  # m/s and rad/s below which the TCP is at rest
 
 
 @dataclass(frozen=True)
-class SimArmSettings:
+class SimArmSettings(Config):
     """The ``sim:`` section of an arm YAML: what only the twin needs.
 
     ``control_rate_hz``: integration rate of the motion. ``max_accel_m_s2`` and
@@ -74,25 +75,15 @@ class SimArmSettings:
     envelope).
     """
 
-    control_rate_hz: float
-    max_accel_m_s2: float
-    max_angular_accel_rad_s2: float
-    start_x_m: float
-    start_y_m: float
-    start_z_m: float
-    start_roll_rad: float
-    start_pitch_rad: float
-    start_yaw_rad: float
-
-    def __post_init__(self) -> None:
-        check_range("control_rate_hz", self.control_rate_hz, 50.0, 2000.0)
-        check_range("max_accel_m_s2", self.max_accel_m_s2, 0.01, 50.0)
-        check_range("max_angular_accel_rad_s2", self.max_angular_accel_rad_s2, 0.01, 100.0)
-        for axis in "xyz":
-            check_range(f"start_{axis}_m", getattr(self, f"start_{axis}_m"), -2.0, 2.0)
-        for angle in ("roll", "pitch", "yaw"):
-            key = f"start_{angle}_rad"
-            check_range(key, getattr(self, key), -math.pi, math.pi)
+    control_rate_hz: float = number(50.0, 2000.0)
+    max_accel_m_s2: float = number(0.01, 50.0)
+    max_angular_accel_rad_s2: float = number(0.01, 100.0)
+    start_x_m: float = number(-2.0, 2.0)
+    start_y_m: float = number(-2.0, 2.0)
+    start_z_m: float = number(-2.0, 2.0)
+    start_roll_rad: float = number(-math.pi, math.pi)
+    start_pitch_rad: float = number(-math.pi, math.pi)
+    start_yaw_rad: float = number(-math.pi, math.pi)
 
     @property
     def start_pose(self) -> Pose:
@@ -111,8 +102,6 @@ class SimArmConfig(XArm6Config):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not isinstance(self.sim, SimArmSettings):
-            raise ValueError(f"key 'sim': expected a SimArmSettings, got {self.sim!r}")
         env, start = self.envelope, self.sim.start_pose
         for axis, value in zip("xyz", start.xyz_m, strict=True):
             low, high = getattr(env, f"{axis}_min_m"), getattr(env, f"{axis}_max_m")
@@ -209,7 +198,7 @@ class SimArm(ContextManagedDevice):
     def move_to(self, target: Pose, speed_m_s: float, wait: bool = True) -> None:
         """Straight move to ``target`` clamped into the envelope at ``speed_m_s`` (capped at
         the envelope's); with ``wait`` sleeps on the clock until reached."""
-        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        require_finite("target", (*target.xyz_m, *target.rpy_rad))
         if not math.isfinite(speed_m_s) or speed_m_s <= 0:
             raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
         self._prepare_motion(MODE_POSITION)
@@ -231,7 +220,7 @@ class SimArm(ContextManagedDevice):
 
     def servo_pose(self, target: Pose) -> None:
         """One servo target, clamped and stepped exactly as ``XArm6.servo_pose`` does."""
-        _require_finite("target", (*target.xyz_m, *target.rpy_rad))
+        require_finite("target", (*target.xyz_m, *target.rpy_rad))
         self._prepare_motion(MODE_SERVO)
         env = self.config.envelope
         now = self._clock.now()
@@ -251,7 +240,7 @@ class SimArm(ContextManagedDevice):
 
     def move_velocity(self, twist: Twist, duration_s: float) -> None:
         """Hold the clamped twist for ``min(duration_s, velocity_timeout_s)``, then stop."""
-        _require_finite("twist", (*twist.linear_m_s, *twist.angular_rad_s))
+        require_finite("twist", (*twist.linear_m_s, *twist.angular_rad_s))
         if not math.isfinite(duration_s) or duration_s <= 0:
             raise ValueError(
                 f"duration_s: expected a positive number (the SDK reads 0 as 'never stop'), "
@@ -386,12 +375,3 @@ class _Goal:
     @classmethod
     def at(cls, pose: Pose, speed_m_s: float) -> _Goal:
         return cls(pose.xyz_m, quaternion_from_rpy(pose.rpy_rad), speed_m_s)
-
-
-def _require_finite(name: str, values: tuple[float, ...]) -> None:
-    try:
-        finite = all(math.isfinite(float(v)) for v in values)
-    except (TypeError, ValueError):
-        finite = False
-    if not finite:
-        raise ValueError(f"{name}: expected finite numbers, got {tuple(values)!r}")

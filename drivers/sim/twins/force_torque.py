@@ -21,44 +21,31 @@ import numpy as np
 
 from drivers.base import ContextManagedDevice, Vector3, WrenchSample
 from drivers.clock import Clock, MonotonicClock
+from drivers.config import Config, number
 from drivers.errors import DeviceNotConnectedError
-from drivers.validation import check_int, check_range
 
 WrenchSource = Callable[[float], tuple[Sequence[float], Sequence[float]]]
 """Gives (force in N, torque in N*m), three components each, at a time in s."""
 
 
 @dataclass(frozen=True)
-class SimForceTorqueSettings:
+class SimForceTorqueSettings(Config):
     """The ``sim:`` section: noise standard deviations per component (N, N*m) and the seed
     of the twin's randomness when the registry builds it."""
 
-    force_noise_n: float
-    torque_noise_nm: float
-    seed: int
-
-    def __post_init__(self) -> None:
-        check_range("force_noise_n", self.force_noise_n, 0.0, 100.0)
-        check_range("torque_noise_nm", self.torque_noise_nm, 0.0, 10.0)
-        check_int("seed", self.seed, 0, 2**32 - 1)
+    force_noise_n: float = number(0.0, 100.0)
+    torque_noise_nm: float = number(0.0, 10.0)
+    seed: int = number(0, 2**32 - 1)
 
 
 @dataclass(frozen=True)
-class SimForceTorqueConfig:
+class SimForceTorqueConfig(Config):
     """A force/torque sensor YAML (``backend: sim``). ``frame``: name of the frame the
     wrench is expressed in (e.g. ``"S"``, the tactile sensor's)."""
 
     name: str
     frame: str
     sim: SimForceTorqueSettings
-
-    def __post_init__(self) -> None:
-        for key in ("name", "frame"):
-            value = getattr(self, key)
-            if not isinstance(value, str) or not value:
-                raise ValueError(f"key '{key}': expected a non-empty string, got {value!r}")
-        if not isinstance(self.sim, SimForceTorqueSettings):
-            raise ValueError(f"key 'sim': expected a SimForceTorqueSettings, got {self.sim!r}")
 
 
 def scripted_wrench(steps: Sequence[tuple[float, Vector3, Vector3]]) -> WrenchSource:

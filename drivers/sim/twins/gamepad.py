@@ -24,20 +24,17 @@ from types import MappingProxyType
 
 from drivers.base import ContextManagedDevice, GamepadState
 from drivers.clock import Clock, MonotonicClock
+from drivers.config import Config
 from drivers.errors import DeviceNotConnectedError
 from drivers.gamepad.mapping import GamepadConfig
 
 
 @dataclass(frozen=True)
-class SimGamepadSettings:
+class SimGamepadSettings(Config):
     """The ``sim:`` section of a gamepad YAML. ``attached``: whether a pad is plugged in at
     start-up."""
 
     attached: bool
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.attached, bool):
-            raise ValueError(f"key 'attached': expected true or false, got {self.attached!r}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -45,11 +42,6 @@ class SimGamepadConfig(GamepadConfig):
     """A gamepad YAML with ``backend: sim``: the real mapping plus the ``sim:`` section."""
 
     sim: SimGamepadSettings
-
-    def __post_init__(self) -> None:
-        super().__post_init__()
-        if not isinstance(self.sim, SimGamepadSettings):
-            raise ValueError(f"key 'sim': expected a SimGamepadSettings, got {self.sim!r}")
 
 
 @dataclass(frozen=True)

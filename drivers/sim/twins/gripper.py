@@ -31,17 +31,17 @@ from typing import Any
 
 from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
 from drivers.clock import Clock, MonotonicClock
+from drivers.config import Config, check_number, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.hande import HandEConfig
-from drivers.validation import check_range
 
 _POLL_PERIOD_S = 0.02  # as the real driver polls during activation
 _NOT_ACTIVATED_CODE = 0x07
 
 
 @dataclass(frozen=True)
-class SimGripperSettings:
+class SimGripperSettings(Config):
     """The ``sim:`` section of a gripper YAML.
 
     ``activation_time_s``: how long activation takes. ``start_width_m``: finger opening at
@@ -49,15 +49,9 @@ class SimGripperSettings:
     ``None`` for none.
     """
 
-    activation_time_s: float
-    start_width_m: float
-    object_width_m: float | None
-
-    def __post_init__(self) -> None:
-        check_range("activation_time_s", self.activation_time_s, 0.0, 30.0)
-        check_range("start_width_m", self.start_width_m, 0.0, 0.2)
-        if self.object_width_m is not None:
-            check_range("object_width_m", self.object_width_m, 0.0, 0.2)
+    activation_time_s: float = number(0.0, 30.0)
+    start_width_m: float = number(0.0, 0.2)
+    object_width_m: float | None = number(0.0, 0.2)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -68,8 +62,6 @@ class SimGripperConfig(HandEConfig):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not isinstance(self.sim, SimGripperSettings):
-            raise ValueError(f"key 'sim': expected a SimGripperSettings, got {self.sim!r}")
         for key in ("start_width_m", "object_width_m"):
             value = getattr(self.sim, key)
             if value is not None and value > self.stroke_m:
@@ -217,7 +209,7 @@ class SimGripper(ContextManagedDevice):
         """Put an object of ``width_m`` (m) between the fingers, or remove it (``None``); a
         motion under way is re-planned from the current opening."""
         if width_m is not None:
-            check_range("object_width_m", width_m, 0.0, self.config.stroke_m)
+            check_number("object_width_m", width_m, 0.0, self.config.stroke_m)
         self._object_width_m = width_m
         if self._target_m is not None:
             self._start_motion(self._target_m, self._motion.speed_m_s)

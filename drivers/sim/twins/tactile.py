@@ -26,65 +26,68 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from drivers.base import ContextManagedDevice, TactileFrame
 from drivers.clock import Clock, MonotonicClock
+from drivers.config import Config, number
 from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.tactile.camera import TactileCameraConfig
-from drivers.validation import check_int, check_range
+from drivers.tactile.profile import sensor_profile
 
 FieldSource = Callable[[float], np.ndarray | None]
 """Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""
 
 
 @dataclass(frozen=True)
-class SimTactileSettings:
+class SimTactileSettings(Config):
     """The ``sim:`` section of a tactile camera YAML.
 
     ``noise_grey``: standard deviation of the pixel noise, grey levels. ``seed``: seed of the
-    twin's randomness when the registry builds it. ``marker_pitch_px`` and
-    ``marker_radius_px``: the printed marker lattice in the output image, px; both ``None``
-    for a gel without markers (DIGIT).
+    twin's randomness when the registry builds it. ``marker_radius_px``: radius of the
+    printed markers in the output image, px; ``None`` for a gel without markers (DIGIT).
+    The markers' pitch is the sensor profile's (see ``SimTactileConfig``).
     """
 
-    noise_grey: float
-    seed: int
-    marker_pitch_px: float | None
-    marker_radius_px: float | None
-
-    def __post_init__(self) -> None:
-        check_range("noise_grey", self.noise_grey, 0.0, 50.0)
-        check_int("seed", self.seed, 0, 2**32 - 1)
-        if self.marker_pitch_px is None or self.marker_radius_px is None:
-            if self.marker_pitch_px is not None or self.marker_radius_px is not None:
-                raise ValueError(
-                    "key 'marker_radius_px': expected null with marker_pitch_px (no markers) "
-                    "and a number with it, got "
-                    f"marker_pitch_px={self.marker_pitch_px!r}, "
-                    f"marker_radius_px={self.marker_radius_px!r}"
-                )
-            return
-        check_range("marker_pitch_px", self.marker_pitch_px, 4.0, 200.0)
-        check_range("marker_radius_px", self.marker_radius_px, 0.5, self.marker_pitch_px / 2)
+    noise_grey: float = number(0.0, 50.0)
+    seed: int = number(0, 2**32 - 1)
+    marker_radius_px: float | None = number(0.5, 100.0)
 
 
 @dataclass(frozen=True, kw_only=True)
 class SimTactileConfig(TactileCameraConfig):
     """A tactile camera YAML with ``backend: sim``: the real driver's keys (output size, frame
-    rate, name) plus the ``sim:`` section."""
+    rate, name) plus the ``sim:`` section.
+
+    ``marker_pitch_px`` is not a key: the twin prints its markers at the pitch of the sensor
+    profile of its ``model`` (configs/sensors/MODEL.yaml, ``SensorProfile.marker_pitch_px``),
+    the one source of the sensor's geometry; ``None`` for a sensor without markers.
+    """
 
     sim: SimTactileSettings
+    marker_pitch_px: float | None = field(init=False)
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        if not isinstance(self.sim, SimTactileSettings):
-            raise ValueError(f"key 'sim': expected a SimTactileSettings, got {self.sim!r}")
+        pitch_px = sensor_profile(self.model).marker_pitch_px
+        object.__setattr__(self, "marker_pitch_px", pitch_px)
+        radius_px = self.sim.marker_radius_px
+        if (pitch_px is None) != (radius_px is None):
+            raise ValueError(
+                "key 'sim.marker_radius_px': expected null for a sensor without printed "
+                f"markers and a number for one with them; sensor '{self.model}' has "
+                f"{'none' if pitch_px is None else 'markers'}, got {radius_px!r}"
+            )
+        if pitch_px is not None and radius_px is not None and radius_px > pitch_px / 2:
+            raise ValueError(
+                f"key 'sim.marker_radius_px': expected at most half the marker pitch "
+                f"({pitch_px / 2:.3g} px), got {radius_px!r}"
+            )
 
 
 class SimTactileSensor(ContextManagedDevice):
@@ -106,7 +109,7 @@ class SimTactileSensor(ContextManagedDevice):
         self._renderer = GelRenderer(
             width_px=config.output_width_px,
             height_px=config.output_height_px,
-            pitch_px=sim.marker_pitch_px,
+            pitch_px=config.marker_pitch_px,
             dot_radius_px=sim.marker_radius_px or 0.0,
             effects=ImageEffects(noise_grey=sim.noise_grey),
             rng=rng,

@@ -16,14 +16,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drivers.config import ConfigError, load_config
+from drivers.config import ConfigError
 from drivers.sim.gel.contact import TOLERANCE
 from drivers.sim.gel.model import GelModel, GelState, Wrench
-from drivers.sim.gel.profile import SHAPES, GelProfile, ObjectShape
+from drivers.sim.gel.profile import SHAPES, GelProfile, ObjectShape, gel_profile
 
 SENSORS = Path(__file__).resolve().parents[3] / "configs" / "sensors"
-MINI = load_config(GelProfile, SENSORS / "gelsight_mini_gel.yaml")
-DIGIT = load_config(GelProfile, SENSORS / "digit_gel.yaml")
+MINI = gel_profile("gelsight_mini")
+DIGIT = gel_profile("digit")
 PROFILES = {"mini": MINI, "digit": DIGIT}
 SHARP_MINI = dataclasses.replace(MINI, edge_softening_m=0.0)
 GRIP_N = 10.0
@@ -490,7 +490,7 @@ def test_an_invalid_profile_file_names_the_file_and_key(tmp_path):
     bad = tmp_path / "bad_gel.yaml"
     bad.write_text(text.replace("friction: 1.0", "friction: -1.0"))
     with pytest.raises(ConfigError, match=r"bad_gel\.yaml.*key 'friction'"):
-        load_config(GelProfile, bad)
+        gel_profile(str(bad))
 
 
 @pytest.mark.parametrize(

@@ -16,7 +16,6 @@ from scipy.ndimage import map_coordinates
 
 from controller.tactile import estimator_config, estimator_for_sensor
 from controller.tactile.flow import make_grid_flow
-from drivers.config import sensor_profile
 from drivers.sim.render.field_grid import GridUpsampler
 from drivers.sim.render.field_inverse import MARGIN_PX, BackwardMapper
 from drivers.sim.render.gel_renderer import GelRenderer
@@ -26,6 +25,7 @@ from drivers.sim.render.marker_images import (
     area_mean_field,
     smooth_random_field,
 )
+from drivers.tactile.profile import sensor_profile
 
 HW = (240, 320)
 # 5 px cells (a physics grid), 4 px, 16/3 px (not a whole number of pixels), full resolution

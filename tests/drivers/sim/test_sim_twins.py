@@ -26,6 +26,7 @@ from drivers.sim.twins.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.twins.gamepad import PadEvent, SimGamepad
 from drivers.sim.twins.gripper import SimGripper
 from drivers.sim.twins.tactile import SimTactileSensor
+from drivers.tactile.profile import sensor_profile
 from tests.drivers.device_configs import CONFIGS, load_device_config
 
 ARM = load_device_config(CONFIGS / "robot" / "xarm6.yaml")
@@ -297,6 +298,9 @@ def test_injected_faults_and_recovery(clock, gripper):
 # ------------------------------------------------------------------------------- tactile
 
 
+MINI_PITCH_PX = sensor_profile("gelsight_mini").marker_pitch_px  # the twin prints the profile's
+
+
 def quiet_mini(**sim):
     return dataclasses.replace(MINI, sim=dataclasses.replace(MINI.sim, **sim))
 
@@ -309,7 +313,7 @@ def shear(shape_hw, px):
 
 def test_frames_follow_the_field_source(clock):
     sensor = SimTactileSensor(quiet_mini(noise_grey=0.0), clock, np.random.default_rng(3))
-    reference = GelRenderer(320, 240, 31.5, 4.5, rng=np.random.default_rng(3))
+    reference = GelRenderer(320, 240, MINI_PITCH_PX, 4.5, rng=np.random.default_rng(3))
     with sensor:
         rest = sensor.read_latest(0.1)
         assert rest.image.shape == (240, 320, 3) and not rest.image.flags.writeable
@@ -327,7 +331,7 @@ def test_a_coarse_field_renders_like_the_full_one(clock):
     sensor.set_field_source(lambda t_s: shear((48, 64), 1.3))  # a 5 px physics grid
     with sensor:
         coarse = sensor.read_latest(0.1).image
-    full = GelRenderer(320, 240, 31.5, 4.5, rng=np.random.default_rng(3)).render(
+    full = GelRenderer(320, 240, MINI_PITCH_PX, 4.5, rng=np.random.default_rng(3)).render(
         shear((240, 320), 1.3)
     )
     assert np.abs(coarse.astype(int) - full).max() <= 1
