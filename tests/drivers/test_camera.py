@@ -18,9 +18,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import yaml
 
 from drivers.base import TactileFrame, TactileSensor
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from drivers.registry import load_device, load_device_config
 from drivers.tactile import TactileCamera, TactileCameraConfig
 from drivers.tactile.decode import (
     FrameProcessor,
@@ -30,7 +32,6 @@ from drivers.tactile.decode import (
     orient_like_digit_sdk,
 )
 from drivers.tactile.device_lookup import find_capture_node
-from tests.drivers.device_configs import load_device_config
 
 REPO = Path(__file__).resolve().parents[2]
 MINI_ID = "usb-Arducam_Technology_Co.__Ltd._GelSight_Mini_R0B_28F5-K4RR_28F5K4RR-video-index"
@@ -264,7 +265,7 @@ def test_digit_output_size_is_checked_after_the_turn(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("name", ["gelsight_mini_camera.yaml", "digit_camera.yaml"])
 def test_example_configs_load(name: str) -> None:
-    config = load_device_config(REPO / "configs" / "sensors" / name, backend="real")
+    config = load_device_config(REPO / "configs" / "sensors" / name, backend="real").config
     assert type(config) is TactileCameraConfig
     assert config.by_id_dir == "/dev/v4l/by-id"
 
@@ -483,12 +484,13 @@ def test_no_frame_before_timeout_is_a_timeout(tmp_path: Path) -> None:
 
 
 def test_registry_builds_the_real_driver_for_a_video_peer(tmp_path: Path) -> None:
-    from drivers import registry
-
     clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(10)])
     factory, _ = paced_factory(raw=False, rate_hz=60)
-    config = digit_config(by_id_dir(tmp_path, DIGIT_ID, clip))
-    with registry.make_tactile_sensor(config, capture_factory=factory) as camera:
+    data = yaml.safe_load((REPO / "configs" / "sensors" / "digit_camera.yaml").read_text())
+    data.update(by_id_dir=str(by_id_dir(tmp_path, DIGIT_ID, clip)), connect_timeout_s=2.0)
+    path = tmp_path / "digit_camera.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with load_device(path, backend="real", kind="tactile", capture_factory=factory) as camera:
         assert isinstance(camera, TactileCamera)
         frame = camera.read_latest(max_age_s=0.5)
     assert frame.image.shape == (320, 240, 3)
