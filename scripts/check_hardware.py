@@ -150,16 +150,18 @@ def tool_port(arm_config: Any) -> Iterator[Any]:
 def probe(spec: registry.DeviceSpec, arm_config: Any = None) -> tuple[bool, str]:
     """Connect, read, disconnect: (ok, reading or what went wrong)."""
     kind = spec.kind
+    culprit = "arm"  # until the tool port's arm is reached
     try:
         via_arm = tool_port(arm_config) if arm_config is not None else nullcontext()
         with via_arm as arm_api:
+            culprit = kind
             transport = {"arm": arm_api} if kind == "gripper" else {}
             with spec.build(**transport) as device:
                 return True, READERS[kind](device)
     except DeviceError as exc:
-        return False, f"{type(exc).__name__}: {exc}. Check {HINTS[kind]}"
+        return False, f"{type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
     except Exception as exc:  # a diagnostic tool reports every failure and goes on
-        return False, f"unexpected {type(exc).__name__}: {exc}. Check {HINTS[kind]}"
+        return False, f"unexpected {type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
 
 
 def tool_port_arm(spec: registry.DeviceSpec, specs: Sequence[registry.DeviceSpec]) -> Any:

@@ -198,10 +198,12 @@ class _Grabber:
         self._thread.start()
 
     def stop(self) -> bool:
-        """Ask the thread to end and wait for it; False if it is still blocked in a camera
-        call (opening or grabbing)."""
+        """Ask the thread to end and wait for it (not while the capture is still opening:
+        the thread then releases it once open); False if it is still blocked in a camera
+        call."""
         self._stop.set()
-        self._thread.join(_JOIN_TIMEOUT_S)
+        if self.opened.is_set():
+            self._thread.join(_JOIN_TIMEOUT_S)
         return not self._thread.is_alive()
 
     def wait_ready(self, timeout_s: float) -> None:
@@ -414,10 +416,9 @@ class TactileCamera(ContextManagedDevice):
         grabber, self._grabber = self._grabber, None
         if grabber is not None and not grabber.stop():
             log.warning(
-                "%s: grabber thread still blocked in the camera after %.1f s; it releases "
-                "the camera when the call returns",
+                "%s: grabber thread still blocked in the camera; it releases the camera "
+                "when the call returns",
                 self.name,
-                _JOIN_TIMEOUT_S,
             )
 
     def read_latest(self, max_age_s: float) -> TactileFrame:

@@ -14,6 +14,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pygame._sdl2 import controller as sdl_controller
 
+from drivers.clock import ManualClock
 from drivers.config import ConfigError, build
 from drivers.errors import DeviceNotConnectedError
 from drivers.gamepad import AxisBinding, GamepadConfig, axis_value
@@ -276,6 +277,14 @@ def test_config_validation_errors(change, message):
         build(GamepadConfig, {**GOOD, **change}, source="pad.yaml")
     assert str(err.value).startswith("pad.yaml: ")
     assert message in str(err.value)
+
+
+def test_readings_are_stamped_on_the_injected_clock(device, config):
+    clock = ManualClock(3.5)
+    with PygameGamepad(config, clock) as pad:
+        assert pad.read().t_s == 3.5
+        clock.advance(0.25)
+        assert pad.read().t_s == 3.75
 
 
 def test_registry_builds_the_real_driver_for_the_virtual_device(device, config):

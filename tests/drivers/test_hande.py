@@ -10,6 +10,7 @@ import pytest
 import yaml
 
 from drivers.base import Gripper, GripperObject
+from drivers.clock import ManualClock
 from drivers.errors import (
     DeviceFaultError,
     DeviceNotConnectedError,
@@ -336,6 +337,19 @@ def test_commands_faster_than_max_rate_are_spaced_not_dropped():
     assert len(arm.call_times) == 9  # connect's check + 8 reads, none dropped
     gaps = [b - a for a, b in zip(arm.call_times, arm.call_times[1:], strict=False)]
     assert min(gaps) >= 1 / 50.0 - 5e-4
+
+
+def test_activation_polling_and_the_status_run_on_the_injected_clock():
+    """With a ManualClock the activation timeout elapses in clock time, without waiting."""
+    arm = FakeXArm(SimulatedHandE(activation_polls=100_000))  # never activates in time
+    clock = ManualClock(50.0)
+    config = HandEConfig(transport="xarm_tool", activation_timeout_s=1.0)
+    with HandE.from_config(config, clock=clock, arm=arm) as gripper:
+        with pytest.raises(DeviceTimeoutError, match="within 1.0 s"):
+            gripper.activate()
+        waited_s = clock.now() - 50.0
+        assert 1.0 < waited_s < 1.0 + 0.05  # polls of 20 ms plus the 5 ms command slots
+        assert gripper.read_status().t_s == clock.now()
 
 
 # -- xArm tool RS-485 port --------------------------------------------------------------------

@@ -6,7 +6,12 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
+import signal
 import socket
+import subprocess
+import sys
+import textwrap
+import time
 
 import numpy as np
 import pytest
@@ -22,6 +27,7 @@ from drivers.config import CONFIG_ROOT
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.registry import load_device, load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
+from tests.drivers.silent_controller import SilentController
 
 CONFIG_FILE = CONFIG_ROOT / "robot" / "xarm6.yaml"
 TOL = 1e-9
@@ -560,6 +566,84 @@ def test_connecting_to_a_closed_loopback_port_raises_not_connected():
     with pytest.raises(DeviceNotConnectedError, match="connect socket failed"):
         arm.connect()
     assert not arm.is_connected
+
+
+@pytest.fixture
+def silent_controller():
+    """A loopback host that accepts on the SDK's port 502 and never answers."""
+    host = SilentController()
+    try:
+        host.__enter__()
+    except PermissionError:
+        pytest.skip("binding TCP port 502 needs root or CAP_NET_BIND_SERVICE")
+    try:
+        yield host
+    finally:
+        host.__exit__()
+
+
+def test_a_controller_that_accepts_and_never_answers_fails_connect_in_time(silent_controller):
+    """Without a deadline the SDK's connect waits about four minutes here (100 version
+    requests of 2 s each)."""
+    config = dataclasses.replace(CONFIG, ip=silent_controller.ip, connect_timeout_s=1.0)
+    arm = XArm6.from_config(config)
+    started = time.monotonic()
+    with pytest.raises(DeviceTimeoutError) as raised:
+        arm.connect()
+    elapsed_s = time.monotonic() - started
+    assert 1.0 <= elapsed_s < 1.0 + 2.0  # the deadline, plus a margin for a loaded machine
+    assert silent_controller.accepted.is_set() and not arm.is_connected
+    message = str(raised.value)
+    assert f"controller at {silent_controller.ip} (TCP port 502) accepted the connection" in message
+    assert "did not answer within 1.0 s (key 'connect_timeout_s')" in message
+    arm.disconnect()  # idempotent after a failed connect
+
+
+SWALLOWING_SDK = textwrap.dedent(
+    """
+    import time
+
+    from drivers.arm import XArm6
+    from drivers.registry import load_device_config
+    from tests.drivers.fake_xarm_api import FakeXArmAPI
+
+
+    class SwallowingApi(FakeXArmAPI):
+        def get_position(self, is_radian=None):
+            print("waiting", flush=True)
+            while True:  # as the SDK's reply wait: a bare except eats KeyboardInterrupt
+                try:
+                    time.sleep(0.01)
+                except BaseException:
+                    pass
+
+
+    config = load_device_config("configs/robot/xarm6.yaml", backend="real").config
+    arm = XArm6(config, SwallowingApi(config.ip, is_radian=True, do_not_open=True))
+    arm.connect()
+    try:
+        arm.read_status()
+    except KeyboardInterrupt:
+        print("interrupted", flush=True)
+    """
+)
+
+
+def test_ctrl_c_interrupts_an_sdk_call_even_though_the_sdk_swallows_it():
+    process = subprocess.Popen(
+        [sys.executable, "-c", SWALLOWING_SDK],
+        cwd=CONFIG_ROOT.parent,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert process.stdout.readline() == "waiting\n"
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=5.0)
+    finally:
+        process.kill()
+    assert (process.returncode, out, err) == (0, "interrupted\n", "")
 
 
 # --------------------------------------------------------------------- configuration
