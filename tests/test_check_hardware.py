@@ -187,23 +187,23 @@ def run_script(*args: str, timeout_s: float) -> tuple[subprocess.CompletedProces
 def test_a_silent_arm_and_its_tool_port_gripper_fail_within_the_timeout(
     tmp_path, silent_controller
 ):
-    """The arm accepts TCP and never replies: each device fails in connect_timeout_s (1 s
+    """The arm accepts TCP and never replies: each device fails in connect_timeout_s (0.5 s
     here) with one line, instead of the SDK's four minutes."""
     arm = variant(
         tmp_path, CONFIGS / "robot" / "xarm6.yaml", "arm.yaml",
-        ip=silent_controller.ip, connect_timeout_s=1.0,
+        ip=silent_controller.ip, connect_timeout_s=0.5,
     )  # fmt: skip
     gripper = variant(tmp_path, CONFIGS / "gripper" / "hande.yaml", "g.yaml", transport="xarm_tool")
     result, elapsed_s = run_script(arm, gripper, "--backend", "real", timeout_s=60)
     assert result.returncode == 1, result.stdout + result.stderr
-    assert elapsed_s < 2 * 1.0 + 3.0  # two connects of 1 s, plus start-up and a margin
+    assert elapsed_s < 2 * 0.5 + 3.0  # two connects of 0.5 s, plus start-up and a margin
     lines = result.stdout.splitlines()
     assert len(lines) == 2
     assert lines[0].startswith("FAIL arm xarm6/real")
     assert lines[1].startswith("FAIL gripper hande/real")
     for line in lines:
         assert f"DeviceTimeoutError: xarm6{' (tool port)' if 'gripper' in line else ''}: " in line
-        assert "accepted the connection but did not answer within 1.0 s" in line
+        assert "accepted the connection but did not answer within 0.5 s" in line
         assert line.endswith("key 'ip' (docs/HARDWARE.md, xArm6)")  # the arm's hint, both
     stderr = result.stderr.splitlines()  # the SDK's banner, nothing of its log
     assert len(stderr) == 1 and stderr[0].startswith("SDK_VERSION: ")
@@ -223,7 +223,7 @@ def test_ctrl_c_during_a_silent_connect_ends_at_once(tmp_path, silent_controller
     )
     try:
         assert silent_controller.accepted.wait(20.0), "the script never reached the arm"
-        time.sleep(0.5)  # inside the SDK's connect, waiting for a reply
+        time.sleep(0.3)  # inside the SDK's connect, waiting for a reply
         process.send_signal(signal.SIGINT)
         sent = time.monotonic()
         out, err = process.communicate(timeout=10.0)

@@ -6,7 +6,10 @@ Facts about the SDK (xarm-python-sdk 1.18, read in its source) that this module 
 * ``XArmAPI.connect()`` has no timeout. Against a host that accepts the TCP connection and
   never replies, it asks for the firmware version up to 100 times, 2 s each
   (``Base._check_version``): about four minutes. ``connect`` below runs it on a daemon
-  thread and waits at most ``timeout_s``; then, or on Ctrl-C, the attempt is abandoned.
+  thread and waits at most ``timeout_s``; then, or on Ctrl-C, the attempt is abandoned
+  (once disconnected it ends within about 10 s: 100 failed requests 0.1 s apart). A new
+  ``connect`` of the same ``XArmAPI`` first waits for an abandoned attempt to end, so the
+  two never share the object.
 * The SDK always connects to TCP port 502 (``XCONF.SocketConf.TCP_CONTROL_PORT``); only the
   address is configurable.
 * Every request waits for its reply up to the SDK's command timeout (2 s unless set with
@@ -32,6 +35,7 @@ import inspect
 import logging
 import sys
 import threading
+import weakref
 from contextlib import redirect_stdout
 from typing import Any
 
@@ -40,6 +44,7 @@ from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
 CONTROL_PORT = 502  # XCONF.SocketConf.TCP_CONTROL_PORT: the only port the SDK connects to
 
 _imported = False
+_attempts: weakref.WeakKeyDictionary[Any, threading.Thread] = weakref.WeakKeyDictionary()
 
 
 def import_sdk() -> None:
@@ -75,6 +80,15 @@ def connect(api: Any, *, ip: str, device: str, timeout_s: float, io_timeout_s: f
     should call ``api.disconnect()``; an abandoned attempt that still succeeds later
     disconnects by itself.
     """
+    previous = _attempts.get(api)
+    if previous is not None:
+        previous.join(timeout_s)  # an abandoned attempt still running on this XArmAPI
+        if previous.is_alive():
+            raise DeviceTimeoutError(
+                device,
+                f"the previous, abandoned connection attempt to {ip} has not ended after "
+                f"{timeout_s} s more; try again in a few seconds",
+            )
     abandoned = threading.Event()
     outcome: list[Exception | None] = []
 
@@ -89,6 +103,7 @@ def connect(api: Any, *, ip: str, device: str, timeout_s: float, io_timeout_s: f
             api.disconnect()  # connected after the caller gave up
 
     worker = threading.Thread(target=attempt, name=f"{device}-connect", daemon=True)
+    _attempts[api] = worker
     worker.start()
     try:
         worker.join(timeout_s)

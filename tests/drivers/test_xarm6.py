@@ -11,6 +11,7 @@ import socket
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 
 import numpy as np
@@ -585,18 +586,59 @@ def silent_controller():
 def test_a_controller_that_accepts_and_never_answers_fails_connect_in_time(silent_controller):
     """Without a deadline the SDK's connect waits about four minutes here (100 version
     requests of 2 s each)."""
-    config = dataclasses.replace(CONFIG, ip=silent_controller.ip, connect_timeout_s=1.0)
+    config = dataclasses.replace(CONFIG, ip=silent_controller.ip, connect_timeout_s=0.5)
     arm = XArm6.from_config(config)
     started = time.monotonic()
     with pytest.raises(DeviceTimeoutError) as raised:
         arm.connect()
     elapsed_s = time.monotonic() - started
-    assert 1.0 <= elapsed_s < 1.0 + 2.0  # the deadline, plus a margin for a loaded machine
+    assert 0.5 <= elapsed_s < 0.5 + 2.0  # the deadline, plus a margin for a loaded machine
     assert silent_controller.accepted.is_set() and not arm.is_connected
     message = str(raised.value)
     assert f"controller at {silent_controller.ip} (TCP port 502) accepted the connection" in message
-    assert "did not answer within 1.0 s (key 'connect_timeout_s')" in message
+    assert "did not answer within 0.5 s (key 'connect_timeout_s')" in message
     arm.disconnect()  # idempotent after a failed connect
+
+
+class HangingConnect(FakeXArmAPI):
+    """``connect`` blocks until ``release`` is set, as the SDK's does on a silent host."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.release = threading.Event()
+
+    def connect(self, *args, **kwargs) -> None:
+        self.release.wait(10.0)
+        super().connect(*args, **kwargs)
+
+
+def test_a_retry_waits_for_the_abandoned_attempt_and_never_shares_the_sdk_object():
+    fake = HangingConnect(CONFIG.ip, is_radian=True, do_not_open=True)
+    arm = XArm6(dataclasses.replace(CONFIG, connect_timeout_s=0.5), fake)
+    with pytest.raises(DeviceTimeoutError, match="did not answer within 0.5 s"):
+        arm.connect()
+    with pytest.raises(DeviceTimeoutError, match="previous, abandoned connection attempt"):
+        arm.connect()  # the first attempt still hangs: no second one on the same object
+    assert len(fake.named("connect")) == 0
+    fake.release.set()  # the abandoned attempt connects late and disconnects by itself
+    arm.connect()
+    assert arm.is_connected and arm.read_status().state is ArmState.READY
+    arm.disconnect()
+
+
+def test_controller_mode_and_state_codes_become_enums():
+    arm, fake, _ = make()
+    assert (arm.read_status().mode, arm.read_status().state) == (ArmMode.POSITION, ArmState.READY)
+    modes = {1: ArmMode.SERVO, 2: ArmMode.MANUAL, 3: ArmMode.MANUAL, 4: ArmMode.OTHER,
+             5: ArmMode.VELOCITY, 7: ArmMode.OTHER}  # fmt: skip
+    for mode, expected in modes.items():
+        fake._mode = mode
+        assert arm.read_status().mode is expected
+    states = {1: ArmState.MOVING, 2: ArmState.READY, 3: ArmState.PAUSED, 4: ArmState.STOPPED,
+              6: ArmState.UNKNOWN}  # fmt: skip
+    for state, expected in states.items():
+        fake._state = state
+        assert arm.read_status().state is expected
 
 
 SWALLOWING_SDK = textwrap.dedent(
