@@ -75,8 +75,7 @@ class TcpMotion:
 
     def tilt_rad(self) -> float:
         """Angle between the tool z-axis and the downward vertical of B."""
-        zx, zy, zz = _tool_z(self.quaternion)
-        return math.atan2(math.hypot(zx, zy), -zz)
+        return _tilt(self.quaternion)
 
     def at_rest(self, tolerance: float) -> bool:
         return _norm(self.velocity_m_s) <= tolerance and _norm(self.angular_rad_s) <= tolerance
@@ -117,7 +116,7 @@ class TcpMotion:
         moved = _add(self.position_m, _scale(self.velocity_m_s, dt))
         self.position_m = _clip(moved, self._low, self._high)
         q = _normalised(_qmul(_qexp(_scale(self.angular_rad_s, dt)), self.quaternion))
-        if self.tilt_rad() > self.envelope.max_tilt_rad + _ROUNDING_RAD:
+        if _tilt(q) > self.envelope.max_tilt_rad + _ROUNDING_RAD:  # the new orientation
             q = _vec4(clamp_tilt(Rotation.from_quat(q), self.envelope.max_tilt_rad).as_quat())
         self.quaternion = q
 
@@ -193,6 +192,11 @@ def rotation_vector_between(start: Quat, end: Quat) -> Vec:
         return (2.0 * x, 2.0 * y, 2.0 * z)
     k = 2.0 * math.atan2(s, w) / s
     return (x * k, y * k, z * k)
+
+
+def _tilt(q: Quat) -> float:
+    zx, zy, zz = _tool_z(q)
+    return math.atan2(math.hypot(zx, zy), -zz)
 
 
 def _tool_z(q: Quat) -> Vec:
