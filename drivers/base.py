@@ -3,22 +3,38 @@
 The controller depends on this module only; it never imports a concrete driver. Every
 driver, real or simulated, implements one of these Protocols, is created by
 ``drivers.registry`` from its configuration, and has the lifecycle ``connect()``,
-``disconnect()``, ``is_connected`` and use as a context manager (``with make_arm(cfg) as arm``).
+``disconnect()``, ``is_connected`` and use as a context manager
+(``with registry.load_device("configs/robot/xarm6.yaml") as arm``).
+
+Every device class also has ``from_config(config, clock=None, ...)``, the constructor
+``drivers.registry.load_device`` calls; its transport keyword (``api=``, ``arm=``,
+``capture_factory=``) lets tests and scripts pass a fake or a real protocol peer, and the
+simulated twins accept and ignore it so one call builds either backend.
 
 Units are SI everywhere (m, rad, N, N*m, s). Frames (see docs/ARCHITECTURE.md):
 ``B`` the arm base, ``T`` the tool (TCP at the stick's grasp point), ``S`` the tactile
-sensor. Timestamps ``t_s`` are seconds on ``time.monotonic()`` of the reading process.
+sensor. Timestamps ``t_s`` are seconds on the device's injected ``Clock`` (``drivers.clock``,
+re-exported here; ``MonotonicClock``, i.e. ``time.monotonic()``, unless one is given).
 """
 
 from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from enum import IntEnum
+from enum import Enum, IntEnum
 from types import TracebackType
-from typing import Protocol, Self, runtime_checkable
+from typing import Any, Protocol, Self, runtime_checkable
 
 import numpy as np
+
+from drivers.clock import Clock, ManualClock, MonotonicClock
+
+__all__ = [
+    "Arm", "ArmMode", "ArmState", "ArmStatus", "Clock", "ContextManagedDevice", "Device",
+    "ForceTorqueSensor", "Gamepad", "GamepadState", "Gripper", "GripperObject", "GripperStatus",
+    "ManualClock", "MonotonicClock", "Pose", "TactileFrame", "TactileSensor", "Twist",
+    "Vector3", "WrenchSample",
+]  # fmt: skip
 
 Vector3 = tuple[float, float, float]
 
@@ -44,16 +60,39 @@ class Twist:
     angular_rad_s: Vector3 = (0.0, 0.0, 0.0)
 
 
+class ArmMode(Enum):
+    """How the arm takes motion commands. Each driver maps its controller's mode codes to
+    these at its boundary (the xArm's in ``drivers.arm.xarm_codes``)."""
+
+    POSITION = "position"  # point-to-point moves: Arm.move_to
+    SERVO = "servo"  # streamed Cartesian servo targets: Arm.servo_pose
+    VELOCITY = "velocity"  # Cartesian velocity with a watchdog: Arm.move_velocity
+    MANUAL = "manual"  # hand-guided (teaching) mode, set on the controller itself
+    OTHER = "other"  # a mode this interface never commands (e.g. joint velocity)
+
+
+class ArmState(Enum):
+    """What the arm's motion is doing. Each driver maps its controller's state codes to these
+    at its boundary (the xArm's in ``drivers.arm.xarm_codes``)."""
+
+    MOVING = "moving"  # executing a motion command
+    READY = "ready"  # armed and at rest: motion commands are accepted
+    PAUSED = "paused"  # a motion was suspended (from the controller's pendant or app)
+    STOPPED = "stopped"  # not armed (after a stop, a fault or start-up): commands re-arm it
+    UNKNOWN = "unknown"  # a state code this interface does not know
+
+
 @dataclass(frozen=True)
-class ArmState:
-    """One reading of the arm. ``error_code``/``warning_code`` are the controller's own
-    codes (0 = none); ``mode`` and ``state`` are the controller's motion mode and state."""
+class ArmStatus:
+    """One reading of the arm: TCP pose in B, joint angles (rad), the motion ``mode`` and
+    ``state``, and the controller's own ``error_code``/``warning_code`` (0 = none; look them
+    up in the vendor's manual, as the gripper's fault codes)."""
 
     t_s: float
     tcp: Pose
     joints_rad: tuple[float, ...]
-    mode: int
-    state: int
+    mode: ArmMode
+    state: ArmState
     error_code: int = 0
     warning_code: int = 0
 
@@ -149,9 +188,15 @@ class ContextManagedDevice:
 
 @runtime_checkable
 class Device(Protocol):
-    """Lifecycle shared by every device."""
+    """Lifecycle shared by every device, and its constructor from configuration."""
 
     name: str
+
+    @classmethod
+    def from_config(cls, config: Any, clock: Clock | None = None) -> Self:
+        """The device for ``config`` (its driver's config dataclass), not connected, reading
+        time from ``clock`` (``MonotonicClock`` when None)."""
+        ...
 
     def connect(self) -> None: ...
 
@@ -174,7 +219,12 @@ class Device(Protocol):
 class Arm(Device, Protocol):
     """A 6-axis arm commanded at its TCP (frame T) in its base frame B."""
 
-    def read_state(self) -> ArmState: ...
+    @classmethod
+    def from_config(cls, config: Any, clock: Clock | None = None, api: Any = None) -> Self:
+        """``api``: the controller's SDK object to drive instead of a new one."""
+        ...
+
+    def read_status(self) -> ArmStatus: ...
 
     def move_to(self, target: Pose, speed_m_s: float, wait: bool = True) -> None:
         """Position move (approach); blocks until reached when ``wait``."""
@@ -203,6 +253,11 @@ class Arm(Device, Protocol):
 class Gripper(Device, Protocol):
     """A parallel gripper commanded by finger opening."""
 
+    @classmethod
+    def from_config(cls, config: Any, clock: Clock | None = None, arm: Any = None) -> Self:
+        """``arm``: the connected arm SDK object, for a gripper on the arm's tool port."""
+        ...
+
     def activate(self) -> None:
         """Activate without dropping a held object (reads status first)."""
         ...
@@ -215,6 +270,13 @@ class Gripper(Device, Protocol):
 @runtime_checkable
 class TactileSensor(Device, Protocol):
     """A visuotactile camera."""
+
+    @classmethod
+    def from_config(
+        cls, config: Any, clock: Clock | None = None, capture_factory: Any = None
+    ) -> Self:
+        """``capture_factory``: opens a capture for a device node, instead of V4L2."""
+        ...
 
     def read_latest(self, max_age_s: float) -> TactileFrame:
         """The newest frame; raises DeviceTimeoutError if it is older than ``max_age_s``."""

@@ -1,15 +1,21 @@
-"""Clocks for the simulated twins: how simulated time advances.
+"""The one time source of the device layer: every real driver and every twin reads time from
+an injected ``Clock`` and never from ``time`` directly (``drivers.base`` re-exports it).
 
-Every twin reads time from an injected ``Clock`` and never from ``time`` directly:
+* ``now()`` -- seconds on a monotonic scale; samples are stamped with it (``t_s``), and
+  ages, step budgets and polling deadlines are measured on it;
+* ``sleep(seconds)`` -- what a device calls where it waits on its own time line (the
+  Hand-E's activation polling and command pacing, ``SimArm.move_to`` with ``wait=True``,
+  ``SimGripper.activate``).
 
-* ``now()`` -- seconds on a monotonic scale; samples are stamped with it (``t_s``);
-* ``sleep(seconds)`` -- what a twin calls where the real driver blocks (``SimArm.move_to``
-  with ``wait=True``, ``SimGripper.activate``).
+``MonotonicClock`` (the default everywhere) is ``time.monotonic`` and ``time.sleep``: the
+devices run in real time beside a real control loop. ``ManualClock`` only moves when told
+(``advance(dt_s)``), and its ``sleep`` advances it at once, so tests and scenes run
+deterministically and as fast as the machine allows.
 
-``MonotonicClock`` (the default, used by ``drivers.registry``) is ``time.monotonic`` and
-``time.sleep``: the twins then run in real time beside a real control loop. ``ManualClock``
-only moves when told (``advance(dt_s)``), and its ``sleep`` advances it at once, so tests
-and scenes run deterministically and as fast as the machine allows.
+Waits on the operating system (a socket, a serial port, a camera thread) are not on the
+clock: the real drivers bound them in real seconds (``connect_timeout_s``, ``io_timeout_s``,
+``timeout_s`` in their YAML), so a silent device fails in bounded wall time whatever clock
+is injected.
 
 The twins integrate their state lazily: each call first brings the twin's state up to
 ``now()`` (in fixed steps where the model has dynamics), so the result depends only on the

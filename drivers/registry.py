@@ -1,4 +1,4 @@
-"""Which class drives a device: the YAML's ``type:`` and ``backend:`` -> driver and config.
+"""Building a device from its YAML: ``type:`` and ``backend:`` -> driver and config.
 
 Device YAML layout (one file per device, e.g. ``configs/robot/xarm6.yaml``)::
 
@@ -17,34 +17,33 @@ names of the device it stands for, and switching ``backend:`` changes nothing el
 ``backend: real`` the ``sim:`` section is ignored. A type with no real driver yet (the
 force/torque sensor) has only the sim backend.
 
-Loading (the drivers do not import ``controller``; a script joins the two)::
+The one way to build a device::
 
-    data = drivers.config.load_yaml(path)
-    selection = registry.select(data)                     # or select(data, backend="real")
-    cfg = drivers.config.build(selection.config_class, selection.keys, source=str(path))
-    with registry.make_device(selection.kind, cfg) as device: ...
+    with registry.load_device("configs/robot/xarm6.yaml") as arm: ...
+    arm = registry.load_device(path, backend="real", kind="arm", clock=clock)  # not connected
 
-``make_arm(cfg)`` etc. return the device for an already-built config, not connected; the
-config's class says which driver (real or twin) to use.
+``load_device_config`` is its first half (read and validate the file, no device built):
+a script that checks every file before touching any device loads them all first, then
+calls ``DeviceSpec.build``. Transport keywords (``api=``, ``arm=``, ``capture_factory=``)
+go to the driver's ``from_config``; the twins accept and ignore them.
+
+Lazy imports. The table below names modules, and a driver's module is imported only when
+that backend is built (or its config class is asked for): ``backend: sim`` needs only the
+base dependencies, and pygame, pymodbus and the xArm SDK (the ``hw`` extra) load only with
+the real gamepad, the serial Hand-E and the real xArm.
 """
 
 from __future__ import annotations
 
+import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, cast
+from pathlib import Path
+from typing import Any
 
-from drivers.arm.xarm6 import XArm6, XArm6Config
 from drivers.base import Arm, Device, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
-from drivers.gamepad.mapping import GamepadConfig
-from drivers.gamepad.pad import PygameGamepad
-from drivers.gripper.hande import HandE, HandEConfig
-from drivers.sim.twins.arm import SimArm, SimArmConfig
-from drivers.sim.twins.force_torque import SimForceTorque, SimForceTorqueConfig
-from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
-from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
-from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
-from drivers.tactile.camera import TactileCamera, TactileCameraConfig
+from drivers.clock import Clock
+from drivers.config import ConfigError, build, load_yaml
 
 BACKENDS = ("sim", "real")
 DEFAULT_BACKEND = "sim"
@@ -54,40 +53,64 @@ SIM_SECTION = "sim"
 
 @dataclass(frozen=True)
 class Driver:
-    """A device class and the config dataclass its ``from_config`` takes."""
+    """Where a device class and the config dataclass of its ``from_config`` live, as
+    ``"module:Name"``; each is imported when first asked for."""
 
-    device_class: type
-    config_class: type
+    device: str
+    config: str
+
+    @property
+    def device_class(self) -> type:
+        return _load(self.device)
+
+    @property
+    def config_class(self) -> type:
+        return _load(self.config)
 
 
 DRIVERS: Mapping[str, Mapping[str, Mapping[str, Driver]]] = {
     "arm": {
         "xarm6": {
-            "real": Driver(XArm6, XArm6Config),
-            "sim": Driver(SimArm, SimArmConfig),
+            "real": Driver("drivers.arm.xarm6:XArm6", "drivers.arm.xarm6:XArm6Config"),
+            "sim": Driver("drivers.sim.twins.arm:SimArm", "drivers.sim.twins.arm:SimArmConfig"),
         },
     },
     "gripper": {
         "hande": {
-            "real": Driver(HandE, HandEConfig),
-            "sim": Driver(SimGripper, SimGripperConfig),
+            "real": Driver("drivers.gripper.hande:HandE", "drivers.gripper.hande:HandEConfig"),
+            "sim": Driver(
+                "drivers.sim.twins.gripper:SimGripper", "drivers.sim.twins.gripper:SimGripperConfig"
+            ),
         },
     },
     "tactile": {
         "tactile_camera": {
-            "real": Driver(TactileCamera, TactileCameraConfig),
-            "sim": Driver(SimTactileSensor, SimTactileConfig),
+            "real": Driver(
+                "drivers.tactile.camera:TactileCamera",
+                "drivers.tactile.camera:TactileCameraConfig",
+            ),
+            "sim": Driver(
+                "drivers.sim.twins.tactile:SimTactileSensor",
+                "drivers.sim.twins.tactile:SimTactileConfig",
+            ),
         },
     },
     "gamepad": {
         "sdl_gamepad": {
-            "real": Driver(PygameGamepad, GamepadConfig),
-            "sim": Driver(SimGamepad, SimGamepadConfig),
+            "real": Driver(
+                "drivers.gamepad.pad:PygameGamepad", "drivers.gamepad.mapping:GamepadConfig"
+            ),
+            "sim": Driver(
+                "drivers.sim.twins.gamepad:SimGamepad", "drivers.sim.twins.gamepad:SimGamepadConfig"
+            ),
         },
     },
     "force_torque": {
         "ft_sensor": {
-            "sim": Driver(SimForceTorque, SimForceTorqueConfig),
+            "sim": Driver(
+                "drivers.sim.twins.force_torque:SimForceTorque",
+                "drivers.sim.twins.force_torque:SimForceTorqueConfig",
+            ),
         },
     },
 }
@@ -103,12 +126,6 @@ PROTOCOLS: Mapping[str, type] = {
 """kind -> the ``drivers.base`` Protocol its devices implement."""
 
 _KIND_OF_TYPE = {type_name: kind for kind, types in DRIVERS.items() for type_name in types}
-_DRIVER_OF_CONFIG = {
-    (kind, driver.config_class): driver
-    for kind, types in DRIVERS.items()
-    for backends in types.values()
-    for driver in backends.values()
-}
 
 
 @dataclass(frozen=True)
@@ -122,6 +139,58 @@ class Selection:
     backend: str
     config_class: type
     keys: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class DeviceSpec:
+    """A device YAML read and validated: what it selects and its config dataclass."""
+
+    path: str
+    kind: str
+    type_name: str
+    backend: str
+    config: Any
+
+    def build(self, clock: Clock | None = None, **transport: Any) -> Device:
+        """The device, not connected: its driver's ``from_config(config, clock=clock,
+        **transport)`` (``clock``: ``MonotonicClock`` when None)."""
+        device_class = _driver(self.kind, self.type_name, self.backend).device_class
+        return device_class.from_config(self.config, clock=clock, **transport)
+
+
+def load_device_config(
+    path: Path | str, backend: str | None = None, kind: str | None = None
+) -> DeviceSpec:
+    """Read and validate the device YAML at ``path``; ``backend`` overrides the file's, and
+    ``kind`` (e.g. ``"arm"``), when given, is required of the file's type. Raises
+    ConfigError naming the file and the key."""
+    if kind is not None and kind not in DRIVERS:
+        raise ValueError(f"unknown device kind {kind!r}; known: {', '.join(DRIVERS)}")
+    source = str(path)
+    data = load_yaml(path)
+    try:
+        selection = select(data, backend)
+    except ValueError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    if kind is not None and selection.kind != kind:
+        raise ConfigError(
+            f"{source}: key 'type': expected a device of kind '{kind}' "
+            f"({', '.join(DRIVERS[kind])}), got {selection.type_name!r} (kind '{selection.kind}')"
+        )
+    config = build(selection.config_class, selection.keys, source=source)
+    return DeviceSpec(source, selection.kind, selection.type_name, selection.backend, config)
+
+
+def load_device(
+    path: Path | str,
+    backend: str | None = None,
+    *,
+    kind: str | None = None,
+    clock: Clock | None = None,
+    **transport: Any,
+) -> Device:
+    """The device of the YAML at ``path``, built and not connected (see the module doc)."""
+    return load_device_config(path, backend, kind).build(clock, **transport)
 
 
 def kind_of(type_name: str) -> str:
@@ -156,49 +225,6 @@ def select(data: Mapping[str, Any], backend: str | None = None) -> Selection:
     return Selection(kind, type_name, chosen, driver.config_class, keys)
 
 
-def make_device(kind: str, config: Any, **transport: Any) -> Device:
-    """The device of ``kind`` for ``config`` (real driver or twin, by the config's class),
-    built by its ``from_config`` and not connected. ``transport`` passes on keyword
-    arguments of ``from_config`` (the Hand-E's ``arm=``)."""
-    driver = _DRIVER_OF_CONFIG.get((kind, type(config)))
-    if driver is None:
-        known = sorted(c.__name__ for k, c in _DRIVER_OF_CONFIG if k == kind)
-        raise TypeError(
-            f"no {kind} driver takes a {type(config).__name__}; expected one of: {', '.join(known)}"
-        )
-    return driver.device_class.from_config(config, **transport)
-
-
-def make_arm(config: XArm6Config, api: Any = None) -> Arm:
-    """The arm for ``config``: ``XArm6`` for an ``XArm6Config``, ``SimArm`` for a
-    ``SimArmConfig``. ``api``: an ``XArmAPI``-like object to use instead of a new one (the
-    twin ignores it)."""
-    return cast(Arm, make_device("arm", config, api=api))
-
-
-def make_gripper(config: HandEConfig, arm: Any = None) -> Gripper:
-    """The gripper for ``config``. ``arm``: the connected ``XArmAPI`` when a real Hand-E uses
-    the xArm tool port (``transport: xarm_tool``); the twin ignores it."""
-    return cast(Gripper, make_device("gripper", config, arm=arm))
-
-
-def make_tactile_sensor(config: TactileCameraConfig, capture_factory: Any = None) -> TactileSensor:
-    """The tactile camera for ``config``. ``capture_factory``: opens a capture for a device
-    node, instead of V4L2 (the twin ignores it)."""
-    transport = {} if capture_factory is None else {"capture_factory": capture_factory}
-    return cast(TactileSensor, make_device("tactile", config, **transport))
-
-
-def make_gamepad(config: GamepadConfig) -> Gamepad:
-    """The gamepad for ``config``."""
-    return cast(Gamepad, make_device("gamepad", config))
-
-
-def make_force_torque(config: SimForceTorqueConfig) -> ForceTorqueSensor:
-    """The force/torque sensor for ``config`` (the twin only, for now)."""
-    return cast(ForceTorqueSensor, make_device("force_torque", config))
-
-
 def _driver(kind: str, type_name: str, backend: str) -> Driver:
     if kind not in DRIVERS:
         raise ValueError(f"unknown device kind {kind!r}; known: {', '.join(DRIVERS)}")
@@ -218,3 +244,8 @@ def _driver(kind: str, type_name: str, backend: str) -> Driver:
             f"{', '.join(backends)}"
         )
     return backends[backend]
+
+
+def _load(reference: str) -> type:
+    module, name = reference.split(":")
+    return getattr(importlib.import_module(module), name)

@@ -16,10 +16,13 @@ exception from one device is reported as a failure of that device, so the others
 checked.
 
 Standard output holds exactly these lines (the xArm SDK's version banner, printed when the
-SDK is imported, goes to standard error).
+SDK is imported, goes to standard error). A silent device fails within its YAML's timeouts
+(the arm's ``connect_timeout_s``, the gripper's ``timeout_s`` x (1 + ``retries``), the
+camera's ``connect_timeout_s``); Ctrl-C stops the check at once.
 
 Exit status: 0 if every device is OK, 1 if any failed, 2 for bad arguments or a bad
-configuration file (one line on stderr, nothing is connected).
+configuration file (one line on stderr, nothing is connected), 130 when interrupted
+(Ctrl-C; one line on stderr).
 """
 
 from __future__ import annotations
@@ -28,14 +31,13 @@ import argparse
 import os
 import sys
 from collections.abc import Callable, Iterator, Sequence
-from contextlib import contextmanager, nullcontext, redirect_stdout
-from dataclasses import dataclass
+from contextlib import contextmanager, nullcontext
 from typing import Any, NoReturn
 
 from drivers import registry
-from drivers.arm import xarm_codes
+from drivers.arm import xarm_codes, xarm_sdk
 from drivers.base import Arm, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
-from drivers.config import CONFIG_ROOT, ConfigError, build, load_yaml
+from drivers.config import CONFIG_ROOT, ConfigError
 from drivers.errors import DeviceError, DeviceFaultError, DeviceNotConnectedError
 
 DEFAULT_CONFIGS = (
@@ -56,41 +58,27 @@ HINTS = {
     "force_torque": "the wrench source of the simulated sensor (docs/HARDWARE.md)",
 }
 FRAME_MAX_AGE_S = 1.0
-
-
-@dataclass(frozen=True)
-class Item:
-    """One device to check: its file, what the file selects, and its built config."""
-
-    path: str
-    selection: registry.Selection
-    config: Any
-
-
-def load_item(path: str, backend: str | None) -> Item:
-    """Load and validate one device YAML; ConfigError names the file and key."""
-    data = load_yaml(path)
-    try:
-        selection = registry.select(data, backend)
-    except ValueError as exc:
-        raise ConfigError(f"{path}: {exc}") from None
-    return Item(path, selection, build(selection.config_class, selection.keys, source=path))
+INTERRUPTED = 130  # 128 + SIGINT, as a shell reports a process ended by Ctrl-C
 
 
 # ------------------------------------------------------------------------------- readings
 
 
 def read_arm(arm: Arm) -> str:
-    state = arm.read_state()
-    if state.error_code or state.warning_code:
+    status = arm.read_status()
+    if status.error_code or status.warning_code:
         parts = []
-        if state.error_code:
-            parts.append(xarm_codes.describe_controller_error(state.error_code))
-        if state.warning_code:
-            parts.append(xarm_codes.describe_controller_warning(state.warning_code))
-        raise DeviceFaultError(arm.name, "; ".join(parts), state.error_code or state.warning_code)
-    x, y, z = state.tcp.xyz_m
-    return f"TCP at ({x:.3f}, {y:.3f}, {z:.3f}) m in B, mode {state.mode}, state {state.state}"
+        if status.error_code:
+            parts.append(xarm_codes.describe_controller_error(status.error_code))
+        if status.warning_code:
+            parts.append(xarm_codes.describe_controller_warning(status.warning_code))
+        code = status.error_code or status.warning_code
+        raise DeviceFaultError(arm.name, "; ".join(parts), code)
+    x, y, z = status.tcp.xyz_m
+    return (
+        f"TCP at ({x:.3f}, {y:.3f}, {z:.3f}) m in B, mode {status.mode.value}, "
+        f"state {status.state.value}"
+    )
 
 
 def read_gripper(gripper: Gripper) -> str:
@@ -142,53 +130,51 @@ READERS: dict[str, Callable[[Any], str]] = {
 
 @contextmanager
 def tool_port(arm_config: Any) -> Iterator[Any]:
-    """A connected ``XArmAPI`` to reach a Hand-E on the xArm's tool RS-485 port."""
-    from xarm.wrapper import XArmAPI
-
-    api = XArmAPI(arm_config.ip, is_radian=True, do_not_open=True)
+    """A connected ``XArmAPI`` to reach a Hand-E on the xArm's tool RS-485 port, connected
+    and answering within the arm's ``connect_timeout_s`` and ``io_timeout_s``. Nothing moves:
+    the arm is not enabled."""
+    api = xarm_sdk.InterruptibleApi(xarm_sdk.new_api(arm_config.ip))
     try:
-        api.connect()
-    except Exception as exc:  # the SDK raises a bare Exception ('connect socket failed')
-        api.disconnect()
-        raise DeviceNotConnectedError(
-            arm_config.name,
-            f"cannot connect to the xArm at {arm_config.ip} to reach the tool port ({exc})",
-        ) from exc
-    try:
+        xarm_sdk.connect(
+            api.wrapped,
+            ip=arm_config.ip,
+            device=f"{arm_config.name} (tool port)",
+            timeout_s=arm_config.connect_timeout_s,
+            io_timeout_s=arm_config.io_timeout_s,
+        )
         yield api
     finally:
         api.disconnect()
 
 
-def probe(item: Item, arm_config: Any = None) -> tuple[bool, str]:
+def probe(spec: registry.DeviceSpec, arm_config: Any = None) -> tuple[bool, str]:
     """Connect, read, disconnect: (ok, reading or what went wrong)."""
-    kind = item.selection.kind
+    kind = spec.kind
+    culprit = "arm"  # until the tool port's arm is reached
     try:
         via_arm = tool_port(arm_config) if arm_config is not None else nullcontext()
         with via_arm as arm_api:
+            culprit = kind
             transport = {"arm": arm_api} if kind == "gripper" else {}
-            with registry.make_device(kind, item.config, **transport) as device:
+            with spec.build(**transport) as device:
                 return True, READERS[kind](device)
     except DeviceError as exc:
-        return False, f"{type(exc).__name__}: {exc}. Check {HINTS[kind]}"
+        return False, f"{type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
     except Exception as exc:  # a diagnostic tool reports every failure and goes on
-        return False, f"unexpected {type(exc).__name__}: {exc}. Check {HINTS[kind]}"
+        return False, f"unexpected {type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
 
 
-def tool_port_arm(item: Item, items: Sequence[Item]) -> Any:
+def tool_port_arm(spec: registry.DeviceSpec, specs: Sequence[registry.DeviceSpec]) -> Any:
     """The arm config through which a real Hand-E on ``transport: xarm_tool`` is reached,
     or None when the gripper does not need one."""
-    selection = item.selection
     if not (
-        selection.kind == "gripper"
-        and selection.backend == "real"
-        and item.config.transport == "xarm_tool"
+        spec.kind == "gripper" and spec.backend == "real" and spec.config.transport == "xarm_tool"
     ):
         return None
-    arms = [i for i in items if i.selection.kind == "arm" and i.selection.backend == "real"]
+    arms = [s for s in specs if s.kind == "arm" and s.backend == "real"]
     if not arms:
         raise ConfigError(
-            f"{item.path}: key 'transport': 'xarm_tool' reaches the gripper through the arm; "
+            f"{spec.path}: key 'transport': 'xarm_tool' reaches the gripper through the arm; "
             "give the arm's YAML (backend real) as well"
         )
     return arms[0].config
@@ -224,22 +210,27 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     paths = args.configs or [str(p) for p in DEFAULT_CONFIGS]
     try:
-        items = [load_item(path, args.backend) for path in paths]
-        arm_configs = [tool_port_arm(item, items) for item in items]
+        specs = [registry.load_device_config(path, args.backend) for path in paths]
+        arm_configs = [tool_port_arm(spec, specs) for spec in specs]
     except ConfigError as exc:
         print(f"check_hardware: error: {exc}", file=sys.stderr)
         return 2
-    if any(i.selection.kind == "arm" and i.selection.backend == "real" for i in items):
-        with redirect_stdout(sys.stderr):  # the SDK prints 'SDK_VERSION: ...' on import
-            import xarm.wrapper  # noqa: F401
     failures = 0
-    for item, arm_config in zip(items, arm_configs, strict=True):
-        ok, text = probe(item, arm_config)
-        failures += not ok
-        selection = item.selection
-        device = f"{selection.kind} {selection.type_name}/{selection.backend}"
-        print(f"{'OK' if ok else 'FAIL':<4} {device:<32} {_shown(item.path)}: {text}", flush=True)
+    try:
+        for spec, arm_config in zip(specs, arm_configs, strict=True):
+            failures += not check(spec, arm_config)
+    except KeyboardInterrupt:
+        print("check_hardware: interrupted", file=sys.stderr)
+        return INTERRUPTED
     return 1 if failures else 0
+
+
+def check(spec: registry.DeviceSpec, arm_config: Any) -> bool:
+    """Probe one device and print its line; True if it is OK."""
+    ok, text = probe(spec, arm_config)
+    device = f"{spec.kind} {spec.type_name}/{spec.backend}"
+    print(f"{'OK' if ok else 'FAIL':<4} {device:<32} {_shown(spec.path)}: {text}", flush=True)
+    return ok
 
 
 if __name__ == "__main__":

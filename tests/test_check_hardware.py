@@ -3,13 +3,19 @@
 from __future__ import annotations
 
 import importlib.util
+import os
+import pty
+import signal
 import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 import yaml
+
+from tests.drivers.silent_controller import SilentController
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "scripts" / "check_hardware.py"
@@ -147,3 +153,104 @@ def test_a_sim_only_type_refuses_the_real_backend(capsys):
         check_hardware.main([str(CONFIGS / "force_torque" / "jig.yaml"), "--backend", "real"]) == 2
     )
     assert "has no 'real' driver yet; known: sim" in capsys.readouterr().err
+
+
+# ------------------------------------------------------------------------------- silence
+
+
+@pytest.fixture
+def silent_controller():
+    """A loopback host that accepts on the xArm SDK's port 502 and never answers."""
+    host = SilentController()
+    try:
+        host.__enter__()
+    except PermissionError:
+        pytest.skip("binding TCP port 502 needs root or CAP_NET_BIND_SERVICE")
+    try:
+        yield host
+    finally:
+        host.__exit__()
+
+
+def run_script(*args: str, timeout_s: float) -> tuple[subprocess.CompletedProcess, float]:
+    started = time.monotonic()
+    result = subprocess.run(
+        [sys.executable, str(SCRIPT), *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=timeout_s,
+    )
+    return result, time.monotonic() - started
+
+
+def test_a_silent_arm_and_its_tool_port_gripper_fail_within_the_timeout(
+    tmp_path, silent_controller
+):
+    """The arm accepts TCP and never replies: each device fails in connect_timeout_s (0.5 s
+    here) with one line, instead of the SDK's four minutes."""
+    arm = variant(
+        tmp_path, CONFIGS / "robot" / "xarm6.yaml", "arm.yaml",
+        ip=silent_controller.ip, connect_timeout_s=0.5,
+    )  # fmt: skip
+    gripper = variant(tmp_path, CONFIGS / "gripper" / "hande.yaml", "g.yaml", transport="xarm_tool")
+    result, elapsed_s = run_script(arm, gripper, "--backend", "real", timeout_s=60)
+    assert result.returncode == 1, result.stdout + result.stderr
+    assert elapsed_s < 2 * 0.5 + 3.0  # two connects of 0.5 s, plus start-up and a margin
+    lines = result.stdout.splitlines()
+    assert len(lines) == 2
+    assert lines[0].startswith("FAIL arm xarm6/real")
+    assert lines[1].startswith("FAIL gripper hande/real")
+    for line in lines:
+        assert f"DeviceTimeoutError: xarm6{' (tool port)' if 'gripper' in line else ''}: " in line
+        assert "accepted the connection but did not answer within 0.5 s" in line
+        assert line.endswith("key 'ip' (docs/HARDWARE.md, xArm6)")  # the arm's hint, both
+    stderr = result.stderr.splitlines()  # the SDK's banner, nothing of its log
+    assert len(stderr) == 1 and stderr[0].startswith("SDK_VERSION: ")
+
+
+def test_ctrl_c_during_a_silent_connect_ends_at_once(tmp_path, silent_controller):
+    arm = variant(
+        tmp_path, CONFIGS / "robot" / "xarm6.yaml", "arm.yaml",
+        ip=silent_controller.ip, connect_timeout_s=30.0,
+    )  # fmt: skip
+    process = subprocess.Popen(
+        [sys.executable, str(SCRIPT), arm, "--backend", "real"],
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert silent_controller.accepted.wait(20.0), "the script never reached the arm"
+        time.sleep(0.3)  # inside the SDK's connect, waiting for a reply
+        process.send_signal(signal.SIGINT)
+        sent = time.monotonic()
+        out, err = process.communicate(timeout=10.0)
+        elapsed_s = time.monotonic() - sent
+    finally:
+        process.kill()
+    assert process.returncode == 130
+    assert elapsed_s < 3.0  # not the 30 s connect timeout
+    assert out == ""
+    assert err.splitlines()[-1] == "check_hardware: interrupted" and "Traceback" not in err
+
+
+def test_a_silent_serial_gripper_fails_in_its_attempts_and_pymodbus_stays_quiet(tmp_path):
+    """A pseudo-terminal with nothing behind it: 3 attempts of 0.1 s, then one FAIL line.
+    pymodbus logs every timeout itself; none of it may reach the terminal."""
+    controller, device = pty.openpty()
+    try:
+        gripper = variant(
+            tmp_path, CONFIGS / "gripper" / "hande.yaml", "g.yaml",
+            port=os.ttyname(device), timeout_s=0.1, retries=2,
+        )  # fmt: skip
+        result, _ = run_script(gripper, "--backend", "real", timeout_s=60)
+    finally:
+        os.close(controller)
+        os.close(device)
+    assert result.returncode == 1
+    line = result.stdout.strip()
+    assert line.startswith("FAIL gripper hande/real") and "\n" not in line
+    assert "DeviceTimeoutError" in line and "3 attempt(s) of 0.1 s" in line
+    assert result.stderr == ""

@@ -4,13 +4,20 @@ Units. Our side is SI in the base frame B (m, rad, m/s, rad/s). The SDK speaks m
 for angles, degrees or radians depending on ``is_radian``. ``from_config`` builds
 ``XArmAPI(ip, is_radian=True, do_not_open=True)`` and every call passes ``is_radian=True``
 explicitly, so angles cross unchanged (no degree round-off) and the only conversion is
-m <-> mm, done here and nowhere else.
+m <-> mm, done here and nowhere else. Mode and state codes become ``ArmMode``/``ArmState``
+here too (``drivers.arm.xarm_codes``).
 
 Modes. ``move_to`` uses mode 0 (position, ``set_position``), ``servo_pose`` mode 1 (servo
 Cartesian, ``set_servo_cartesian``), ``move_velocity`` mode 5 (Cartesian velocity,
 ``vc_set_cartesian_velocity`` always with a positive ``duration``, the controller's
 watchdog). Entering a mode runs ``motion_enable(True)``, ``set_mode(m)``, ``set_state(0)``,
 the order the SDK documents (``XArmAPI.clean_error``/``set_mode`` docstrings).
+
+Silence and Ctrl-C (``drivers.arm.xarm_sdk``). ``connect()`` gives up after
+``connect_timeout_s`` (DeviceTimeoutError) even when the controller accepts the TCP
+connection and never replies; every reply is then awaited at most ``io_timeout_s``
+(API code 3: DeviceTimeoutError), a waited move at most ``move_timeout_s``. SDK calls made
+from the main thread wait interruptibly, so Ctrl-C always raises KeyboardInterrupt at once.
 
 Safety envelope. Every target, step and twist passes through ``drivers.arm.envelope``
 before it reaches the SDK (see that module for the policy). Servo streams start from the
@@ -25,7 +32,7 @@ error/warning callback (and any failed motion command) latches a fault and stops
 (``set_state(4)``); until ``clear_fault()`` every motion command raises DeviceFaultError.
 Any controller warning counts as a fault: the controller reports rejected commands as
 warnings (e.g. W14, no solution), so the arm is not where it was told to be.
-``read_state`` still works while faulted and reports the controller's codes.
+``read_status`` still works while faulted and reports the controller's codes.
 """
 
 from __future__ import annotations
@@ -34,14 +41,13 @@ import ipaddress
 import logging
 import math
 import threading
-import time
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from drivers.arm import xarm_codes
+from drivers.arm import xarm_codes, xarm_sdk
 from drivers.arm.envelope import (
     SafetyEnvelope,
     clamp_pose,
@@ -50,7 +56,8 @@ from drivers.arm.envelope import (
     rotation_from_rpy,
     timed_servo_target,
 )
-from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
+from drivers.base import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
+from drivers.clock import Clock, MonotonicClock
 from drivers.config import Config, number
 from drivers.errors import (
     DeviceError,
@@ -62,11 +69,6 @@ from drivers.errors import (
 _LOG = logging.getLogger(__name__)
 
 MM_PER_M = 1000.0
-MODE_POSITION = 0
-MODE_SERVO = 1
-MODE_VELOCITY = 5
-STATE_READY = 0  # set_state(0): motion state
-STATE_STOP = 4  # set_state(4): stop; the controller needs set_state(0) to move again
 MIN_VELOCITY_FIRMWARE = (1, 8, 0)  # vc_set_cartesian_velocity ignores duration before this
 _ENTRY_TOLERANCE_M = 1e-3
 _ENTRY_TOLERANCE_RAD = 1e-2
@@ -100,7 +102,9 @@ class XArm6Config(Config):
     ``ip``: the control box's IPv4 address. ``servo_rate_hz``: nominal servo streaming rate
     (50-200 Hz), the step budget of the first command of a stream. ``velocity_timeout_s``:
     the longest a velocity command may be held (watchdog ceiling). ``move_timeout_s``: the
-    longest a waited position move may take.
+    longest a waited position move may take. ``connect_timeout_s``: the longest
+    ``connect()`` waits for the controller to answer. ``io_timeout_s``: the longest any
+    request waits for its reply.
     """
 
     ip: str
@@ -110,6 +114,8 @@ class XArm6Config(Config):
     tcp: TcpConfig
     envelope: SafetyEnvelope
     name: str = "xarm6"
+    connect_timeout_s: float = number(0.5, 60.0, default=5.0)
+    io_timeout_s: float = number(0.05, 10.0, default=2.0)
 
     def __post_init__(self) -> None:
         try:
@@ -122,31 +128,31 @@ class XArm6Config(Config):
 
 class XArm6(ContextManagedDevice):
     """An xArm6 commanded at its TCP in B. ``api`` is an ``xarm.wrapper.XArmAPI`` (or a
-    faithful fake) not yet connected; ``clock`` gives seconds (monotonic) for timestamps
-    and the servo step budget."""
+    faithful fake) not yet connected; ``clock`` stamps readings and times the servo step
+    budget (``MonotonicClock`` when None)."""
 
-    def __init__(
-        self, config: XArm6Config, api: Any, clock: Callable[[], float] = time.monotonic
-    ) -> None:
+    def __init__(self, config: XArm6Config, api: Any, clock: Clock | None = None) -> None:
         self.config = config
         self.name = config.name
-        self._api = api
-        self._clock = clock
+        self._api = xarm_sdk.InterruptibleApi(api)
+        self._clock = clock if clock is not None else MonotonicClock()
         self._fault_lock = threading.Lock()
         self._fault: DeviceFaultError | None = None
-        self._mode: int | None = None  # None: not armed (after connect failure or a stop)
+        self._mode: ArmMode | None = None  # None: not armed (after connect failure or a stop)
         self._servo_reference: Pose | None = None
         self._servo_time_s: float | None = None
 
     @classmethod
-    def from_config(cls, config: XArm6Config, api: Any = None) -> XArm6:
+    def from_config(cls, config: XArm6Config, clock: Clock | None = None, api: Any = None) -> XArm6:
         """The driver over ``api``, by default a real ``XArmAPI`` for ``config.ip`` (not
         connected yet)."""
-        if api is None:
-            from xarm.wrapper import XArmAPI
+        return cls(config, api if api is not None else xarm_sdk.new_api(config.ip), clock)
 
-            api = XArmAPI(config.ip, is_radian=True, do_not_open=True)
-        return cls(config, api)
+    @property
+    def api(self) -> xarm_sdk.InterruptibleApi:
+        """The SDK object (calls interruptible): what a Hand-E on the tool port talks through
+        (``HandE.from_config(config, arm=xarm6.api)``)."""
+        return self._api
 
     # ----------------------------------------------------------------- lifecycle
 
@@ -163,22 +169,27 @@ class XArm6(ContextManagedDevice):
     def connect(self) -> None:
         """Open the connection, read the controller's codes, arm mode 0 and set the TCP.
 
-        A controller error or warning found here is latched (not raised): the arm stays
+        Raises DeviceNotConnectedError when the controller cannot be reached and
+        DeviceTimeoutError when it does not answer within ``connect_timeout_s``. A
+        controller error or warning found here is latched (not raised): the arm stays
         unarmed and the first motion command says to call ``clear_fault()``.
         """
         if self.is_connected:
             return
+        cfg = self.config
         self._api.register_error_warn_changed_callback(self._on_error_warn)
         try:
-            self._api.connect()
-        except Exception as exc:  # the SDK raises a bare Exception ('connect socket failed')
+            xarm_sdk.connect(
+                self._api.wrapped,
+                ip=cfg.ip,
+                device=self.name,
+                timeout_s=cfg.connect_timeout_s,
+                io_timeout_s=cfg.io_timeout_s,
+            )
+        except BaseException:
             self._api.release_error_warn_changed_callback(self._on_error_warn)
             self._api.disconnect()  # closes the socket the SDK opened and left behind
-            raise DeviceNotConnectedError(
-                self.name,
-                f"cannot connect to the controller at {self.config.ip} ({exc}); check that the "
-                "control box is on, the Ethernet link is up and key 'ip' is right",
-            ) from exc
+            raise
         try:
             if not self.is_connected:
                 raise DeviceNotConnectedError(
@@ -188,7 +199,7 @@ class XArm6(ContextManagedDevice):
             if error or warning:
                 self._latch(self._controller_fault(error, warning))
             if self.fault is None:
-                self._arm(MODE_POSITION)
+                self._arm(ArmMode.POSITION)
                 self._configure_tcp()
         except BaseException:
             self.disconnect()
@@ -197,7 +208,7 @@ class XArm6(ContextManagedDevice):
     def disconnect(self) -> None:
         """Stop any motion (best effort), release the SDK callback and close. Idempotent."""
         if self.is_connected:
-            code = self._api.set_state(STATE_STOP)
+            code = self._api.set_state(xarm_codes.SET_STATE_STOP)
             if code != 0:
                 _LOG.warning(
                     "%s: stop before disconnect: %s", self.name, xarm_codes.describe_api_code(code)
@@ -208,20 +219,20 @@ class XArm6(ContextManagedDevice):
 
     # ----------------------------------------------------------------- reading
 
-    def read_state(self) -> ArmState:
+    def read_status(self) -> ArmStatus:
         """TCP pose in B (m, rad), joint angles (rad), mode, state and the controller's
         error/warning codes. Works while a fault is latched."""
         self._require_connected()
         tcp = self._read_pose()
-        t_s = self._clock()
+        t_s = self._clock.now()
         code, joints = self._api.get_servo_angle(is_radian=True)
         self._check_reply(code, joints, "get_servo_angle(is_radian=True)")
-        return ArmState(
+        return ArmStatus(
             t_s=t_s,
             tcp=tcp,
             joints_rad=tuple(float(q) for q in joints[:6]),
-            mode=int(self._api.mode),
-            state=int(self._api.state),
+            mode=xarm_codes.mode_from_code(int(self._api.mode)),
+            state=xarm_codes.state_from_code(int(self._api.state)),
             error_code=int(self._api.error_code),
             warning_code=int(self._api.warn_code),
         )
@@ -237,7 +248,7 @@ class XArm6(ContextManagedDevice):
         self._prepare_motion()
         goal = clamp_pose(target, self.config.envelope)
         speed = min(speed_m_s, self.config.envelope.max_speed_m_s)
-        self._enter_mode(MODE_POSITION)
+        self._enter_mode(ArmMode.POSITION)
         x, y, z, roll, pitch, yaw = _sdk_pose(goal)
         code = self._api.set_position(
             x=x, y=y, z=z, roll=roll, pitch=pitch, yaw=yaw,
@@ -251,9 +262,9 @@ class XArm6(ContextManagedDevice):
         previous command by at most the step bounds (and speed x elapsed time)."""
         require_finite("target", (*target.xyz_m, *target.rpy_rad))
         self._prepare_motion()
-        self._enter_mode(MODE_SERVO)
+        self._enter_mode(ArmMode.SERVO)
         env = self.config.envelope
-        now = self._clock()
+        now = self._clock.now()
         command = timed_servo_target(
             self._servo_reference,
             target,
@@ -280,7 +291,7 @@ class XArm6(ContextManagedDevice):
             )
         self._prepare_motion()
         duration = min(duration_s, self.config.velocity_timeout_s)
-        self._enter_mode(MODE_VELOCITY)
+        self._enter_mode(ArmMode.VELOCITY)
         command = clamp_twist(self._read_pose(), twist, duration, self.config.envelope)
         code = self._api.vc_set_cartesian_velocity(
             _sdk_twist(command), is_radian=True, is_tool_coord=False, duration=duration
@@ -294,7 +305,7 @@ class XArm6(ContextManagedDevice):
         self._require_connected()
         if self.fault is not None or self._mode is None:
             self._safe_stop()
-        elif self._mode == MODE_VELOCITY:
+        elif self._mode is ArmMode.VELOCITY:
             code = self._api.vc_set_cartesian_velocity(
                 [0.0] * 6, is_radian=True, is_tool_coord=False,
                 duration=self.config.velocity_timeout_s,
@@ -302,7 +313,7 @@ class XArm6(ContextManagedDevice):
             self._check_motion(code, "vc_set_cartesian_velocity(zero)")
         else:
             mode = self._mode
-            self._check(self._api.set_state(STATE_STOP), "set_state(4)")
+            self._check(self._api.set_state(xarm_codes.SET_STATE_STOP), "set_state(4)")
             self._arm(mode)
 
     def emergency_stop(self) -> None:
@@ -314,7 +325,7 @@ class XArm6(ContextManagedDevice):
         self._mode = None
         self._latch(DeviceFaultError(self.name, "emergency stop requested; call clear_fault()"))
         state = self._api.state
-        if state != STATE_STOP:
+        if state != xarm_codes.STATE_STOPPED:
             raise DeviceFaultError(
                 self.name, f"emergency stop not confirmed: controller state {state}, expected 4"
             )
@@ -340,22 +351,23 @@ class XArm6(ContextManagedDevice):
             )
         with self._fault_lock:
             self._fault = None
-        self._arm(MODE_POSITION)
+        self._arm(ArmMode.POSITION)
         self._configure_tcp()
 
     # ----------------------------------------------------------------- internals
 
-    def _arm(self, mode: int) -> None:
+    def _arm(self, mode: ArmMode) -> None:
         self._mode = None
         self._servo_reference = None
         self._servo_time_s = None
+        code = xarm_codes.MODE_CODES[mode]
         self._check(self._api.motion_enable(enable=True), "motion_enable(True)")
-        self._check(self._api.set_mode(mode), f"set_mode({mode})")
-        self._check(self._api.set_state(STATE_READY), "set_state(0)")
+        self._check(self._api.set_mode(code), f"set_mode({code})")
+        self._check(self._api.set_state(xarm_codes.SET_STATE_READY), "set_state(0)")
         self._mode = mode
 
-    def _enter_mode(self, mode: int) -> None:
-        if mode == MODE_VELOCITY and tuple(self._api.version_number) < MIN_VELOCITY_FIRMWARE:
+    def _enter_mode(self, mode: ArmMode) -> None:
+        if mode is ArmMode.VELOCITY and tuple(self._api.version_number) < MIN_VELOCITY_FIRMWARE:
             raise DeviceFaultError(
                 self.name,
                 f"firmware {self._api.version_number} ignores the velocity watchdog duration "
@@ -363,7 +375,7 @@ class XArm6(ContextManagedDevice):
             )
         if self._mode != mode:
             self._arm(mode)
-        if mode == MODE_SERVO and self._servo_reference is None:
+        if mode is ArmMode.SERVO and self._servo_reference is None:
             measured = self._read_pose()
             start = clamp_pose(measured, self.config.envelope)
             offset_m = float(np.linalg.norm(np.subtract(measured.xyz_m, start.xyz_m)))
@@ -472,7 +484,7 @@ class XArm6(ContextManagedDevice):
     def _safe_stop(self) -> None:
         """Best effort, never raises: stop the arm (state 4); it stays unarmed."""
         self._mode = None
-        code = self._api.set_state(STATE_STOP)
+        code = self._api.set_state(xarm_codes.SET_STATE_STOP)
         if code != 0:
             _LOG.warning("%s: safe stop failed: %s", self.name, xarm_codes.describe_api_code(code))
 

@@ -1,6 +1,6 @@
 """Meanings of the xArm SDK's codes, for error messages.
 
-Three code spaces, never to be mixed up:
+Four code spaces, never to be mixed up:
 
 * **API codes**: the ``code`` every ``XArmAPI`` call returns (0 = success). Table below,
   from the SDK's documentation ``doc/api/xarm_api_code.md`` ("API Code") and its
@@ -9,9 +9,17 @@ Three code spaces, never to be mixed up:
   (``XArmAPI.warn_code``): looked up in the SDK's own tables
   (``xarm/core/config/x_code.py``: ``ControllerError``, ``ControllerWarn``), which give a
   title and what to do.
+* **Mode and state codes**: what ``set_mode``/``set_state`` take and ``XArmAPI.mode``/
+  ``XArmAPI.state`` report (the SDK's docstrings of those properties). The driver maps them
+  to ``drivers.base.ArmMode``/``ArmState`` here; no raw mode or state code leaves
+  ``drivers.arm``. Note that the *command* ``set_state(0)`` ("ready to move") is answered
+  by the *reported* state 2 ("sleeping": armed, at rest).
 """
 
 from __future__ import annotations
+
+from drivers.arm.xarm_sdk import import_sdk
+from drivers.base import ArmMode, ArmState
 
 API_CODE_MEANINGS: dict[int, str] = {
     -12: "running a Blockly app failed",
@@ -42,11 +50,37 @@ API_CODE_MEANINGS: dict[int, str] = {
     101: "too many consecutive failed state checks while waiting",
 }
 
+MODE_CODES: dict[ArmMode, int] = {ArmMode.POSITION: 0, ArmMode.SERVO: 1, ArmMode.VELOCITY: 5}
+"""The ``set_mode`` code of each mode the driver commands."""
+
+_MODE_OF_CODE = {
+    0: ArmMode.POSITION,
+    1: ArmMode.SERVO,
+    2: ArmMode.MANUAL,  # joint teaching
+    3: ArmMode.MANUAL,  # Cartesian teaching
+    5: ArmMode.VELOCITY,  # Cartesian velocity (4 is joint velocity: OTHER)
+}
+_STATE_OF_CODE = {1: ArmState.MOVING, 2: ArmState.READY, 3: ArmState.PAUSED, 4: ArmState.STOPPED}
+
+SET_STATE_READY = 0  # set_state(0): enable motion in the mode set last
+SET_STATE_STOP = 4  # set_state(4): stop and drop queued motion; the controller reports state 4
+STATE_STOPPED = 4  # the reported state after set_state(4)
+
 NOT_CONNECTED = -1
 HAS_ERROR = 1
 HAS_WARNING = 2
 REPLY_TIMEOUT = 3
 WAIT_FINISH_TIMEOUT = 100
+
+
+def mode_from_code(code: int) -> ArmMode:
+    """The ``ArmMode`` of a mode code reported by ``XArmAPI.mode``."""
+    return _MODE_OF_CODE.get(code, ArmMode.OTHER)
+
+
+def state_from_code(code: int) -> ArmState:
+    """The ``ArmState`` of a state code reported by ``XArmAPI.state``."""
+    return _STATE_OF_CODE.get(code, ArmState.UNKNOWN)
 
 
 def describe_api_code(code: int) -> str:
@@ -56,6 +90,7 @@ def describe_api_code(code: int) -> str:
 
 def describe_controller_error(code: int) -> str:
     """``"controller error C<code>: title. what to do"`` from the SDK's error table."""
+    import_sdk()
     from xarm.core.config.x_code import ControllerError
 
     return _describe("controller error C", ControllerError(code))
@@ -63,6 +98,7 @@ def describe_controller_error(code: int) -> str:
 
 def describe_controller_warning(code: int) -> str:
     """``"controller warning W<code>: title. what to do"`` from the SDK's warning table."""
+    import_sdk()
     from xarm.core.config.x_code import ControllerWarn
 
     return _describe("controller warning W", ControllerWarn(code))

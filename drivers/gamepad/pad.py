@@ -26,7 +26,6 @@ whether a pad is attached right now.
 from __future__ import annotations
 
 import os
-import time
 from typing import Self
 
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout at import
@@ -35,6 +34,7 @@ import pygame  # noqa: E402
 from pygame._sdl2 import controller as sdl_controller  # noqa: E402
 
 from drivers.base import ContextManagedDevice, GamepadState  # noqa: E402
+from drivers.clock import Clock, MonotonicClock  # noqa: E402
 from drivers.errors import DeviceNotConnectedError  # noqa: E402
 from drivers.gamepad.mapping import GamepadConfig, axis_value  # noqa: E402
 
@@ -87,19 +87,21 @@ class PygameGamepad(ContextManagedDevice):
     """An Xbox / PS4 / PS5 pad read through SDL's game-controller API.
 
     ``read()`` gives axes and buttons by action name as mapped in ``GamepadConfig``; axes are
-    dimensionless in [-1, 1] after the dead zone (see ``drivers.gamepad.mapping``).
+    dimensionless in [-1, 1] after the dead zone (see ``drivers.gamepad.mapping``). ``clock``
+    stamps the readings (``MonotonicClock`` when None). SDL calls never block.
     """
 
-    def __init__(self, config: GamepadConfig) -> None:
+    def __init__(self, config: GamepadConfig, clock: Clock | None = None) -> None:
         self.config = config
         self.name = config.name
+        self._clock = clock if clock is not None else MonotonicClock()
         self._open = False
         self._pad: sdl_controller.Controller | None = None
 
     @classmethod
-    def from_config(cls, config: GamepadConfig) -> Self:
+    def from_config(cls, config: GamepadConfig, clock: Clock | None = None) -> Self:
         """Build the driver; SDL needs no transport object, so this is the constructor."""
-        return cls(config)
+        return cls(config, clock)
 
     @property
     def is_connected(self) -> bool:
@@ -133,7 +135,7 @@ class PygameGamepad(ContextManagedDevice):
         self._open = False
 
     def read(self) -> GamepadState:
-        """Pump SDL events, follow hot-plug, and return the mapped state (``t_s`` monotonic).
+        """Pump SDL events, follow hot-plug, and return the mapped state (``t_s`` on the clock).
 
         While no pad is attached the state is safe: ``connected=False``, axes 0.0, buttons
         released. Raises ``DeviceNotConnectedError`` before ``connect()``.
@@ -150,7 +152,7 @@ class PygameGamepad(ContextManagedDevice):
         # 2.6 fails converting a JOYDEVICEREMOVED whose JOYDEVICEADDED it converted after the
         # device had gone (a plug/unplug between two reads): SystemError from a KeyError.
         pygame.event.clear(pump=False)
-        t_s = time.monotonic()
+        t_s = self._clock.now()
         pad = self._pad
         cfg = self.config
         if pad is None:

@@ -10,6 +10,10 @@ Behaviour worth knowing:
 - ``move()`` only sends the go-to command; poll ``read_status()`` (or ``wait_until_stopped``).
 - Every register transaction is retried ``retries`` times on timeouts, then raises
   ``DeviceTimeoutError`` naming the port, baud rate and slave id; the driver stays usable.
+  Each attempt waits at most ``timeout_s`` (on the xArm tool port: the arm's
+  ``io_timeout_s``), so ``connect()`` (one status read) and every call against a silent
+  gripper fail within ``(1 + retries)`` attempts; ``activate()`` polls at most
+  ``activation_timeout_s`` on the clock.
 - The gripper accepts at most 200 commands per second. Transactions faster than
   ``max_rate_hz`` are delayed until their slot, never dropped: a silently dropped gripper
   command is worse than a delay of a few milliseconds.
@@ -18,16 +22,16 @@ Behaviour worth knowing:
 from __future__ import annotations
 
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
 from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
+from drivers.clock import Clock, MonotonicClock
 from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
-from drivers.gripper.transport import ModbusRtuTransport, RegisterTransport, XArmToolTransport
+from drivers.gripper.transport import RegisterTransport, XArmToolTransport
 
 T = TypeVar("T")
 
@@ -66,12 +70,16 @@ class HandEConfig(Config):
 
 
 class HandE(ContextManagedDevice):
-    """Robotiq Hand-E gripper; see the module docstring. Thread-safe."""
+    """Robotiq Hand-E gripper; see the module docstring. Thread-safe. ``clock`` stamps the
+    status, paces the commands and times the polling (``MonotonicClock`` when None)."""
 
-    def __init__(self, config: HandEConfig, transport: RegisterTransport) -> None:
+    def __init__(
+        self, config: HandEConfig, transport: RegisterTransport, clock: Clock | None = None
+    ) -> None:
         self.config = config
         self.name = config.name
         self._transport = transport
+        self._clock = clock if clock is not None else MonotonicClock()
         self._connected = False
         self._activated = False
         self._requested_position: int | None = None  # rPR of the last go-to command
@@ -79,9 +87,9 @@ class HandE(ContextManagedDevice):
         self._next_slot_s = 0.0
 
     @classmethod
-    def from_config(cls, config: HandEConfig, arm: Any = None) -> HandE:
-        """Build the driver with its real transport; ``arm`` is the connected ``XArmAPI``
-        when ``config.transport == "xarm_tool"``."""
+    def from_config(cls, config: HandEConfig, clock: Clock | None = None, arm: Any = None) -> HandE:
+        """Build the driver with its real transport (not opened); ``arm`` is the connected
+        ``XArmAPI`` (e.g. ``XArm6.api``) when ``config.transport == "xarm_tool"``."""
         transport: RegisterTransport
         if config.transport == "xarm_tool":
             if arm is None:
@@ -94,6 +102,8 @@ class HandE(ContextManagedDevice):
                 device=config.name,
             )
         else:
+            from drivers.gripper.modbus_rtu import ModbusRtuTransport  # pymodbus: only here
+
             transport = ModbusRtuTransport.for_serial_port(
                 config.port,
                 baudrate=config.baudrate,
@@ -101,7 +111,7 @@ class HandE(ContextManagedDevice):
                 timeout_s=config.timeout_s,
                 device=config.name,
             )
-        return cls(config, transport)
+        return cls(config, transport, clock)
 
     # -- lifecycle ---------------------------------------------------------------------
 
@@ -143,7 +153,7 @@ class HandE(ContextManagedDevice):
             self._requested_position = None  # the reset cancels any go-to command
             self._write_command(act=False, go=False, position=0, speed=0, force=0)
             self._write_command(act=True, go=False, position=0, speed=0, force=0)
-        deadline = time.monotonic() + self.config.activation_timeout_s
+        deadline = self._clock.now() + self.config.activation_timeout_s
         while True:
             raw = self._read_raw()
             if raw.gACT == 1 and raw.gSTA == regs.GSTA_ACTIVATED:
@@ -155,13 +165,13 @@ class HandE(ContextManagedDevice):
                     f"activation failed: {regs.fault_message(raw.gFLT, raw.kFLT)}",
                     code=raw.gFLT,
                 )
-            if time.monotonic() > deadline:
+            if self._clock.now() > deadline:
                 raise DeviceTimeoutError(
                     self.name,
                     f"activation did not complete within {self.config.activation_timeout_s} s "
                     f"(gSTA={raw.gSTA}); check that nothing blocks the fingers",
                 )
-            time.sleep(_POLL_PERIOD_S)
+            self._clock.sleep(_POLL_PERIOD_S)
 
     def move(self, width_m: float, speed_m_s: float, force_n: float) -> None:
         """Send the fingers toward an opening of ``width_m`` (m) at ``speed_m_s`` (m/s,
@@ -180,7 +190,7 @@ class HandE(ContextManagedDevice):
     def read_status(self) -> GripperStatus:
         """One status reading. Faults are reported in the status, not raised."""
         raw = self._read_raw()
-        t_s = time.monotonic()
+        t_s = self._clock.now()
         cfg = self.config
         # Until the position request echo gPR matches the last go-to command, the status
         # still describes the previous one. The manual says to ignore gOBJ when gGTO == 0
@@ -203,16 +213,16 @@ class HandE(ContextManagedDevice):
 
     def wait_until_stopped(self, timeout_s: float) -> GripperStatus:
         """Poll until the fingers stop (target reached or object met); returns that status."""
-        deadline = time.monotonic() + timeout_s
+        deadline = self._clock.now() + timeout_s
         while True:
             status = self.read_status()
             if not status.moving:
                 return status
-            if time.monotonic() > deadline:
+            if self._clock.now() > deadline:
                 raise DeviceTimeoutError(
                     self.name, f"fingers still moving after {timeout_s} s (at {status.width_m} m)"
                 )
-            time.sleep(_POLL_PERIOD_S)
+            self._clock.sleep(_POLL_PERIOD_S)
 
     # -- registers ---------------------------------------------------------------------
 
@@ -253,8 +263,8 @@ class HandE(ContextManagedDevice):
         ) from last
 
     def _wait_for_slot(self) -> None:
-        now = time.monotonic()
+        now = self._clock.now()
         if now < self._next_slot_s:
-            time.sleep(self._next_slot_s - now)
-            now = time.monotonic()
+            self._clock.sleep(self._next_slot_s - now)
+            now = self._clock.now()
         self._next_slot_s = now + 1.0 / self.config.max_rate_hz

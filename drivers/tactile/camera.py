@@ -15,8 +15,11 @@ Facts the defaults rest on:
 * DIGIT: digit-interface streams QVGA 320 x 240 at 60 fps by default (``DigitHandler.STREAMS``)
   and turns each frame with ``cv2.transpose`` then ``cv2.flip(frame, 0)``.
 
-A grabber thread keeps only the newest frame and the ``time.monotonic()`` instant its grab
-returned. ``read_latest(max_age_s)`` hands it over, or raises:
+A grabber thread opens and configures the capture, then keeps only the newest frame and the
+instant (on the injected clock) its grab returned; no camera call is made on the caller's
+thread, so ``connect()`` takes at most ``connect_timeout_s`` (plus the by-id lookup) even
+when opening the device hangs, and Ctrl-C interrupts it. ``read_latest(max_age_s)`` never
+waits: it hands the newest frame over, or raises:
 
 * DeviceNotConnectedError: not connected, or the camera was lost (its node disappeared, or
   ``max_read_failures`` grabs failed in a row);
@@ -30,7 +33,6 @@ from __future__ import annotations
 import logging
 import os
 import threading
-import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal, Protocol
@@ -39,6 +41,7 @@ import cv2
 import numpy as np
 
 from drivers.base import ContextManagedDevice, TactileFrame
+from drivers.clock import Clock, MonotonicClock
 from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.tactile.decode import FrameProcessor, JpegDownscale, cropped_size
@@ -141,19 +144,28 @@ def _fourcc_text(value: float) -> str:
 
 
 class _Grabber:
-    """Owns the capture once started: grabs, processes, keeps the newest frame, releases."""
+    """Opens the capture (``open_capture``) on its own thread, then owns it: grabs, processes,
+    keeps the newest frame, releases."""
 
     def __init__(
-        self, capture: Capture, node: str, config: TactileCameraConfig, processor: FrameProcessor
+        self,
+        open_capture: Callable[[], Capture],
+        node: str,
+        config: TactileCameraConfig,
+        processor: FrameProcessor,
+        clock: Clock,
     ) -> None:
-        self._capture = capture
+        self._open_capture = open_capture
         self._node = node
         self._config = config
         self._processor = processor
+        self._clock = clock
         self._lock = threading.Lock()
         self._latest: TactileFrame | None = None
         self._fault: str | None = None
         self._lost: str | None = None
+        self.open_error: DeviceNotConnectedError | None = None  # opening failed
+        self.opened = threading.Event()  # set once the capture is open and configured
         self._stop = threading.Event()
         self._ready = threading.Event()  # set on the first frame and when the thread ends
         self._thread = threading.Thread(
@@ -164,9 +176,12 @@ class _Grabber:
         self._thread.start()
 
     def stop(self) -> bool:
-        """Ask the thread to end and wait for it; False if it is still blocked in a grab."""
+        """Ask the thread to end and wait for it (not while the capture is still opening:
+        the thread then releases it once open); False if it is still blocked in a camera
+        call."""
         self._stop.set()
-        self._thread.join(_JOIN_TIMEOUT_S)
+        if self.opened.is_set():
+            self._thread.join(_JOIN_TIMEOUT_S)
         return not self._thread.is_alive()
 
     def wait_ready(self, timeout_s: float) -> None:
@@ -182,26 +197,32 @@ class _Grabber:
             return self._latest, self._fault, self._lost
 
     def _run(self) -> None:
+        capture: Capture | None = None
         try:
-            self._loop()
+            capture = self._open_capture()
+            self.opened.set()
+            self._loop(capture)
+        except DeviceNotConnectedError as exc:
+            self.open_error = exc
         except Exception as exc:  # an OpenCV or programming error: report it, never hang
             log.exception("%s: grabber thread failed", self._config.name)
             with self._lock:
                 self._lost = f"grabber thread failed: {exc!r}"
         finally:
-            self._capture.release()
+            if capture is not None:
+                capture.release()
             self._ready.set()
 
     def _lose(self, reason: str) -> None:
         with self._lock:
             self._lost = reason
 
-    def _loop(self) -> None:
+    def _loop(self, capture: Capture) -> None:
         limit = self._config.max_read_failures
         grab_failures = decode_failures = identical = 0
         previous: np.ndarray | None = None
         while not self._stop.is_set():
-            if not self._capture.grab():
+            if not capture.grab():
                 if not os.path.exists(self._node):
                     self._lose(f"device node {self._node} is gone (unplugged?)")
                     return
@@ -210,9 +231,9 @@ class _Grabber:
                     self._lose(f"{grab_failures} frame grabs in a row failed on {self._node}")
                     return
                 continue
-            t_s = time.monotonic()
+            t_s = self._clock.now()
             grab_failures = 0
-            ok, raw = self._capture.retrieve()
+            ok, raw = capture.retrieve()
             try:
                 if not ok or raw is None:
                     raise ValueError("retrieve() returned no frame")
@@ -244,22 +265,32 @@ class TactileCamera(ContextManagedDevice):
     """A GelSight Mini or DIGIT camera (implements ``drivers.base.TactileSensor``).
 
     ``capture_factory`` opens a capture on a device node; ``from_config`` uses ``open_v4l2``,
-    tests pass captures on video files. Images are uint8 H x W x 3 BGR, read-only; their x
+    tests pass captures on video files. ``clock`` stamps the frames and measures their age
+    (``MonotonicClock`` when None). Images are uint8 H x W x 3 BGR, read-only; their x
     axis (columns) and y axis (rows) are the sensor frame S's in-plane axes.
     """
 
-    def __init__(self, config: TactileCameraConfig, capture_factory: CaptureFactory) -> None:
+    def __init__(
+        self,
+        config: TactileCameraConfig,
+        capture_factory: CaptureFactory,
+        clock: Clock | None = None,
+    ) -> None:
         self.config = config
         self.name = config.name
         self._capture_factory = capture_factory
+        self._clock = clock if clock is not None else MonotonicClock()
         self._grabber: _Grabber | None = None
 
     @classmethod
     def from_config(
-        cls, config: TactileCameraConfig, capture_factory: CaptureFactory = open_v4l2
+        cls,
+        config: TactileCameraConfig,
+        clock: Clock | None = None,
+        capture_factory: CaptureFactory | None = None,
     ) -> TactileCamera:
-        """The camera opened through ``capture_factory`` (V4L2 by default), not connected."""
-        return cls(config, capture_factory)
+        """The camera opened through ``capture_factory`` (V4L2 when None), not connected."""
+        return cls(config, capture_factory if capture_factory is not None else open_v4l2, clock)
 
     @property
     def is_connected(self) -> bool:
@@ -270,13 +301,43 @@ class TactileCamera(ContextManagedDevice):
         """Find, open and configure the camera, start grabbing, wait for the first frame.
 
         Raises DeviceNotConnectedError (no such device, cannot open it) or DeviceTimeoutError
-        (opened, but no frame within ``connect_timeout_s``).
+        (opening hangs, or no frame within ``connect_timeout_s``).
         """
         if self.is_connected:
             return
         self.disconnect()  # clean up after a lost camera
         cfg = self.config
         node = find_capture_node(self.name, cfg.by_id_pattern, cfg.by_id_dir)
+        grabber = _Grabber(lambda: self._open(node), node, cfg, cfg.frame_processor(), self._clock)
+        self._grabber = grabber
+        try:
+            grabber.start()
+            grabber.wait_ready(cfg.connect_timeout_s)
+        except BaseException:  # Ctrl-C: stop the grabber
+            self.disconnect()
+            raise
+        frame, fault, lost = grabber.snapshot()
+        if frame is None:
+            self.disconnect()
+            if grabber.open_error is not None:
+                raise grabber.open_error
+            if lost is not None:
+                raise DeviceNotConnectedError(self.name, f"camera lost while starting: {lost}")
+            if not grabber.opened.is_set():
+                raise DeviceTimeoutError(
+                    self.name,
+                    f"opening {node} did not finish within {cfg.connect_timeout_s} s (key "
+                    "'connect_timeout_s'): the camera or its driver hangs; replug the sensor",
+                )
+            detail = f" ({fault})" if fault else ""
+            raise DeviceTimeoutError(
+                self.name,
+                f"opened {node} but got no usable frame within {cfg.connect_timeout_s} s{detail}; "
+                "check the USB bandwidth (one camera per USB 2 controller) and the camera mode",
+            )
+
+    def _open(self, node: str) -> Capture:
+        """Open and configure the capture (on the grabber's thread)."""
         capture = self._capture_factory(node)
         if not capture.isOpened():
             capture.release()
@@ -290,21 +351,7 @@ class TactileCamera(ContextManagedDevice):
         except BaseException:
             capture.release()
             raise
-        grabber = _Grabber(capture, node, cfg, cfg.frame_processor())
-        self._grabber = grabber
-        grabber.start()
-        grabber.wait_ready(cfg.connect_timeout_s)
-        frame, fault, lost = grabber.snapshot()
-        if frame is None:
-            self.disconnect()
-            if lost is not None:
-                raise DeviceNotConnectedError(self.name, f"camera lost while starting: {lost}")
-            detail = f" ({fault})" if fault else ""
-            raise DeviceTimeoutError(
-                self.name,
-                f"opened {node} but got no usable frame within {cfg.connect_timeout_s} s{detail}; "
-                "check the USB bandwidth (one camera per USB 2 controller) and the camera mode",
-            )
+        return capture
 
     def _configure(self, capture: Capture, node: str) -> None:
         cfg = self.config
@@ -347,10 +394,9 @@ class TactileCamera(ContextManagedDevice):
         grabber, self._grabber = self._grabber, None
         if grabber is not None and not grabber.stop():
             log.warning(
-                "%s: grabber thread still blocked in a grab after %.1f s; it releases the "
-                "camera when the grab returns",
+                "%s: grabber thread still blocked in the camera; it releases the camera "
+                "when the call returns",
                 self.name,
-                _JOIN_TIMEOUT_S,
             )
 
     def read_latest(self, max_age_s: float) -> TactileFrame:
@@ -369,7 +415,7 @@ class TactileCamera(ContextManagedDevice):
             raise DeviceFaultError(self.name, fault)
         if frame is None:
             raise DeviceTimeoutError(self.name, "no frame received yet")
-        age_s = time.monotonic() - frame.t_s
+        age_s = self._clock.now() - frame.t_s
         if age_s > max_age_s:
             raise DeviceTimeoutError(
                 self.name,

@@ -17,6 +17,8 @@ It keeps the SDK's signatures and return conventions, as read in the SDK's sourc
   ``clean_warn`` (``Base.clean_error``/``clean_warn``) return the raw reply code; here 1
   when an error was present and 2 when a warning was (the reply's status flags).
 * ``emergency_stop`` returns None (``XArm.emergency_stop``: ``set_state(4)`` until state 4).
+* ``set_timeout(s)`` sets the reply timeout of later commands and returns it, connected or
+  not (``Base.set_timeout``); ``connect`` resets it to 2 s (``Base._init``).
 * ``connect`` raises a bare ``Exception('connect socket failed')`` when the socket fails,
   and calls the error/warning callbacks once with the current codes (``Base.connect``).
 * The error/warning callback gets ``{'error_code': e, 'warn_code': w}``
@@ -85,6 +87,7 @@ class FakeXArmAPI:
         self.tcp_offset: list[float] | None = None  # mm and rad
         self.tcp_load: tuple[float, list[float]] | None = None  # kg, mm
         self.refuse_connection = False
+        self.timeout_s = 2.0  # reply timeout of commands, s
         self.sticky_error = False
         self.ignore_stop = False
         self._default_is_radian = is_radian
@@ -160,12 +163,18 @@ class FakeXArmAPI:
             return
         if self.refuse_connection:
             raise Exception("connect socket failed")
+        self.timeout_s = 2.0
         self._connected = True
         self._notify()
 
     def disconnect(self) -> None:
         self._record("disconnect", (), {})
         self._connected = False
+
+    def set_timeout(self, timeout) -> float:
+        self._record("set_timeout", (timeout,), {})
+        self.timeout_s = timeout
+        return timeout
 
     def register_error_warn_changed_callback(self, callback=None) -> bool:
         self._record("register_error_warn_changed_callback", (callback,), {})

@@ -18,9 +18,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import yaml
 
 from drivers.base import TactileFrame, TactileSensor
+from drivers.clock import ManualClock
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from drivers.registry import load_device, load_device_config
 from drivers.tactile import TactileCamera, TactileCameraConfig
 from drivers.tactile.decode import (
     FrameProcessor,
@@ -30,7 +33,6 @@ from drivers.tactile.decode import (
     orient_like_digit_sdk,
 )
 from drivers.tactile.device_lookup import find_capture_node
-from tests.drivers.device_configs import load_device_config
 
 REPO = Path(__file__).resolve().parents[2]
 MINI_ID = "usb-Arducam_Technology_Co.__Ltd._GelSight_Mini_R0B_28F5-K4RR_28F5K4RR-video-index"
@@ -264,7 +266,7 @@ def test_digit_output_size_is_checked_after_the_turn(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("name", ["gelsight_mini_camera.yaml", "digit_camera.yaml"])
 def test_example_configs_load(name: str) -> None:
-    config = load_device_config(REPO / "configs" / "sensors" / name, backend="real")
+    config = load_device_config(REPO / "configs" / "sensors" / name, backend="real").config
     assert type(config) is TactileCameraConfig
     assert config.by_id_dir == "/dev/v4l/by-id"
 
@@ -397,6 +399,23 @@ def test_stale_frame_raises_timeout_and_recovers(tmp_path: Path) -> None:
         wait_for(lambda: not raises_now(camera, DeviceTimeoutError, max_age_s=0.1))
 
 
+def test_frames_are_stamped_and_aged_on_the_injected_clock(tmp_path: Path) -> None:
+    clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(10)])
+    factory, made = paced_factory(raw=True, rate_hz=100)
+    clock = ManualClock(10.0)
+    config = digit_config(by_id_dir(tmp_path, DIGIT_ID, clip))
+    with TactileCamera(config, factory, clock) as camera:
+        assert camera.read_latest(max_age_s=0.5).t_s == 10.0
+        made[0].pause()
+        time.sleep(0.2)  # let a grab in progress finish
+        clock.advance(1.0)
+        with pytest.raises(DeviceTimeoutError, match="1000 ms old"):
+            camera.read_latest(max_age_s=0.5)
+        made[0].resume()
+        wait_for(lambda: not raises_now(camera, DeviceTimeoutError, max_age_s=0.5))
+        assert camera.read_latest(max_age_s=0.5).t_s == 11.0
+
+
 def test_frozen_stream_is_a_fault(tmp_path: Path) -> None:
     still = textured(240, 320, seed=7)
     clip = write_avi(tmp_path / "still.avi", [still] * 4)  # looped: the same frame forever
@@ -482,13 +501,40 @@ def test_no_frame_before_timeout_is_a_timeout(tmp_path: Path) -> None:
     assert not camera.is_connected
 
 
-def test_registry_builds_the_real_driver_for_a_video_peer(tmp_path: Path) -> None:
-    from drivers import registry
+def test_a_camera_whose_open_hangs_fails_connect_in_time(tmp_path: Path) -> None:
+    """Opening runs on the grabber thread: a driver stuck in open() costs connect_timeout_s,
+    and the capture is released once the open returns."""
+    clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=0)] * 4)
+    d = by_id_dir(tmp_path, DIGIT_ID, clip)
+    unblock = threading.Event()
+    factory, made = paced_factory(raw=True, rate_hz=100)
 
+    def hanging_factory(node: str) -> PacedCapture:
+        unblock.wait(10.0)  # as a V4L2 open that never returns
+        return factory(node)
+
+    camera = TactileCamera(digit_config(d, connect_timeout_s=0.2), hanging_factory)
+    started = time.monotonic()
+    with pytest.raises(DeviceTimeoutError, match=r"opening .* did not finish within 0.2 s"):
+        camera.connect()
+    assert time.monotonic() - started < 0.2 + 1.0  # the deadline plus a margin, no join
+    assert not camera.is_connected
+    grabbers = [t for t in threading.enumerate() if t.name == "tactile_camera-grabber"]
+    unblock.set()
+    for thread in grabbers:
+        thread.join(3.0)
+        assert not thread.is_alive()
+    assert len(made) == 1 and not made[0].isOpened()  # released by the thread
+
+
+def test_registry_builds_the_real_driver_for_a_video_peer(tmp_path: Path) -> None:
     clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(10)])
     factory, _ = paced_factory(raw=False, rate_hz=60)
-    config = digit_config(by_id_dir(tmp_path, DIGIT_ID, clip))
-    with registry.make_tactile_sensor(config, capture_factory=factory) as camera:
+    data = yaml.safe_load((REPO / "configs" / "sensors" / "digit_camera.yaml").read_text())
+    data.update(by_id_dir=str(by_id_dir(tmp_path, DIGIT_ID, clip)), connect_timeout_s=2.0)
+    path = tmp_path / "digit_camera.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with load_device(path, backend="real", kind="tactile", capture_factory=factory) as camera:
         assert isinstance(camera, TactileCamera)
         frame = camera.read_latest(max_age_s=0.5)
     assert frame.image.shape == (320, 240, 3)

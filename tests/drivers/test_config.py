@@ -14,9 +14,9 @@ import drivers.config as config_module
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
 from drivers.config import Config, ConfigError, build, load_config, load_yaml, number
 from drivers.gripper.hande import HandEConfig
+from drivers.registry import load_device_config
 from drivers.sim.scenes.jig import JigConfig
 from drivers.tactile.profile import sensor_profile
-from tests.drivers.device_configs import load_device_config
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -268,7 +268,7 @@ def test_subclass_rules_and_checks_run_once_each(monkeypatch):
     calls = []
     real = config_module._check_fields
     monkeypatch.setattr(config_module, "_check_fields", lambda c: calls.append(c) or real(c))
-    twin = load_device_config(CONFIGS / "gripper" / "hande.yaml")
+    twin = load_device_config(CONFIGS / "gripper" / "hande.yaml").config
     assert calls == [twin.sim, twin]
     with pytest.raises(ValueError, match="key 'sim.start_width_m'"):  # the subclass's rule
         dataclasses.replace(twin, stroke_m=0.01)

@@ -14,17 +14,13 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pygame._sdl2 import controller as sdl_controller
 
+from drivers.clock import ManualClock
 from drivers.config import ConfigError, build
 from drivers.errors import DeviceNotConnectedError
-from drivers.gamepad import (
-    AxisBinding,
-    GamepadConfig,
-    PygameGamepad,
-    axis_value,
-)
+from drivers.gamepad import AxisBinding, GamepadConfig, axis_value
 from drivers.gamepad.mapping import AXIS_NAMES, BUTTON_NAMES
-from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, init_sdl
-from tests.drivers.device_configs import load_device_config
+from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, PygameGamepad, init_sdl
+from drivers.registry import load_device, load_device_config
 from tests.drivers.virtual_joystick import (
     VIRTUAL_AXES,
     VIRTUAL_BUTTONS,
@@ -59,7 +55,7 @@ def device(sdl):
 
 @pytest.fixture
 def config():
-    return load_device_config(XBOX_YAML, backend="real")
+    return load_device_config(XBOX_YAML, backend="real").config
 
 
 @pytest.fixture
@@ -283,11 +279,17 @@ def test_config_validation_errors(change, message):
     assert message in str(err.value)
 
 
-def test_registry_builds_the_real_driver_for_the_virtual_device(device, config):
-    from drivers import registry
+def test_readings_are_stamped_on_the_injected_clock(device, config):
+    clock = ManualClock(3.5)
+    with PygameGamepad(config, clock) as pad:
+        assert pad.read().t_s == 3.5
+        clock.advance(0.25)
+        assert pad.read().t_s == 3.75
 
-    with registry.make_gamepad(config) as pad:
-        assert isinstance(pad, PygameGamepad)
+
+def test_registry_builds_the_real_driver_for_the_virtual_device(device, config):
+    with load_device(XBOX_YAML, backend="real", kind="gamepad") as pad:
+        assert isinstance(pad, PygameGamepad) and pad.config == config
         device.set_button("leftshoulder", True)
         device.set_axis("leftx", FULL)
         state = pad.read()

@@ -7,8 +7,10 @@ import time
 from pathlib import Path
 
 import pytest
+import yaml
 
 from drivers.base import Gripper, GripperObject
+from drivers.clock import ManualClock
 from drivers.errors import (
     DeviceFaultError,
     DeviceNotConnectedError,
@@ -16,8 +18,9 @@ from drivers.errors import (
 )
 from drivers.gripper import HandE, HandEConfig
 from drivers.gripper import hande_registers as regs
-from drivers.gripper.transport import ModbusRtuTransport, XArmToolTransport
-from tests.drivers.device_configs import load_device_config
+from drivers.gripper.modbus_rtu import ModbusRtuTransport
+from drivers.gripper.transport import XArmToolTransport
+from drivers.registry import load_device, load_device_config
 from tests.drivers.hande_server import FakeXArm, HandEServer, SimulatedHandE
 
 CONFIG_FILE = Path(__file__).parents[2] / "configs" / "gripper" / "hande.yaml"
@@ -300,7 +303,7 @@ def test_config_values_out_of_range_name_the_key(key, value):
 
 
 def test_example_config_file_holds_the_defaults():
-    assert load_device_config(CONFIG_FILE, backend="real") == HandEConfig()
+    assert load_device_config(CONFIG_FILE, backend="real").config == HandEConfig()
 
 
 def test_xarm_tool_transport_needs_the_arm():
@@ -334,6 +337,19 @@ def test_commands_faster_than_max_rate_are_spaced_not_dropped():
     assert len(arm.call_times) == 9  # connect's check + 8 reads, none dropped
     gaps = [b - a for a, b in zip(arm.call_times, arm.call_times[1:], strict=False)]
     assert min(gaps) >= 1 / 50.0 - 5e-4
+
+
+def test_activation_polling_and_the_status_run_on_the_injected_clock():
+    """With a ManualClock the activation timeout elapses in clock time, without waiting."""
+    arm = FakeXArm(SimulatedHandE(activation_polls=100_000))  # never activates in time
+    clock = ManualClock(50.0)
+    config = HandEConfig(transport="xarm_tool", activation_timeout_s=1.0)
+    with HandE.from_config(config, clock=clock, arm=arm) as gripper:
+        with pytest.raises(DeviceTimeoutError, match="within 1.0 s"):
+            gripper.activate()
+        waited_s = clock.now() - 50.0
+        assert 1.0 < waited_s < 1.0 + 0.05  # polls of 20 ms plus the 5 ms command slots
+        assert gripper.read_status().t_s == clock.now()
 
 
 # -- xArm tool RS-485 port --------------------------------------------------------------------
@@ -432,17 +448,13 @@ def test_unit_keyword_follows_the_installed_pymodbus_signature():
     assert client.calls == [(0x07D0, 3, 9)]
 
 
-def test_registry_builds_the_real_driver_from_the_example_yaml(server):
+def test_registry_builds_the_real_driver_from_the_example_yaml(server, tmp_path):
     """The example YAML with ``backend: real``, pointed at the pty peer, through the registry."""
-    import dataclasses
-
-    from drivers import registry
-
-    example = load_device_config(CONFIG_FILE, backend="real")
-    config = dataclasses.replace(
-        example, port=server.port, open_count=3, closed_count=230, timeout_s=0.3
-    )
-    with registry.make_gripper(config) as gripper:
+    data = yaml.safe_load(CONFIG_FILE.read_text())
+    data.update(port=server.port, open_count=3, closed_count=230, timeout_s=0.3)
+    path = tmp_path / "hande.yaml"
+    path.write_text(yaml.safe_dump(data))
+    with load_device(path, backend="real", kind="gripper") as gripper:
         assert isinstance(gripper, HandE)
         gripper.activate()
         gripper.move(0.020, speed_m_s=0.150, force_n=50.0)

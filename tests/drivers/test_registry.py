@@ -4,13 +4,20 @@ from __future__ import annotations
 
 import ast
 import dataclasses
+import subprocess
+import sys
+import textwrap
 
 import pytest
 import yaml
 
 from drivers import registry
 from drivers.arm import XArm6, XArm6Config
-from drivers.gamepad import GamepadConfig, PygameGamepad
+from drivers.clock import ManualClock
+from drivers.config import CONFIG_ROOT as CONFIGS
+from drivers.config import ConfigError
+from drivers.gamepad import GamepadConfig
+from drivers.gamepad.pad import PygameGamepad
 from drivers.gripper import HandE, HandEConfig
 from drivers.sim.twins.arm import SimArm, SimArmConfig
 from drivers.sim.twins.force_torque import SimForceTorque, SimForceTorqueConfig
@@ -18,7 +25,6 @@ from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
 from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
 from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
 from drivers.tactile import TactileCamera, TactileCameraConfig
-from tests.drivers.device_configs import CONFIGS, load_device_config
 
 REPO = CONFIGS.parent
 DEVICE_YAMLS = {
@@ -38,13 +44,6 @@ EXPECTED = {
     ("gamepad", "sdl_gamepad", "real"): (PygameGamepad, GamepadConfig),
     ("gamepad", "sdl_gamepad", "sim"): (SimGamepad, SimGamepadConfig),
     ("force_torque", "ft_sensor", "sim"): (SimForceTorque, SimForceTorqueConfig),
-}
-MAKERS = {
-    "arm": registry.make_arm,
-    "gripper": registry.make_gripper,
-    "tactile": registry.make_tactile_sensor,
-    "gamepad": registry.make_gamepad,
-    "force_torque": registry.make_force_torque,
 }
 EXAMPLES = [(kind, path) for kind, paths in DEVICE_YAMLS.items() for path in paths]
 TWINNED = [(kind, path) for kind, path in EXAMPLES if kind != "force_torque"]  # real and sim
@@ -75,18 +74,20 @@ def test_example_configs_default_to_sim_and_build_every_backend(kind, path):
     selection = registry.select(data)
     assert (selection.kind, selection.backend) == (kind, "sim")
     for backend in registry.DRIVERS[kind][data["type"]]:
-        config = load_device_config(path, backend)
+        spec = registry.load_device_config(path, backend)
         device_class, config_class = EXPECTED[(kind, data["type"], backend)]
-        assert type(config) is config_class
-        device = MAKERS[kind](config)  # real drivers build their transport without opening it
-        assert type(device) is device_class
+        assert (spec.kind, spec.type_name, spec.backend) == (kind, data["type"], backend)
+        assert type(spec.config) is config_class
+        device = registry.load_device(path, backend, kind=kind)  # real transports not opened
+        assert type(device) is device_class and device.config == spec.config
         assert isinstance(device, registry.PROTOCOLS[kind])
         assert not device.is_connected
 
 
 @pytest.mark.parametrize(("kind", "path"), TWINNED, ids=lambda v: getattr(v, "name", v))
 def test_the_twin_runs_with_the_real_devices_settings(kind, path):
-    real, sim = load_device_config(path, "real"), load_device_config(path, "sim")
+    real = registry.load_device_config(path, "real").config
+    sim = registry.load_device_config(path, "sim").config
     assert isinstance(sim, type(real))
     for field in dataclasses.fields(real):
         assert getattr(sim, field.name) == getattr(real, field.name)
@@ -126,10 +127,126 @@ def test_config_class_errors_list_the_known():
         registry.config_class("gripper", "xarm6", "sim")
 
 
-def test_a_maker_refuses_another_kinds_config():
-    gripper_config = load_device_config(CONFIGS / "gripper" / "hande.yaml")
-    with pytest.raises(TypeError, match="no arm driver takes a SimGripperConfig; expected one of"):
-        registry.make_arm(gripper_config)
+def test_loading_refuses_a_file_of_another_kind():
+    path = CONFIGS / "gripper" / "hande.yaml"
+    with pytest.raises(ConfigError) as err:
+        registry.load_device(path, kind="arm")
+    assert str(err.value) == (
+        f"{path}: key 'type': expected a device of kind 'arm' (xarm6), got 'hande' (kind 'gripper')"
+    )
+    with pytest.raises(ValueError, match="unknown device kind 'robot'; known: arm, gripper"):
+        registry.load_device(path, kind="robot")
+
+
+def test_load_errors_name_the_file_and_the_key(tmp_path):
+    bad = tmp_path / "pad.yaml"
+    bad.write_text("type: joystick\nbackend: sim\n")
+    with pytest.raises(ConfigError, match=f"^{bad}: key 'type': unknown device type 'joystick'"):
+        registry.load_device(bad)
+    bad.write_text("type: xarm6\nbackend: real\nip: 1.2.3.4\n")
+    with pytest.raises(ConfigError, match=f"^{bad}: missing key 'servo_rate_hz'"):
+        registry.load_device_config(bad)
+
+
+def test_the_clock_and_the_transport_reach_from_config():
+    clock = ManualClock(7.0)
+    with registry.load_device(CONFIGS / "force_torque" / "jig.yaml", clock=clock) as sensor:
+        assert sensor.read().t_s == 7.0
+    with registry.load_device(CONFIGS / "robot" / "xarm6.yaml", clock=clock, api=object()) as arm:
+        assert isinstance(arm, SimArm) and arm.read_status().t_s == 7.0  # the twin ignores api
+
+
+# ------------------------------------------------------------------------------- lazy imports
+
+HARDWARE_LIBRARIES = ("pygame", "pymodbus", "serial", "xarm")  # the "hw" extra
+SIM_ONLY = textwrap.dedent(
+    """
+    import importlib.abc
+    import sys
+
+    BLOCKED = set(sys.argv[1].split(","))
+
+
+    class Absent(importlib.abc.MetaPathFinder):
+        \"\"\"As if the hardware libraries were not installed.\"\"\"
+
+        def find_spec(self, name, path=None, target=None):
+            if name.partition(".")[0] in BLOCKED:
+                raise ModuleNotFoundError(f"No module named {name!r} (blocked)", name=name)
+            return None
+
+
+    sys.meta_path.insert(0, Absent())
+
+    from drivers import registry
+    from drivers.clock import ManualClock
+
+    READS = {
+        "arm": lambda d: d.read_status(),
+        "gripper": lambda d: (d.activate(), d.read_status()),
+        "tactile": lambda d: d.read_latest(max_age_s=1.0),
+        "gamepad": lambda d: d.read(),
+        "force_torque": lambda d: d.read(),
+    }
+    clock = ManualClock()
+    for path in sys.argv[2:]:
+        spec = registry.load_device_config(path)
+        assert spec.backend == "sim", path
+        with spec.build(clock) as device:
+            assert isinstance(device, registry.PROTOCOLS[spec.kind])
+            clock.advance(0.1)
+            READS[spec.kind](device)
+        print(spec.kind, type(device).__name__)
+
+    sys.argv = ["check_hardware", *sys.argv[2:]]
+    import runpy
+
+    try:
+        runpy.run_path("scripts/check_hardware.py", run_name="__main__")
+    except SystemExit as end:
+        print("check_hardware exit", end.code)
+    print("loaded:", sorted({m.partition(".")[0] for m in sys.modules} & BLOCKED))
+    """
+)
+
+
+def test_sim_devices_need_none_of_the_hardware_libraries():
+    """Every sim device YAML builds, connects and reads with pygame, pymodbus, pyserial and
+    the xArm SDK made unimportable, and check_hardware reports them all OK."""
+    paths = [str(path) for _, path in EXAMPLES]
+    result = subprocess.run(
+        [sys.executable, "-c", SIM_ONLY, ",".join(HARDWARE_LIBRARIES), *paths],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stdout.splitlines()
+    assert [line.split()[0] for line in lines[: len(paths)]] == [kind for kind, _ in EXAMPLES]
+    assert sum(line.startswith("OK ") for line in lines) == len(paths)
+    assert lines[-2:] == ["check_hardware exit 0", "loaded: []"]
+
+
+def test_a_real_backend_needs_its_library():
+    """The same block makes the real xArm's build fail on the missing SDK, so the check above
+    does block what it says."""
+    script = SIM_ONLY.split("from drivers import registry")[0] + textwrap.dedent(
+        """
+        from drivers import registry
+
+        registry.load_device("configs/robot/xarm6.yaml", backend="real")
+        """
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", script, ",".join(HARDWARE_LIBRARIES)],
+        capture_output=True,
+        text=True,
+        cwd=REPO,
+        timeout=60,
+    )
+    assert result.returncode == 1
+    assert "No module named 'xarm' (blocked)" in result.stderr
 
 
 # ------------------------------------------------------------------------------- layering

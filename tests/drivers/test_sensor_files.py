@@ -14,9 +14,9 @@ import pytest
 import yaml
 
 from drivers.config import CONFIG_ROOT, ConfigError
+from drivers.registry import load_device_config
 from drivers.sim.gel.profile import GEOMETRY_KEYS, gel_profile
 from drivers.tactile.profile import sensor_names, sensor_profile
-from tests.drivers.device_configs import load_device_config
 
 SENSORS = CONFIG_ROOT / "sensors"
 
@@ -33,7 +33,7 @@ def test_every_file_in_the_sensor_folder_belongs_to_a_profile():
 def test_the_camera_file_asks_for_the_profiles_image(name):
     profile = sensor_profile(name)
     for backend in ("sim", "real"):
-        camera = load_device_config(SENSORS / f"{name}_camera.yaml", backend)
+        camera = load_device_config(SENSORS / f"{name}_camera.yaml", backend).config
         assert camera.model == camera.name == profile.name
         out = (camera.output_width_px, camera.output_height_px)
         if camera.model == "digit":
@@ -45,7 +45,7 @@ def test_the_camera_file_asks_for_the_profiles_image(name):
 @pytest.mark.parametrize("name", sensor_names())
 def test_the_twin_prints_the_profiles_markers(name):
     profile = sensor_profile(name)
-    twin = load_device_config(SENSORS / f"{name}_camera.yaml", "sim")
+    twin = load_device_config(SENSORS / f"{name}_camera.yaml", "sim").config
     assert twin.marker_pitch_px == profile.marker_pitch_px
     if profile.marker_pitch_mm is None:
         assert twin.marker_pitch_px is None and twin.sim.marker_radius_px is None

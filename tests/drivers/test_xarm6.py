@@ -6,8 +6,13 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
+import signal
 import socket
-from pathlib import Path
+import subprocess
+import sys
+import textwrap
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -17,12 +22,15 @@ from scipy.spatial.transform import Rotation
 
 from drivers.arm import SafetyEnvelope, TcpConfig, XArm6, XArm6Config
 from drivers.arm.envelope import rotation_from_rpy, tilt_rad
-from drivers.base import Arm, Pose, Twist
+from drivers.base import Arm, ArmMode, ArmState, Pose, Twist
+from drivers.clock import ManualClock
+from drivers.config import CONFIG_ROOT
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
-from tests.drivers.device_configs import load_device_config
+from drivers.registry import load_device, load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
+from tests.drivers.silent_controller import SilentController
 
-CONFIG_FILE = Path(__file__).resolve().parents[2] / "configs" / "robot" / "xarm6.yaml"
+CONFIG_FILE = CONFIG_ROOT / "robot" / "xarm6.yaml"
 TOL = 1e-9
 ENV = SafetyEnvelope(
     x_min_m=0.2, x_max_m=0.5, y_min_m=-0.2, y_max_m=0.2, z_min_m=0.05, z_max_m=0.4,
@@ -42,22 +50,12 @@ STARTUP = ["motion_enable", "set_mode", "set_state"]
 HOME = Pose((0.3, 0.0, 0.2), (math.pi, 0.0, 0.0))
 
 
-class Clock:
-    """A manual monotonic clock (s)."""
-
-    def __init__(self) -> None:
-        self.t = 100.0
-
-    def __call__(self) -> float:
-        return self.t
-
-
-def make(connect: bool = True, **hooks) -> tuple[XArm6, FakeXArmAPI, Clock]:
+def make(connect: bool = True, **hooks) -> tuple[XArm6, FakeXArmAPI, ManualClock]:
     """A driver over a fake with the given test hooks set (e.g. ``sticky_error=True``)."""
     fake = FakeXArmAPI(CONFIG.ip, is_radian=True, do_not_open=True)
     for hook, value in hooks.items():
         setattr(fake, hook, value)
-    clock = Clock()
+    clock = ManualClock(100.0)
     arm = XArm6(CONFIG, fake, clock=clock)
     if connect:
         arm.connect()
@@ -86,9 +84,10 @@ def test_connect_runs_the_documented_start_up_then_sets_the_tcp():
     arm, fake, _ = make()
     assert isinstance(arm, Arm) and arm.is_connected
     assert names_since(fake, 0) == [
-        "register_error_warn_changed_callback", "connect", "get_err_warn_code",
+        "register_error_warn_changed_callback", "connect", "set_timeout", "get_err_warn_code",
         "motion_enable", "set_mode", "set_state", "set_tcp_offset", "set_tcp_load",
     ]  # fmt: skip
+    assert fake.named("set_timeout")[0].args == (CONFIG.io_timeout_s,)
     assert state_changing(fake) == [("motion_enable", True), ("set_mode", 0), ("set_state", 0)]
     assert fake.mode == 0 and fake.state == 2
     np.testing.assert_allclose(fake.tcp_offset, [0.0, 10.0, 205.0, 0.0, 0.0, 0.5])  # mm, rad
@@ -101,7 +100,7 @@ def test_each_mode_switch_re_runs_enable_mode_state_and_commands_go_in_their_mod
     arm, fake, clock = make()
     start = len(fake.calls)
     arm.servo_pose(HOME)
-    clock.t += 0.01
+    clock.advance(0.01)
     arm.servo_pose(HOME)  # same mode: no re-arm
     arm.move_velocity(Twist((0.01, 0.0, 0.0)), 0.1)
     arm.move_to(HOME, 0.05)
@@ -168,25 +167,30 @@ def test_move_to_waits_with_the_configured_timeout():
 def test_readings_convert_mm_to_m_and_keep_radians():
     arm, fake, clock = make()
     fake.pose = [312.5, -20.25, 150.0, math.pi - 0.1, 0.05, 0.3]
-    state = arm.read_state()
+    state = arm.read_status()
     assert state.tcp.xyz_m == pytest.approx((0.3125, -0.02025, 0.15), abs=1e-12)
     assert state.tcp.rpy_rad == pytest.approx((math.pi - 0.1, 0.05, 0.3), abs=1e-6)
     assert state.joints_rad == pytest.approx(tuple(fake.joints[:6]), abs=1e-6)
-    assert (state.t_s, state.mode, state.state, state.error_code) == (clock.t, 0, 2, 0)
+    assert (state.t_s, state.mode, state.state, state.error_code) == (
+        clock.now(),
+        ArmMode.POSITION,
+        ArmState.READY,
+        0,
+    )
     assert fake.named("get_position")[-1].kwargs == {"is_radian": True}
 
 
 def test_commands_convert_m_to_mm_and_round_trip():
     arm, fake, _ = make()
     fake.pose = [312.5, -20.25, 150.0, math.pi - 0.1, 0.05, 0.3]
-    arm.servo_pose(arm.read_state().tcp)  # hold: the command is the reading
+    arm.servo_pose(arm.read_status().tcp)  # hold: the command is the reading
     np.testing.assert_allclose(fake.named("set_servo_cartesian")[-1].sent, fake.pose, atol=1e-6)
     target = Pose((0.25, 0.1, 0.3), (math.pi, 0.1, -0.2))
     arm.move_to(target, 0.05)
     sent = fake.named("set_position")[-1]
     np.testing.assert_allclose(sent.sent["pose"], [250.0, 100.0, 300.0, math.pi, 0.1, -0.2])
     assert sent.kwargs["speed"] == pytest.approx(50.0)  # mm/s
-    assert arm.read_state().tcp.xyz_m == pytest.approx(target.xyz_m, abs=1e-9)
+    assert arm.read_status().tcp.xyz_m == pytest.approx(target.xyz_m, abs=1e-9)
     arm.move_velocity(Twist((0.01, -0.02, 0.03), (0.0, 0.0, 0.1)), 0.1)
     speeds, duration = fake.named("vc_set_cartesian_velocity")[-1].sent
     np.testing.assert_allclose(speeds, [10.0, -20.0, 30.0, 0.0, 0.0, 0.1])  # mm/s, rad/s
@@ -200,9 +204,9 @@ def test_the_api_default_unit_does_not_matter_every_call_says_radians():
     for default_is_radian in (False, True):
         fake = FakeXArmAPI(CONFIG.ip, is_radian=default_is_radian, do_not_open=True)
         fake.pose = [312.5, -20.25, 150.0, math.pi - 0.1, 0.05, 0.3]
-        arm = XArm6(CONFIG, fake, clock=Clock())
+        arm = XArm6(CONFIG, fake, clock=ManualClock(100.0))
         arm.connect()
-        state = arm.read_state()
+        state = arm.read_status()
         arm.servo_pose(Pose((0.313, -0.02, 0.151), (math.pi, 0.06, 0.29)))
         arm.move_to(HOME, 0.05)
         results.append((state, fake.tcp_offset, [c.sent for c in fake.calls if c.sent]))
@@ -244,7 +248,7 @@ def test_no_servo_command_ever_leaves_the_envelope(stream, start):
         step_rad = min(ENV.max_step_rad, ENV.max_angular_speed_rad_s * elapsed)
         assert (rotation * last_rotation.inv()).magnitude() <= step_rad + 1e-6  # SDK rounding
         previous = sent
-        clock.t += dt
+        clock.advance(dt)
         elapsed = dt
 
 
@@ -325,7 +329,7 @@ def test_error_callback_latches_a_fault_and_stops_the_arm():
     with pytest.raises(DeviceFaultError):
         arm.move_to(HOME, 0.05)
     assert len(fake.named("set_servo_cartesian")) == sent and len(fake.named("set_position")) == 0
-    assert arm.read_state().error_code == 31  # reading still works
+    assert arm.read_status().error_code == 31  # reading still works
 
 
 def test_a_warning_is_a_fault_too():
@@ -431,7 +435,7 @@ def test_a_fault_present_at_connect_is_latched_and_the_arm_left_unarmed():
 def test_not_connected_calls_raise_not_connected():
     arm, fake, _ = make(connect=False)
     for call in (
-        arm.read_state,
+        arm.read_status,
         arm.stop,
         arm.emergency_stop,
         arm.clear_fault,
@@ -446,7 +450,7 @@ def test_getters_returning_the_not_connected_string_raise_not_connected():
     arm, fake, _ = make()
     fake.fail_next("get_position", -1)  # the link dropped between our check and the call
     with pytest.raises(DeviceNotConnectedError, match="API code -1") as raised:
-        arm.read_state()
+        arm.read_status()
     assert raised.value.code == -1
 
 
@@ -491,10 +495,10 @@ def test_from_config_builds_an_unconnected_real_xarm_api_in_radians():
     from xarm.wrapper import XArmAPI
 
     arm = XArm6.from_config(CONFIG)
-    assert isinstance(arm._api, XArmAPI) and arm._api.default_is_radian is True
+    assert isinstance(arm.api.wrapped, XArmAPI) and arm.api.default_is_radian is True
     assert not arm.is_connected
     with pytest.raises(DeviceNotConnectedError):
-        arm.read_state()
+        arm.read_status()
     arm.disconnect()
 
 
@@ -522,6 +526,7 @@ def test_the_fake_matches_the_real_sdk_when_not_connected():
             {"x": 300.0, "z": 200.0, "speed": 50.0, "is_radian": True, "wait": True},
         ),
         ("emergency_stop", (), {}),
+        ("set_timeout", (1.5,), {}),
         ("register_error_warn_changed_callback", (print,), {}),
         ("release_error_warn_changed_callback", (print,), {}),
     ]
@@ -537,12 +542,12 @@ def test_every_call_the_driver_makes_fits_the_real_sdk_signature():
 
     arm, fake, clock = make()
     arm.servo_pose(HOME)
-    clock.t += 0.01
+    clock.advance(0.01)
     arm.move_velocity(Twist((0.01, 0.0, 0.0)), 0.1)
     arm.stop()
     arm.move_to(HOME, 0.05)
     arm.stop()
-    arm.read_state()
+    arm.read_status()
     fake.inject_error(31)
     arm.clear_fault()
     arm.emergency_stop()
@@ -564,11 +569,130 @@ def test_connecting_to_a_closed_loopback_port_raises_not_connected():
     assert not arm.is_connected
 
 
+@pytest.fixture
+def silent_controller():
+    """A loopback host that accepts on the SDK's port 502 and never answers."""
+    host = SilentController()
+    try:
+        host.__enter__()
+    except PermissionError:
+        pytest.skip("binding TCP port 502 needs root or CAP_NET_BIND_SERVICE")
+    try:
+        yield host
+    finally:
+        host.__exit__()
+
+
+def test_a_controller_that_accepts_and_never_answers_fails_connect_in_time(silent_controller):
+    """Without a deadline the SDK's connect waits about four minutes here (100 version
+    requests of 2 s each)."""
+    config = dataclasses.replace(CONFIG, ip=silent_controller.ip, connect_timeout_s=0.5)
+    arm = XArm6.from_config(config)
+    started = time.monotonic()
+    with pytest.raises(DeviceTimeoutError) as raised:
+        arm.connect()
+    elapsed_s = time.monotonic() - started
+    assert 0.5 <= elapsed_s < 0.5 + 2.0  # the deadline, plus a margin for a loaded machine
+    assert silent_controller.accepted.is_set() and not arm.is_connected
+    message = str(raised.value)
+    assert f"controller at {silent_controller.ip} (TCP port 502) accepted the connection" in message
+    assert "did not answer within 0.5 s (key 'connect_timeout_s')" in message
+    arm.disconnect()  # idempotent after a failed connect
+
+
+class HangingConnect(FakeXArmAPI):
+    """``connect`` blocks until ``release`` is set, as the SDK's does on a silent host."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.release = threading.Event()
+
+    def connect(self, *args, **kwargs) -> None:
+        self.release.wait(10.0)
+        super().connect(*args, **kwargs)
+
+
+def test_a_retry_waits_for_the_abandoned_attempt_and_never_shares_the_sdk_object():
+    fake = HangingConnect(CONFIG.ip, is_radian=True, do_not_open=True)
+    arm = XArm6(dataclasses.replace(CONFIG, connect_timeout_s=0.5), fake)
+    with pytest.raises(DeviceTimeoutError, match="did not answer within 0.5 s"):
+        arm.connect()
+    with pytest.raises(DeviceTimeoutError, match="previous, abandoned connection attempt"):
+        arm.connect()  # the first attempt still hangs: no second one on the same object
+    assert len(fake.named("connect")) == 0
+    fake.release.set()  # the abandoned attempt connects late and disconnects by itself
+    arm.connect()
+    assert arm.is_connected and arm.read_status().state is ArmState.READY
+    arm.disconnect()
+
+
+def test_controller_mode_and_state_codes_become_enums():
+    arm, fake, _ = make()
+    assert (arm.read_status().mode, arm.read_status().state) == (ArmMode.POSITION, ArmState.READY)
+    modes = {1: ArmMode.SERVO, 2: ArmMode.MANUAL, 3: ArmMode.MANUAL, 4: ArmMode.OTHER,
+             5: ArmMode.VELOCITY, 7: ArmMode.OTHER}  # fmt: skip
+    for mode, expected in modes.items():
+        fake._mode = mode
+        assert arm.read_status().mode is expected
+    states = {1: ArmState.MOVING, 2: ArmState.READY, 3: ArmState.PAUSED, 4: ArmState.STOPPED,
+              6: ArmState.UNKNOWN}  # fmt: skip
+    for state, expected in states.items():
+        fake._state = state
+        assert arm.read_status().state is expected
+
+
+SWALLOWING_SDK = textwrap.dedent(
+    """
+    import time
+
+    from drivers.arm import XArm6
+    from drivers.registry import load_device_config
+    from tests.drivers.fake_xarm_api import FakeXArmAPI
+
+
+    class SwallowingApi(FakeXArmAPI):
+        def get_position(self, is_radian=None):
+            print("waiting", flush=True)
+            while True:  # as the SDK's reply wait: a bare except eats KeyboardInterrupt
+                try:
+                    time.sleep(0.01)
+                except BaseException:
+                    pass
+
+
+    config = load_device_config("configs/robot/xarm6.yaml", backend="real").config
+    arm = XArm6(config, SwallowingApi(config.ip, is_radian=True, do_not_open=True))
+    arm.connect()
+    try:
+        arm.read_status()
+    except KeyboardInterrupt:
+        print("interrupted", flush=True)
+    """
+)
+
+
+def test_ctrl_c_interrupts_an_sdk_call_even_though_the_sdk_swallows_it():
+    process = subprocess.Popen(
+        [sys.executable, "-c", SWALLOWING_SDK],
+        cwd=CONFIG_ROOT.parent,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert process.stdout.readline() == "waiting\n"
+        process.send_signal(signal.SIGINT)
+        out, err = process.communicate(timeout=5.0)
+    finally:
+        process.kill()
+    assert (process.returncode, out, err) == (0, "interrupted\n", "")
+
+
 # --------------------------------------------------------------------- configuration
 
 
 def test_the_example_config_file_is_valid():
-    config = load_device_config(CONFIG_FILE, backend="real")
+    config = load_device_config(CONFIG_FILE, backend="real").config
     assert type(config) is XArm6Config
     assert 50 <= config.servo_rate_hz <= 200 and config.envelope.max_tilt_rad > 0
 
@@ -603,13 +727,9 @@ def test_tcp_validation_names_the_key(change, key):
 
 
 def test_registry_builds_the_real_driver_from_the_example_yaml():
-    from drivers import registry
-    from tests.drivers.device_configs import CONFIGS, load_device_config
-
-    config = load_device_config(CONFIGS / "robot" / "xarm6.yaml", backend="real")
-    fake = FakeXArmAPI(config.ip, is_radian=True, do_not_open=True)
-    with registry.make_arm(config, api=fake) as arm:
+    fake = FakeXArmAPI("192.168.1.185", is_radian=True, do_not_open=True)
+    with load_device(CONFIG_FILE, backend="real", kind="arm", api=fake) as arm:
         assert isinstance(arm, XArm6) and arm.is_connected
-        state = arm.read_state()
+        state = arm.read_status()
     assert not fake.connected
     assert len(state.tcp.xyz_m) == 3 and state.error_code == 0

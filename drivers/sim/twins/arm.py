@@ -28,8 +28,9 @@ last integration step.
 
 Errors and states are the real driver's: DeviceNotConnectedError before ``connect()``;
 ``emergency_stop()`` and ``inject_fault()`` latch a DeviceFaultError that motion commands
-raise until ``clear_fault()``. ``mode`` is 0 (position), 1 (servo) or 5 (velocity);
-``state`` 1 moving, 2 ready, 4 stopped (the SDK's numbers).
+raise until ``clear_fault()``. ``ArmStatus.mode`` is ``ArmMode.POSITION``, ``SERVO`` or
+``VELOCITY`` (the last mode armed); ``state`` is ``ArmState.MOVING``, ``READY`` (armed, at
+rest at the goal) or ``STOPPED`` (not armed, or a fault latched).
 """
 
 from __future__ import annotations
@@ -48,18 +49,12 @@ from drivers.arm.envelope import (
 )
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
-from drivers.base import ArmState, ContextManagedDevice, Pose, Twist
+from drivers.base import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
 from drivers.clock import Clock, MonotonicClock
 from drivers.config import Config, number
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
 
-MODE_POSITION = 0
-MODE_SERVO = 1
-MODE_VELOCITY = 5
-STATE_MOVING = 1
-STATE_READY = 2
-STATE_STOPPED = 4
 ARRIVED_M = 1e-6  # a position goal counts as reached within this distance ...
 ARRIVED_RAD = 1e-6  # ... and this angle, with the TCP at rest
 _AT_REST = 1e-9  # m/s and rad/s below which the TCP is at rest
@@ -138,8 +133,8 @@ class SimArm(ContextManagedDevice):
         self._t0_s = self._clock.now()
         self._steps = 0
         self._connected = False
-        self._mode: int | None = None  # None: not armed (stopped)
-        self._last_mode = MODE_POSITION
+        self._mode: ArmMode | None = None  # None: not armed (stopped)
+        self._last_mode = ArmMode.POSITION
         self._goal: _Goal | None = None
         self._twist = Twist()
         self._twist_until_s = -math.inf
@@ -148,9 +143,12 @@ class SimArm(ContextManagedDevice):
         self._servo_time_s: float | None = None
 
     @classmethod
-    def from_config(cls, config: SimArmConfig, api: Any = None) -> SimArm:
-        """The twin on the real-time clock (not connected yet); ``api`` is ignored."""
-        return cls(config)
+    def from_config(
+        cls, config: SimArmConfig, clock: Clock | None = None, api: Any = None
+    ) -> SimArm:
+        """The twin on ``clock`` (real time when None), not connected yet; ``api`` is
+        accepted for the same call as ``XArm6.from_config`` and ignored."""
+        return cls(config, clock)
 
     # ----------------------------------------------------------------- lifecycle
 
@@ -170,7 +168,7 @@ class SimArm(ContextManagedDevice):
             return
         self._connected = True
         if self._fault is None:
-            self._arm(MODE_POSITION)
+            self._arm(ArmMode.POSITION)
 
     def disconnect(self) -> None:
         """Stop (decelerating) and disconnect. Idempotent."""
@@ -180,11 +178,11 @@ class SimArm(ContextManagedDevice):
 
     # ----------------------------------------------------------------- reading
 
-    def read_state(self) -> ArmState:
+    def read_status(self) -> ArmStatus:
         """TCP pose in B at the last integration step; works while a fault is latched."""
         self._require_connected()
         self._advance()
-        return ArmState(
+        return ArmStatus(
             t_s=self._t0_s + self._steps * self._dt_s,
             tcp=self._pose(),
             joints_rad=(math.nan,) * 6,
@@ -201,7 +199,7 @@ class SimArm(ContextManagedDevice):
         require_finite("target", (*target.xyz_m, *target.rpy_rad))
         if not math.isfinite(speed_m_s) or speed_m_s <= 0:
             raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
-        self._prepare_motion(MODE_POSITION)
+        self._prepare_motion(ArmMode.POSITION)
         goal = clamp_pose(target, self.config.envelope)
         self._goal = _Goal.at(goal, min(speed_m_s, self.config.envelope.max_speed_m_s))
         if not wait:
@@ -221,7 +219,7 @@ class SimArm(ContextManagedDevice):
     def servo_pose(self, target: Pose) -> None:
         """One servo target, clamped and stepped exactly as ``XArm6.servo_pose`` does."""
         require_finite("target", (*target.xyz_m, *target.rpy_rad))
-        self._prepare_motion(MODE_SERVO)
+        self._prepare_motion(ArmMode.SERVO)
         env = self.config.envelope
         now = self._clock.now()
         if self._servo_reference is None:
@@ -246,7 +244,7 @@ class SimArm(ContextManagedDevice):
                 f"duration_s: expected a positive number (the SDK reads 0 as 'never stop'), "
                 f"got {duration_s!r}"
             )
-        self._prepare_motion(MODE_VELOCITY)
+        self._prepare_motion(ArmMode.VELOCITY)
         duration = min(duration_s, self.config.velocity_timeout_s)
         self._twist = clamp_twist(self._pose(), twist, duration, self.config.envelope)
         self._twist_until_s = self._clock.now() + duration
@@ -273,7 +271,7 @@ class SimArm(ContextManagedDevice):
         self._require_connected()
         self._advance()
         self._fault = None
-        self._arm(MODE_POSITION)
+        self._arm(ArmMode.POSITION)
 
     def inject_fault(self, code: int, message: str) -> None:
         """Simulate controller error ``code``: the arm stops and the fault is latched, as
@@ -294,7 +292,7 @@ class SimArm(ContextManagedDevice):
         if not self._connected:
             raise DeviceNotConnectedError(self.name, "not connected; call connect() first")
 
-    def _prepare_motion(self, mode: int) -> None:
+    def _prepare_motion(self, mode: ArmMode) -> None:
         self._require_connected()
         self._advance()
         if self._fault is not None:
@@ -306,7 +304,7 @@ class SimArm(ContextManagedDevice):
         if self._mode != mode:
             self._arm(mode)
 
-    def _arm(self, mode: int) -> None:
+    def _arm(self, mode: ArmMode) -> None:
         self._halt()
         self._mode = mode
         self._last_mode = mode
@@ -324,10 +322,10 @@ class SimArm(ContextManagedDevice):
         if self._fault is None:  # keep the first fault: the root cause
             self._fault = fault
 
-    def _state(self) -> int:
+    def _state(self) -> ArmState:
         if self._mode is None or self._fault is not None:
-            return STATE_STOPPED
-        return STATE_READY if self._goal_reached() else STATE_MOVING
+            return ArmState.STOPPED
+        return ArmState.READY if self._goal_reached() else ArmState.MOVING
 
     def _goal_reached(self) -> bool:
         """At rest, and at the goal if there is one."""

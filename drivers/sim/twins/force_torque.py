@@ -86,9 +86,11 @@ class SimForceTorque(ContextManagedDevice):
         self._connected = False
 
     @classmethod
-    def from_config(cls, config: SimForceTorqueConfig) -> SimForceTorque:
-        """The twin on the real-time clock, seeded by ``config.sim.seed``."""
-        return cls(config)
+    def from_config(
+        cls, config: SimForceTorqueConfig, clock: Clock | None = None
+    ) -> SimForceTorque:
+        """The twin on ``clock`` (real time when None), seeded by ``config.sim.seed``."""
+        return cls(config, clock)
 
     def set_source(self, source: WrenchSource | None) -> None:
         """Read the wrench from ``source`` from now on (None: the zero wrench)."""

@@ -85,9 +85,9 @@ class SimGamepad(ContextManagedDevice):
         self._next = 0  # index of the first event not yet applied
 
     @classmethod
-    def from_config(cls, config: SimGamepadConfig) -> SimGamepad:
-        """The twin on the real-time clock."""
-        return cls(config)
+    def from_config(cls, config: SimGamepadConfig, clock: Clock | None = None) -> SimGamepad:
+        """The twin on ``clock`` (real time when None)."""
+        return cls(config, clock)
 
     def play(self, events: Sequence[PadEvent]) -> None:
         """Start the script now, from neutral input; events must be in time order and name

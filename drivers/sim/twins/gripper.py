@@ -109,10 +109,12 @@ class SimGripper(ContextManagedDevice):
         self._sticky = False
 
     @classmethod
-    def from_config(cls, config: SimGripperConfig, arm: Any = None) -> SimGripper:
-        """The twin on the real-time clock. ``arm`` is accepted for the same call as
-        ``HandE.from_config`` and unused: the twin needs no transport."""
-        return cls(config)
+    def from_config(
+        cls, config: SimGripperConfig, clock: Clock | None = None, arm: Any = None
+    ) -> SimGripper:
+        """The twin on ``clock`` (real time when None). ``arm`` is accepted for the same call
+        as ``HandE.from_config`` and unused: the twin needs no transport."""
+        return cls(config, clock)
 
     # -- lifecycle ---------------------------------------------------------------------
 

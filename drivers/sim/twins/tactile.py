@@ -123,10 +123,13 @@ class SimTactileSensor(ContextManagedDevice):
         self._latest: tuple[int, TactileFrame] | None = None
 
     @classmethod
-    def from_config(cls, config: SimTactileConfig, capture_factory: Any = None) -> SimTactileSensor:
-        """The twin on the real-time clock, seeded by ``config.sim.seed``; ``capture_factory``
-        is ignored."""
-        return cls(config)
+    def from_config(
+        cls, config: SimTactileConfig, clock: Clock | None = None, capture_factory: Any = None
+    ) -> SimTactileSensor:
+        """The twin on ``clock`` (real time when None), seeded by ``config.sim.seed``;
+        ``capture_factory`` is accepted for the same call as ``TactileCamera.from_config``
+        and ignored."""
+        return cls(config, clock)
 
     @property
     def shape_hw(self) -> tuple[int, int]:
