@@ -15,7 +15,8 @@ truth):
 * ``degenerate``: the share of frames the estimator flags ``degenerate``;
 * ``zero tilt``: the share whose tilt torques are both exactly 0.0;
 * ``R^2 tau_x``, ``R^2 tau_y``: a linear fit of the raw tilt torque to the model's carried
-  torque about S's origin, on the even contact frames, scored on the odd ones;
+  torque about S's origin, on the even contact frames, scored on the odd ones, and the sign
+  of the fitted slope (``+``: the estimate has the torque's sign);
 * ``largest step``: the largest change of the tilt estimate between consecutive frames of the
   ``press_rolled`` phase (the press changes, the roll stays), relative to the range of the
   estimate over all contact frames: a jump shows here.
@@ -54,17 +55,20 @@ class PressRollScore:
     zero_tilt: float
     r2_tau_x: float
     r2_tau_y: float
+    slope_sign: tuple[int, int]
     largest_step: float
 
 
-def _held_out_r2(estimate: np.ndarray, truth: np.ndarray) -> float:
-    """R^2 on the odd samples of a least-squares line fitted on the even ones."""
+def _held_out_fit(estimate: np.ndarray, truth: np.ndarray) -> tuple[float, int]:
+    """R^2 on the odd samples of a least-squares line fitted on the even ones, and the sign
+    of its slope."""
     fit_x, fit_y = truth[0::2], estimate[0::2]
     slope, offset = np.polyfit(fit_x, fit_y, 1)
     test_x, test_y = truth[1::2], estimate[1::2]
     residual = test_y - (slope * test_x + offset)
     spread = test_y - test_y.mean()
-    return 1.0 - float(residual @ residual) / max(float(spread @ spread), 1e-300)
+    r2 = 1.0 - float(residual @ residual) / max(float(spread @ spread), 1e-300)
+    return r2, int(np.sign(slope))
 
 
 def run(
@@ -72,6 +76,7 @@ def run(
 ) -> list[PressRollScore]:
     """Render the scene once and score each estimator configuration on it."""
     profile = sensor_profile(sensor)
+    configs = [sensor_estimator(profile, method) for method in methods]  # fail before the work
     model = BallGelModel(gel_profile(sensor), scene.ball_radius_m)
     program = press_roll_program(scene)
     states = press_roll_states(model, program)
@@ -80,23 +85,28 @@ def run(
     truth = np.array([[s.carried.tau_x, s.carried.tau_y] for s in states])[touching]
     pressing = np.array([step.phase == "press_rolled" for step in program])[touching]
     scores = []
-    for method in methods:
-        name, config = sensor_estimator(profile, method)
+    for name, config in configs:
         estimator = TactileEstimator(config, profile)
         estimator.set_reference(images[0])
-        estimates = [estimator.push(image, step.t_s) for image, step in zip(images, program)]
-        contact = [e for e, touch in zip(estimates, touching) if touch]
+        estimates = [
+            estimator.push(image, step.t_s) for image, step in zip(images, program, strict=True)
+        ]
+        contact = [e for e, touch in zip(estimates, touching, strict=True) if touch]
         tilt = np.array([[e.tau_x, e.tau_y] for e in contact])
         steps = np.abs(np.diff(tilt[pressing], axis=0)).max(axis=0)
         span = np.ptp(tilt, axis=0)
+        (r2_x, sign_x), (r2_y, sign_y) = (
+            _held_out_fit(tilt[:, axis], truth[:, axis]) for axis in (0, 1)
+        )
         scores.append(
             PressRollScore(
                 method=name,
                 contact_frames=len(contact),
                 degenerate=float(np.mean([e.degenerate for e in contact])),
                 zero_tilt=float(np.mean([e.tau_x == 0.0 and e.tau_y == 0.0 for e in contact])),
-                r2_tau_x=_held_out_r2(tilt[:, 0], truth[:, 0]),
-                r2_tau_y=_held_out_r2(tilt[:, 1], truth[:, 1]),
+                r2_tau_x=r2_x,
+                r2_tau_y=r2_y,
+                slope_sign=(sign_x, sign_y),
                 largest_step=float((steps / np.maximum(span, 1e-300)).max()),
             )
         )
@@ -107,21 +117,20 @@ def table(scores: list[PressRollScore]) -> str:
     """A markdown table of ``scores``."""
     lines = [
         "| estimator | contact frames | degenerate | zero tilt | R^2 tau_x | R^2 tau_y "
-        "| largest step |",
-        "|---|---|---|---|---|---|---|",
+        "| slope signs | largest step |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for s in scores:
+        signs = " / ".join("+" if sign > 0 else "-" for sign in s.slope_sign)
         lines.append(
             f"| `{s.method}` | {s.contact_frames} | {s.degenerate:.1%} | {s.zero_tilt:.1%} "
-            f"| {s.r2_tau_x:.3f} | {s.r2_tau_y:.3f} | {s.largest_step:.2f} |"
+            f"| {s.r2_tau_x:.3f} | {s.r2_tau_y:.3f} | {signs} | {s.largest_step:.2f} |"
         )
     return "\n".join(lines)
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="eval_press_roll", description=__doc__.splitlines()[0]
-    )
+    parser = argparse.ArgumentParser(prog="eval_press_roll", description=__doc__.splitlines()[0])
     parser.add_argument("--methods", default="default,paper", help="estimator configurations")
     parser.add_argument("--sensor", default="gelsight_mini")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered gel")

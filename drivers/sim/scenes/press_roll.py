@@ -97,8 +97,9 @@ def press_roll_program(config: PressRollConfig) -> list[PressRollStep]:
         phase = 2 * math.pi * config.roll_cycles * np.arange(1, config.roll_frames + 1)
         swing = roll * np.sin(phase / config.roll_frames)
         rows += [("roll", force, s if axis == 0 else 0.0, s if axis == 1 else 0.0) for s in swing]
-    up_down = np.sin(math.pi * np.arange(1, config.press_rolled_frames + 1)
-                     / config.press_rolled_frames)
+    up_down = np.sin(
+        math.pi * np.arange(1, config.press_rolled_frames + 1) / config.press_rolled_frames
+    )
     rows += [("press_rolled", force * (1 + (config.harder - 1) * a), roll, roll) for a in up_down]
     return [
         PressRollStep(i / config.rate_hz, phase, f, (ex, ey))
@@ -143,15 +144,10 @@ class BallGelModel(GelModel):
     def footprint(
         self, offset_m: tuple[float, float] = (0.0, 0.0), angle_rad: float = 0.0
     ) -> Footprint:
-        key = (float(offset_m[0]), float(offset_m[1]), 0.0)
-        if key not in self._placed:
-            self._placed[key] = ball_footprint(self, self.radius_m, offset_m)
-        return self._placed[key]
+        return ball_footprint(self, self.radius_m, offset_m)
 
 
-def press_roll_states(
-    model: GelModel, program: list[PressRollStep]
-) -> list[GelState]:
+def press_roll_states(model: GelModel, program: list[PressRollStep]) -> list[GelState]:
     """The gel's state at each step of ``program`` (each solve warm-started from the last)."""
     states: list[GelState] = []
     previous: GelState | None = None
