@@ -1,21 +1,38 @@
-"""Tactile dipole moment and the tilt torque it gives (Fuchioka & Hamaya, ICRA 2024).
+"""Tactile dipole moment and the tilt torque it gives (Fuchioka & Hamaya, ICRA 2024), continuous
+under a net press.
 
 Given the divergence ``div_i`` of the zeroed displacement field at grid points ``x_i`` (frame S,
-mm), with N points:
+mm), with N points, P = sum max(div, 0) and Q = sum max(-div, 0) the masses of the positive and
+negative regions, C+ and C- their div-weighted centroids, and D = P - Q the net divergence:
 
-1. C+ is the centroid of the points with div > 0, weighted by div; C- likewise for div < 0,
-   weighted by |div|.
-2. m = (C+ + C-) / 2 and r_i = x_i - m (origin ``centroid_midpoint``), or r_i = x_i
-   (origin ``sensor_centre``, the gel centre).
-3. p = (1/N) sum_i r_i div_i, in mm.
-4. tilt torque tau = [c_x p_y, -c_y p_x]; with c = 1 this is the raw torque in mm.
+1. the origin ``o``: with ``centroid_midpoint``, o = w m, the paper's midpoint
+   m = (C+ + C-) / 2 scaled by a weight w that is 1 while the two regions are comparable
+   (weak / strong mass ratio rho = min(P, Q) / max(P, Q) >= ``full_midpoint_ratio``) and
+   falls smoothly to 0 (the gel centre) as the weaker region vanishes:
+   w = smoothstep(rho / full_midpoint_ratio) = 3 t^2 - 2 t^3; with ``sensor_centre``, o = 0;
+2. p = (1/N) sum_i (x_i - o) div_i = (sum_i x_i div_i - o D) / N, in mm;
+3. tilt torque tau = [c_x p_y, -c_y p_x]; with c = 1 this is the raw torque in mm.
+
+Why (docs/ARCHITECTURE.md, "The dipole under a net press"): sum_i (x_i - o) div_i is the
+first moment of the divergence about o, which changes with o only through o D. With the
+regions balanced (D = 0) every origin gives the same, translation-invariant moment
+(P / N)(C+ - C-), the paper's. Under a net press (D != 0) the paper's moment is
+((P + Q) / 2N)(C+ - C-): it is biased by the press and, when one region vanishes, its centroid
+is undefined and the rule has no value (it used to return zero). The moment about the gel
+centre stays the first moment of the pressure change about S's axes, the torque the wrench
+is expressed about, and is linear in the field. Blending the origin between the two keeps the
+paper's result where both regions are comparable and makes p continuous, indeed Lipschitz:
+for any change of the divergence, per axis,
+|delta p| <= (2 + 2.625 / full_midpoint_ratio) (R / N) sum_i |delta div_i|, R the grid's
+largest |coordinate| on that axis (the weak region's centroid moves by up to R / Q per unit
+change, and w D / Q stays below 1.125 / full_midpoint_ratio; tests/tactile/test_dipole_press.py).
 
 Sign: pressure rising toward +y makes the gel spread there (div > 0 at +y, < 0 at -y), so
 p_y > 0 and tau_x > 0: the torque about S's x axis that the gel exerts on the grasped object
 (docs/ARCHITECTURE.md has the drawing).
 
-Unlike the authors' code, nothing here divides by the centroid distance, so an empty field
-gives zero torque and the ``degenerate`` flag, never NaN.
+Nothing here divides by the centroid distance. ``degenerate`` means the divergence is zero at
+every point (no information about tilt; p is then zero), never NaN.
 """
 
 from __future__ import annotations
@@ -29,19 +46,25 @@ from controller.tactile.field import require_finite
 
 DipoleOrigin = Literal["centroid_midpoint", "sensor_centre"]
 
-# A sign region whose |div| mass is below this fraction of the total counts as absent.
-_EMPTY_REGION_FRACTION = 1e-9
+# The weak / strong mass ratio from which on the paper's midpoint is used unchanged (the
+# estimator configurations' ``dipole_full_midpoint_ratio``; docs/ARCHITECTURE.md says why).
+FULL_MIDPOINT_RATIO = 0.25
 
 
 @dataclass(frozen=True)
 class DipoleMoment:
-    """The dipole moment ``p`` (mm), the origin ``m`` it was taken about (mm, frame S), and
-    ``degenerate``: the field had no positive or no negative divergence (p is then zero)."""
+    """The dipole moment ``p`` (mm) and the origin ``m`` it was taken about (mm, frame S).
+
+    ``midpoint_weight``: the share w of the centroid midpoint in that origin (1: the paper's
+    midpoint; 0: the gel centre, when one sign of divergence is absent or with the
+    ``sensor_centre`` origin). ``degenerate``: the divergence was zero everywhere (p is then
+    zero)."""
 
     p_x: float
     p_y: float
     m_x: float
     m_y: float
+    midpoint_weight: float
     degenerate: bool
 
     @property
@@ -50,20 +73,37 @@ class DipoleMoment:
         return self.p_y, -self.p_x
 
 
+def midpoint_weight(ratio: float, full_ratio: float) -> float:
+    """w(rho) = smoothstep(rho / full_ratio): 0 at rho = 0, 1 from rho = full_ratio on, with a
+    continuous slope (at most 1.5 / full_ratio)."""
+    if ratio >= full_ratio:
+        return 1.0
+    t = ratio / full_ratio
+    return t * t * (3.0 - 2.0 * t)
+
+
 class DipoleMomentCalculator:
     """Computes the dipole moment on a fixed grid without allocating per call.
 
-    ``x_mm`` (cols,) and ``y_mm`` (rows,) are the grid's cell centres in frame S.
+    ``x_mm`` (cols,) and ``y_mm`` (rows,) are the grid's cell centres in frame S;
+    ``full_midpoint_ratio`` in (0, 1]: see the module docstring.
     """
 
     def __init__(
-        self, x_mm: np.ndarray, y_mm: np.ndarray, origin: DipoleOrigin = "centroid_midpoint"
+        self,
+        x_mm: np.ndarray,
+        y_mm: np.ndarray,
+        origin: DipoleOrigin = "centroid_midpoint",
+        full_midpoint_ratio: float = FULL_MIDPOINT_RATIO,
     ) -> None:
         if origin not in ("centroid_midpoint", "sensor_centre"):
             raise ValueError(
                 f"dipole origin must be 'centroid_midpoint' or 'sensor_centre', got {origin!r}"
             )
+        if not 0.0 < full_midpoint_ratio <= 1.0:
+            raise ValueError(f"full_midpoint_ratio must be in (0, 1], got {full_midpoint_ratio!r}")
         self.origin = origin
+        self.full_midpoint_ratio = full_midpoint_ratio
         grid_x, grid_y = np.meshgrid(x_mm, y_mm)
         self._x = grid_x.ravel()
         self._y = grid_y.ravel()
@@ -85,22 +125,22 @@ class DipoleMomentCalculator:
         mass_neg = -float(self._negative.sum())
         moment_x = float(self._x @ flat)
         moment_y = float(self._y @ flat)
+        degenerate = mass_pos + mass_neg == 0.0
 
-        if self.origin == "sensor_centre":
-            degenerate = mass_pos + mass_neg == 0.0
-            return DipoleMoment(moment_x / n, moment_y / n, 0.0, 0.0, degenerate)
-
-        floor = _EMPTY_REGION_FRACTION * (mass_pos + mass_neg)
-        if mass_pos <= floor or mass_neg <= floor or mass_pos + mass_neg == 0.0:
-            return DipoleMoment(0.0, 0.0, 0.0, 0.0, True)
+        weight = 0.0
+        if self.origin == "centroid_midpoint" and mass_pos > 0.0 and mass_neg > 0.0:
+            ratio = min(mass_pos, mass_neg) / max(mass_pos, mass_neg)
+            weight = midpoint_weight(ratio, self.full_midpoint_ratio)
+        if weight == 0.0:
+            return DipoleMoment(moment_x / n, moment_y / n, 0.0, 0.0, 0.0, degenerate)
         c_pos_x = float(self._x @ self._positive) / mass_pos
         c_pos_y = float(self._y @ self._positive) / mass_pos
         c_neg_x = -float(self._x @ self._negative) / mass_neg
         c_neg_y = -float(self._y @ self._negative) / mass_neg
-        m_x = 0.5 * (c_pos_x + c_neg_x)
-        m_y = 0.5 * (c_pos_y + c_neg_y)
+        m_x = 0.5 * weight * (c_pos_x + c_neg_x)
+        m_y = 0.5 * weight * (c_pos_y + c_neg_y)
         net = mass_pos - mass_neg
         # sum_i (x_i - m) div_i = sum_i x_i div_i - m * sum_i div_i
         p_x = (moment_x - m_x * net) / n
         p_y = (moment_y - m_y * net) / n
-        return DipoleMoment(p_x, p_y, m_x, m_y, False)
+        return DipoleMoment(p_x, p_y, m_x, m_y, weight, False)

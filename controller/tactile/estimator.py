@@ -152,7 +152,7 @@ class TactileEstimator:
         rows, cols = y_mm.size, x_mm.size
         if grid is None:
             self._dipole_block = (1, 1)
-            self._dipole = DipoleMomentCalculator(x_mm, y_mm, self.config.dipole_origin)
+            self._dipole = self._dipole_calculator(x_mm, y_mm)
             return
         mismatch = dipole_grid_mismatch(self.config, rows, cols)
         if mismatch:
@@ -160,12 +160,19 @@ class TactileEstimator:
         self._dipole_block = (rows // grid.rows, cols // grid.cols)
         x_coarse = x_mm.reshape(grid.cols, -1).mean(axis=1)
         y_coarse = y_mm.reshape(grid.rows, -1).mean(axis=1)
-        self._dipole = DipoleMomentCalculator(x_coarse, y_coarse, self.config.dipole_origin)
+        self._dipole = self._dipole_calculator(x_coarse, y_coarse)
         coarse = (grid.rows, grid.cols)
         self._pooled = (np.empty(coarse), np.empty(coarse))
         self._coarse_div = np.empty(coarse)
         self._coarse_work = np.empty(coarse)
         self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse)
+
+    def _dipole_calculator(self, x_mm: np.ndarray, y_mm: np.ndarray) -> DipoleMomentCalculator:
+        """The dipole on the grid ``x_mm`` x ``y_mm`` with the configuration's origin rule."""
+        config = self.config
+        return DipoleMomentCalculator(
+            x_mm, y_mm, config.dipole_origin, config.dipole_full_midpoint_ratio
+        )
 
     def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the

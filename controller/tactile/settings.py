@@ -186,8 +186,12 @@ class EstimatorConfig(Config):
     this coarser grid (and decomposed again there for the curl-free part), while tau_z, the
     shear and the slip detector keep the full grid (null: the full grid itself). With square
     blocks this is exactly what an estimator with a proportionally larger stride computes.
-    ``tau_z_about``: the NHHD in-plane torque's origin, the gel centre
-    or the rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``:
+    ``dipole_origin``: the point the dipole moment is taken about: the paper's centroid
+    midpoint, moved smoothly toward the gel centre as one sign of divergence vanishes, or
+    the gel centre (``sensor_centre``); ``dipole_full_midpoint_ratio``: the weak / strong
+    mass ratio of the two signs from which on the midpoint is used unchanged
+    (controller/tactile/dipole.py). ``tau_z_about``: the NHHD in-plane torque's origin, the
+    gel centre or the rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``:
     weight of the newest field in the temporal filter (1 = off). ``reference_frames``:
     frames averaged into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
@@ -198,6 +202,7 @@ class EstimatorConfig(Config):
     stride_px: float = number(4, 160)
     divergence_of: Literal["raw", "curl_free"]
     dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
+    dipole_full_midpoint_ratio: float = number(0.01, 1.0)
     tau_z_about: Literal["gel_centre", "rotation_centre"]
     dipole_grid: DipoleGrid | None
     ema_alpha: float = number(0.01, 1.0)

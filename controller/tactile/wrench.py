@@ -33,13 +33,14 @@ class WrenchEstimate:
     * ``t_s``: the frame's timestamp, s.
 
     Flags: ``contact`` -- the field's mean magnitude exceeds the contact threshold;
-    ``degenerate`` -- the field had no positive or no negative divergence, so the tilt torque
-    is set to zero; ``slip_suspected`` -- the slip detector sees part of the contact slipping
-    (incipient or gross slip); ``slip_gross`` -- it sees the object sliding as a whole;
-    ``rezero_recommended`` -- after gross slip the load was released and the field settled,
-    so the zeroing reference should be refreshed (controller/tactile/slip.py; all three stay
-    False when the detector is disabled); ``zeroing`` -- the reference is still being
-    captured, all values are zero.
+    ``degenerate`` -- the divergence on the dipole's grid is zero everywhere, so the tilt
+    torque is zero for want of information, not measured (with one sign of divergence
+    absent the tilt is still estimated, controller/tactile/dipole.py); ``slip_suspected``
+    -- the slip detector sees part of the contact slipping (incipient or gross slip);
+    ``slip_gross`` -- it sees the object sliding as a whole; ``rezero_recommended`` --
+    after gross slip the load was released and the field settled, so the zeroing reference
+    should be refreshed (controller/tactile/slip.py; all three stay False when the detector
+    is disabled); ``zeroing`` -- the reference is still being captured, all values are zero.
     """
 
     t_s: float

@@ -46,9 +46,12 @@ def test_zero_field_is_degenerate_and_silent():
     assert d.degenerate and (d.p_x, d.p_y) == (0.0, 0.0)
 
 
-def test_one_signed_divergence_is_degenerate():
-    d = dipole(np.abs(div_of(*source(1.0, 0.0, 0.05))) + 1e-3)
-    assert d.degenerate and (d.p_x, d.p_y) == (0.0, 0.0)
+def test_one_signed_divergence_is_the_moment_about_the_gel_centre():
+    div = np.abs(div_of(*source(1.0, 0.0, 0.05))) + 1e-3
+    d = dipole(div)
+    assert not d.degenerate and d.midpoint_weight == 0.0 and (d.m_x, d.m_y) == (0.0, 0.0)
+    assert d.p_x == pytest.approx((GRID_X * div).mean(), rel=1e-12)
+    assert d.p_x > 0  # the press sits at +x
 
 
 def test_sensor_centre_origin_uses_fixed_lever():
