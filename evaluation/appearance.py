@@ -115,7 +115,8 @@ def measure(image: np.ndarray) -> AppearanceStats:
     pitch, diameter, darkness, edge = _marker_stats(grey, background, markers.centres_px)
     bands, low = _bands(grey, free, counted)
     low_colour = masked_blur(colour, free, BAND_SIGMAS_PX[-1])[counted]
-    correlation = np.corrcoef(low_colour.T)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a flat channel: NaN
+        correlation = np.corrcoef(low_colour.T)
     return AppearanceStats(
         width_px=image.shape[1],
         height_px=image.shape[0],
@@ -242,18 +243,21 @@ def _cell(value: float) -> str:
 
 
 def summarise(stats: list[AppearanceStats]) -> AppearanceStats:
-    """The median of several images' statistics (a video's frames), field by field."""
+    """The median of several images' statistics (a video's frames), field by field, over the
+    images where it was measurable (NaN if none)."""
     if not stats:
         raise ValueError("stats: expected at least one image's statistics")
-    first = asdict(stats[0])
     merged: dict[str, object] = {}
-    for key, value in first.items():
-        column = np.array([asdict(s)[key] for s in stats], dtype=float)
-        median = np.median(column, axis=0)
+    for key, value in asdict(stats[0]).items():
+        column = np.array([asdict(s)[key] for s in stats], dtype=float).reshape(len(stats), -1)
+        median = [
+            float(np.median(c[np.isfinite(c)])) if np.isfinite(c).any() else np.nan
+            for c in column.T
+        ]
         if isinstance(value, tuple):
-            merged[key] = tuple(float(v) for v in median)
+            merged[key] = tuple(median)
         elif isinstance(value, int):
-            merged[key] = int(round(float(median)))
+            merged[key] = int(round(median[0]))
         else:
-            merged[key] = float(median)
+            merged[key] = median[0]
     return AppearanceStats(**merged)

@@ -7,7 +7,9 @@ levels; positions are px (x right, y down, pixel centres at integers).
 
 A marker is a dark, compact blob: a connected region darker than the image's grey-level
 closing (the markers closed away by a disc wider than the largest marker) by more than
-both Otsu's threshold on that darkness and ``min_darkness_grey``, with an area of a disc of
+both Otsu's threshold on that darkness and ``min_darkness_grey``, whose darkest pixel is
+darker than the closing by at least ``MIN_RELATIVE_DARKNESS`` of it (a texture's dark specks
+are shallower than printed ink), with an area of a disc of
 diameter 2 to ``max_diameter_px`` and a bounding box that it fills by at least half, about as
 wide as tall. Its centre is the darkness-weighted centroid. A gel without markers (DIGIT, a
 bare GelSight) gives none: its smudges are fainter than ``min_darkness_grey``.
@@ -19,12 +21,17 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+from scipy import ndimage
 
 MAX_DIAMETER_PX = 16.0
 """Largest marker diameter looked for, px (markers at 320 x 240 are 5-10 px)."""
 
 MIN_DARKNESS_GREY = 20.0
 """Least darkness of a marker below the closed background, grey levels."""
+
+MIN_RELATIVE_DARKNESS = 0.45
+"""Least darkness of a marker's darkest pixel as a fraction of the closed background (real
+markers: about 0.8; a dense speckle's darkest specks: about 0.35)."""
 
 MASK_MARGIN_PX = 2
 """Pixels added around each marker's blob to cover its soft edge."""
@@ -61,7 +68,8 @@ def find_markers(
     grey = grey_of(image)
     radius = int(np.ceil(max_diameter_px / 2)) + 2
     disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * radius + 1, 2 * radius + 1))
-    darkness = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, disc) - grey
+    closed = cv2.morphologyEx(grey, cv2.MORPH_CLOSE, disc)
+    darkness = closed - grey
     otsu, _ = cv2.threshold(
         np.clip(darkness, 0, 255).astype(np.uint8), 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU
     )
@@ -70,8 +78,11 @@ def find_markers(
     area = stats[:, cv2.CC_STAT_AREA].astype(float)
     box_w = stats[:, cv2.CC_STAT_WIDTH].astype(float)
     box_h = stats[:, cv2.CC_STAT_HEIGHT].astype(float)
+    relative = darkness / np.maximum(closed, 1.0)
+    deepest = np.asarray(ndimage.maximum(relative, labels, np.arange(count)))
     keep = (
-        (area >= np.pi)
+        (deepest >= MIN_RELATIVE_DARKNESS)
+        & (area >= np.pi)
         & (area <= np.pi * (max_diameter_px / 2) ** 2)
         & (area >= 0.5 * box_w * box_h)
         & (np.maximum(box_w, box_h) <= 2 * np.minimum(box_w, box_h))
