@@ -117,7 +117,7 @@ def test_look_source_is_the_look_to_four_digits():
 #   3 % or less); the 50-100 px band within a factor 1.8: the captures hold more power there
 #   than at 25-50 px (the GelSight pair's pressed sphere, the DIGIT pair's LED lobes), which
 #   a texture of white noise band-passed in octaves cannot reach without overshooting 25-50
-#   px; the fit lands at 0.67-0.75 of it, varying by 4-6 % per seed. The speckle gel is 2.5-5.8x
+#   px; the fit lands at 0.67-0.75 of it, varying by 4-6 % per seed. The speckle gel is 2.4-5.8x
 #   the captures in the 2-50 px bands, so the bounds separate it clearly (checked below).
 BOUNDS_ABS = {
     "marker diameter px": 0.6,
