@@ -6,12 +6,14 @@ the sensor's working size, 320 x 240) in px and grey levels (OpenCV's BGR luma u
 channel is named):
 
 * **Markers** (drivers/sim/render/gel_analysis.py finds them): their count, the median
-  nearest-neighbour distance (the lattice pitch), and from a fit of an edge model to each
-  marker's pixels, ``I(r) = b(r) - a * Phi((R - r) / s)`` (b: the marker-free background
-  around it, Phi: the standard normal CDF, r: distance to the centre), the medians over the
-  markers of: the **diameter** 2 R (where the darkening is half its depth), the
-  **darkness** a / b at the centre (0: invisible, 1: black), and the **10-90 % edge width**
-  2 * 1.2816 * s (px over which the darkening goes from 10 to 90 % of its depth).
+  nearest-neighbour distance (the lattice pitch), and from a least-squares fit of an edge
+  model to each marker's pixels within half a pitch (at most 12 px) of its centre,
+  ``I(r) = b(r) * (1 - d * Phi((R - r) / s))`` (b: the marker-free background around it,
+  a 3 px normalised blur; Phi: the standard normal CDF; r: distance to the centre), the
+  medians over the markers not cut by the border of: the **diameter** 2 R (where the
+  darkening is half its depth), the **darkness** d (0: invisible, 1: black), and the
+  **10-90 % edge width** 2 * 1.2816 * s (px over which the darkening goes from 10 to 90 %
+  of its depth).
 * **Shading between the markers**: the image with the markers masked out is split into
   octave bands by differences of Gaussian blurs taken over the unmasked pixels only
   (normalised convolution), ``band_k = G(s_k) - G(2 s_k)`` for s_k = 0 (the image itself),
@@ -22,11 +24,12 @@ channel is named):
   2-6 px, each next one twice those). Colour: the **mean** B, G, R of the unmasked pixels
   and the **spread** (standard deviation) of each channel's low part across the image, and
   the correlation coefficients of the low parts between channels (B-G, B-R, G-R).
-* **Noise**: the robust standard deviation (1.4826 x the median absolute deviation) of the
-  image convolved with Immerkaer's kernel [[1, -2, 1], [-2, 4, -2], [1, -2, 1]] / 6 over the
-  unmasked pixels, per channel, then the median of the channels. The kernel removes
-  anything locally linear, so this is pixel noise plus the finest texture (Immerkaer, "Fast
-  noise variance estimation", CVIU 1996).
+* **Noise**: Immerkaer's estimate, sqrt(pi / 2) times the mean absolute value of the image
+  convolved with the kernel [[1, -2, 1], [-2, 4, -2], [1, -2, 1]] / 6 over the unmasked
+  pixels, per channel, then the median of the channels (Immerkaer, "Fast noise variance
+  estimation", CVIU 1996). The kernel removes anything locally linear, so this is pixel
+  noise plus the finest texture; a median-based version would be quantised by the uint8
+  grey levels (1/6 steps), so the mean is used.
 
 A video's statistics are the median of its frames' (``summarise``).
 """
@@ -52,7 +55,6 @@ BAND_NAMES = ("2-6px", "6-12px", "12-25px", "25-50px", "50-100px")
 BORDER_PX = 8
 EDGE_TO_10_90 = 2 * 1.2815516  # 10-90 % width of a Gaussian-blurred step, in units of s
 _IMMERKAER = np.array([[1, -2, 1], [-2, 4, -2], [1, -2, 1]], np.float32) / 6.0
-_FIT_REACH = 1.5  # fit a marker's pixels out to this many of its blob radii
 
 
 @dataclass(frozen=True)
@@ -188,8 +190,7 @@ def _marker_stats(
 
 
 def _fit_edge(r: np.ndarray, values: np.ndarray, background: np.ndarray) -> tuple:
-    """(R px, a / b, s px) of ``values = b - a Phi((R - r) / s)`` by least squares, with
-    a expressed relative to the background b (the darkness)."""
+    """(R px, d, s px) of ``values = b (1 - d Phi((R - r) / s))`` by least squares."""
     dark = values < background - 0.5 * (background - values.min())
     start = (max(np.sqrt(dark.sum() / np.pi), 1.0), 0.8, 0.7)
 

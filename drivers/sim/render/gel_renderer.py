@@ -1,7 +1,9 @@
 """Fast seeded marker-gel images for the simulated tactile camera (about 1-2 ms per 320 x 240
 frame on one core; ``python scripts/bench_render.py`` measures it).
 
-The image is the printed gel (drivers/sim/render/gel_pattern.py) warped by a forward displacement
+The image is the gel of the chosen appearance (drivers/sim/render/appearance.py: the original
+``speckle`` gel of drivers/sim/render/gel_pattern.py by default, a ``realistic`` gel fitted to
+real captures, or a real capture) warped by a forward displacement
 field given at any grid resolution with the image's aspect (drivers/sim/render/field_grid.py: the
 field convention; field_inverse.py: the backward map; image_warp.py: the resampling), then
 the image effects of ``ImageEffects`` (render/image_effects.py) in the order light takes:
