@@ -1,7 +1,9 @@
 """Fast seeded marker-gel images for the simulated tactile camera (about 1-2 ms per 320 x 240
 frame on one core; ``python scripts/bench_render.py`` measures it).
 
-The image is the printed gel (drivers/sim/render/gel_pattern.py) warped by a forward displacement
+The image is the gel of the chosen appearance (drivers/sim/render/appearance.py: the original
+``speckle`` gel of drivers/sim/render/gel_pattern.py by default, a ``realistic`` gel fitted to
+real captures, or a real capture) warped by a forward displacement
 field given at any grid resolution with the image's aspect (drivers/sim/render/field_grid.py: the
 field convention; field_inverse.py: the backward map; image_warp.py: the resampling), then
 the image effects of ``ImageEffects`` (render/image_effects.py) in the order light takes:
@@ -20,13 +22,14 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from drivers.sim.render.appearance import make_gel_pattern
 from drivers.sim.render.field_inverse import BackwardMapper
-from drivers.sim.render.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.image_warp import SplineWarper
-from drivers.sim.render.lighting import drift_rate, led_shading, shade
+from drivers.sim.render.lighting import drift_rate, shade
 from drivers.sim.render.noise_bank import NoiseBank
 from drivers.sim.render.occlusion import Occlusion
+from drivers.sim.render.realistic import RealisticLook
 
 
 class GelRenderer:
@@ -38,6 +41,12 @@ class GelRenderer:
     levels). ``effects``: see ``ImageEffects`` (none by default). ``rng`` seeds the gel
     (drawn first, as ``MarkerImageRenderer`` draws it: the same seed gives the same gel) and
     then one independent stream per effect.
+
+    ``appearance`` names the gel's look (drivers/sim/render/appearance.py): ``"speckle"``
+    (the default, the original synthetic gel), ``"realistic"`` / ``"realistic_digit"`` (fitted
+    to real captures; a ``RealisticLook`` works too) or ``"real:<capture>"`` (a real capture
+    warped). ``dot_radius_px``, ``jitter_px`` and ``texture_grey`` shape the speckle gel only;
+    a real capture brings its own markers.
 
     ``marker_centres_px`` (N, 2) are the (x, y) px of the markers printed and present in the
     reference; ``dropped_marker_centres_px`` those worn off by marker dropout;
@@ -54,16 +63,15 @@ class GelRenderer:
         texture_grey: float = 12.0,
         effects: ImageEffects | None = None,
         rng: np.random.Generator | None = None,
+        appearance: str | RealisticLook = "speckle",
     ) -> None:
         rng = np.random.default_rng(0) if rng is None else rng
         self.effects = effects = ImageEffects() if effects is None else effects
         self.shape_hw = shape_hw = (height_px, width_px)
-        centres = (
-            np.empty((0, 2))
-            if pitch_px is None
-            else marker_lattice(shape_hw, pitch_px, jitter_px, rng)
+        pattern = make_gel_pattern(
+            appearance, shape_hw, pitch_px, dot_radius_px, jitter_px, texture_grey, rng
         )
-        gel_speckle = speckle(shape_hw, texture_grey, rng)
+        centres = pattern.marker_centres_px
         dropout_seed, occlusion_seed, noise_seed = np.random.SeedSequence(
             int(rng.integers(2**63))
         ).spawn(3)
@@ -74,11 +82,7 @@ class GelRenderer:
         ] = True
         self.marker_centres_px = centres[~dropped]
         self.dropped_marker_centres_px = centres[dropped]
-        self._gel = SplineWarper(
-            reflectance(
-                gel_speckle, marker_coverage(shape_hw, self.marker_centres_px, dot_radius_px)
-            )
-        )
+        self._gel = SplineWarper(pattern.reflectance(~dropped))
         self._occlusion = None
         if effects.occlusion_count > 0:
             self._occlusion = Occlusion(
@@ -92,7 +96,7 @@ class GelRenderer:
         self._noise = None
         if effects.noise_grey > 0:
             self._noise = NoiseBank((height_px, width_px, 3), effects.noise_grey, noise_seed)
-        self._shading = led_shading(shape_hw)
+        self._shading = pattern.shading
         self._drift_rate = drift_rate(
             self._shading,
             effects.drift_gain_per_level,
@@ -149,7 +153,7 @@ class GelRenderer:
             raise ValueError(
                 f"exposure_start_px: expected the end field's shape {end.shape}, got {start.shape}"
             )
-        total = np.zeros(self.shape_hw, np.float32)
+        total = np.zeros_like(self._gel.image)
         for t in np.linspace(0.0, 1.0, samples, dtype=np.float32):
             total += self._gel(self._mapper(start + t * (end - start)))
         return total * np.float32(1.0 / samples)

@@ -47,12 +47,16 @@ def half_pixel_table(image: np.ndarray) -> np.ndarray:
 
 
 class SplineWarper:
-    """``warper(backward)`` -> the image (H, W) float32 resampled at the backward map
-    (H, W, 2) px (image(y) = source(backward(y))), mirrored beyond the border."""
+    """``warper(backward)`` -> the image (H, W) or (H, W, C) float32 (C <= 4) resampled at
+    the backward map (H, W, 2) px (image(y) = source(backward(y))), mirrored beyond the
+    border; each channel has its own table and one ``cv2.remap`` samples them all."""
 
     def __init__(self, image: np.ndarray) -> None:
         self.image = image
-        self._table = half_pixel_table(image)
+        if image.ndim == 2:
+            self._table = half_pixel_table(image)
+        else:
+            self._table = cv2.merge([half_pixel_table(channel) for channel in cv2.split(image)])
 
     def __call__(self, backward_px: np.ndarray) -> np.ndarray:
         in_table = cv2.multiply(backward_px, (2.0, 2.0, 0.0, 0.0))

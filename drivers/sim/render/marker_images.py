@@ -14,9 +14,10 @@ import cv2
 import numpy as np
 from scipy.ndimage import map_coordinates, spline_filter
 
+from drivers.sim.render.appearance import make_gel_pattern
 from drivers.sim.render.field_inverse import backward_map
-from drivers.sim.render.gel_pattern import marker_coverage, marker_lattice, reflectance, speckle
-from drivers.sim.render.lighting import led_shading, shade
+from drivers.sim.render.lighting import shade
+from drivers.sim.render.realistic import RealisticLook
 
 
 class MarkerImageRenderer:
@@ -25,7 +26,8 @@ class MarkerImageRenderer:
     ``pitch_px``: marker lattice pitch (``None``: a gel without printed markers, texture
     only, as the DIGIT's); ``dot_radius_px``: marker radius; ``jitter_px``:
     random offset of each marker from its lattice site; ``texture_grey``: amplitude of the
-    gel's speckle texture. ``rng`` seeds the marker jitter and the texture.
+    gel's speckle texture. ``rng`` seeds the marker jitter and the texture. ``appearance``:
+    the gel's look, as ``GelRenderer``'s (drivers/sim/render/appearance.py).
     """
 
     def __init__(
@@ -37,20 +39,18 @@ class MarkerImageRenderer:
         jitter_px: float = 1.5,
         texture_grey: float = 12.0,
         rng: np.random.Generator | None = None,
+        appearance: str | RealisticLook = "speckle",
     ) -> None:
         rng = np.random.default_rng(0) if rng is None else rng
         self.shape_hw = shape_hw = (height_px, width_px)
-        self.marker_centres_px = (
-            np.empty((0, 2))
-            if pitch_px is None
-            else marker_lattice(shape_hw, pitch_px, jitter_px, rng)
+        gel = make_gel_pattern(
+            appearance, shape_hw, pitch_px, dot_radius_px, jitter_px, texture_grey, rng
         )
-        gel_speckle = speckle(shape_hw, texture_grey, rng)
-        self._pattern = reflectance(
-            gel_speckle, marker_coverage(shape_hw, self.marker_centres_px, dot_radius_px)
-        )
-        self._spline = spline_filter(self._pattern, order=3, mode="mirror")
-        self._shading = led_shading(shape_hw)
+        self.marker_centres_px = gel.marker_centres_px
+        self._pattern = gel.reflectance(np.ones(len(self.marker_centres_px), bool))
+        channels = [self._pattern] if self._pattern.ndim == 2 else cv2.split(self._pattern)
+        self._splines = [spline_filter(c, order=3, mode="mirror") for c in channels]
+        self._shading = gel.shading
 
     def render(self, displacement_px: np.ndarray | None = None) -> np.ndarray:
         """The image after the gel moved by the forward field ``displacement_px`` (H, W, 2)
@@ -60,9 +60,11 @@ class MarkerImageRenderer:
             # Cubic-spline resampling at full float precision: cv2.remap quantises sub-pixel
             # positions to 1/32 px, which biases sub-pixel flow ground truth by up to 0.03 px.
             map_x, map_y = backward_map(displacement_px)
-            pattern = map_coordinates(
-                self._spline, [map_y, map_x], order=3, mode="mirror", prefilter=False
-            )
+            channels = [
+                map_coordinates(spline, [map_y, map_x], order=3, mode="mirror", prefilter=False)
+                for spline in self._splines
+            ]
+            pattern = channels[0] if len(channels) == 1 else cv2.merge(channels)
         return shade(pattern, self._shading)
 
 

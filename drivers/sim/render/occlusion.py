@@ -50,6 +50,9 @@ class Occlusion:
         self._static = (alpha * reflectance * (1.0 + speckle)).astype(np.float32)
 
     def apply(self, gel: np.ndarray) -> np.ndarray:
-        """The reflectance the camera sees: the warped gel ``gel`` (H, W) float32 where free,
-        the static blobs where covered, blended at their soft edges (a new array)."""
+        """The reflectance the camera sees: the warped gel ``gel`` (H, W) or (H, W, C) float32
+        where free, the static blobs where covered, blended at their soft edges (a new
+        array)."""
+        if gel.ndim == 3:
+            return gel * self._keep[..., None] + self._static[..., None]
         return cv2.add(cv2.multiply(gel, self._keep), self._static)
