@@ -277,3 +277,8 @@ def test_controller_imports_only_the_driver_interfaces():
     }
     imported = _imports("controller")
     assert not [(p, m) for p, m in imported if m.startswith("drivers") and m not in allowed]
+
+
+def test_runtime_layers_never_import_evaluation_or_tests():
+    imported = _imports("controller") | _imports("drivers")
+    assert not [(p, m) for p, m in imported if m.split(".")[0] in ("evaluation", "tests")]

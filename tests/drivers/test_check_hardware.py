@@ -1,8 +1,8 @@
-"""scripts/check_hardware.py as a user runs it: one line per device, exit 0/1/2."""
+"""scripts/check_hardware.py (drivers/check_hardware.py) as a user runs it: one line per
+device, exit 0/1/2."""
 
 from __future__ import annotations
 
-import importlib.util
 import os
 import pty
 import signal
@@ -15,9 +15,10 @@ from pathlib import Path
 import pytest
 import yaml
 
+from drivers import check_hardware
 from tests.drivers.silent_controller import SilentController
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "check_hardware.py"
 CONFIGS = ROOT / "configs"
 SIM_CONFIGS = [
@@ -30,15 +31,6 @@ SIM_CONFIGS = [
 ]
 
 
-def load_script():
-    spec = importlib.util.spec_from_file_location("check_hardware", SCRIPT)
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up there
-    spec.loader.exec_module(module)
-    return module
-
-
-check_hardware = load_script()
 
 
 def variant(tmp_path: Path, source: Path, name: str, **changes) -> str:
