@@ -54,9 +54,12 @@ def write_jig_dataset(
     config: JigConfig,
     seed: int,
     extras: dict | None = None,
+    replace: bool = False,
 ) -> dict[str, float]:
-    """Simulate the jig running ``experiments`` and write the dataset to ``folder``.
-    Returns timing: frames, seconds for the physics and for the rendering."""
+    """Simulate the jig running ``experiments`` and write the dataset to ``folder`` (all or
+    nothing, ``DatasetWriter``; ``replace``: an existing dataset there is replaced once the
+    new one is complete). Returns timing: frames, seconds for the physics and for the
+    rendering."""
     rng = np.random.default_rng(seed)
     program = jig_program(experiments, config, rng)
     frame_times = tactile_times(program, config, rng)
@@ -80,7 +83,7 @@ def write_jig_dataset(
     )
     gel = JigGel(model, program, config)
     physics_s = render_s = 0.0
-    with DatasetWriter(folder, meta, config.tactile_rate_hz) as writer:
+    with DatasetWriter(folder, meta, config.tactile_rate_hz, replace=replace) as writer:
         writer.write_ft(ft_t, ft_wrench)
         for index, t_s in enumerate(frame_times):
             start = time.perf_counter()

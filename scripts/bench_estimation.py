@@ -32,8 +32,10 @@ from controller.tactile.flow import DenseGridFlow
 from controller.tactile.settings import EstimatorConfig
 from drivers.config import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
+from evaluation.cli import integer, run_tool
 from evaluation.configurations import estimator_variants
 from evaluation.machine import cpu_model, git_revision
+from evaluation.outputs import check_output_file, write_text
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)
 FAMILIES = {"smooth": (40.0, 120.0), "contact": (15.0, 40.0)}
@@ -162,12 +164,20 @@ def table(results: list[tuple[str, dict]]) -> str:
     return "\n".join(lines)
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", type=Path, help="write the report (markdown) to this file")
-    parser.add_argument("--repeats", type=int, default=5, help="timing passes over the warps")
+    parser.add_argument(
+        "--repeats", type=integer(1, 10_000), default=5, help="timing passes over the warps"
+    )
     parser.add_argument("--quick", action="store_true", help="two configurations, one warp each")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
+    return run_tool("bench_estimation", lambda: run(args))
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.write:
+        check_output_file(args.write, option="--write")
     cv2.setNumThreads(1)
     reference, cases = make_cases(per_amplitude=1 if args.quick else 3)
     results = []
@@ -204,7 +214,6 @@ def main() -> int:
     )
     print(report)
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
         previous = args.write.read_text() if args.write.exists() else ""
         marker = "\n## "
         tail = ""
@@ -214,7 +223,7 @@ def main() -> int:
                 tail = marker + rest.split(marker, 1)[1]
         elif previous.startswith("# Benchmarks"):
             tail = "\n" + previous.split("\n", 1)[1]
-        args.write.write_text(report + tail)
+        write_text(args.write, report + tail)
         print(f"wrote {args.write}")
     return 0
 

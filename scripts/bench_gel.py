@@ -33,6 +33,7 @@ import scipy  # noqa: E402
 from drivers.config import load_config  # noqa: E402
 from drivers.sim.gel.model import GelModel, Wrench  # noqa: E402
 from drivers.sim.gel.profile import SHAPES, GelProfile  # noqa: E402
+from evaluation.cli import integer, run_tool  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 PROFILES = ("gelsight_mini_gel", "digit_gel")
@@ -108,11 +109,19 @@ def machine() -> str:
     )
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=240, help="solves per sequence (>= 200)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed passes (best median)")
-    args = parser.parse_args()
+    parser.add_argument(
+        "--steps", type=integer(200, 1_000_000), default=240, help="solves per sequence (>= 200)"
+    )
+    parser.add_argument(
+        "--repeats", type=integer(1, 10_000), default=3, help="timed passes (best median)"
+    )
+    args = parser.parse_args(argv)
+    return run_tool("bench_gel", lambda: bench(args))
+
+
+def bench(args: argparse.Namespace) -> int:
     steps = sequence(args.steps)
     print(f"Machine: {machine()}.")
     print(f"{args.steps} solves per sequence, best of {args.repeats} passes; ms per solve.\n")

@@ -40,6 +40,7 @@ from drivers.sim.render.image_effects import ImageEffects  # noqa: E402
 from drivers.sim.render.image_warp import SplineWarper  # noqa: E402
 from drivers.sim.render.lighting import led_shading, shade  # noqa: E402
 from drivers.sim.render.marker_images import MarkerImageRenderer, smooth_random_field  # noqa: E402
+from evaluation.cli import integer, run_tool  # noqa: E402
 
 SHAPE_HW = (240, 320)
 GRIDS = {"48x64": (48, 64), "240x320": SHAPE_HW}
@@ -138,10 +139,16 @@ def rows(samples: dict[str, list[float]]) -> list[str]:
     ]
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=200, help="renders per case")
-    args = parser.parse_args()
+    parser.add_argument(
+        "--repeats", type=integer(1, 1_000_000), default=200, help="renders per case"
+    )
+    args = parser.parse_args(argv)
+    return run_tool("bench_render", lambda: run(args))
+
+
+def run(args: argparse.Namespace) -> int:
     cv2.setNumThreads(1)
     print(f"GelRenderer, {SHAPE_HW[1]}x{SHAPE_HW[0]} output, median of {args.repeats} renders")
     print()

@@ -3,6 +3,7 @@ import pytest
 
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
 from drivers.config import ConfigError
+from evaluation.outputs import write_text
 
 
 def series(rng, slope=0.004, offset=0.0, noise=0.0):
@@ -58,7 +59,7 @@ def test_nan_input_is_an_error():
 def test_save_and_load_round_trip(tmp_path):
     cal = Calibration("gelsight_mini", "default", {"tau_x": AxisFit(0.004, 0.0, 0.001, 0.99, 100)})
     path = tmp_path / "cal.yaml"
-    cal.save(path)
+    write_text(path, cal.to_yaml())
     assert Calibration.load(path) == cal
 
 
