@@ -1,13 +1,14 @@
 """Recorded tactile video read frame by frame, with every loss of frames accounted for.
 
-OpenCV (FFmpeg backend) hides damage: a frame whose data does not decode is skipped or
-patched, and a truncated file simply ends early. This reader numbers each frame it returns
-by the container's presentation time (``round(pts * fps)``; by its position when the
-container gives no usable time), so a lost frame leaves a gap in the numbers and the
-frames after it keep their true times. After a pass, ``ReadLog.damage`` lists what is
-missing: gaps in the numbering, and an end that disagrees with the frame count in the
-container's header (a truncated file). The callers decide whether that is an error
-(datasets, and ``scripts/estimate.py`` by default) or a warning.
+OpenCV (FFmpeg backend) hides damage: a frame whose data does not decode ends the stream
+(the frames after it are only found by reading on), a damaged frame may be patched, and a
+truncated file simply ends early. This reader reads on past failures and numbers each frame
+it returns by the container's presentation time (``round(pts * fps)``; by its position,
+counting the failed reads, when the container gives no usable time), so a lost frame
+leaves a gap in the numbers and the frames after it keep their true times. After a pass,
+``ReadLog.damage`` lists what is missing: gaps in the numbering, and an end that disagrees
+with the frame count in the container's header (a truncated file). The callers decide
+whether that is an error (datasets, and ``scripts/estimate.py`` by default) or a warning.
 """
 
 from __future__ import annotations
@@ -19,6 +20,8 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+UNREADABLE_IN_A_ROW = 50  # failed reads in a row that end a pass (the end of the file)
 
 
 class VideoError(ValueError):
@@ -84,22 +87,30 @@ class VideoFile:
 
     def frames(self, log: ReadLog | None = None) -> Iterator[tuple[int, np.ndarray]]:
         """(frame number, BGR image) of every frame that decodes, in order; ``log`` (if
-        given) records the pass."""
+        given) records the pass. OpenCV reports a frame that does not decode as the end of
+        the stream; reading on finds the frames after it, so the pass ends only after
+        ``UNREADABLE_IN_A_ROW`` failed reads in a row."""
         log = ReadLog() if log is None else log
         capture = cv2.VideoCapture(str(self.path))
+        failures = 0
         try:
-            while True:
+            while failures < UNREADABLE_IN_A_ROW:
                 ok, image = capture.read()
                 if not ok or image is None:
-                    return
-                number = self._number(capture.get(cv2.CAP_PROP_POS_MSEC), log.last)
+                    failures += 1
+                    continue
+                number = self._number(capture.get(cv2.CAP_PROP_POS_MSEC), log.last, failures)
+                failures = 0
                 log.record(number)
                 yield number, image
         finally:
             capture.release()
 
-    def _number(self, pts_ms: float, previous: int) -> int:
+    def _number(self, pts_ms: float, previous: int, failures: int) -> int:
+        """By the presentation time when the container gives one that moves forward, else
+        the next number after the ``failures`` frames that did not decode."""
+        following = previous + 1 + failures
         if self.fps is None or not math.isfinite(pts_ms):
-            return previous + 1
+            return following
         number = round(pts_ms * 1e-3 * self.fps)
-        return number if number > previous else previous + 1
+        return number if number > previous else following
