@@ -54,7 +54,7 @@ def _check_not_input(path: Path, inputs: Iterable[PathLike | None], option: str)
             raise ToolError(
                 f"{option} '{path}' is the input '{item}'; a tool never writes over its inputs"
             )
-        if target.is_relative_to(source):
+        if target.is_relative_to(source) and not source.is_file():
             raise ToolError(
                 f"{option} '{path}' lies inside the input folder '{item}'; "
                 "write the output somewhere else"

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import csv
 import math
+import warnings
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -242,9 +243,9 @@ class Dataset:
         self.frame_t_s = frames[:, 1]
         ft = _read_table(self.folder / FT_CSV, FT_COLUMNS)
         self.ft_t_s, self.ft_wrench = ft[:, 0], ft[:, 1:]
+        self._video = self._open_video()
         truth_path = self.folder / TRUTH_CSV
         self.truth = _read_named_table(truth_path, len(self)) if truth_path.is_file() else None
-        self._video = self._open_video()
         _check_meta_against_data(self)
 
     def __len__(self) -> int:
@@ -318,7 +319,9 @@ def _read_table(path: Path, columns: tuple[str, ...]) -> np.ndarray:
 
 def _numbers(path: Path, columns: int) -> np.ndarray:
     try:
-        table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", UserWarning)  # "input contained no data"
+            table = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
     except ValueError as exc:
         raise ConfigError(f"{path}: expected numbers in every row ({exc})") from None
     if table.size and table.shape[1] != columns:
