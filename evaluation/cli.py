@@ -73,6 +73,9 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
     except OSError as exc:
         print(f"{prog}: error: {one_line(describe_os_error(exc))}", file=sys.stderr)
         return EXIT_ERROR
+    except UnicodeDecodeError as exc:  # a binary file given where text was expected
+        print(f"{prog}: error: an input is not UTF-8 text ({one_line(exc)})", file=sys.stderr)
+        return EXIT_ERROR
     except KeyboardInterrupt:
         print(f"{prog}: interrupted by SIGINT; {_DISCARDED}", file=sys.stderr)
         return EXIT_SIGINT

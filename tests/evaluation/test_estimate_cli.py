@@ -439,3 +439,10 @@ def test_broken_calibration_files_are_one_line_errors(folder, tmp_path, capsys, 
     code, err = run_main(capsys, folder, "--out", tmp_path / "x.csv", "--calibration", calibration)
     assert code == 2
     assert_one_error_line(err, message)
+
+
+def test_a_binary_calibration_file_is_a_one_line_error(folder, tmp_path, capsys):
+    calibration = tmp_path / "cal.yaml"
+    calibration.write_bytes(bytes(range(256)))
+    code, err = run_main(capsys, folder, "--out", tmp_path / "x.csv", "--calibration", calibration)
+    assert code == 2 and err.startswith("estimate: error:") and "\n" not in err

@@ -81,6 +81,32 @@ def test_save_and_load_round_trip(tmp_path):
             "  tau_x: {slope: .nan, intercept: 0, rmse: 0, r2: 1, samples: 3}\n",
             "finite",
         ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes:\n"
+            "  tau_x: {slope: true, intercept: 0, rmse: 0, r2: 1, samples: 3}\n",
+            "axes.tau_x.slope",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes:\n"
+            "  tau_x: {slope: 1, intercept: 0, rmse: 0, r2: 1, samples: 1.5}\n",
+            "axes.tau_x.samples",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes: [1, 2]\n",
+            "key 'axes': expected a mapping",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: abc\naxes: {}\n",
+            "estimator_sha256",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\naxes: {}\n",
+            "missing key 'estimator_sha256'",
+        ),
     ],
 )
 def test_bad_calibration_files_name_the_key(tmp_path, text, message):
