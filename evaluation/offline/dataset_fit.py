@@ -101,15 +101,17 @@ def segment_mask(dataset: Dataset, t_s: np.ndarray, axis: str) -> np.ndarray:
     return mask
 
 
-def fit_dataset(dataset: Dataset, series: EstimateSeries) -> dict[tuple[str, str], AxisFit]:
-    """Fits keyed by (axis, method) for every axis the dataset has segments for. An axis
-    with segments that cannot be fitted is a ValueError naming it, never silently left
-    out."""
+def fit_dataset(
+    dataset: Dataset, series: EstimateSeries, axes: Iterable[str] | None = None
+) -> dict[tuple[str, str], AxisFit]:
+    """Fits keyed by (axis, method) for each of ``axes`` (default: every axis the dataset
+    has segments for). An axis that cannot be fitted (no or too few frames of ``series``
+    in its segments) is a ValueError naming it, never silently left out."""
     truth_t, truth = dataset.gel_truth()
     fits = {}
-    axes = {segment.axis for segment in dataset.meta.segments}
+    wanted = {s.axis for s in dataset.meta.segments} if axes is None else set(axes)
     for axis, (ours, baseline, column) in TORQUE_AXES.items():
-        if axis not in axes:
+        if axis not in wanted:
             continue
         mask = segment_mask(dataset, series.t_s, axis)
         for method, name in zip(METHODS, (ours, baseline), strict=True):
