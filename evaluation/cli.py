@@ -2,7 +2,7 @@
 
 Exit codes (docs/ARCHITECTURE.md, "Failure behaviour"):
 
-* 0 -- done;
+* 0 -- done (warnings, if any, on stderr);
 * 2 -- bad input (argument, file, configuration) or an output that cannot be written: one
   line ``PROG: error: ...`` on stderr, never a traceback;
 * 130 -- interrupted by SIGINT (Ctrl-C), 143 -- ended by SIGTERM: one line
@@ -27,7 +27,6 @@ from pathlib import Path
 
 from drivers.config import CONFIG_ROOT, ConfigError, SensorProfile, load_config, sensor_profile
 
-EXIT_OK = 0
 EXIT_ERROR = 2
 EXIT_SIGINT = 128 + signal.SIGINT  # 130
 EXIT_SIGTERM = 128 + signal.SIGTERM  # 143
@@ -51,7 +50,7 @@ def one_line(text: object) -> str:
 
 
 def describe_os_error(exc: OSError) -> str:
-    """``'PATH': reason`` for an OSError, e.g. ``'/dev/full': No space left on device``."""
+    """``'PATH': reason`` for an OSError, e.g. ``'x.csv': No space left on device``."""
     reason = exc.strerror or str(exc)
     return f"'{exc.filename}': {reason}" if exc.filename else reason
 
@@ -62,6 +61,7 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
     SIGTERM is turned into ``Terminated`` while ``body`` runs (in the main thread), so
     ``finally`` blocks and the atomic writers clean up exactly as on Ctrl-C.
     """
+    quiet_video_decoder()
     previous = None
     if threading.current_thread() is threading.main_thread():
         previous = signal.signal(signal.SIGTERM, _raise_terminated)
@@ -115,7 +115,6 @@ def integer(low: int, high: int) -> Callable[[str], int]:
             )
         return value
 
-    parse.__name__ = "integer"
     return parse
 
 
@@ -132,7 +131,6 @@ def number(low: float, high: float, unit: str = "") -> Callable[[str], float]:
             raise argparse.ArgumentTypeError(f"expected {what}, got {text!r}")
         return value
 
-    parse.__name__ = "number"
     return parse
 
 
@@ -150,12 +148,10 @@ def number_list(low: float, high: float, unit: str) -> Callable[[str], tuple[flo
                 f"e.g. 10,7, got {text!r}"
             ) from None
 
-    parse.__name__ = "number_list"
     return parse
 
 
 SEED = integer(0, 2**32 - 1)
-RATE_HZ = number(0.1, 10_000.0, "frames per second")
 
 
 def distinct(parser: argparse.ArgumentParser, option: str, values: list[str]) -> None:

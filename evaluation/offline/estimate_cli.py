@@ -51,7 +51,6 @@ from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 from evaluation.cli import (
     ToolError,
     load_sensor_profile,
-    quiet_video_decoder,
     resolved_config_path,
     run_tool,
 )
@@ -327,7 +326,6 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    quiet_video_decoder()
 
     def body() -> int:
         count = estimate_file(
