@@ -7,8 +7,9 @@ this module:
   one of the tool's inputs (same resolved path, or the same file under another name), lie
   inside an input folder, or (for a folder) contain an input; an existing output must be a
   regular file (a file path) or a folder (a folder path), never a device such as
-  ``/dev/full``; its folder must exist or be creatable, and be writable (probed by creating
-  a temporary file, which also catches read-only file systems).
+  ``/dev/full``, nor a read-only file; its folder must exist or be creatable, and be
+  writable (probed by creating a temporary file, which also catches read-only file
+  systems).
 * ``atomic_file`` / ``atomic_text`` / ``write_text`` write to a hidden temporary file in the
   destination folder (``.NAME.XXXXXXXX.partial.EXT``), flush it to disk, then
   ``os.replace`` it over the destination. An error or an interruption removes the temporary
@@ -91,6 +92,8 @@ def check_output_file(
             f"{option} '{path}' is not a regular file (a device, pipe or socket); "
             "expected a file path"
         )
+    if path.is_file() and not os.access(path, os.W_OK):
+        raise ToolError(f"{option} '{path}' is read-only; it is not replaced")
     _check_not_input(path, inputs, option)
     _check_writable_folder(path.parent, option)
     return path

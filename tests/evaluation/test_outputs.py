@@ -85,6 +85,11 @@ def test_a_folder_without_write_permission_is_refused(tmp_path):
             check_output_file(locked / "out.csv")
     finally:
         locked.chmod(0o700)
+    kept = tmp_path / "kept.csv"
+    kept.write_text("mine")
+    kept.chmod(0o444)
+    with pytest.raises(ToolError, match="is read-only"):
+        check_output_file(kept)
 
 
 @pytest.mark.parametrize("error", [RuntimeError, KeyboardInterrupt])
@@ -141,3 +146,24 @@ def test_staged_files_move_into_place_only_on_success(tmp_path):
     assert (tmp_path / "REPORT.md").read_text() == "new"
     assert (tmp_path / "figures" / "a.png").read_bytes() == b"png"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["REPORT.md", "figures"]
+
+
+def test_refusals_of_unwritable_places_as_the_os_reports_them(tmp_path, monkeypatch):
+    """The same checks as above, for a user without permission, when the tests run as root:
+    the OS's answers are stood in for."""
+    import evaluation.outputs as outputs
+
+    kept = tmp_path / "kept.csv"
+    kept.write_text("mine")
+    monkeypatch.setattr(outputs.os, "access", lambda path, mode: False)
+    with pytest.raises(ToolError, match="is read-only"):
+        check_output_file(kept)
+    monkeypatch.undo()
+
+    def denied(*args, **kwargs):
+        raise PermissionError(13, "Permission denied")
+
+    monkeypatch.setattr(outputs.tempfile, "TemporaryFile", denied)
+    with pytest.raises(ToolError, match=r"cannot write in '.*' \(Permission denied\)"):
+        check_output_file(tmp_path / "new" / "out.csv")
+    assert kept.read_text() == "mine"
