@@ -47,6 +47,7 @@ from evaluation.cli import (
     run_tool,
 )
 from evaluation.configurations import DEFAULT, PAPER, estimator_variants
+from evaluation.jig_dataset import MAX_FRAMES_PER_AXIS
 from evaluation.machine import cpu_model, git_revision
 from evaluation.outputs import check_output_file, check_output_folder, staged_folder
 from evaluation.pareto import ParetoPoint, accuracy, front, latency, pareto_chart
@@ -63,7 +64,6 @@ CASES = (
 PARETO_CASE = "gelsight_mini-plate"
 SLIP_SEED = 11
 MAX_JOBS = 64
-MAX_FRAMES_PER_AXIS = 1_000_000
 
 
 def _one_thread() -> None:

@@ -109,8 +109,9 @@ class FrameSource:
         """What a complete pass logged in ``log`` lost; empty for an intact input."""
         if self.video is not None:
             return [f"'{self.path}': {problem}" for problem in log.damage(self.frame_count)]
-        read = {n for n in range(log.last + 1)} - {n for a, b in log.gaps for n in range(a, b + 1)}
-        bad = [p.name for n, p in enumerate(self.images or ()) if n not in read]
+        images = self.images or []
+        missing = [n for first, last in log.gaps for n in range(first, last + 1)]
+        bad = [images[n].name for n in [*missing, *range(log.last + 1, len(images))]]
         if not bad:
             return []
         names = ", ".join(bad[:5]) + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")

@@ -28,12 +28,10 @@ from evaluation.cli import (
     resolved_config_path,
     run_tool,
 )
-from evaluation.jig_dataset import paper_experiments, write_jig_dataset
+from evaluation.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiments, write_jig_dataset
 from evaluation.outputs import check_output_folder
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model, jig_config
-
-MAX_FRAMES_PER_AXIS = 1_000_000
 
 
 def build_parser() -> argparse.ArgumentParser:
