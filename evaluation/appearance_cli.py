@@ -30,6 +30,7 @@ import numpy as np
 from drivers.sim.render.real_texture import fit_to_size
 from evaluation.appearance import AppearanceStats, format_table, measure, summarise
 from evaluation.offline.estimate_cli import IMAGE_SUFFIXES, InputError, open_source
+from evaluation.offline.video import ReadLog
 
 
 def parse_size(text: str) -> tuple[int, int] | None:
@@ -50,7 +51,7 @@ def frames_of(path: Path, every: int) -> Iterator[np.ndarray]:
             raise InputError(f"cannot read image '{path}'")
         yield image
         return
-    for index, frame in enumerate(open_source(path).frames()):
+    for index, (_, frame) in enumerate(open_source(path).frames(ReadLog())):
         if index % every == 0:
             yield frame
 

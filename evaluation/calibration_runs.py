@@ -69,6 +69,7 @@ def run_case(case: CalibrationCase, root: Path, estimator: str | None = None) ->
         experiments,
         config,
         seed=case.seed,
+        replace=True,
     )
     timing["total_s"] = time.perf_counter() - start
     dataset = Dataset(folder)
@@ -80,7 +81,7 @@ def run_case(case: CalibrationCase, root: Path, estimator: str | None = None) ->
         case,
         folder,
         fits,
-        calibration_from_fits(fits, case.sensor, tactile.config_name),
+        calibration_from_fits(fits, case.sensor, tactile),
         series,
         timing,
         float(np.mean(truth.get("lifted_off", [0.0]))),

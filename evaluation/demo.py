@@ -12,18 +12,18 @@ from __future__ import annotations
 
 import argparse
 import csv
-import sys
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from controller.tactile import estimator_for_sensor
-from drivers.config import ConfigError
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import PHASES, demo_sequence
-from evaluation.offline.estimate_cli import InputError, estimate_file
+from evaluation.cli import SEED, resolved_config_path, run_tool
+from evaluation.offline.estimate_cli import estimate_file
 from evaluation.offline.plotting import plot_series_against_truth
+from evaluation.outputs import atomic_text, check_output_folder
 
 SENSOR = "gelsight_mini"
 
@@ -42,14 +42,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--method", default=None, help="estimator configuration (default: the Mini profile's)"
     )
-    parser.add_argument("--seed", type=int, default=7)
+    parser.add_argument("--seed", type=SEED, default=7)
     args = parser.parse_args(argv)
-    try:
-        method = estimator_for_sensor(SENSOR, args.method).config_name
-    except ConfigError as exc:
-        print(f"demo: error: {exc}", file=sys.stderr)
-        return 2
+    return run_tool("demo", lambda: demo(args))
 
+
+def demo(args: argparse.Namespace) -> int:
+    method = estimator_for_sensor(SENSOR, args.method).config_name
+    check_output_folder(args.out, [resolved_config_path(method, "estimators")], option="--out")
     frames_dir = args.out / "frames"
     frames_dir.mkdir(parents=True, exist_ok=True)
     for old in frames_dir.glob("*.png"):
@@ -60,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
         cv2.imwrite(
             str(frames_dir / f"frame_{index:04d}.png"), renderer.render(frame.displacement_px)
         )
-    with (args.out / "truth.csv").open("w", newline="") as handle:
+    with atomic_text(args.out / "truth.csv", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["frame", "time_s", *PHASES[1:]])
         for index, f in enumerate(sequence):
@@ -70,11 +70,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"demo: rendered {len(sequence)} synthetic frames into {frames_dir}")
 
     out_csv = args.out / "estimates.csv"
-    try:
-        estimate_file(frames_dir, out_csv, reference="0:5", sensor=SENSOR, method=method, fps=25.0)
-    except InputError as exc:
-        print(f"demo: error: {exc}", file=sys.stderr)
-        return 2
+    estimate_file(frames_dir, out_csv, reference="0:5", sensor=SENSOR, method=method, fps=25.0)
     with out_csv.open() as handle:
         rows = list(csv.DictReader(handle))
     column = {key: np.array([float(r[key]) for r in rows]) for key in rows[0]}

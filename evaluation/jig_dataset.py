@@ -29,11 +29,26 @@ class FrameRenderer(Protocol):
         of cells covering the image."""
 
 
+MAX_FRAMES_PER_AXIS = 1_000_000  # 14.6 h of frames at 19 Hz; more is a typing mistake
+
+
 def paper_experiments(
     axes: Sequence[str], amplitudes_nm: Sequence[float], frames_per_axis: int, config: JigConfig
 ) -> list[Experiment]:
     """Experiments that cycle through ``amplitudes_nm`` about each axis until about
-    ``frames_per_axis`` tactile frames have been captured for it."""
+    ``frames_per_axis`` tactile frames have been captured for it. Raises ValueError for a
+    count outside [1, MAX_FRAMES_PER_AXIS], a repeated axis or no amplitude."""
+    if (
+        isinstance(frames_per_axis, bool)
+        or not isinstance(frames_per_axis, int)
+        or not 1 <= frames_per_axis <= MAX_FRAMES_PER_AXIS
+    ):
+        raise ValueError(
+            f"frames per axis: expected a whole number in [1, {MAX_FRAMES_PER_AXIS}], "
+            f"got {frames_per_axis!r}"
+        )
+    if len(set(axes)) != len(axes) or not amplitudes_nm:
+        raise ValueError(f"expected distinct axes and at least one amplitude, got {axes!r}")
     mean_pulse_s = (
         config.ramp_min_s
         + config.ramp_max_s
@@ -54,9 +69,12 @@ def write_jig_dataset(
     config: JigConfig,
     seed: int,
     extras: dict | None = None,
+    replace: bool = False,
 ) -> dict[str, float]:
-    """Simulate the jig running ``experiments`` and write the dataset to ``folder``.
-    Returns timing: frames, seconds for the physics and for the rendering."""
+    """Simulate the jig running ``experiments`` and write the dataset to ``folder`` (all or
+    nothing, ``DatasetWriter``; ``replace``: an existing dataset there is replaced once the
+    new one is complete). Returns timing: frames, seconds for the physics and for the
+    rendering."""
     rng = np.random.default_rng(seed)
     program = jig_program(experiments, config, rng)
     frame_times = tactile_times(program, config, rng)
@@ -80,7 +98,7 @@ def write_jig_dataset(
     )
     gel = JigGel(model, program, config)
     physics_s = render_s = 0.0
-    with DatasetWriter(folder, meta, config.tactile_rate_hz) as writer:
+    with DatasetWriter(folder, meta, config.tactile_rate_hz, replace=replace) as writer:
         writer.write_ft(ft_t, ft_wrench)
         for index, t_s in enumerate(frame_times):
             start = time.perf_counter()

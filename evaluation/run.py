@@ -11,6 +11,12 @@
 4. Slip detection, precision and recall: on the sweeps and on dedicated sequences
    (``evaluation.slip_eval``).
 Work runs in ``--jobs`` processes, each estimator on one thread.
+
+Arguments and output folders are checked before any work. Charts and the report are written
+to a hidden staging folder inside ``--docs`` and moved into place together at the end, so an
+error or an interruption (SIGINT: exit 130, SIGTERM: 143; workers leave SIGINT to this
+process, which stops them) leaves the previous report and charts as they were; each dataset
+under ``--work`` is replaced only once its new version is complete.
 """
 
 from __future__ import annotations
@@ -30,8 +36,17 @@ from evaluation.calibration_runs import (
     scatter_chart,
     timeseries_chart,
 )
+from evaluation.cli import (
+    ignore_interrupts_in_worker,
+    integer,
+    one_line,
+    resolved_config_path,
+    run_tool,
+)
 from evaluation.configurations import DEFAULT, PAPER, estimator_variants
+from evaluation.jig_dataset import MAX_FRAMES_PER_AXIS
 from evaluation.machine import describe_machine, one_thread_env
+from evaluation.outputs import check_output_file, check_output_folder, staged_folder
 from evaluation.pareto import ParetoPoint, accuracy, front, latency, pareto_chart
 from evaluation.report import calibration_table, pareto_table, sweep_tables
 from evaluation.slip_report import slip_tables, sweep_slip_table
@@ -45,6 +60,7 @@ CASES = (
 )
 PARETO_CASE = "gelsight_mini-plate"
 SLIP_SEED = 11
+MAX_JOBS = 64
 
 
 def _case_job(args: tuple[CalibrationCase, Path, str | None]) -> CaseResult:
@@ -61,8 +77,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="evaluate", description=__doc__.splitlines()[0])
     parser.add_argument("--docs", type=Path, default=Path("docs"))
     parser.add_argument("--work", type=Path, default=Path("out/evaluate"))
-    parser.add_argument("--frames-per-axis", type=int, default=600)
-    parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--frames-per-axis", type=integer(1, MAX_FRAMES_PER_AXIS), default=600)
+    parser.add_argument("--jobs", type=integer(1, MAX_JOBS), default=2)
     parser.add_argument(
         "--quick", action="store_true", help="tiny datasets and few variants (smoke test)"
     )
@@ -78,17 +94,34 @@ def main(argv: list[str] | None = None) -> int:
         for sensor in {case.sensor for case in CASES}:
             estimator_for_sensor(sensor, args.estimator)
     except ConfigError as exc:
-        parser.error(str(exc))
+        parser.error(one_line(exc))
+    return run_tool("evaluate", lambda: evaluate(args))
+
+
+def evaluate(args: argparse.Namespace) -> int:
+    """Check the output folders, run every experiment, then publish the report and charts."""
+    inputs = [resolved_config_path(args.estimator, "estimators")]
+    check_output_file(args.docs / "EVALUATION.md", inputs, option="--docs")
+    check_output_folder(args.docs / "figures", inputs, option="--docs")
+    check_output_folder(args.work / "datasets", inputs, option="--work")
     one_thread_env()
+    with staged_folder(args.docs) as staging:
+        document = _run(args, staging)
+    print(document)
+    return 0
+
+
+def _run(args: argparse.Namespace, staging: Path) -> str:
+    """Every experiment; charts and EVALUATION.md go to ``staging``; returns the report."""
     began = time.perf_counter()
-    figures = args.docs / "figures"
-    figures.mkdir(parents=True, exist_ok=True)
+    figures = staging / "figures"
+    figures.mkdir()
     frames = 60 if args.quick else args.frames_per_axis
     cases = [
         CalibrationCase(c.sensor, c.shape, c.axes, frames, c.seed)
         for c in (CASES[:1] + CASES[-1:] if args.quick else CASES)
     ]
-    pool = get_context("spawn").Pool(args.jobs)
+    pool = get_context("spawn").Pool(args.jobs, initializer=ignore_interrupts_in_worker)
     with pool:
         results = pool.map(
             _case_job, [(case, args.work / "datasets", args.estimator) for case in cases]
@@ -145,9 +178,8 @@ def main(argv: list[str] | None = None) -> int:
     document = _document(
         results, points, sweeps if not args.quick else None, slip, elapsed, stage1_s, args
     )
-    (args.docs / "EVALUATION.md").write_text(document)
-    print(document)
-    return 0
+    (staging / "EVALUATION.md").write_text(document)
+    return document
 
 
 def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:

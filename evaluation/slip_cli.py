@@ -5,6 +5,8 @@
 
 ``make evaluate`` runs the same evaluation and puts its tables in docs/EVALUATION.md; this
 script is for trying other estimator configurations, grips or objects on their own.
+Arguments and ``--out`` are checked before any work; the report is written atomically.
+Bad input exits with code 2 and one line; SIGINT and SIGTERM with 130 and 143.
 """
 
 from __future__ import annotations
@@ -14,9 +16,22 @@ import sys
 import time
 from pathlib import Path
 
+from controller.tactile.settings import sensor_estimator
+from drivers.config import ConfigError
 from drivers.sim.gel.profile import SHAPES
+from drivers.tactile.profile import sensor_profile
+from evaluation.cli import (
+    SEED,
+    distinct,
+    number,
+    number_list,
+    one_line,
+    resolved_config_path,
+    run_tool,
+)
 from evaluation.machine import cpu_model
-from evaluation.slip_eval import GRIPS_N, OBJECTS, evaluate
+from evaluation.outputs import check_output_file, write_text
+from evaluation.slip_eval import GRIPS_N, OBJECTS, SENSOR, evaluate
 from evaluation.slip_report import slip_tables
 
 
@@ -27,25 +42,43 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument(
         "--grips",
+        type=str,
         default=",".join(f"{g:g}" for g in GRIPS_N),
         help="grip forces, N (first: tuning)",
     )
-    parser.add_argument("--seed", type=int, default=11)
-    parser.add_argument("--noise-grey", type=float, default=1.0, help="camera noise sigma")
+    parser.add_argument("--seed", type=SEED, default=11)
+    parser.add_argument(
+        "--noise-grey",
+        type=number(0.0, 50.0, "grey levels"),
+        default=1.0,
+        help="camera noise sigma",
+    )
     parser.add_argument("--out", type=Path, help="write the markdown report here")
     parser.add_argument("--objects", default=",".join(OBJECTS), help="objects to grasp")
     parser.add_argument("--quick", action="store_true", help="two sequences per object")
     args = parser.parse_args(argv)
     try:
-        grips = tuple(float(g) for g in args.grips.split(","))
-    except ValueError:
-        parser.error(f"--grips {args.grips!r}: expected comma-separated forces in N, e.g. 10,7")
-    if any(g <= 0 for g in grips):
-        parser.error(f"--grips {args.grips!r}: every grip force must be > 0 N")
-    objects = tuple(args.objects.split(","))
+        grips = number_list(0.1, 200.0, "N")(args.grips)
+    except argparse.ArgumentTypeError:
+        parser.error(
+            f"--grips {args.grips!r}: expected comma-separated forces in N, e.g. 10,7; "
+            "every grip force must be > 0 N (at most 200 N)"
+        )
+    objects = args.objects.split(",")
     unknown = sorted(set(objects) - set(SHAPES))
     if unknown:
         parser.error(f"unknown object {unknown[0]!r}; expected some of {', '.join(SHAPES)}")
+    distinct(parser, "--objects", objects)
+    try:
+        method, _ = sensor_estimator(sensor_profile(SENSOR), args.method)
+    except ConfigError as exc:
+        parser.error(f"--method: {one_line(exc)}")
+    return run_tool("eval_slip", lambda: _run(args, method, grips, tuple(objects)))
+
+
+def _run(args: argparse.Namespace, method: str, grips: tuple[float, ...], objects) -> int:
+    if args.out:
+        check_output_file(args.out, [resolved_config_path(method, "estimators")])
     began = time.perf_counter()
     report = evaluate(args.method, grips, args.seed, args.noise_grey, objects, args.quick)
     seconds = time.perf_counter() - began
@@ -62,7 +95,6 @@ def main(argv: list[str] | None = None) -> int:
         ]
     )
     if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text + "\n")
+        write_text(args.out, text + "\n")
     sys.stdout.write(text + "\n")
     return 0

@@ -9,11 +9,22 @@ time span are dropped), then each axis gets a least-squares fit
 so ``slope`` is the paper's c_x / c_y (units: N*m per raw unit). A calibration file holds the
 fits of several axes (``tau_x``, ``tau_y``, ..., and the baseline's ``fv_tau_x``, ...) and
 is applied to WrenchEstimates; axes absent from the file stay raw.
+
+A calibration file records what it was fitted for: the sensor profile's name and the
+estimator configuration's name and fingerprint (``estimator_sha256``). ``mismatch`` says
+why a calibration does not fit another sensor or configuration; the tools refuse to apply
+it then (``scripts/estimate.py --force`` overrides). Files load through the configuration
+loader (``drivers.config``) into these frozen dataclasses.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import hashlib
+import json
+import math
+import re
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -21,23 +32,24 @@ import numpy as np
 import yaml
 
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from drivers.config import ConfigError, load_yaml
+from drivers.config import Config, ConfigError, build, load_yaml, number
 
-FORMAT = "tactile-insertion/calibration/v1"
+FORMAT = "tactile-insertion/calibration/v2"
+FORMAT_V1 = "tactile-insertion/calibration/v1"
 AXES = VALUE_FIELDS
 _MIN_SAMPLES = 3
 
 
 @dataclass(frozen=True)
-class AxisFit:
+class AxisFit(Config):
     """One axis: ``truth ~= slope * raw + intercept``, with the fit's RMSE (truth units), R^2
     and the number of samples used."""
 
     slope: float
     intercept: float
-    rmse: float
+    rmse: float = number(0.0, math.inf)
     r2: float
-    samples: int
+    samples: int = number(1, 2**62)
 
     def apply(self, raw: float) -> float:
         return self.slope * raw + self.intercept
@@ -88,52 +100,89 @@ def fit_axis(
     return AxisFit(float(slope), float(intercept), rmse, r2, int(x.size))
 
 
+def estimator_sha256(config: object) -> str:
+    """Fingerprint of an estimator configuration (a dataclass): SHA-256 of its values as
+    sorted JSON. Two configurations with equal values have equal fingerprints, whatever
+    their file names."""
+    text = json.dumps(dataclasses.asdict(config), sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
 @dataclass(frozen=True)
-class Calibration:
-    """Per-axis fits for one sensor and estimator configuration."""
+class Calibration(Config):
+    """Per-axis fits for one sensor profile (``sensor``: its name) and estimator
+    configuration (``estimator``: its name or path, ``estimator_sha256``: the fingerprint of
+    its values; None for a file written before fingerprints were recorded)."""
 
     sensor: str
     estimator: str
-    axes: dict[str, AxisFit]
+    axes: Mapping[str, AxisFit]
+    estimator_sha256: str | None = None
 
     def __post_init__(self) -> None:
         unknown = sorted(set(self.axes) - set(AXES))
         if unknown:
-            raise ValueError(f"unknown calibration axis '{unknown[0]}'; expected one of {AXES}")
+            raise ValueError(
+                f"unknown key 'axes.{unknown[0]}'; expected calibration axes among: "
+                + ", ".join(AXES)
+            )
+        digest = self.estimator_sha256
+        if digest is not None and not re.fullmatch(r"[0-9a-f]{64}", digest):
+            raise ValueError(
+                f"key 'estimator_sha256': expected 64 hexadecimal digits, got {digest!r}"
+            )
+
+    def mismatch(self, sensor: str, config: object) -> str | None:
+        """Why this calibration does not fit the sensor profile named ``sensor`` with the
+        estimator configuration ``config``; None when it does."""
+        if sensor != self.sensor:
+            return f"it was fitted for sensor '{self.sensor}', not '{sensor}'"
+        if self.estimator_sha256 is None:
+            return (
+                "it does not record which estimator configuration it was fitted for "
+                f"(format {FORMAT_V1}); re-run scripts/calibrate.py"
+            )
+        if estimator_sha256(config) != self.estimator_sha256:
+            return (
+                f"it was fitted for the estimator configuration '{self.estimator}', and the "
+                "one in use has other values"
+            )
+        return None
 
     def apply(self, estimate: WrenchEstimate) -> WrenchEstimate:
         """The estimate with each calibrated axis scaled (and offset); others unchanged."""
         values = {axis: fit.apply(getattr(estimate, axis)) for axis, fit in self.axes.items()}
         return dataclasses.replace(estimate, calibrated=True, **values)
 
-    def save(self, path: Path | str) -> None:
+    def to_yaml(self) -> str:
+        """The calibration file's text (format v2)."""
         document = {
             "format": FORMAT,
             "sensor": self.sensor,
             "estimator": self.estimator,
+            "estimator_sha256": self.estimator_sha256,
             "axes": {axis: dataclasses.asdict(fit) for axis, fit in self.axes.items()},
         }
-        Path(path).write_text(yaml.safe_dump(document, sort_keys=False))
+        return yaml.safe_dump(document, sort_keys=False)
 
     @classmethod
     def load(cls, path: Path | str) -> Calibration:
-        """Read a calibration file; errors name the file and the offending key."""
-        data = load_yaml(path)
-        if data.get("format") != FORMAT:
-            raise ConfigError(
-                f"{path}: key 'format': expected '{FORMAT}', got {data.get('format')!r}"
-            )
-        for key in ("sensor", "estimator", "axes"):
-            if key not in data:
-                raise ConfigError(f"{path}: missing key '{key}'")
-        axes = {}
-        fields = [f.name for f in dataclasses.fields(AxisFit)]
-        for axis, fit in (data["axes"] or {}).items():
-            if axis not in AXES:
-                raise ConfigError(f"{path}: unknown key 'axes.{axis}'; expected one of {AXES}")
-            if not isinstance(fit, dict) or sorted(fit) != sorted(fields):
-                raise ConfigError(f"{path}: key 'axes.{axis}': expected the keys {fields}")
-            if not all(isinstance(fit[k], int | float) and np.isfinite(fit[k]) for k in fields):
-                raise ConfigError(f"{path}: key 'axes.{axis}': expected finite numbers")
-            axes[axis] = AxisFit(**fit)
-        return cls(str(data["sensor"]), str(data["estimator"]), axes)
+        """Read a calibration file (format v2, or v1 without the estimator fingerprint)
+        through the configuration loader; errors name the file and the offending key."""
+        data = dict(load_yaml(path))
+        found = data.pop("format", None)
+        if found not in (FORMAT, FORMAT_V1):
+            raise ConfigError(f"{path}: key 'format': expected '{FORMAT}', got {found!r}")
+        if found == FORMAT_V1:
+            if "estimator_sha256" in data:
+                raise ConfigError(f"{path}: unknown key 'estimator_sha256' in format {found}")
+            data["estimator_sha256"] = None
+        axes = data.get("axes")
+        if isinstance(axes, Mapping):
+            for axis in axes:
+                if axis not in AXES:
+                    raise ConfigError(
+                        f"{path}: unknown key 'axes.{axis}'; expected calibration axes among: "
+                        + ", ".join(AXES)
+                    )
+        return build(cls, data, source=str(path))

@@ -22,6 +22,7 @@ must (its flow outputs) and the returned estimate.
 
 from __future__ import annotations
 
+import numbers
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -45,6 +46,7 @@ from controller.tactile.wrench import WrenchEstimate
 from drivers.tactile.profile import SensorProfile, sensor_profile
 
 _ASPECT_TOLERANCE = 0.02
+MAX_REFERENCE_FRAMES = 10_000
 
 
 def estimator_for_sensor(
@@ -96,35 +98,58 @@ class TactileEstimator:
 
     def rezero(self, n_frames: int | None = None) -> None:
         """Capture a new reference from the next ``n_frames`` pushed frames (default: the
-        configuration's ``reference_frames``). Call it after the grasp has settled."""
+        configuration's ``reference_frames``). Call it after the grasp has settled.
+
+        Raises ValueError, leaving the estimator as it was, unless ``n_frames`` is a whole
+        number in [1, MAX_REFERENCE_FRAMES] (a bool, a float or NaN is refused)."""
         n = self.config.reference_frames if n_frames is None else n_frames
-        if n < 1:
-            raise ValueError(f"rezero needs at least one frame, got {n}")
-        self._zeroing_left = n
+        if (
+            isinstance(n, bool)
+            or not isinstance(n, numbers.Integral)
+            or not 1 <= n <= MAX_REFERENCE_FRAMES
+        ):
+            raise ValueError(
+                f"rezero needs a whole number of frames in [1, {MAX_REFERENCE_FRAMES}], got {n!r}"
+            )
+        self._zeroing_left = int(n)
         self._zeroing_count = 0
         self._reference_sum = None
         self._rezero_policy.reset()
 
     def set_reference(self, frames: np.ndarray | Sequence[np.ndarray]) -> None:
-        """Use the mean of ``frames`` (one image, or a sequence / stack of images) now."""
+        """Use the mean of ``frames`` (one image, or a sequence / stack of images) now.
+
+        Every frame is checked before anything changes: on a ValueError (no frame, a frame
+        that is not an image, frames of different sizes) the estimator is left as it was."""
         stack = [frames] if isinstance(frames, np.ndarray) and frames.ndim <= 3 else list(frames)
         if not stack:
             raise ValueError("set_reference needs at least one frame")
-        self._frame_shape = None
+        shape = None
         total = None
-        for frame in stack:
-            image = self._working_image(frame)
+        for index, frame in enumerate(stack):
+            try:
+                image = self._working_image(frame, shape)
+            except ValueError as exc:
+                raise ValueError(f"reference frame {index}: {exc}") from None
+            shape = frame.shape[:2]
             total = image.astype(np.float32) if total is None else total + image
         self._install_reference(total / len(stack))
+        self._frame_shape = shape
         self._zeroing_left = 0
 
     def _install_reference(self, mean_image: np.ndarray) -> None:
+        """Build the flow on the reference first, then replace the buffers: a ValueError
+        leaves the estimator as it was."""
         reference = np.clip(mean_image + 0.5, 0, 255).astype(np.uint8)
         height, width = reference.shape[:2]
         rows, cols = field_grid(self.config, height, width)
+        mismatch = dipole_grid_mismatch(self.config, rows, cols)
+        if mismatch:
+            raise ValueError(mismatch)
+        grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
+        grid_flow.set_reference(reference)
         self._allocate(height, width, rows, cols)
-        self._grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
-        self._grid_flow.set_reference(reference)
+        self._grid_flow = grid_flow
         self._rezero_policy.reset()
         self._last_slip = None
 
@@ -195,8 +220,9 @@ class TactileEstimator:
 
     # -- frames ------------------------------------------------------------------------------
 
-    def _working_image(self, frame: np.ndarray) -> np.ndarray:
-        """BGR uint8 at the profile's resolution in the frame's own orientation."""
+    def _working_image(self, frame: np.ndarray, shape: tuple[int, ...] | None = None) -> np.ndarray:
+        """BGR uint8 at the profile's resolution in the frame's own orientation. ``shape``:
+        the (rows, cols) the frame must have (None: any). Changes no state."""
         if not isinstance(frame, np.ndarray) or frame.dtype != np.uint8:
             kind = getattr(frame, "dtype", type(frame).__name__)
             raise ValueError(f"tactile frame must be a uint8 image, got {kind}")
@@ -208,12 +234,11 @@ class TactileEstimator:
             )
         elif frame.shape[2] == 4:
             frame = cv2.cvtColor(frame, cv2.COLOR_BGRA2BGR)
-        if self._frame_shape is not None and frame.shape[:2] != self._frame_shape:
+        if shape is not None and frame.shape[:2] != shape:
             raise ValueError(
                 f"frame of {frame.shape[1]} x {frame.shape[0]} px does not match the reference "
-                f"({self._frame_shape[1]} x {self._frame_shape[0]} px); re-zero after changing size"
+                f"({shape[1]} x {shape[0]} px); re-zero after changing size"
             )
-        self._frame_shape = frame.shape[:2]
         target = self._target_shape(frame.shape[0], frame.shape[1])
         if frame.shape[:2] == target:
             return frame
@@ -240,21 +265,25 @@ class TactileEstimator:
             self.rezero()
         if self._zeroing_left > 0:
             return self._capture_reference(frame, t_s)
-        image = self._working_image(frame)
+        image = self._working_image(frame, self._frame_shape)
         self._grid_flow.measure(image, self._grid_px)
         self._update_field()
         return self._estimate(t_s)
 
     def _capture_reference(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        if self._zeroing_count == 0:
-            self._frame_shape = None
-        image = self._working_image(frame).astype(np.float32)
-        self._reference_sum = image if self._reference_sum is None else self._reference_sum + image
+        first = self._zeroing_count == 0
+        image = self._working_image(frame, None if first else self._frame_shape)
+        total = image.astype(np.float32)
+        if self._reference_sum is not None:
+            total += self._reference_sum
+        if self._zeroing_left == 1:
+            self._install_reference(total / (self._zeroing_count + 1))
+            total = None
+        if first:
+            self._frame_shape = frame.shape[:2]
+        self._reference_sum = total
         self._zeroing_count += 1
         self._zeroing_left -= 1
-        if self._zeroing_left == 0:
-            self._install_reference(self._reference_sum / self._zeroing_count)
-            self._reference_sum = None
         return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
 
     def _update_field(self) -> None:

@@ -26,6 +26,10 @@ waits: it hands the newest frame over, or raises:
 * DeviceFaultError: the stream is frozen (``frozen_frame_count`` identical output images in a
   row), or ``max_read_failures`` frames in a row did not decode;
 * DeviceTimeoutError: the newest frame is older than ``max_age_s`` (the stream stalled).
+
+A frame that does not decode (a cut or corrupted JPEG) is skipped, and the first of each run
+of such frames is logged as a warning; the newest good frame stays available, with its own
+grab time, so nothing downstream sees a wrong timestamp.
 """
 
 from __future__ import annotations
@@ -218,6 +222,7 @@ class _Grabber:
             self._lost = reason
 
     def _loop(self, capture: Capture) -> None:
+        cfg_name = self._config.name
         limit = self._config.max_read_failures
         grab_failures = decode_failures = identical = 0
         previous: np.ndarray | None = None
@@ -240,6 +245,8 @@ class _Grabber:
                 image = self._processor(raw)
             except ValueError as exc:
                 decode_failures += 1
+                if decode_failures == 1:  # once per run of bad frames, not once per frame
+                    log.warning("%s: a frame did not decode and was skipped: %s", cfg_name, exc)
                 if decode_failures >= limit:
                     with self._lock:
                         self._fault = f"{decode_failures} frames in a row unusable: {exc}"

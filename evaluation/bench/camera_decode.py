@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from drivers.tactile.decode import FrameProcessor, decode_jpeg
+from evaluation.cli import SEED, integer, run_tool
 from evaluation.machine import describe_machine
 
 WIDTH_PX, HEIGHT_PX = 3280, 2464
@@ -75,9 +76,13 @@ def jpeg_library() -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=40, help="timed runs per cell")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--runs", type=integer(1, 100_000), default=40, help="timed runs per cell")
+    parser.add_argument("--seed", type=SEED, default=0)
     args = parser.parse_args(argv)
+    return run_tool("bench_camera_decode", lambda: bench(args))
+
+
+def bench(args: argparse.Namespace) -> int:
     cv2.setNumThreads(1)
     frame = mini_like_frame(np.random.default_rng(args.seed))
     print(

@@ -26,8 +26,10 @@ from controller.tactile import EstimatorConfig, TactileEstimator
 from controller.tactile.flow import DenseGridFlow
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
 from drivers.tactile.profile import sensor_profile
+from evaluation.cli import integer, run_tool
 from evaluation.configurations import estimator_variants
 from evaluation.machine import describe_machine
+from evaluation.outputs import check_output_file, write_text
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)
 FAMILIES = {"smooth": (40.0, 120.0), "contact": (15.0, 40.0)}
@@ -148,9 +150,17 @@ def table(results: list[tuple[str, dict]]) -> str:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--write", type=Path, help="write the report (markdown) to this file")
-    parser.add_argument("--repeats", type=int, default=5, help="timing passes over the warps")
+    parser.add_argument(
+        "--repeats", type=integer(1, 10_000), default=5, help="timing passes over the warps"
+    )
     parser.add_argument("--quick", action="store_true", help="two configurations, one warp each")
     args = parser.parse_args(argv)
+    return run_tool("bench_estimation", lambda: run(args))
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.write:
+        check_output_file(args.write, option="--write")
     cv2.setNumThreads(1)
     reference, cases = make_cases(per_amplitude=1 if args.quick else 3)
     results = []
@@ -187,7 +197,6 @@ def main(argv: list[str] | None = None) -> int:
     )
     print(report)
     if args.write:
-        args.write.parent.mkdir(parents=True, exist_ok=True)
         previous = args.write.read_text() if args.write.exists() else ""
         marker = "\n## "
         tail = ""
@@ -197,6 +206,6 @@ def main(argv: list[str] | None = None) -> int:
                 tail = marker + rest.split(marker, 1)[1]
         elif previous.startswith("# Benchmarks"):
             tail = "\n" + previous.split("\n", 1)[1]
-        args.write.write_text(report + tail)
+        write_text(args.write, report + tail)
         print(f"wrote {args.write}")
     return 0

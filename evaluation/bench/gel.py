@@ -33,6 +33,8 @@ STAGES = {
     "camera": "image_field_px",
 }
 
+from evaluation.cli import integer, run_tool  # noqa: E402
+
 
 def sequence(steps: int) -> list[tuple[float, Wrench]]:
     """(grip force N, wrench) along a slow, smooth loading path."""
@@ -81,9 +83,17 @@ def stage_shares(model: GelModel, steps: list[tuple[float, Wrench]]) -> dict[str
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--steps", type=int, default=240, help="solves per sequence (>= 200)")
-    parser.add_argument("--repeats", type=int, default=3, help="timed passes (best median)")
+    parser.add_argument(
+        "--steps", type=integer(200, 1_000_000), default=240, help="solves per sequence (>= 200)"
+    )
+    parser.add_argument(
+        "--repeats", type=integer(1, 10_000), default=3, help="timed passes (best median)"
+    )
     args = parser.parse_args(argv)
+    return run_tool("bench_gel", lambda: bench(args))
+
+
+def bench(args: argparse.Namespace) -> int:
     steps = sequence(args.steps)
     print(f"Machine: {describe_machine('1 thread (OMP/OpenBLAS/MKL 1)')}.")
     print(f"{args.steps} solves per sequence, best of {args.repeats} passes; ms per solve.\n")

@@ -40,6 +40,8 @@ STATIC_EFFECTS = ImageEffects(
     marker_dropout_fraction=0.1,
     occlusion_count=2,
 )
+from evaluation.cli import integer, run_tool  # noqa: E402
+
 N_FIELDS = 8
 
 
@@ -118,8 +120,14 @@ def rows(samples: dict[str, list[float]]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=200, help="renders per case")
+    parser.add_argument(
+        "--repeats", type=integer(1, 1_000_000), default=200, help="renders per case"
+    )
     args = parser.parse_args(argv)
+    return run_tool("bench_render", lambda: run(args))
+
+
+def run(args: argparse.Namespace) -> int:
     cv2.setNumThreads(1)
     print(f"GelRenderer, {SHAPE_HW[1]}x{SHAPE_HW[0]} output, median of {args.repeats} renders")
     print()

@@ -27,7 +27,9 @@ from controller.tactile.field import grid_axes_mm
 from controller.tactile.nhhd import NHHD
 from controller.tactile.slip import SlipDetector
 from drivers.sim.render.marker_images import MarkerImageRenderer
+from evaluation.cli import integer, run_tool
 from evaluation.machine import describe_machine
+from evaluation.outputs import check_output_file, write_text
 
 SECTION = "## Slip detector"
 
@@ -103,6 +105,7 @@ def report(update: dict[str, str], push: dict[str, str], frames: int) -> str:
 
 
 def write_section(path: Path, section: str) -> None:
+    """Replace (or append) this script's section of the markdown file at ``path``."""
     previous = path.read_text() if path.exists() else "# Benchmarks\n"
     if SECTION in previous:
         head, rest = previous.split(SECTION, 1)
@@ -110,14 +113,25 @@ def write_section(path: Path, section: str) -> None:
         text = head + section + ("\n## " + tail if tail is not None else "")
     else:
         text = previous.rstrip("\n") + "\n\n" + section
-    path.write_text(text)
+    write_text(path, text)
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--frames", type=int, default=2000)
+    parser.add_argument(
+        "--frames",
+        type=integer(10, 1_000_000),
+        default=2000,
+        help="frames per detector case (a tenth per push case)",
+    )
     parser.add_argument("--write", type=Path, help="update this markdown file's section")
     args = parser.parse_args(argv)
+    return run_tool("bench_slip", lambda: run(args))
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.write:
+        check_output_file(args.write, option="--write")
     cv2.setNumThreads(1)
     text = report(bench_update(args.frames), bench_push(args.frames // 10), args.frames)
     sys.stdout.write(text)

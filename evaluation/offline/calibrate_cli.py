@@ -5,14 +5,18 @@
 Runs the estimator over the dataset's frames (zeroed on its reference interval), fits each
 axis that has segments (c_x, c_y and c_z: our dipole / NHHD torque, and the FingerVision
 baseline's, side by side), prints a table of slope, RMSE (N*mm) and R^2, and writes the
-calibration file (``Calibration.save``) that ``scripts/estimate.py --calibration`` reads.
-Expected failures print one line ``calibrate: error: ...`` and exit with code 2.
+calibration file (``Calibration.to_yaml``: the fits, and the sensor profile and estimator
+configuration they were fitted for) that ``scripts/estimate.py --calibration`` reads.
+
+``--out`` is checked before any work (not an input, writable) and written atomically. An
+incomplete or inconsistent dataset, or an axis with segments that cannot be fitted, is an
+error. Expected failures print one line ``calibrate: error: ...`` and exit with code 2;
+SIGINT and SIGTERM exit with 130 and 143 (evaluation/cli.py).
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -20,8 +24,11 @@ import numpy as np
 from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
 from drivers.config import ConfigError
+from drivers.tactile.profile import sensor_profile
+from evaluation.cli import ToolError, resolved_config_path, run_tool
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
+from evaluation.outputs import check_output_file, write_text
 
 
 def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
@@ -56,23 +63,32 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    return run_tool("calibrate", lambda: calibrate(args.dataset, args.method, args.out))
+
+
+def calibrate(folder: Path, method: str | None, out: Path | None) -> int:
+    """Check the output, fit the dataset in ``folder``, print the table, write ``out``."""
+    if out is not None:
+        check_output_file(out, [folder, resolved_config_path(method, "estimators")])
+    dataset = Dataset(folder)
+    profile = sensor_profile(dataset.meta.sensor)
+    estimator = estimator_for_sensor(profile, method)
+    method = estimator.config_name
     try:
-        dataset = Dataset(args.dataset)
-        estimator = estimator_for_sensor(dataset.meta.sensor, args.method)
-        method = estimator.config_name
         series = estimate_dataset(dataset, estimator)
         fits = fit_dataset(dataset, series)
-        if not fits:
-            raise ConfigError(f"{args.dataset}: the dataset has no segments to fit")
-    except (ConfigError, ValueError) as exc:
-        print(f"calibrate: error: {exc}", file=sys.stderr)
-        return 2
+    except ConfigError:
+        raise
+    except ValueError as exc:
+        raise ToolError(str(exc)) from None
+    if not fits:
+        raise ToolError(f"{folder}: the dataset has no segments to fit")
     print(
-        f"calibrate: {len(dataset)} frames of {args.dataset} ({dataset.meta.sensor}, "
+        f"calibrate: {len(dataset)} frames of {folder} ({dataset.meta.sensor}, "
         f"{method}); median estimator time {np.median(series.latency_ms):.2f} ms"
     )
     print(fit_table(fits))
-    if args.out is not None:
-        calibration_from_fits(fits, dataset.meta.sensor, method).save(args.out)
-        print(f"calibrate: wrote {args.out}")
+    if out is not None:
+        write_text(out, calibration_from_fits(fits, profile.name, estimator).to_yaml())
+        print(f"calibrate: wrote {out}")
     return 0

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.tactile import TactileEstimator
-from controller.tactile.calibration import AxisFit, Calibration, fit_axis
+from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256, fit_axis
 from controller.tactile.wrench import VALUE_FIELDS
 from evaluation.offline.dataset import Dataset
 
@@ -97,27 +97,39 @@ def segment_mask(dataset: Dataset, t_s: np.ndarray, axis: str) -> np.ndarray:
     return mask
 
 
-def fit_dataset(dataset: Dataset, series: EstimateSeries) -> dict[tuple[str, str], AxisFit]:
-    """Fits keyed by (axis, method) for every axis the dataset has segments for."""
+def fit_dataset(
+    dataset: Dataset, series: EstimateSeries, axes: Iterable[str] | None = None
+) -> dict[tuple[str, str], AxisFit]:
+    """Fits keyed by (axis, method) for each of ``axes`` (default: every axis the dataset
+    has segments for). An axis that cannot be fitted (no or too few frames of ``series``
+    in its segments) is a ValueError naming it, never silently left out."""
     truth_t, truth = dataset.gel_truth()
     fits = {}
+    wanted = {s.axis for s in dataset.meta.segments} if axes is None else set(axes)
     for axis, (ours, baseline, column) in TORQUE_AXES.items():
-        mask = segment_mask(dataset, series.t_s, axis)
-        if not mask.any():
+        if axis not in wanted:
             continue
+        mask = segment_mask(dataset, series.t_s, axis)
         for method, name in zip(METHODS, (ours, baseline), strict=True):
-            fits[(axis, method)] = fit_axis(
-                series.t_s[mask], series.values[name][mask], truth_t, truth[:, column]
-            )
+            try:
+                fits[(axis, method)] = fit_axis(
+                    series.t_s[mask], series.values[name][mask], truth_t, truth[:, column]
+                )
+            except ValueError as exc:
+                raise ValueError(
+                    f"{dataset.folder}: cannot fit tau_{axis} ({method}): {exc}"
+                ) from None
     return fits
 
 
 def calibration_from_fits(
-    fits: dict[tuple[str, str], AxisFit], sensor: str, estimator: str
+    fits: dict[tuple[str, str], AxisFit], sensor: str, estimator: TactileEstimator
 ) -> Calibration:
-    """A calibration file's content: every fitted axis, ours and the baseline's."""
+    """A calibration file's content: every fitted axis, ours and the baseline's, and what
+    it was fitted for (the sensor profile's name, the estimator's configuration name and the
+    fingerprint of its values)."""
     axes = {}
     for (axis, method), fit in fits.items():
         ours, baseline, _ = TORQUE_AXES[axis]
         axes[ours if method == "ours" else baseline] = fit
-    return Calibration(sensor, estimator, axes)
+    return Calibration(sensor, estimator.config_name, axes, estimator_sha256(estimator.config))

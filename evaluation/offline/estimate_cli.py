@@ -1,22 +1,32 @@
 """Offline estimation on recorded tactile video or a folder of images.
 
     python scripts/estimate.py INPUT --reference SPEC --out OUT.csv [--sensor gelsight_mini]
-        [--method NAME] [--calibration FILE] [--fps F]
+        [--method NAME] [--calibration FILE [--force]] [--fps F] [--allow-damaged]
 
 INPUT is a video file OpenCV can read, or a folder of images read in natural sorted order
-(frame_2 before frame_10). SPEC is a frame index (``0``) or a range ``a:b`` whose frames
+(frame_2 before frame_10). SPEC is a frame number (``0``) or a range ``a:b`` whose frames
 (a included, b excluded) are averaged into the zeroing reference. ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
-sensor profile's ``estimator`` is used.
+sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
+estimator configuration is refused unless ``--force``.
 
 The CSV has one row per frame: ``frame,time_s,tau_x,tau_y,tau_z,shear_x,shear_y,normal,
 fv_tau_x,fv_tau_y,fv_tau_z,contact,degenerate,slip_suspected,slip_gross,rezero_recommended,
-latency_ms``. Without a calibration file the values are raw (mm, mm^2; see
+latency_ms``. ``frame`` is the frame's number in the recording (by the container's
+timestamps for a video, the sorted position for a folder) and ``time_s = frame / rate``
+(``--fps``, else the video's rate, else the sensor's), so a lost frame leaves a gap and
+every time stays true. Without a calibration file the values are raw (mm, mm^2; see
 controller/tactile/wrench.py); the flags are 0 or 1; ``latency_ms`` is the estimator's time
 for that frame.
 
-Expected failures (unreadable input, empty folder, mismatched frame sizes, reference out of
-range, bad configuration) print one line ``estimate: error: ...`` and exit with code 2.
+Damaged input (frames that do not decode, a video that ends before the frame count in its
+header) is an error by default; with ``--allow-damaged`` the frames that decode are
+estimated and each kind of loss is one ``estimate: warning: ...`` line. The CSV is written
+to a temporary file and renamed over OUT only when complete: an error or an interruption
+leaves an earlier OUT as it was. Expected failures (unreadable input, empty folder,
+mismatched frame sizes, reference out of range, bad configuration, an OUT that is an input
+or cannot be written) print one line ``estimate: error: ...`` and exit with code 2; SIGINT
+and SIGTERM exit with 130 and 143 (evaluation/cli.py).
 """
 
 from __future__ import annotations
@@ -26,25 +36,33 @@ import csv
 import re
 import sys
 import time
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 import numpy as np
 from tqdm import tqdm
 
-from controller.tactile import Calibration, WrenchEstimate, estimator_for_sensor
+from controller.tactile import Calibration, EstimatorConfig, WrenchEstimate, estimator_for_sensor
 from controller.tactile.wrench import VALUE_FIELDS
-from drivers.config import ConfigError
+from drivers.tactile.profile import sensor_profile
+from evaluation.cli import (
+    ToolError,
+    resolved_config_path,
+    run_tool,
+)
+from evaluation.offline.video import ReadLog, VideoError, VideoFile
+from evaluation.outputs import atomic_text, check_output_file
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")
 CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, *FLAG_FIELDS, "latency_ms")
 PROGRESS_MIN_FRAMES = 100
+MIN_RATE_HZ, MAX_RATE_HZ = 0.1, 10_000.0
 
 
-class InputError(Exception):
+class InputError(ToolError):
     """A user-facing problem with the input; the message is one line."""
 
 
@@ -52,32 +70,50 @@ def _natural_key(path: Path) -> list[object]:
     return [int(part) if part.isdigit() else part.lower() for part in re.split(r"(\d+)", path.name)]
 
 
+def _warn(message: str) -> None:
+    print(f"estimate: warning: {message}", file=sys.stderr)
+
+
 @dataclass
 class FrameSource:
-    """Frames of a video file or an image folder, read in order."""
+    """Frames of a video file or an image folder, read in order and numbered (see the
+    module doc); ``frame_count`` and ``fps`` come from the video's header (None: unknown)."""
 
     path: Path
     images: list[Path] | None  # None for a video
-    frame_count: int | None
-    fps: float | None
+    video: VideoFile | None
+    frame_count: int | None = field(init=False)
+    fps: float | None = field(init=False)
 
-    def frames(self) -> Iterator[np.ndarray]:
+    def __post_init__(self) -> None:
         if self.images is not None:
-            for image_path in self.images:
-                image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)
-                if image is None:
-                    raise InputError(f"cannot read image '{image_path}'")
-                yield image
+            self.frame_count, self.fps = len(self.images), None
+        else:
+            assert self.video is not None
+            self.frame_count, self.fps = self.video.header_frames, self.video.fps
+
+    def frames(self, log: ReadLog) -> Iterator[tuple[int, np.ndarray]]:
+        """(frame number, image) of every frame that decodes; ``log`` records the pass."""
+        if self.video is not None:
+            yield from self.video.frames(log)
             return
-        capture = cv2.VideoCapture(str(self.path))
-        try:
-            while True:
-                ok, frame = capture.read()
-                if not ok:
-                    return
-                yield frame
-        finally:
-            capture.release()
+        for number, image_path in enumerate(self.images or ()):
+            image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)
+            if image is not None:
+                log.record(number)
+                yield number, image
+
+    def damage(self, log: ReadLog) -> list[str]:
+        """What a complete pass logged in ``log`` lost; empty for an intact input."""
+        if self.video is not None:
+            return [f"'{self.path}': {problem}" for problem in log.damage(self.frame_count)]
+        images = self.images or []
+        missing = [n for first, last in log.gaps for n in range(first, last + 1)]
+        bad = [images[n].name for n in [*missing, *range(log.last + 1, len(images))]]
+        if not bad:
+            return []
+        names = ", ".join(bad[:5]) + (f" and {len(bad) - 5} more" if len(bad) > 5 else "")
+        return [f"'{self.path}': {len(bad)} images did not decode ({names})"]
 
 
 def open_source(path: Path) -> FrameSource:
@@ -86,22 +122,19 @@ def open_source(path: Path) -> FrameSource:
         raise InputError(f"input '{path}' does not exist")
     if path.is_dir():
         images = sorted(
-            (p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES), key=_natural_key
+            (p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file()),
+            key=_natural_key,
         )
         if not images:
             suffixes = ", ".join(IMAGE_SUFFIXES)
             raise InputError(f"folder '{path}' holds no images ({suffixes})")
-        return FrameSource(path, images, len(images), None)
-    capture = cv2.VideoCapture(str(path))
+        return FrameSource(path, images, None)
+    if not path.is_file():
+        raise InputError(f"input '{path}' is not a regular file or a folder")
     try:
-        ok = capture.isOpened() and capture.read()[0]
-        count = int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if ok else 0
-        fps = float(capture.get(cv2.CAP_PROP_FPS)) if ok else 0.0
-    finally:
-        capture.release()
-    if not ok:
-        raise InputError(f"cannot read video '{path}': OpenCV cannot open or decode it")
-    return FrameSource(path, None, count if count > 0 else None, fps if fps > 0 else None)
+        return FrameSource(path, None, VideoFile.open(path))
+    except VideoError as exc:
+        raise InputError(str(exc)) from None
 
 
 def parse_reference(spec: str) -> tuple[int, int]:
@@ -117,22 +150,29 @@ def parse_reference(spec: str) -> tuple[int, int]:
 
 
 def read_reference(source: FrameSource, start: int, stop: int) -> list[np.ndarray]:
-    """The frames [start, stop) of the source."""
-    if source.frame_count is not None and stop > source.frame_count:
-        raise InputError(
-            f"--reference {start}:{stop} is out of range: '{source.path}' has "
-            f"{source.frame_count} frames"
-        )
+    """The frames numbered [start, stop) of the source; every one must have decoded."""
     frames = []
-    for index, frame in enumerate(source.frames()):
-        if index >= start:
-            frames.append(frame)
-        if index + 1 >= stop:
+    log = ReadLog()
+    for number, frame in source.frames(log):
+        if number >= stop:
             break
+        if number >= start:
+            frames.append(frame)
+    else:
+        if log.last < stop - 1:
+            header = (
+                f" (its header says {source.frame_count})"
+                if source.video is not None and source.frame_count != log.read
+                else ""
+            )
+            raise InputError(
+                f"--reference {start}:{stop} is out of range: '{source.path}' ended after "
+                f"{log.read} frames{header}"
+            )
     if len(frames) < stop - start:
         raise InputError(
-            f"--reference {start}:{stop} is out of range: '{source.path}' ended after "
-            f"{start + len(frames)} frames"
+            f"--reference {start}:{stop}: {stop - start - len(frames)} of these frames of "
+            f"'{source.path}' are missing or did not decode; choose another reference range"
         )
     return frames
 
@@ -143,6 +183,22 @@ def _row(index: int, t_s: float, estimate: WrenchEstimate, latency_ms: float) ->
     return [index, f"{t_s:.6f}", *values, *flags, f"{latency_ms:.3f}"]
 
 
+def load_calibration(
+    path: Path, sensor: str, config: EstimatorConfig, force: bool, warn: Callable[[str], None]
+) -> Calibration:
+    """The calibration at ``path``, refused if fitted for another sensor or estimator
+    configuration (a warning instead with ``force``)."""
+    calibration = Calibration.load(path)
+    problem = calibration.mismatch(sensor, config)
+    if problem and not force:
+        raise InputError(
+            f"--calibration '{path}' does not fit: {problem}; pass --force to apply it anyway"
+        )
+    if problem:
+        warn(f"--calibration '{path}': {problem}; applied anyway (--force)")
+    return calibration
+
+
 def estimate_file(
     input_path: Path,
     out_csv: Path,
@@ -151,13 +207,30 @@ def estimate_file(
     method: str | None = None,
     calibration: Path | None = None,
     fps: float | None = None,
+    force: bool = False,
+    allow_damaged: bool = False,
+    warn: Callable[[str], None] = _warn,
 ) -> int:
-    """Run the estimator over INPUT and write the CSV; returns the number of frames."""
+    """Run the estimator over INPUT and write the CSV; returns the number of rows. Every
+    argument and the output path are checked before any frame is read."""
     start, stop = parse_reference(reference)
-    if fps is not None and not fps > 0:
-        raise InputError(f"--fps {fps}: expected a positive number of frames per second")
-    fit = Calibration.load(calibration) if calibration is not None else None
-    estimator = estimator_for_sensor(sensor, method, fit)
+    if fps is not None and not MIN_RATE_HZ <= fps <= MAX_RATE_HZ:
+        raise InputError(
+            f"--fps {fps:g}: expected a positive number of frames per second in "
+            f"[{MIN_RATE_HZ:g}, {MAX_RATE_HZ:g}]"
+        )
+    profile = sensor_profile(sensor)
+    estimator = estimator_for_sensor(profile, method)
+    if calibration is not None:
+        fit = load_calibration(calibration, profile.name, estimator.config, force, warn)
+        estimator = estimator_for_sensor(profile, method, fit)
+    inputs = [
+        input_path,
+        resolved_config_path(sensor, "sensors"),
+        resolved_config_path(estimator.config_name, "estimators"),
+        calibration,
+    ]
+    check_output_file(out_csv, inputs)
     source = open_source(input_path)
     rate_hz = fps or source.fps or estimator.profile.fps_hz
 
@@ -169,32 +242,36 @@ def estimate_file(
 
     show_progress = source.frame_count is None or source.frame_count >= PROGRESS_MIN_FRAMES
     count = 0
-    try:
-        out_csv.parent.mkdir(parents=True, exist_ok=True)
-        handle = out_csv.open("w", newline="")
-    except OSError as exc:
-        raise InputError(f"cannot write '{out_csv}': {exc.strerror}") from None
-    with handle:
+    log = ReadLog()
+    with atomic_text(out_csv, newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(CSV_COLUMNS)
         frames = tqdm(
-            source.frames(),
+            source.frames(log),
             total=source.frame_count,
             unit="frame",
             disable=not show_progress,
             file=sys.stderr,
             leave=False,
         )
-        for index, frame in enumerate(frames):
-            t_s = index / rate_hz
+        for number, frame in frames:
+            t_s = number / rate_hz
             began = time.perf_counter()
             try:
                 estimate = estimator.push(frame, t_s)
             except ValueError as exc:
-                raise InputError(f"frame {index}: {exc}") from None
+                raise InputError(f"frame {number}: {exc}; nothing written") from None
             latency_ms = (time.perf_counter() - began) * 1e3
-            writer.writerow(_row(index, t_s, estimate, latency_ms))
+            writer.writerow(_row(number, t_s, estimate, latency_ms))
             count += 1
+        problems = source.damage(log)
+        if problems and not allow_damaged:
+            raise InputError(
+                "; ".join(problems) + "; nothing written (pass --allow-damaged to estimate "
+                "the frames that decoded)"
+            )
+    for problem in problems:
+        warn(problem)
     return count
 
 
@@ -207,7 +284,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--reference",
         default="0",
-        help="zeroing reference: frame index N, or range A:B averaged (default 0)",
+        help="zeroing reference: frame number N, or range A:B averaged (default 0)",
     )
     parser.add_argument("--out", type=Path, required=True, help="output CSV path")
     parser.add_argument(
@@ -225,17 +302,28 @@ def build_parser() -> argparse.ArgumentParser:
         "--calibration", type=Path, default=None, help="calibration YAML from scripts/calibrate.py"
     )
     parser.add_argument(
+        "--force",
+        action="store_true",
+        help="apply a calibration fitted for another sensor or estimator configuration",
+    )
+    parser.add_argument(
         "--fps",
         type=float,
         default=None,
-        help="frame rate for time_s (default: the video's, else the sensor's)",
+        help="frame rate for time_s, Hz (default: the video's, else the sensor's)",
+    )
+    parser.add_argument(
+        "--allow-damaged",
+        action="store_true",
+        help="estimate the frames of a damaged input that decode (warnings), instead of failing",
     )
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    try:
+
+    def body() -> int:
         count = estimate_file(
             args.input,
             args.out,
@@ -244,9 +332,10 @@ def main(argv: list[str] | None = None) -> int:
             args.method,
             args.calibration,
             args.fps,
+            args.force,
+            args.allow_damaged,
         )
-    except (InputError, ConfigError) as exc:
-        print(f"estimate: error: {exc}", file=sys.stderr)
-        return 2
-    print(f"estimate: wrote {count} rows to {args.out}")
-    return 0
+        print(f"estimate: wrote {count} rows to {args.out}")
+        return 0
+
+    return run_tool("estimate", body)

@@ -5,59 +5,81 @@
         [--frames-per-axis 12500] [--scene calibration_jig] [--seed 0]
 
 The paper's runs held about 12,500 frames per axis. Calibrate with scripts/calibrate.py OUT.
-Expected failures print one line ``make_dataset: error: ...`` and exit with code 2.
+OUT must not exist; it is checked (and every argument) before any work. The dataset is
+built in a hidden folder beside OUT and renamed to OUT only when complete: an error or an
+interruption leaves no OUT. Expected failures print one line ``make_dataset: error: ...``
+and exit with code 2; SIGINT and SIGTERM exit with 130 and 143 (evaluation/cli.py).
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
 from pathlib import Path
 
-from drivers.config import ConfigError
 from drivers.sim.gel.profile import SHAPES
-from evaluation.jig_dataset import paper_experiments, write_jig_dataset
+from drivers.tactile.profile import sensor_profile
+from evaluation.cli import (
+    SEED,
+    ToolError,
+    distinct,
+    integer,
+    number,
+    resolved_config_path,
+    run_tool,
+)
+from evaluation.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiments, write_jig_dataset
+from evaluation.outputs import check_output_folder
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model, jig_config
 
 
-def main(argv: list[str] | None = None) -> int:
+def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="make_dataset", description=__doc__.splitlines()[0])
-    parser.add_argument("out", type=Path, help="dataset folder to write")
-    parser.add_argument("--sensor", default="gelsight_mini", help="gel profile: SENSOR_gel.yaml")
+    parser.add_argument("out", type=Path, help="dataset folder to write (must not exist)")
+    parser.add_argument(
+        "--sensor", default="gelsight_mini", help="sensor profile (its gel: SENSOR_gel.yaml)"
+    )
     parser.add_argument("--object", default="plate", choices=sorted(SHAPES))
     parser.add_argument("--axes", nargs="+", default=["x", "y"], choices=["x", "y", "z"])
     parser.add_argument(
         "--amplitudes-nmm",
         nargs="+",
-        type=float,
+        type=number(0.1, 1000.0, "N*mm"),
         default=[20.0, 40.0, 60.0],
         help="peak torques the hand applies, N*mm",
     )
-    parser.add_argument("--frames-per-axis", type=int, default=12500)
+    parser.add_argument("--frames-per-axis", type=integer(1, MAX_FRAMES_PER_AXIS), default=12500)
     parser.add_argument("--scene", default="calibration_jig", help="configs/scenes name or path")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=SEED, default=0)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
     args = parser.parse_args(argv)
+    distinct(parser, "--axes", args.axes)
+    return run_tool("make_dataset", lambda: make_dataset(args))
+
+
+def make_dataset(args: argparse.Namespace) -> int:
+    """Check every argument and OUT, then simulate and write the dataset."""
+    scene = resolved_config_path(args.scene, "scenes")
+    check_output_folder(args.out, [scene], option="OUT", must_not_exist=True)
+    sensor_profile(args.sensor)
     try:
         config = jig_config(args.scene)
         model = gel_model(args.sensor, args.object)
+        renderer = make_renderer(args.sensor, seed=args.seed)
         experiments = paper_experiments(
             args.axes, [a * 1e-3 for a in args.amplitudes_nmm], args.frames_per_axis, config
         )
         start = time.perf_counter()
         timing = write_jig_dataset(
-            args.out,
-            args.sensor,
-            model,
-            make_renderer(args.sensor, seed=args.seed),
-            experiments,
-            config,
-            seed=args.seed,
+            args.out, args.sensor, model, renderer, experiments, config, seed=args.seed
         )
-    except (ConfigError, ValueError) as exc:
-        print(f"make_dataset: error: {exc}", file=sys.stderr)
-        return 2
+    except ValueError as exc:  # a ConfigError, or a setting the simulator refuses
+        raise ToolError(str(exc)) from None
     elapsed = time.perf_counter() - start
     sim_rate = timing["frames"] / (timing["physics_s"] + timing["render_s"])
     print(

@@ -10,6 +10,8 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from evaluation.outputs import atomic_file  # noqa: E402
+
 
 def plot_series_against_truth(
     t_s: Sequence[float],
@@ -17,7 +19,8 @@ def plot_series_against_truth(
     path: Path,
     title: str,
 ) -> None:
-    """One panel per (name, truth, {label: series}) row; writes a PNG to ``path``."""
+    """One panel per (name, truth, {label: series}) row; writes a PNG to ``path``
+    (atomically: an earlier chart stays until the new one is complete)."""
     fig, axes = plt.subplots(len(panels), 1, figsize=(9, 2.2 * len(panels)), sharex=True)
     axes = [axes] if len(panels) == 1 else axes
     for ax, (name, truth, estimates) in zip(axes, panels, strict=True):
@@ -30,6 +33,8 @@ def plot_series_against_truth(
     axes[-1].set_xlabel("time (s)")
     fig.suptitle(title, fontsize=10)
     fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    try:
+        with atomic_file(path) as temporary:
+            fig.savefig(temporary, dpi=110, format="png")
+    finally:
+        plt.close(fig)

@@ -432,11 +432,15 @@ def test_changing_stream_is_not_frozen(tmp_path: Path) -> None:
     clip = write_avi(tmp_path / "live.avi", [textured(240, 320, seed=i) for i in range(3)])
     factory, _ = paced_factory(raw=True, rate_hz=200)
     config = digit_config(by_id_dir(tmp_path, DIGIT_ID, clip), frozen_frame_count=2)
+    images = []
     with TactileCamera(config, factory) as camera:
         t_end = time.monotonic() + 0.2
         while time.monotonic() < t_end:
-            camera.read_latest(max_age_s=0.5)
+            images.append(camera.read_latest(max_age_s=0.5).image)  # a fault would raise
             time.sleep(0.01)
+        assert camera.is_connected
+    assert len(images) >= 10
+    assert len({image.tobytes() for image in images}) >= 2  # the stream really changed
 
 
 def test_end_of_stream_is_a_disconnect(tmp_path: Path) -> None:

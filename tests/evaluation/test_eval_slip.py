@@ -45,3 +45,32 @@ def test_bad_arguments_exit_2_naming_the_input(args, message, capsys):
         slip_cli.main(args)
     assert stop.value.code == 2
     assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--method", "nope"], "unknown estimator configuration 'nope'"),
+        (["--grips", "nan"], "--grips 'nan'"),
+        (["--grips", "inf"], "--grips 'inf'"),
+        (["--grips", "10,"], "--grips '10,'"),
+        (["--noise-grey", "-5"], "--noise-grey"),
+        (["--noise-grey", "nan"], "--noise-grey"),
+        (["--seed", "-1"], "--seed"),
+        (["--objects", "plate,plate"], "'plate' is given twice"),
+    ],
+)
+def test_nonsense_arguments_exit_2_before_any_work(args, message, capsys, monkeypatch):
+    monkeypatch.setattr(slip_cli, "evaluate", lambda *a: pytest.fail("work began"))
+    with pytest.raises(SystemExit) as stop:
+        slip_cli.main(args)
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("out", ["/dev/full", "."])
+def test_an_unwritable_report_is_refused_before_any_work(out, capsys, monkeypatch):
+    monkeypatch.setattr(slip_cli, "evaluate", lambda *a: pytest.fail("work began"))
+    assert slip_cli.main(["--quick", "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("eval_slip: error: --out") and "\n" not in err

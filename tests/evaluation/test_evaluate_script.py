@@ -40,3 +40,68 @@ def test_every_sweep_level_builds_a_valid_setting():
         assert condition.nominal in condition.levels, condition.name
         for level in condition.levels:
             condition.setting(level)  # raises ValueError naming the bad key
+
+
+@pytest.mark.parametrize(
+    "args,message",
+    [
+        (["--jobs", "0"], "--jobs"),
+        (["--jobs", "-2"], "--jobs"),
+        (["--jobs", "1.5"], "--jobs"),
+        (["--frames-per-axis", "0"], "--frames-per-axis"),
+    ],
+)
+def test_evaluate_refuses_nonsense_counts(tmp_path, capsys, args, message):
+    with pytest.raises(SystemExit) as stop:
+        evaluate_main([*args, "--docs", str(tmp_path), "--work", str(tmp_path)])
+    assert stop.value.code == 2 and message in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize(
+    "make_args,message",
+    [
+        (lambda t: ["--docs", str(t / "file")], "is a file"),
+        (lambda t: ["--work", str(t / "file")], "is a file"),
+        (lambda t: ["--docs", "/proc/none"], "cannot write in"),
+        (lambda t: ["--docs", str(t / "d"), "--work", str(t / "d" / "EVALUATION.md")], "is a"),
+    ],
+)
+def test_evaluate_checks_its_outputs_before_any_work(
+    tmp_path, capsys, monkeypatch, make_args, message
+):
+    import evaluation.run as run
+
+    (tmp_path / "file").write_text("mine")
+    (tmp_path / "d").mkdir()
+    (tmp_path / "d" / "EVALUATION.md").write_text("previous")
+    monkeypatch.setattr(run, "_run", lambda *a: pytest.fail("work began"))
+    args = make_args(tmp_path)
+    args += [] if "--docs" in args else ["--docs", str(tmp_path / "docs")]
+    args += [] if "--work" in args else ["--work", str(tmp_path / "work")]
+    assert evaluate_main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("evaluate: error:") and message in err and "\n" not in err
+    assert (tmp_path / "file").read_text() == "mine"
+    assert (tmp_path / "d" / "EVALUATION.md").read_text() == "previous"
+
+
+def test_an_interrupted_evaluation_keeps_the_previous_report(tmp_path, capsys, monkeypatch):
+    import evaluation.run as run
+
+    docs = tmp_path / "docs"
+    (docs / "figures").mkdir(parents=True)
+    (docs / "EVALUATION.md").write_text("previous report")
+    (docs / "figures" / "pareto.png").write_bytes(b"previous chart")
+
+    def interrupted(args, staging):
+        (staging / "figures").mkdir()
+        (staging / "figures" / "pareto.png").write_bytes(b"half a new chart")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "_run", interrupted)
+    assert evaluate_main(["--docs", str(docs), "--work", str(tmp_path / "w")]) == 130
+    assert "interrupted by SIGINT" in capsys.readouterr().err
+    assert (docs / "EVALUATION.md").read_text() == "previous report"
+    assert (docs / "figures" / "pareto.png").read_bytes() == b"previous chart"
+    assert sorted(p.name for p in docs.iterdir()) == ["EVALUATION.md", "figures"]

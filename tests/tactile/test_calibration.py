@@ -3,6 +3,7 @@ import pytest
 
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
 from drivers.config import ConfigError
+from evaluation.outputs import write_text
 
 
 def series(rng, slope=0.004, offset=0.0, noise=0.0):
@@ -58,7 +59,7 @@ def test_nan_input_is_an_error():
 def test_save_and_load_round_trip(tmp_path):
     cal = Calibration("gelsight_mini", "default", {"tau_x": AxisFit(0.004, 0.0, 0.001, 0.99, 100)})
     path = tmp_path / "cal.yaml"
-    cal.save(path)
+    write_text(path, cal.to_yaml())
     assert Calibration.load(path) == cal
 
 
@@ -79,6 +80,32 @@ def test_save_and_load_round_trip(tmp_path):
             "format: tactile-insertion/calibration/v1\nsensor: s\nestimator: e\naxes:\n"
             "  tau_x: {slope: .nan, intercept: 0, rmse: 0, r2: 1, samples: 3}\n",
             "finite",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes:\n"
+            "  tau_x: {slope: true, intercept: 0, rmse: 0, r2: 1, samples: 3}\n",
+            "axes.tau_x.slope",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes:\n"
+            "  tau_x: {slope: 1, intercept: 0, rmse: 0, r2: 1, samples: 1.5}\n",
+            "axes.tau_x.samples",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: null\naxes: [1, 2]\n",
+            "key 'axes': expected a mapping",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\n"
+            "estimator_sha256: abc\naxes: {}\n",
+            "estimator_sha256",
+        ),
+        (
+            "format: tactile-insertion/calibration/v2\nsensor: s\nestimator: e\naxes: {}\n",
+            "missing key 'estimator_sha256'",
         ),
     ],
 )

@@ -196,3 +196,41 @@ def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     per_frame_bytes = sum(s.size_diff for s in grown) / 30
     # The estimate object itself (~200 B) may remain referenced; array buffers would be KBs.
     assert per_frame_bytes < 512, [str(s) for s in grown[:5]]
+
+
+@pytest.mark.parametrize("bad", [2.5, float("nan"), 0, -3, True, "3", 10**9])
+def test_rezero_refuses_nonsense_and_leaves_the_estimator_usable(estimator, renderer, bad):
+    pressed = renderer.render(PATTERNS["tilt_x"])
+    before = estimator.push(pressed, 0.0)
+    with pytest.raises(ValueError, match="rezero needs a whole number of frames"):
+        estimator.rezero(bad)
+    assert estimator.is_zeroed
+    after = estimator.push(pressed, 0.1)  # no AttributeError, same answer as before
+    assert not after.zeroing and after.tau_x == pytest.approx(before.tau_x)
+
+
+def test_rezero_accepts_numpy_integers(estimator, renderer):
+    estimator.rezero(np.int64(2))
+    assert estimator.push(renderer.render(), 0.0).zeroing
+
+
+def test_failed_set_reference_leaves_the_estimator_as_it_was(estimator, renderer):
+    pressed = renderer.render(PATTERNS["tilt_x"])
+    before = estimator.push(pressed, 0.0)
+    half = renderer.render()[::2, ::2].copy()  # 160 x 120: same aspect, another size
+    with pytest.raises(ValueError, match="reference frame 1: frame of 160 x 120 px"):
+        estimator.set_reference([renderer.render(), half])
+    with pytest.raises(ValueError, match="reference frame 0: tactile frame must be"):
+        estimator.set_reference([np.zeros((240, 320, 3), np.float32)])
+    after = estimator.push(pressed, 0.1)
+    assert after.tau_x == pytest.approx(before.tau_x) and estimator.is_zeroed
+
+
+def test_failed_push_during_zeroing_keeps_the_capture(renderer):
+    est = TactileEstimator(CONFIG, PROFILE)
+    est.rezero(2)
+    assert est.push(renderer.render(), 0.0).zeroing
+    with pytest.raises(ValueError, match="does not match the reference"):
+        est.push(renderer.render()[::2, ::2].copy(), 0.1)
+    assert est.push(renderer.render(), 0.2).zeroing  # the second frame of the two
+    assert est.is_zeroed

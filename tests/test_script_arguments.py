@@ -1,0 +1,54 @@
+"""Every script refuses nonsense counts, seeds and outputs with exit code 2 before any work."""
+
+import runpy
+from pathlib import Path
+
+import pytest
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+def script_main(name: str):
+    return runpy.run_path(str(SCRIPTS / f"{name}.py"), run_name=f"script_{name}")["main"]
+
+
+@pytest.mark.parametrize(
+    "name,args,message",
+    [
+        ("bench_estimation", ["--repeats", "0"], "--repeats"),
+        ("bench_estimation", ["--repeats", "-1"], "--repeats"),
+        ("bench_gel", ["--steps", "0"], "--steps"),
+        ("bench_gel", ["--steps", "199"], "--steps"),
+        ("bench_gel", ["--repeats", "0"], "--repeats"),
+        ("bench_render", ["--repeats", "0"], "--repeats"),
+        ("bench_render", ["--repeats", "2.5"], "--repeats"),
+        ("bench_slip", ["--frames", "0"], "--frames"),
+        ("bench_slip", ["--frames", "9"], "--frames"),
+        ("bench_camera_decode", ["--runs", "0"], "--runs"),
+        ("bench_camera_decode", ["--seed", "-3"], "--seed"),
+        ("demo", ["--seed", "nan"], "--seed"),
+    ],
+)
+def test_nonsense_counts_are_usage_errors(name, args, message, capsys):
+    main = script_main(name)
+    with pytest.raises(SystemExit) as stop:
+        main(args)
+    assert stop.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("name", ["bench_estimation", "bench_slip"])
+@pytest.mark.parametrize("out,message", [("/dev/full", "not a regular file"), (".", "a folder")])
+def test_bench_reports_check_their_output_first(name, out, message, capsys):
+    main = script_main(name)
+    assert main(["--write", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"{name}: error: --write") and message in err and "\n" not in err
+
+
+def test_demo_refuses_an_output_that_is_a_file(tmp_path, capsys):
+    (tmp_path / "file").write_text("mine")
+    assert script_main("demo")(["--out", str(tmp_path / "file")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("demo: error: --out") and "is a file" in err
+    assert (tmp_path / "file").read_text() == "mine"
