@@ -16,7 +16,6 @@ import pytest
 import yaml
 
 from drivers import check_hardware
-from tests.drivers.silent_controller import SilentController
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "check_hardware.py"
@@ -149,19 +148,6 @@ def test_a_sim_only_type_refuses_the_real_backend(capsys):
 
 # ------------------------------------------------------------------------------- silence
 
-
-@pytest.fixture
-def silent_controller():
-    """A loopback host that accepts on the xArm SDK's port 502 and never answers."""
-    host = SilentController()
-    try:
-        host.__enter__()
-    except PermissionError:
-        pytest.skip("binding TCP port 502 needs root or CAP_NET_BIND_SERVICE")
-    try:
-        yield host
-    finally:
-        host.__exit__()
 
 
 def run_script(*args: str, timeout_s: float) -> tuple[subprocess.CompletedProcess, float]:

@@ -28,7 +28,6 @@ from drivers.config import CONFIG_ROOT
 from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.registry import load_device, load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
-from tests.drivers.silent_controller import SilentController
 
 CONFIG_FILE = CONFIG_ROOT / "robot" / "xarm6.yaml"
 TOL = 1e-9
@@ -568,19 +567,6 @@ def test_connecting_to_a_closed_loopback_port_raises_not_connected():
         arm.connect()
     assert not arm.is_connected
 
-
-@pytest.fixture
-def silent_controller():
-    """A loopback host that accepts on the SDK's port 502 and never answers."""
-    host = SilentController()
-    try:
-        host.__enter__()
-    except PermissionError:
-        pytest.skip("binding TCP port 502 needs root or CAP_NET_BIND_SERVICE")
-    try:
-        yield host
-    finally:
-        host.__exit__()
 
 
 def test_a_controller_that_accepts_and_never_answers_fails_connect_in_time(silent_controller):
