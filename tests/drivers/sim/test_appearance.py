@@ -36,17 +36,9 @@ from drivers.sim.render.real_texture import (
 )
 from drivers.sim.render.realistic import REALISTIC
 from drivers.tactile.profile import sensor_profile
+from tests.drivers.sim.effects import ALL
 
 HW = (240, 320)
-ALL = ImageEffects(
-    noise_grey=3.0,
-    drift_gain_per_level=(0.04, -0.03, 0.02),
-    drift_gradient_grey_per_level=6.0,
-    blur_sigma_px=0.8,
-    motion_blur_samples=3,
-    marker_dropout_fraction=0.2,
-    occlusion_count=2,
-)
 REAL_MARKERS = "real:gelsight_markers_a"
 
 

@@ -26,19 +26,11 @@ from drivers.sim.render.marker_images import (
     smooth_random_field,
 )
 from drivers.tactile.profile import sensor_profile
+from tests.drivers.sim.effects import ALL
 
 HW = (240, 320)
 # 5 px cells (a physics grid), 4 px, 16/3 px (not a whole number of pixels), full resolution
 GRIDS = [(48, 64), (60, 80), (45, 60), HW]
-ALL = ImageEffects(
-    noise_grey=3.0,
-    drift_gain_per_level=(0.04, -0.03, 0.02),
-    drift_gradient_grey_per_level=6.0,
-    blur_sigma_px=0.8,
-    motion_blur_samples=3,
-    marker_dropout_fraction=0.2,
-    occlusion_count=2,
-)
 
 
 def nodes_px(grid_hw, image_hw=HW):
