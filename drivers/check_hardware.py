@@ -158,9 +158,17 @@ def probe(spec: registry.DeviceSpec, arm_config: Any = None) -> tuple[bool, str]
             with spec.build(**transport) as device:
                 return True, READERS[kind](device)
     except DeviceError as exc:
-        return False, f"{type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
+        return False, f"{type(exc).__name__}: {_with_hint(str(exc), culprit)}"
     except Exception as exc:  # a diagnostic tool reports every failure and goes on
-        return False, f"unexpected {type(exc).__name__}: {exc}. Check {HINTS[culprit]}"
+        return False, f"unexpected {type(exc).__name__}: {_with_hint(str(exc), culprit)}"
+
+
+def _with_hint(message: str, kind: str) -> str:
+    """The driver's message, then what to check for ``kind``, unless the driver's message
+    already says what to check (a hint is given once)."""
+    if "check" in message.lower():
+        return message
+    return f"{message}. Check {HINTS[kind]}"
 
 
 def tool_port_arm(spec: registry.DeviceSpec, specs: Sequence[registry.DeviceSpec]) -> Any:
