@@ -40,7 +40,7 @@ from controller.tactile import TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
-from evaluation.rendering import make_renderer
+from drivers.tactile.profile import sensor_profile
 from evaluation.sim_setup import gel_model
 
 SENSOR = "gelsight_mini"
@@ -156,6 +156,21 @@ def sequences(shape: str, grip_n: float, cap: Capacity) -> list[Sequence]:
     ]
 
 
+def make_renderer(appearance: str, noise_grey: float, seed: int) -> GelRenderer:
+    """A seeded renderer of the gel ``appearance`` (``speckle``, ``realistic``,
+    ``real:<capture>``: drivers/sim/render/appearance.py) at the sensor's working image size
+    and marker pitch, with ``noise_grey`` grey levels of camera noise."""
+    profile = sensor_profile(SENSOR)
+    return GelRenderer(
+        width_px=profile.width_px,
+        height_px=profile.height_px,
+        pitch_px=profile.marker_pitch_px,
+        effects=ImageEffects(noise_grey=noise_grey),
+        rng=np.random.default_rng(seed),
+        appearance=appearance,
+    )
+
+
 def run_sequence(
     sequence: Sequence,
     model: GelModel,
@@ -264,11 +279,13 @@ def run_grip(
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
+    appearance: str = "speckle",
 ) -> GripRuns:
     """Run every sequence of every object at one grip force (one worker's job). ``quick``:
-    only the first positive and the first negative sequence of each object (a smoke test)."""
+    only the first positive and the first negative sequence of each object (a smoke test);
+    ``appearance``: the rendered gel's look (``make_renderer``)."""
     estimator = estimator_for_sensor(SENSOR, method)
-    renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed=seed)
+    renderer = make_renderer(appearance, noise_grey, seed)
     groups = []
     for shape in objects:
         model = gel_model(SENSOR, shape)
@@ -316,10 +333,11 @@ def evaluate(
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
+    appearance: str = "speckle",
 ) -> dict:
     """``report`` over ``run_grip`` for each grip force in turn (grip k seeded seed + k)."""
     runs = [
-        run_grip(grip, seed + k, method, noise_grey, objects, quick)
+        run_grip(grip, seed + k, method, noise_grey, objects, quick, appearance)
         for k, grip in enumerate(grips_n)
     ]
     return report(runs, seed, noise_grey)

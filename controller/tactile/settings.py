@@ -130,10 +130,12 @@ class SlipConfig(Config):
     since the last evaluation, looks at the increment over the contact core: the cells where
     the tangential field is at least ``core_fraction`` of its largest value. Only loading
     increments count: their rigid motion must point within acos(``loading_cosine``) of the
-    tangential field's own. The residual of an affine fit to the increment (RMS over the
-    core, relative to the increment's RMS) minus the grasp's stick baseline is the slip
-    score. The baseline is the smallest residual of the first ``baseline_evaluations``
-    evaluations after zeroing, capped at ``baseline_max``.
+    tangential field's own, and carry a tangential load: their rigid motion (mm, as
+    ``CoreFit`` gives it) at least ``min_rigid_fraction`` of their RMS over the core. The
+    residual of an affine fit to the increment (RMS over the core, relative to the
+    increment's RMS) minus the grasp's stick baseline is the slip score. The baseline is
+    the smallest residual of the first ``baseline_evaluations`` evaluations after zeroing,
+    capped at ``baseline_max``. A core of fewer than six cells is not judged.
 
     * incipient slip: score >= ``incipient_score``;
     * gross slip: score >= ``gross_score`` and then the tangential field (RMS) stops
@@ -149,6 +151,7 @@ class SlipConfig(Config):
     min_increment_mm: float = number(1e-4, 10.0)
     core_fraction: float = number(0.0, 1.0)
     loading_cosine: float = number(-1.0, 1.0)
+    min_rigid_fraction: float = number(0.0, 1.0)
     baseline_evaluations: int = number(1, 100)
     baseline_max: float = number(0.0, 1.0)
     incipient_score: float = number(0.0, 1.0)

@@ -193,6 +193,8 @@ class SlipDetector:
         np.copyto(self._anchor_v, self._tv)
         if _cosine(increment, tangential) < cfg.loading_cosine:
             return
+        if _norm(increment) < cfg.min_rigid_fraction * fit.rms(self._inc_u, self._inc_v):
+            return
         self._evaluations += 1
         if self._evaluations <= cfg.baseline_evaluations:
             self._baseline = min(self._baseline, residual)
@@ -215,6 +217,10 @@ class SlipDetector:
             self._near_gross = False
             return False
         return t_s - self._growth_s >= cfg.gross_confirm_s - _TIME_SLACK_S
+
+
+def _norm(a: tuple[float, float, float]) -> float:
+    return math.sqrt(a[0] ** 2 + a[1] ** 2 + a[2] ** 2)
 
 
 def _cosine(a: tuple[float, float, float], b: tuple[float, float, float]) -> float:
@@ -283,6 +289,12 @@ class CoreFit:
         explained = (sum_u * sum_u + sum_v * sum_v) / total
         explained += self._linear_energy(xu, yu) + self._linear_energy(xv, yv)
         return rigid, math.sqrt(max(energy - explained, 0.0) / energy)
+
+    def rms(self, du: np.ndarray, dv: np.ndarray) -> float:
+        """Weighted RMS of the field (du, dv) over the cells, in its units."""
+        wu = np.multiply(self._w, du, out=self._wu)
+        wv = np.multiply(self._w, dv, out=self._wv)
+        return math.sqrt((float(np.vdot(wu, du)) + float(np.vdot(wv, dv))) / self._total)
 
     def _linear_energy(self, sx: float, sy: float) -> float:
         """s^T C^-1 s for the 2 x 2 position covariance C (pseudo-inverse when the core's
