@@ -135,7 +135,8 @@ class SlipConfig(Config):
     residual of an affine fit to the increment (RMS over the core, relative to the
     increment's RMS) minus the grasp's stick baseline is the slip score. The baseline is
     the smallest residual of the first ``baseline_evaluations`` evaluations after zeroing,
-    capped at ``baseline_max``. A core of fewer than six cells is not judged.
+    capped at ``baseline_max``; those evaluations only learn (score 0). A core of fewer than
+    six cells is not judged.
 
     * incipient slip: score >= ``incipient_score``;
     * gross slip: score >= ``gross_score`` and then the tangential field (RMS) stops

@@ -77,6 +77,9 @@ from controller.tactile.field import VectorField, require_finite
 from controller.tactile.nhhd import NHHDResult
 from controller.tactile.settings import RezeroConfig, SlipConfig
 
+# The affine fit has 6 parameters; with 2n values on n cells, n >= 6 leaves at least as many
+# residual degrees of freedom as parameters (a core of 3 cells or fewer fits exactly).
+MIN_CORE_CELLS = 6
 # Timestamps are compared to durations with this slack, so that 0.04 s frames add up to 0.4 s.
 _TIME_SLACK_S = 1e-9
 
@@ -185,6 +188,8 @@ class SlipDetector:
     def _evaluate(self, largest: float, load: float, t_s: float) -> None:
         cfg = self.config
         np.greater_equal(self._magnitude, cfg.core_fraction * largest, out=self._core)
+        if float(self._core.sum()) < MIN_CORE_CELLS:
+            return  # an affine fit explains it exactly: no residual to judge
         fit = self._fit
         fit.set_weights(self._core)
         increment, residual = fit.motion(self._inc_u, self._inc_v)
@@ -199,6 +204,8 @@ class SlipDetector:
         if self._evaluations <= cfg.baseline_evaluations:
             self._baseline = min(self._baseline, residual)
         self._score = residual - self._baseline
+        if self._evaluations <= cfg.baseline_evaluations:
+            self._score = 0.0  # the first loading increments are stuck by premise: learn only
         self._incipient = self._score >= cfg.incipient_score
         if self._score >= cfg.gross_score:
             if not self._near_gross:
