@@ -135,6 +135,40 @@ def test_tilts_and_sideways_increments_are_not_judged():
     assert not any(s.incipient for s in statuses)
 
 
+def _vortex_quadrupole(cx: float, cy: float, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Four alternately turning Gaussian vortices around (cx, cy), mm: divergence-free, with no
+    net translation or rotation, and not affine."""
+    u, v = np.zeros_like(GRID_X), np.zeros_like(GRID_X)
+    for sx, sy, sign in ((1, 1, 1), (-1, 1, -1), (-1, -1, 1), (1, -1, -1)):
+        dx, dy = GRID_X - cx - sx * spacing, GRID_Y - cy - sy * spacing
+        g = sign * np.exp(-(dx**2 + dy**2) / (2 * 2.0**2))
+        u, v = u - dy * g, v + dx * g
+    return u, v
+
+
+def test_pushing_and_tilting_without_slip_raises_no_flag():
+    """The normal load swings by +-50% (twice) during a tilt there and back. Its radial field
+    goes to the diverging part; what flow and decomposition leak into the divergence-free
+    part grows with the load, nearly along itself (a small translation on a non-affine
+    pattern), so each push passes the loading test with a large residual. It moves no
+    stuck core rigidly, so it is not judged (the detector before this gate flagged every
+    frame of this sequence)."""
+    k = np.arange(60)
+    load = 1.0 + 0.5 * np.sin(2 * np.pi * 2 * k / 60)
+    tilt = np.sin(2 * np.pi * k / 60)
+    press, lean = _vortex_quadrupole(0.0, 0.0, 3.0), _vortex_quadrupole(1.5, -1.0, 2.0)
+    scale = 0.1 / float(np.hypot(*press).max())
+    fields = []
+    for a, b in zip(load, tilt, strict=True):
+        radial = 0.1 * a * np.exp(-(GRID_X**2 + GRID_Y**2) / 50)
+        u = radial * GRID_X + scale * (a * (press[0] + 0.1) + 0.5 * b * lean[0])
+        v = radial * GRID_Y + scale * (a * press[1] + 0.5 * b * lean[1])
+        fields.append((u, v))
+    statuses = feed(SlipDetector(SLIP, X_MM, Y_MM), fields)
+    assert max(s.load_mm for s in statuses) > SLIP.min_field_mm  # loaded: it was judged
+    assert not any(s.incipient or s.gross for s in statuses)
+
+
 def test_gross_slip_needs_a_plateau_and_ends_when_the_load_falls():
     detector = SlipDetector(SLIP, X_MM, Y_MM)
     fields = stick_then_slip()
