@@ -114,6 +114,7 @@ def evaluate(
     return {
         "method": estimator.config_name,
         "seed": seed,
+        "appearances": appearances,
         "rows": rows,
         "frames": frames,
         "suspected_rate": sum(r["slip_suspected"] for r in clean) / frames if frames else 0.0,
