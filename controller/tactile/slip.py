@@ -25,7 +25,16 @@ alternatives below (evaluation/slip_eval.py; docs/EVALUATION.md gives the number
    grows along its own direction, so the increment's rigid motion (translation and
    rotation times the core's radius of gyration) must point within acos(``loading_cosine``)
    of the rigid motion of ``t`` itself. Tilts, grip changes, unloading and a load turning
-   sideways are skipped (the increment still restarts from there).
+   sideways are skipped (the increment still restarts from there). A loading increment
+   must also **move the stuck core rigidly**: its rigid motion at least
+   ``min_rigid_fraction`` of its RMS over the core. A change of the normal load (pushing,
+   pressing) leaks into ``t`` through the flow's errors and the decomposition's harmonic
+   part as a non-affine pattern that grows with the load, nearly along itself, so it passed
+   the direction test with a large residual; its rigid part is 4-25% of its RMS on
+   realistic images, a real tangential increment's 95-98% (evaluation/slip_false_alarms.py).
+   Under slip the affine residual r bounds the rigid fraction by sqrt(1 - r^2), so the gate
+   at 0.5 still judges residuals up to 0.87. Cores of fewer than ``MIN_CORE_CELLS`` cells
+   (an affine fit explains them exactly) are not judged either.
 4. The **residual** is the RMS misfit of an affine motion (least squares: translation,
    rotation, uniform expansion, two stretches) to the increment over the core, relative to
    the increment's RMS. GelSlim fits a rigid motion; the affine terms also absorb the
@@ -37,7 +46,9 @@ alternatives below (evaluation/slip_eval.py; docs/EVALUATION.md gives the number
    and how much depends on the object. The stick **baseline** is therefore learned per
    grasp: the smallest residual of the first ``baseline_evaluations`` evaluations after
    zeroing (the first load increments, stuck by physics), capped at ``baseline_max``. The
-   **score** is residual - baseline.
+   **score** is residual - baseline; those first evaluations only learn (score 0): a
+   residual above the cap before anything was learned used to flag the first increment of
+   a noisy, barely loaded contact.
 6. Incipient slip: score >= ``incipient_score``; the verdict holds until the next judged
    increment or until the contact is unloaded (largest ``|t|`` below ``min_field_mm``).
    Gross slip: score >= ``gross_score`` (the slip front nears the core), and then the
