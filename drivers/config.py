@@ -45,7 +45,13 @@ _SHOWN_CHARS = 80  # longest value repr quoted in a message
 
 
 class ConfigError(ValueError):
-    """A configuration file is unreadable, or a key is unknown, missing or out of range."""
+    """A configuration file is unreadable, or a key is unknown, missing or out of range.
+
+    The message is always one line: line breaks inside it (a key or value quoted from the
+    file) are shown escaped."""
+
+    def __init__(self, message: str) -> None:
+        super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
 def number(low: float, high: float, *, default: Any = dataclasses.MISSING) -> Any:

@@ -16,7 +16,7 @@ from drivers.config import Config, ConfigError, build, load_config, load_yaml, n
 from drivers.gripper.hande import HandEConfig
 from drivers.registry import load_device_config
 from drivers.sim.scenes.jig import JigConfig
-from drivers.tactile.profile import sensor_profile
+from drivers.tactile.profile import SensorProfile, sensor_profile
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -346,3 +346,11 @@ def test_long_values_are_cut_in_messages():
     with pytest.raises(ValueError) as info:
         knobs_in_code(label=["x" * 50] * 20)
     assert len(str(info.value)) < 150 and str(info.value).endswith("...")
+
+
+def test_a_key_with_a_line_break_is_named_on_one_line(tmp_path):
+    path = tmp_path / "odd.yaml"
+    path.write_text('"\\n": 1\n')
+    with pytest.raises(ConfigError) as info:
+        load_config(SensorProfile, path)
+    assert "\n" not in str(info.value) and "unknown key '\\n'" in str(info.value)
