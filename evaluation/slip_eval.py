@@ -40,7 +40,7 @@ from controller.tactile import TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
-from evaluation.rendering import make_renderer
+from evaluation.rendering import Appearance, make_renderer
 from evaluation.sim_setup import gel_model
 
 SENSOR = "gelsight_mini"
@@ -264,11 +264,13 @@ def run_grip(
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
+    appearance: Appearance = None,
 ) -> GripRuns:
-    """Run every sequence of every object at one grip force (one worker's job). ``quick``:
-    only the first positive and the first negative sequence of each object (a smoke test)."""
+    """Run every sequence of every object at one grip force (one worker's job), rendered
+    with ``appearance`` (None: the sensor's nominal, realistic one). ``quick``: only the
+    first positive and the first negative sequence of each object (a smoke test)."""
     estimator = estimator_for_sensor(SENSOR, method)
-    renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed=seed)
+    renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed, appearance)
     groups = []
     for shape in objects:
         model = gel_model(SENSOR, shape)

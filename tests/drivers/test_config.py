@@ -346,3 +346,18 @@ def test_long_values_are_cut_in_messages():
     with pytest.raises(ValueError) as info:
         knobs_in_code(label=["x" * 50] * 20)
     assert len(str(info.value)) < 150 and str(info.value).endswith("...")
+
+
+def test_a_config_holding_a_mapping_survives_pickling():
+    """make evaluate sends calibrations (with a read-only ``axes`` mapping) between
+    processes."""
+    import pickle
+
+    from controller.tactile.calibration import AxisFit, Calibration
+
+    fit = AxisFit(slope=2.0, intercept=0.0, rmse=0.1, r2=0.9, samples=10)
+    calibration = Calibration(sensor="gelsight_mini", estimator="default", axes={"tau_x": fit})
+    again = pickle.loads(pickle.dumps(calibration))
+    assert again == calibration and isinstance(again.axes, type(calibration.axes))
+    with pytest.raises(TypeError):
+        again.axes["tau_y"] = fit  # still read-only
