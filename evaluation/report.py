@@ -57,8 +57,9 @@ def pareto_table(points: list[ParetoPoint]) -> list[str]:
 def sweep_tables(results: dict[str, list[LevelResult]]) -> list[str]:
     methods = list(METHOD_AXES)
     lines = [
-        "Breakdown level per method (first level where R^2 < 0.9 or RMSE/peak doubles over "
-        "nominal; '-' none in the sweep):",
+        "Breakdown level per method (first level, walking away from nominal, where R^2 < 0.9 "
+        "or RMSE/peak doubles over nominal; 'below / above' when the nominal is inside the "
+        "sweep; '-' none in the sweep):",
         "",
         "| condition | nominal | " + " | ".join(methods) + " |",
         "|---|---|" + "---|" * len(methods),

@@ -270,7 +270,7 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         f"- default against the paper's configuration: {speedup:.1f}x faster "
         f"({default.latency_ms:.2f} against {paper.latency_ms:.2f} ms; target >= 15x: "
         f"{'met' if speedup >= 15 else 'missed'}), tilt RMSE {default.rmse_nmm:.3f} against "
-        f"{paper.rmse_nmm:.3f} N*mm over the Mini's three objects (target: no worse: "
+        f"{paper.rmse_nmm:.3f} N*mm over the Mini's four datasets (target: no worse: "
         f"{'met' if default.rmse_nmm <= paper.rmse_nmm else 'missed'})",
         "",
         "## 2. Speed against accuracy",

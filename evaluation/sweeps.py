@@ -16,8 +16,9 @@ Methods: the dipole (tau_x, tau_y), the NHHD in-plane torque (tau_z; also taken 
 rotational potential's extremum, as Zhang et al., with the same calibration constant) and
 the FingerVision baseline (fv_tau_x, fv_tau_y, fv_tau_z). Per level and method: RMSE
 (N*mm), R^2 over the sequence, and the RMSE normalised by the peak true torque on that
-axis (NRMSE). A method breaks down at the first level where R^2 < 0.9 or the NRMSE exceeds
-twice its nominal value. Each level also scores the slip flags per frame against the gel's
+axis (NRMSE). A method breaks down at the first level, walking away from nominal (both ways
+when the nominal is inside the sweep), where R^2 < 0.9 or the NRMSE exceeds twice its
+nominal value. Each level also scores the slip flags per frame against the gel's
 slip state (the definitions of ``evaluation.slip_eval``).
 """
 
@@ -411,19 +412,24 @@ def run_level(
 
 
 def breakdown(condition: Condition, results: list[LevelResult], method: str) -> str:
-    """The first level (in sweep order, away from nominal) where R^2 < 0.9 or the NRMSE
-    doubles over nominal; "-" when none does."""
+    """The first level, walking away from nominal, where R^2 < 0.9 or the NRMSE doubles
+    over nominal; "-" when none does. A nominal inside the sweep is walked both ways:
+    "BELOW / ABOVE" (e.g. "0.2 / -": fails at 0.2, holds up to the largest level)."""
     by_level = {r.level: r for r in results}
-    nominal = by_level[condition.nominal].nrmse[method]
-    for i, level in enumerate(condition.levels):
-        if level == condition.nominal:
-            continue
-        result = by_level[level]
-        if result.r2[method] < 0.9 or result.nrmse[method] > 2.0 * nominal:
-            if by_level[condition.nominal].r2[method] < 0.9:
-                return "fails at nominal"
-            return condition.level_label(i)
-    return "-"
+    nominal = by_level[condition.nominal]
+    if nominal.r2[method] < 0.9:
+        return "fails at nominal"
+    at = condition.levels.index(condition.nominal)
+
+    def first(indices) -> str:
+        for i in indices:
+            result = by_level[condition.levels[i]]
+            if result.r2[method] < 0.9 or result.nrmse[method] > 2.0 * nominal.nrmse[method]:
+                return condition.level_label(i)
+        return "-"
+
+    above = first(range(at + 1, len(condition.levels)))
+    return above if at == 0 else f"{first(range(at - 1, -1, -1))} / {above}"
 
 
 def sweep_chart(results: dict[str, list[LevelResult]], path) -> None:

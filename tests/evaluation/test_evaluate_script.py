@@ -137,3 +137,24 @@ def test_the_realistic_image_conditions_build_renderable_settings():
                 np.zeros((30, 40, 2)), frame_index=0
             )
             assert image.shape == (240, 320, 3) and image.std() > 1.0, condition.level_label(i)
+
+
+def test_breakdown_walks_away_from_nominal_both_ways():
+    from evaluation.sweeps import CONDITIONS, LevelResult, breakdown
+
+    tilt = next(c for c in CONDITIONS if c.name == "tilt motion (field amplitude)")
+    r2 = {0.2: 0.5, 0.4: 0.8, 1.0: 0.99, 2.0: 0.99, 3.0: 0.95}  # fails at 0.4 first, below
+    nrmse = {0.2: 0.1, 0.4: 0.1, 1.0: 0.1, 2.0: 0.1, 3.0: 0.25}  # doubles at 3 px, above
+    results = [
+        LevelResult(tilt.name, v, {"m": 1.0}, {"m": r2[v]}, {"m": nrmse[v]}, 10, {}, 10)
+        for v in tilt.levels
+    ]
+    assert breakdown(tilt, results, "m") == "0.4 / 3"
+    texture = next(c for c in CONDITIONS if c.name == "appearance: texture")
+    results = [
+        LevelResult(
+            texture.name, v, {"m": 1.0}, {"m": 0.99 if v < 2 else 0.1}, {"m": 0.1}, 10, {}, 10
+        )
+        for v in texture.levels
+    ]
+    assert breakdown(texture, results, "m") == texture.labels[2]  # nominal first: one way
