@@ -25,6 +25,7 @@ not files), and an error names the file, the dotted key path and what was expect
 
 from __future__ import annotations
 
+import copyreg
 import dataclasses
 import functools
 import math
@@ -179,6 +180,19 @@ def _check_mapping(hint: Any, value: Any, key: str, bounds: tuple[float, float] 
             raise ValueError(f"key '{key}': expected string keys, got {show(name)}")
         checked[name] = _check(value_type, item, f"{key}.{name}", bounds)
     return types.MappingProxyType(checked)
+
+
+def _read_only(mapping: dict) -> types.MappingProxyType:
+    return types.MappingProxyType(mapping)
+
+
+def _pickle_mapping_proxy(proxy: types.MappingProxyType) -> tuple:
+    return _read_only, (dict(proxy),)
+
+
+# A checked mapping is read-only (MappingProxyType); this lets a configuration holding one
+# cross to a worker process and back (multiprocessing pickles it).
+copyreg.pickle(types.MappingProxyType, _pickle_mapping_proxy)
 
 
 def _check_tuple(hint: Any, value: Any, key: str, bounds: tuple[float, float] | None) -> Any:

@@ -31,15 +31,21 @@ NOMINAL_AMPLITUDES_NM = (0.02, 0.04, 0.06)  # applied by the hand; each gel carr
 
 @dataclass(frozen=True)
 class CalibrationCase:
+    """One calibration run: ``appearance`` is a renderer appearance name
+    (drivers/sim/render/appearance.py), None for the sensor's nominal realistic one."""
+
     sensor: str
     shape: str
     axes: tuple[str, ...] = ("x", "y", "z")
     frames_per_axis: int = 600
     seed: int = 0
+    appearance: str | None = None
 
     @property
     def name(self) -> str:
-        return f"{self.sensor}-{self.shape}"
+        """ "SENSOR-SHAPE", with "-APPEARANCE" appended (':' as '_') when not nominal."""
+        suffix = "" if self.appearance is None else "-" + self.appearance.replace(":", "_")
+        return f"{self.sensor}-{self.shape}{suffix}"
 
 
 @dataclass
@@ -65,7 +71,7 @@ def run_case(case: CalibrationCase, root: Path, estimator: str | None = None) ->
         folder,
         case.sensor,
         gel_model(case.sensor, case.shape),
-        make_renderer(case.sensor, seed=case.seed),
+        make_renderer(case.sensor, seed=case.seed, appearance=case.appearance),
         experiments,
         config,
         seed=case.seed,
@@ -128,7 +134,10 @@ def scatter_chart(result: CaseResult, path: Path) -> None:
             ax.set_xlim(-lim, lim)
             ax.set_ylim(-lim, lim)
             ax.legend(fontsize=7, markerscale=3)
-    fig.suptitle(f"Calibration, {result.case.sensor}, {result.case.shape} (simulated jig)")
+    look = result.case.appearance or "realistic"
+    fig.suptitle(
+        f"Calibration, {result.case.sensor}, {result.case.shape}, {look} images (simulated jig)"
+    )
     fig.tight_layout()
     fig.savefig(path, dpi=90)
     plt.close(fig)

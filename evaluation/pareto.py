@@ -2,8 +2,9 @@
 per-frame latency (one thread) against its tilt-torque RMSE after calibration.
 
 The datasets are the Mini's calibration runs with each object (plate, square peg, round
-peg): the pegs are the closer stand-ins for a USB stick, and a configuration that is best on
-a wide plate need not be best under a narrow peg. Accuracy uses the frames of the tilt
+peg) on realistic images, and the plate on a real capture (evaluation/run.py): the pegs are
+the closer stand-ins for a USB stick, and a configuration that is best on a wide plate need
+not be best under a narrow peg. Accuracy uses the frames of the tilt
 experiments (x and y) and runs in worker processes; latency is timed afterwards on the plate
 dataset, one configuration at a time, so the workers' contention does not distort it."""
 

@@ -22,12 +22,18 @@ def calibration_table(results: list[CaseResult]) -> list[str]:
             method = "NHHD" if axis == "z" else "dipole"
             ratio = ours.rmse / base.rmse if base.rmse > 0 else float("nan")
             lines.append(
-                f"| {result.case.sensor} | {result.case.shape} | tau_{axis} | {method} "
+                f"| {result.case.sensor} | {_object(result)} | tau_{axis} | {method} "
                 f"| {ours.slope:.4g} | {ours.rmse * 1e3:.3f} | {ours.r2:.4f} "
                 f"| {base.slope:.4g} | {base.rmse * 1e3:.3f} | {base.r2:.4f} | {ratio:.2f} "
                 f"| {ours.samples} |"
             )
     return lines
+
+
+def _object(result: CaseResult) -> str:
+    """The object, with the real capture it was rendered on if not the nominal look."""
+    look = result.case.appearance
+    return result.case.shape if look is None else f"{result.case.shape} on {look}"
 
 
 def pareto_table(points: list[ParetoPoint]) -> list[str]:
@@ -51,8 +57,9 @@ def pareto_table(points: list[ParetoPoint]) -> list[str]:
 def sweep_tables(results: dict[str, list[LevelResult]]) -> list[str]:
     methods = list(METHOD_AXES)
     lines = [
-        "Breakdown level per method (first level where R^2 < 0.9 or RMSE/peak doubles over "
-        "nominal; '-' none in the sweep):",
+        "Breakdown level per method (first level, walking away from nominal, where R^2 < 0.9 "
+        "or RMSE/peak doubles over nominal; 'below / above' when the nominal is inside the "
+        "sweep; '-' none in the sweep):",
         "",
         "| condition | nominal | " + " | ".join(methods) + " |",
         "|---|---|" + "---|" * len(methods),

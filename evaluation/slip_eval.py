@@ -40,7 +40,7 @@ from controller.tactile import TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
-from drivers.tactile.profile import sensor_profile
+from evaluation.rendering import Appearance, make_renderer
 from evaluation.sim_setup import gel_model
 
 SENSOR = "gelsight_mini"
@@ -156,21 +156,6 @@ def sequences(shape: str, grip_n: float, cap: Capacity) -> list[Sequence]:
     ]
 
 
-def make_renderer(appearance: str, noise_grey: float, seed: int) -> GelRenderer:
-    """A seeded renderer of the gel ``appearance`` (``speckle``, ``realistic``,
-    ``real:<capture>``: drivers/sim/render/appearance.py) at the sensor's working image size
-    and marker pitch, with ``noise_grey`` grey levels of camera noise."""
-    profile = sensor_profile(SENSOR)
-    return GelRenderer(
-        width_px=profile.width_px,
-        height_px=profile.height_px,
-        pitch_px=profile.marker_pitch_px,
-        effects=ImageEffects(noise_grey=noise_grey),
-        rng=np.random.default_rng(seed),
-        appearance=appearance,
-    )
-
-
 def run_sequence(
     sequence: Sequence,
     model: GelModel,
@@ -279,13 +264,13 @@ def run_grip(
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
-    appearance: str = "speckle",
+    appearance: Appearance = None,
 ) -> GripRuns:
-    """Run every sequence of every object at one grip force (one worker's job). ``quick``:
-    only the first positive and the first negative sequence of each object (a smoke test);
-    ``appearance``: the rendered gel's look (``make_renderer``)."""
+    """Run every sequence of every object at one grip force (one worker's job), rendered
+    with ``appearance`` (None: the sensor's nominal, realistic one). ``quick``: only the
+    first positive and the first negative sequence of each object (a smoke test)."""
     estimator = estimator_for_sensor(SENSOR, method)
-    renderer = make_renderer(appearance, noise_grey, seed)
+    renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed, appearance)
     groups = []
     for shape in objects:
         model = gel_model(SENSOR, shape)
@@ -333,7 +318,7 @@ def evaluate(
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
-    appearance: str = "speckle",
+    appearance: Appearance = None,
 ) -> dict:
     """``report`` over ``run_grip`` for each grip force in turn (grip k seeded seed + k)."""
     runs = [

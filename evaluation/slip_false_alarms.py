@@ -27,8 +27,10 @@ import numpy as np
 
 from controller.tactile import estimator_for_sensor
 from drivers.sim.gel.model import GelModel, Wrench
+from drivers.sim.render.image_effects import ImageEffects
+from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_model
-from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, SENSOR, capacity, make_renderer
+from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, SENSOR, capacity
 
 APPEARANCES = ("realistic", "real:gelsight_markers_a", "real:gelsight_markers_b")
 OBJECTS = ("plate", "square_peg")
@@ -101,7 +103,7 @@ def evaluate(
     rows = []
     for k, appearance in enumerate(appearances):
         estimator = estimator_for_sensor(SENSOR, method)
-        renderer = make_renderer(appearance, NOISE_GREY, seed + k)
+        renderer = make_renderer(SENSOR, ImageEffects(noise_grey=NOISE_GREY), seed + k, appearance)
         for shape in objects:
             model = gel_model(SENSOR, shape)
             for sequence in sequences(model):

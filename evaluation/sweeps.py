@@ -7,18 +7,25 @@ applied, the live gel carrying half), with the condition applied. The estimates 
 calibrated with the constants fitted on the nominal dataset of the same sensor and object
 (``calibration_runs``), and compared with the torques the gel really carried.
 
+Images: each sensor's nominal appearance (evaluation.rendering: the procedural gel fitted to
+its real captures) unless a condition changes it; the ``appearance`` conditions run the old
+speckled renderer, each real capture warped by the gel model's field, and shifted lighting
+colours, all calibrated with the nominal (realistic) constants.
+
 Methods: the dipole (tau_x, tau_y), the NHHD in-plane torque (tau_z; also taken about the
 rotational potential's extremum, as Zhang et al., with the same calibration constant) and
 the FingerVision baseline (fv_tau_x, fv_tau_y, fv_tau_z). Per level and method: RMSE
 (N*mm), R^2 over the sequence, and the RMSE normalised by the peak true torque on that
-axis (NRMSE). A method breaks down at the first level where R^2 < 0.9 or the NRMSE exceeds
-twice its nominal value. Each level also scores the slip flags per frame against the gel's
+axis (NRMSE). A method breaks down at the first level, walking away from nominal (both ways
+when the nominal is inside the sweep), where R^2 < 0.9 or the NRMSE exceeds twice its
+nominal value. Each level also scores the slip flags per frame against the gel's
 slip state (the definitions of ``evaluation.slip_eval``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -28,10 +35,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controller.tactile import Calibration, TactileEstimator, estimator_for_sensor
+from drivers.sim.gel.model import Wrench
 from drivers.sim.render.image_effects import ImageEffects
+from drivers.sim.render.real_texture import real_gel_names
+from drivers.sim.render.realistic import REALISTIC
 from drivers.sim.scenes.jig import Experiment, JigConfig, JigGel, jig_program, tactile_times
 from evaluation.offline.dataset_fit import estimate_frames
-from evaluation.rendering import NOMINAL_EFFECTS, make_renderer
+from evaluation.rendering import NOMINAL_EFFECTS, Appearance, make_renderer
 from evaluation.sim_setup import gel_model, jig_config
 from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, confusion
 
@@ -66,6 +76,8 @@ class Setting:
     drift: float = 0.0  # lighting drift level reached at the end of the sequence
     ramp_s: float = 0.6
     exposure_fraction: float = 0.0  # motion blur: exposure as a share of the frame period
+    grip_swing: float = 0.0  # pushing: grip *= 1 + grip_swing * sin(2 pi f t) once started
+    appearance: Appearance = None  # None: the sensor's nominal (evaluation.rendering)
 
 
 @dataclass(frozen=True)
@@ -86,6 +98,71 @@ def _fraction_of_friction(fraction: float) -> Setting:
     jig = jig_config()
     capacity = 1.0 * jig.grip_force_n  # friction 1.0 in both gel profiles
     return Setting(shear_n=fraction * capacity / abs(jig.gel_load_factor))
+
+
+PUSH_FREQUENCY_HZ = 0.4
+"""How fast the grip swings in the pushing condition (about one swing per two pulses)."""
+TILT_PX_SENSOR, TILT_PX_SHAPE = "gelsight_mini", "plate"
+TILT_PX_LEVELS = (0.2, 0.4, 1.0, 2.0, 3.0)
+
+
+def peak_tilt_px(applied_nm: float, sensor: str = TILT_PX_SENSOR, shape: str = TILT_PX_SHAPE):
+    """The tilt motion a pulse of ``applied_nm`` (N*m, applied by the hand) makes: the
+    largest displacement (px, 320x240 image) anywhere on the gel model's field grid between
+    the grasped rest state (jig grip, no torque) and the peak of the pulse, the live gel
+    carrying ``gel_load_factor`` of it; the larger over a pulse about x and one about y."""
+    jig = jig_config()
+    model = gel_model(sensor, shape)
+    rest = model.solve(jig.grip_force_n, Wrench()).field_px
+    carried = abs(jig.gel_load_factor) * applied_nm
+    peaks = []
+    for axis in ("tau_x", "tau_y"):
+        moved = model.solve(jig.grip_force_n, Wrench(**{axis: carried})).field_px - rest
+        peaks.append(float(np.hypot(moved[..., 0], moved[..., 1]).max()))
+    return max(peaks)
+
+
+@functools.cache
+def tilt_amplitude_nm(peak_px: float) -> float:
+    """The applied pulse amplitude (N*m) whose ``peak_tilt_px`` is ``peak_px`` (bisection;
+    the relation bends above about 2 px as the face starts to lift off)."""
+    low, high = 0.0, 0.4
+    for _ in range(30):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if peak_tilt_px(middle) < peak_px else (low, middle)
+    return 0.5 * (low + high)
+
+
+TEXTURES = ("speckle", *(f"real:{name}" for name in real_gel_names()))
+TEXTURE_LABELS = (
+    "realistic (fitted, nominal)",
+    "speckle (old renderer)",
+    *(f"real: {name}" for name in real_gel_names()),
+)
+LIGHTINGS = (
+    ("fitted (nominal)", REALISTIC),
+    (
+        "warm (red up, blue down)",
+        dataclasses.replace(REALISTIC, light_mean_bgr=(150.0, 170.0, 235.0)),
+    ),
+    (
+        "cool (blue up, red down)",
+        dataclasses.replace(REALISTIC, light_mean_bgr=(240.0, 180.0, 130.0)),
+    ),
+    ("green", dataclasses.replace(REALISTIC, light_mean_bgr=(150.0, 225.0, 150.0))),
+    (
+        "dim, 2x spread",
+        dataclasses.replace(
+            REALISTIC,
+            light_mean_bgr=tuple(0.6 * v for v in REALISTIC.light_mean_bgr),
+            light_spread_bgr=tuple(2.0 * v for v in REALISTIC.light_spread_bgr),
+        ),
+    ),
+)
+
+
+def _texture(v: float) -> Setting:
+    return Setting(appearance=None if v == 0 else TEXTURES[int(v) - 1])
 
 
 CONDITIONS = (
@@ -186,6 +263,36 @@ CONDITIONS = (
         lambda v: Setting(shape=("plate", "square_peg", "round_peg")[int(v)]),
         labels=("plate", "square peg", "round peg"),
     ),
+    Condition(
+        "tilt motion (field amplitude)",
+        "peak px at 320x240",
+        TILT_PX_LEVELS,
+        1.0,
+        lambda v: Setting(amplitude_nm=tilt_amplitude_nm(v)),
+    ),
+    Condition(
+        "pushing (grip swing during tilt)",
+        "+-% of grip",
+        (0, 10, 25, 50),
+        0,
+        lambda v: Setting(grip_swing=v / 100),
+    ),
+    Condition(
+        "appearance: texture",
+        "",
+        tuple(range(len(TEXTURE_LABELS))),
+        0,
+        _texture,
+        labels=TEXTURE_LABELS,
+    ),
+    Condition(
+        "appearance: lighting colour",
+        "",
+        tuple(range(len(LIGHTINGS))),
+        0,
+        lambda v: Setting(appearance=LIGHTINGS[int(v)][1]),
+        labels=tuple(label for label, _ in LIGHTINGS),
+    ),
 )
 
 
@@ -213,6 +320,8 @@ def _program(setting: Setting, jig: JigConfig, rng: np.random.Generator):
     ramp = 0.5 - 0.5 * np.cos(math.pi * ramp)
     wrench[:, 0] += setting.shear_n * ramp
     wrench[:, 5] += setting.twist_nm * ramp
+    swing = np.sin(2 * math.pi * PUSH_FREQUENCY_HZ * np.maximum(program.t_s - start, 0.0))
+    program.grip_n[:] *= 1.0 + setting.grip_swing * ramp * swing
     return program
 
 
@@ -248,7 +357,7 @@ def run_level(
     program = _program(setting, jig, rng)
     times = tactile_times(program, jig, rng)
     gel = JigGel(gel_model(setting.sensor, setting.shape), program, jig)
-    renderer = make_renderer(setting.sensor, setting.effects, seed=seed)
+    renderer = make_renderer(setting.sensor, setting.effects, seed, setting.appearance)
     period = 1.0 / jig.tactile_rate_hz
     truth = np.empty((times.size, 6))
     slipping = np.empty(times.size)  # the gel's slip fraction
@@ -303,19 +412,24 @@ def run_level(
 
 
 def breakdown(condition: Condition, results: list[LevelResult], method: str) -> str:
-    """The first level (in sweep order, away from nominal) where R^2 < 0.9 or the NRMSE
-    doubles over nominal; "-" when none does."""
+    """The first level, walking away from nominal, where R^2 < 0.9 or the NRMSE doubles
+    over nominal; "-" when none does. A nominal inside the sweep is walked both ways:
+    "BELOW / ABOVE" (e.g. "0.2 / -": fails at 0.2, holds up to the largest level)."""
     by_level = {r.level: r for r in results}
-    nominal = by_level[condition.nominal].nrmse[method]
-    for i, level in enumerate(condition.levels):
-        if level == condition.nominal:
-            continue
-        result = by_level[level]
-        if result.r2[method] < 0.9 or result.nrmse[method] > 2.0 * nominal:
-            if by_level[condition.nominal].r2[method] < 0.9:
-                return "fails at nominal"
-            return condition.level_label(i)
-    return "-"
+    nominal = by_level[condition.nominal]
+    if nominal.r2[method] < 0.9:
+        return "fails at nominal"
+    at = condition.levels.index(condition.nominal)
+
+    def first(indices) -> str:
+        for i in indices:
+            result = by_level[condition.levels[i]]
+            if result.r2[method] < 0.9 or result.nrmse[method] > 2.0 * nominal.nrmse[method]:
+                return condition.level_label(i)
+        return "-"
+
+    above = first(range(at + 1, len(condition.levels)))
+    return above if at == 0 else f"{first(range(at - 1, -1, -1))} / {above}"
 
 
 def sweep_chart(results: dict[str, list[LevelResult]], path) -> None:

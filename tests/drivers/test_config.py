@@ -354,3 +354,18 @@ def test_a_key_with_a_line_break_is_named_on_one_line(tmp_path):
     with pytest.raises(ConfigError) as info:
         load_config(SensorProfile, path)
     assert "\n" not in str(info.value) and "unknown key '\\n'" in str(info.value)
+
+
+def test_a_config_holding_a_mapping_survives_pickling():
+    """make evaluate sends calibrations (with a read-only ``axes`` mapping) between
+    processes."""
+    import pickle
+
+    from controller.tactile.calibration import AxisFit, Calibration
+
+    fit = AxisFit(slope=2.0, intercept=0.0, rmse=0.1, r2=0.9, samples=10)
+    calibration = Calibration(sensor="gelsight_mini", estimator="default", axes={"tau_x": fit})
+    again = pickle.loads(pickle.dumps(calibration))
+    assert again == calibration and isinstance(again.axes, type(calibration.axes))
+    with pytest.raises(TypeError):
+        again.axes["tau_y"] = fit  # still read-only

@@ -105,3 +105,56 @@ def test_an_interrupted_evaluation_keeps_the_previous_report(tmp_path, capsys, m
     assert (docs / "EVALUATION.md").read_text() == "previous report"
     assert (docs / "figures" / "pareto.png").read_bytes() == b"previous chart"
     assert sorted(p.name for p in docs.iterdir()) == ["EVALUATION.md", "figures"]
+
+
+def test_the_realistic_image_conditions_build_renderable_settings():
+    """The tilt-motion, pushing and appearance sweeps: each level a distinct, valid setting
+    whose appearance the renderer draws; speckle is one labelled level."""
+    import numpy as np
+
+    from evaluation.rendering import make_renderer
+    from evaluation.sim_setup import jig_config
+    from evaluation.sweeps import CONDITIONS, _program, peak_tilt_px
+
+    by_name = {c.name: c for c in CONDITIONS}
+    tilt = by_name["tilt motion (field amplitude)"]
+    for px in tilt.levels:
+        assert peak_tilt_px(tilt.setting(px).amplitude_nm) == pytest.approx(px, rel=1e-3)
+    assert min(tilt.levels) == 0.2 and max(tilt.levels) == 3.0
+    push = by_name["pushing (grip swing during tilt)"]
+    assert max(push.levels) == 50
+    program = _program(push.setting(50), jig_config(), np.random.default_rng(0))
+    held = program.grip_n[program.t_s >= program.segments[0].t_start_s + 1.0]
+    grip = jig_config().grip_force_n
+    assert held.max() > 1.4 * grip and held.min() < 0.6 * grip
+    texture = by_name["appearance: texture"]
+    assert "speckle (old renderer)" in texture.labels
+    assert sum(label.startswith("real: ") for label in texture.labels) == 5
+    for condition in (by_name["appearance: lighting colour"], texture):
+        for i, level in enumerate(condition.levels):
+            setting = condition.setting(level)
+            image = make_renderer(setting.sensor, setting.effects, 0, setting.appearance).render(
+                np.zeros((30, 40, 2)), frame_index=0
+            )
+            assert image.shape == (240, 320, 3) and image.std() > 1.0, condition.level_label(i)
+
+
+def test_breakdown_walks_away_from_nominal_both_ways():
+    from evaluation.sweeps import CONDITIONS, LevelResult, breakdown
+
+    tilt = next(c for c in CONDITIONS if c.name == "tilt motion (field amplitude)")
+    r2 = {0.2: 0.5, 0.4: 0.8, 1.0: 0.99, 2.0: 0.99, 3.0: 0.95}  # fails at 0.4 first, below
+    nrmse = {0.2: 0.1, 0.4: 0.1, 1.0: 0.1, 2.0: 0.1, 3.0: 0.25}  # doubles at 3 px, above
+    results = [
+        LevelResult(tilt.name, v, {"m": 1.0}, {"m": r2[v]}, {"m": nrmse[v]}, 10, {}, 10)
+        for v in tilt.levels
+    ]
+    assert breakdown(tilt, results, "m") == "0.4 / 3"
+    texture = next(c for c in CONDITIONS if c.name == "appearance: texture")
+    results = [
+        LevelResult(
+            texture.name, v, {"m": 1.0}, {"m": 0.99 if v < 2 else 0.1}, {"m": 0.1}, 10, {}, 10
+        )
+        for v in texture.levels
+    ]
+    assert breakdown(texture, results, "m") == texture.labels[2]  # nominal first: one way
