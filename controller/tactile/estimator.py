@@ -95,7 +95,10 @@ class TactileEstimator:
         self._zeroing_left = 0
 
     def _install_reference(self, mean_image: np.ndarray) -> None:
-        reference = np.clip(mean_image + 0.5, 0, 255).astype(np.uint8)
+        # Round half to even: the mean of 2 integer frames ends in .5 half the time, and
+        # rounding those up would brighten the reference by 0.25 grey levels, which dense
+        # flow on a smooth gel reads as motion.
+        reference = np.clip(np.rint(mean_image), 0, 255).astype(np.uint8)
         height, width = reference.shape[:2]
         rows, cols = field_grid(self.config, height, width)
         self._allocate(height, width, rows, cols)

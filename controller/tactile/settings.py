@@ -17,7 +17,7 @@ from drivers.config import (
     resolve_config_path,
 )
 
-FlowMethod = Literal["dis", "farneback", "markers"]
+FlowMethod = Literal["dis", "farneback", "markers", "grid_lk"]
 
 
 @dataclass(frozen=True)
@@ -94,6 +94,20 @@ class MarkerParams:
 
 
 @dataclass(frozen=True)
+class GridLKParams:
+    """Regularised Lucas-Kanade on the grid (controller/tactile/grid_lk.py): one displacement
+    per grid cell fitted to every pixel, with a membrane prior of relative weight
+    ``smoothness``; images blurred by ``blur_sigma_px`` (px of the working image, 0: none);
+    ``iterations`` Gauss-Newton steps; ``normalize_brightness``: a free brightness offset per
+    cell and channel."""
+
+    smoothness: float = number(0.0, 1000.0)
+    blur_sigma_px: float = number(0.0, 10.0)
+    iterations: int = number(1, 20)
+    normalize_brightness: bool
+
+
+@dataclass(frozen=True)
 class FlowConfig:
     """How the displacement field is measured from images.
 
@@ -110,6 +124,7 @@ class FlowConfig:
     dis: DisParams
     farneback: FarnebackParams
     markers: MarkerParams
+    grid_lk: GridLKParams
 
 
 @dataclass(frozen=True)

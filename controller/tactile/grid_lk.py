@@ -1,0 +1,200 @@
+"""Regularised Lucas-Kanade on the grid: one displacement per grid cell, fitted to every pixel.
+
+The gel's displacement is smooth and the estimator needs it only on its grid, so instead of
+a dense flow that is then pooled, this fits the grid field to the images directly: a
+parametric Lucas-Kanade (Baker & Matthews, "Lucas-Kanade 20 years on", IJCV 2004) whose
+motion model is one displacement ``u_k`` (px) per grid cell, with the membrane prior of Horn
+& Schunck (1981) between neighbouring cells:
+
+    minimise  sum_k sum_{x in cell k} sum_channels (I_cur(x + u_k) - I_ref(x))^2
+              + lambda * sum_{neighbouring cells k, l} |u_k - u_l|^2.
+
+Gauss-Newton, linearised with the reference's gradient ``g`` (inverse compositional: the
+normal matrix depends on the reference only, so it is factorised once per reference). Each
+step solves ``(G + lambda L) du = -b - lambda L u``: G is block diagonal with the cell means
+of ``g g^T`` (summed over channels), b holds the cell means of ``g r``, r being the current
+image warped back by the estimate minus the reference, and L is the Laplacian of the grid
+graph. ``lambda = smoothness * mean(trace of G's blocks) / 2``: the prior's weight follows
+the image's contrast, so one ``smoothness`` suits gels of any contrast. Every pixel of every
+channel contributes in proportion to its gradient, so LED shading, fine texture and markers
+all count, and a textureless cell is filled in from its neighbours instead of returning
+noise. Working on each colour channel matters on a real gel: its shading gradients differ per
+channel and partly cancel in the luminance.
+
+``normalize_brightness``: each cell also gets a free brightness offset per channel,
+eliminated in closed form (the gradient and the residual are centred on their cell means),
+so a drifting LED does not read as motion; it costs the information in each cell's mean
+gradient. Images are blurred by ``blur_sigma_px`` first (less noise, a wider linear range).
+
+Per frame: one conversion to float, the blur, and per step a warp (from the second step, or
+from the first with ``warm_start``), two products and two area means, and a sparse solve.
+Displacements are in px of the working image, like every ``GridFlow``'s.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+from scipy import sparse
+from scipy.sparse.linalg import factorized
+
+from controller.tactile.settings import FlowConfig
+
+# Ridge added to the normal matrix, relative to its mean data weight: keeps it invertible on
+# a featureless image (whose field is then zero).
+_RIDGE = 1e-6
+
+
+def grid_laplacian(rows: int, cols: int) -> sparse.csr_matrix:
+    """Graph Laplacian (rows*cols square, cells in row-major order) of the 4-neighbour grid:
+    u^T L u is the sum of squared differences between neighbouring cells."""
+    index = np.arange(rows * cols).reshape(rows, cols)
+    first = np.concatenate([index[:, :-1].ravel(), index[:-1, :].ravel()])
+    second = np.concatenate([index[:, 1:].ravel(), index[1:, :].ravel()])
+    n = rows * cols
+    adjacency = sparse.coo_matrix((np.ones(first.size), (first, second)), shape=(n, n))
+    adjacency = (adjacency + adjacency.T).tocsr()
+    degree = np.asarray(adjacency.sum(axis=1)).ravel()
+    return (sparse.diags(degree) - adjacency).tocsr()
+
+
+class GridLKFlow:
+    """The grid field by regularised Lucas-Kanade (module docstring); a ``GridFlow``."""
+
+    def __init__(self, config: FlowConfig, shape_hw: tuple[int, int], rows: int, cols: int) -> None:
+        if config.method != "grid_lk":
+            raise ValueError(f"GridLKFlow needs method 'grid_lk', got {config.method!r}")
+        self.config = config
+        self.params = config.grid_lk
+        self.rows, self.cols = rows, cols
+        height, width = shape_hw
+        h = max(1, round(height * config.scale))
+        w = max(1, round(width * config.scale))
+        self.flow_shape = (h, w)
+        self._gray = config.color == "gray"
+        plane = (h, w) if self._gray else (h, w, 3)
+        self._small = np.empty(plane, np.uint8)
+        self._grey_full = np.empty(shape_hw, np.uint8)
+        self._reference = np.empty(plane, np.float32)
+        self._current = np.empty(plane, np.float32)
+        self._warped = np.empty(plane, np.float32)
+        self._residual = np.empty(plane, np.float32)
+        self._product = np.empty(plane, np.float32)
+        grid_y, grid_x = np.mgrid[0:h, 0:w].astype(np.float32)
+        self._grid = (grid_x, grid_y)
+        self._map = (np.empty((h, w), np.float32), np.empty((h, w), np.float32))
+        self._dense = np.empty((h, w, 2), np.float32)
+        self._prior = sparse.kron(grid_laplacian(rows, cols), sparse.identity(2), format="csr")
+        n = rows * cols
+        self._theta = np.zeros((n, 2))
+        self._rhs = np.empty((n, 2))
+        self._has_previous = False
+
+    # -- images ------------------------------------------------------------------------------
+
+    def _prepare(self, image: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """``image`` (BGR uint8, working resolution) as float32 grey or BGR at the flow
+        resolution, blurred, into ``out``."""
+        source = image
+        if self._gray:
+            cv2.cvtColor(image, cv2.COLOR_BGR2GRAY, dst=self._grey_full)
+            source = self._grey_full
+        if source.shape[:2] != self.flow_shape:
+            size = (self.flow_shape[1], self.flow_shape[0])
+            cv2.resize(source, size, dst=self._small, interpolation=cv2.INTER_AREA)
+            source = self._small
+        np.copyto(out, source, casting="unsafe")
+        sigma = self.params.blur_sigma_px * self.config.scale
+        if sigma > 0:
+            cv2.GaussianBlur(out, (0, 0), sigma, dst=out)
+        return out
+
+    def _cell_means(self, plane: np.ndarray) -> np.ndarray:
+        """Area mean of ``plane`` over each grid cell: (rows, cols[, channels]) float64."""
+        pooled = cv2.resize(plane, (self.cols, self.rows), interpolation=cv2.INTER_AREA)
+        return pooled.astype(np.float64)
+
+    def _moment(self, a: np.ndarray, b: np.ndarray, a_cell, b_cell) -> np.ndarray:
+        """Cell means of a*b summed over channels, (rows*cols,); with cell means of a and b
+        given (brightness normalisation), of (a - mean a)(b - mean b)."""
+        np.multiply(a, b, out=self._product)
+        value = self._cell_means(self._product)
+        if a_cell is not None:
+            value -= a_cell * b_cell
+        return value.reshape(self.rows * self.cols, -1).sum(axis=1)
+
+    # -- GridFlow ----------------------------------------------------------------------------
+
+    def set_reference(self, image: np.ndarray) -> None:
+        reference = self._prepare(image, self._reference)
+        self._gradients = (
+            cv2.Sobel(reference, cv2.CV_32F, 1, 0, ksize=3, scale=0.125),
+            cv2.Sobel(reference, cv2.CV_32F, 0, 1, ksize=3, scale=0.125),
+        )
+        if self.params.normalize_brightness:
+            self._gradient_cells = tuple(self._cell_means(g) for g in self._gradients)
+        else:
+            self._gradient_cells = (None, None)
+        n = self.rows * self.cols
+        blocks = np.empty((n, 2, 2))
+        for i in range(2):
+            for j in range(i, 2):
+                blocks[:, i, j] = blocks[:, j, i] = self._moment(
+                    self._gradients[i],
+                    self._gradients[j],
+                    self._gradient_cells[i],
+                    self._gradient_cells[j],
+                )
+        weight = max(float(np.trace(blocks, axis1=1, axis2=2).mean()) / 2.0, 1e-12)
+        self._lambda = self.params.smoothness * weight
+        matrix = (
+            sparse.block_diag(list(blocks), format="csr")
+            + self._lambda * self._prior
+            + _RIDGE * weight * sparse.identity(2 * n, format="csr")
+        )
+        self._solve = factorized(matrix.tocsc())
+        self._has_previous = False
+
+    def _warp_back(self, current: np.ndarray) -> np.ndarray:
+        """``current`` sampled at x + u(x), u the estimate interpolated bilinearly between
+        cell centres, into the warped buffer."""
+        field = self._theta.reshape(self.rows, self.cols, 2).astype(np.float32)
+        size = (self.flow_shape[1], self.flow_shape[0])
+        cv2.resize(field, size, dst=self._dense, interpolation=cv2.INTER_LINEAR)
+        for axis in range(2):
+            np.add(self._grid[axis], self._dense[..., axis], out=self._map[axis])
+        cv2.remap(
+            current,
+            *self._map,
+            cv2.INTER_LINEAR,
+            dst=self._warped,
+            borderMode=cv2.BORDER_REPLICATE,
+        )
+        return self._warped
+
+    def measure(self, image: np.ndarray, out: np.ndarray) -> np.ndarray:
+        current = self._prepare(image, self._current)
+        warm = self.config.warm_start and self._has_previous
+        if not warm:
+            self._theta.fill(0.0)
+        n = self.rows * self.cols
+        for step in range(self.params.iterations):
+            moved = warm or step > 0
+            source = self._warp_back(current) if moved else current
+            np.subtract(source, self._reference, out=self._residual)
+            residual_cell = (
+                self._cell_means(self._residual) if self.params.normalize_brightness else None
+            )
+            for axis in range(2):
+                self._rhs[:, axis] = -self._moment(
+                    self._gradients[axis],
+                    self._residual,
+                    self._gradient_cells[axis],
+                    residual_cell,
+                )
+            if moved:
+                self._rhs -= self._lambda * (self._prior @ self._theta.ravel()).reshape(n, 2)
+            self._theta += self._solve(self._rhs.ravel()).reshape(n, 2)
+        self._has_previous = True
+        out.reshape(-1, 2)[:] = self._theta / self.config.scale
+        return out
