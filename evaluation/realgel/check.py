@@ -63,9 +63,11 @@ def sequence_specs(
     frames: int,
     seed: int,
     lighting: float = 0.0,
+    shading: str = "moves",
 ) -> list[SequenceSpec]:
     """Tilt about x and about y, alone and with pushing, at each amplitude, on each texture,
-    under a lighting drift of ``lighting`` (sequences.SequenceSpec).
+    under a lighting drift of ``lighting``, with the LED ``shading`` moving with the gel or
+    fixed (sequences.SequenceSpec).
 
     The mechanics (contact, signals, push amplitude in [0.3, 0.5]) and the noise sigma (in
     [2, 4] grey levels) of a (amplitude, axis, push) combination are the same on every
@@ -90,6 +92,7 @@ def sequence_specs(
                         combo_seed,
                         frames,
                         lighting,
+                        shading,
                     )
                     for texture in textures
                 )

@@ -2,18 +2,20 @@
 
     python scripts/realgel_check.py [--estimators default,paper,dis_ultrafast,markers]
         [--textures all|NAME,...] [--amplitudes 0.4] [--frames 160] [--seed 0]
-        [--lighting 0] [--oracle] [--quick] [--out REPORT.md] [--json ROWS.json]
+        [--lighting 0] [--shading moves|fixed] [--oracle] [--quick] [--out REPORT.md]
+        [--json ROWS.json]
 
 Each real capture of evaluation/data/real_gels/ is warped by the in-plane surface
 displacement of a half-space (Boussinesq) under a tilted flat contact (evaluation/realgel/:
 elastic.py, sequences.py); neither the project's gel model nor its renderer is involved.
 Per texture and amplitude: tilt about x and about y, alone and while the grip pressure
-swings by 30-50% (pushing), camera noise 2-4 grey levels, seeded. Each estimator's tilt
-torque is calibrated by a linear fit on the first half of a sequence and scored on the
-second half (R², RMSE relative to the range); also ms per frame (one thread), the fractions
-of frames flagged degenerate, with exactly zero tilt, and flagged as slipping (all
-sequences are slip-free). ``--oracle`` adds each estimator's pipeline run on the true field
-(its flow replaced), which separates the flow's error from the dipole's.
+swings by 30-50% (pushing), camera noise 2-4 grey levels, seeded; optionally a drifting
+LED (``--lighting``) and LED shading that stays with the camera (``--shading fixed``).
+Each estimator's tilt torque is calibrated by a linear fit on the first half of a sequence
+and scored on the second half (R², RMSE relative to the range); also ms per frame (one
+thread), the fractions of frames flagged degenerate, with exactly zero tilt, and flagged as
+slipping (all sequences are slip-free). ``--oracle`` adds each estimator's pipeline run
+on the true field (its flow replaced), which separates the flow's error from the dipole's.
 """
 
 from __future__ import annotations
@@ -67,6 +69,12 @@ def main(argv: list[str] | None = None) -> int:
         help="LED drift amplitude, relative (0: steady light)",
     )
     parser.add_argument(
+        "--shading",
+        choices=("moves", "fixed"),
+        default="moves",
+        help="the capture's LED shading moves with the gel, or stays with the camera",
+    )
+    parser.add_argument(
         "--oracle", action="store_true", help="also run each estimator's pipeline on the true field"
     )
     parser.add_argument(
@@ -104,7 +112,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.oracle:
             entries.append(Entry(f"{label} on the true field", config, oracle=True))
 
-    specs = sequence_specs(textures, amplitudes, frames, args.seed, args.lighting)
+    specs = sequence_specs(textures, amplitudes, frames, args.seed, args.lighting, args.shading)
     began = time.perf_counter()
     rows = run_check(specs, entries)
     seconds = time.perf_counter() - began

@@ -10,6 +10,11 @@ the grip pressure itself swing by +-``push`` (relative), so that at the extremes
 Every frame is the texture warped by the surface displacement of its pressure (backward
 map: the inverse of the forward field, by fixed-point iteration, then ``cv2.remap`` with
 bicubic interpolation and reflected borders), plus Gaussian camera noise, rounded to uint8.
+With ``shading`` "moves" the whole capture is warped, LED shading included (the simple
+choice); with "fixed" only its albedo is (markers and fine texture), under the capture's
+illumination, which stays with the camera as a real sensor's LEDs do
+(textures.split_illumination): harder, because a smooth gel's shading then carries no
+motion and a marker moving through a shading gradient changes brightness.
 The reference frame is the grasp without tilt (the estimator zeroes on it). Displacements
 are scaled so that the tilt's own part of the field peaks at ``tilt_px`` pixels at full
 tilt. The truth of each frame is the applied tilt torque (``elastic.PressureBasis``).
@@ -28,7 +33,7 @@ import cv2
 import numpy as np
 
 from evaluation.realgel.elastic import ContactPatch, PressureBasis
-from evaluation.realgel.textures import SIZE_HW, TEXTURES, load_texture
+from evaluation.realgel.textures import SIZE_HW, TEXTURES, load_texture, split_illumination
 
 TILT_RATIO = 0.5
 INVERSE_ITERATIONS = 4
@@ -41,7 +46,9 @@ class SequenceSpec:
     ``axis``: the tilt axis, x or y (frame S). ``push``: relative swing of the grip pressure
     (0: none). ``tilt_px``: peak of the tilt's displacement at full tilt, px at 320 x 240.
     ``noise_grey``: camera noise sigma, grey levels. ``frames``: frames after the reference.
-    ``lighting``: amplitude of a lighting drift (``lighting_gain``), relative; 0: steady.
+    ``lighting``: amplitude of a lighting drift (``lighting_drift``), relative; 0: steady.
+    ``shading``: whether the capture's LED shading moves with the gel or stays (module
+    docstring).
     """
 
     texture: str
@@ -52,6 +59,7 @@ class SequenceSpec:
     seed: int
     frames: int = 160
     lighting: float = 0.0
+    shading: Literal["moves", "fixed"] = "moves"
 
     def __post_init__(self) -> None:
         if self.texture not in TEXTURES:
@@ -62,6 +70,8 @@ class SequenceSpec:
             raise ValueError(f"tilt axis must be 'x' or 'y', got {self.axis!r}")
         if not 0.0 <= self.push <= 1.0 - TILT_RATIO:
             raise ValueError(f"push must be in [0, {1.0 - TILT_RATIO}], got {self.push}")
+        if self.shading not in ("moves", "fixed"):
+            raise ValueError(f"shading must be 'moves' or 'fixed', got {self.shading!r}")
         if not 0.0 <= self.lighting < 1.0:
             raise ValueError(f"lighting drift must be in [0, 1), got {self.lighting}")
         if self.frames < 4:
@@ -71,7 +81,8 @@ class SequenceSpec:
     def label(self) -> str:
         push = f", push ±{self.push:.0%}" if self.push else ""
         lighting = f", light ±{self.lighting:.0%}" if self.lighting else ""
-        return f"tilt {self.axis}{push}{lighting}"
+        shading = ", fixed shading" if self.shading == "fixed" else ""
+        return f"tilt {self.axis}{push}{lighting}{shading}"
 
 
 def random_patch(rng: np.random.Generator, height: int, width: int) -> ContactPatch:
@@ -210,14 +221,17 @@ def render(spec: SequenceSpec, reference_frames: int = 1) -> RenderedSequence:
     """Render ``spec``'s frames and ``reference_frames`` noisy references. The noise is
     seeded by the spec's seed and texture."""
     texture = load_texture(spec.texture)
+    illumination = np.float32(1.0)
+    if spec.shading == "fixed":
+        illumination, texture = split_illumination(texture)
     mech = mechanics(spec)
     rng = np.random.default_rng([spec.seed, 1, sorted(TEXTURES).index(spec.texture)])
-    reference = warp(texture, mech.field(0.0, 1.0))
+    reference = illumination * warp(texture, mech.field(0.0, 1.0))
     references = [add_noise(reference, spec.noise_grey, rng) for _ in range(reference_frames)]
     ramps, swings = lighting_drift(np.random.default_rng([spec.seed, 3]), spec.frames, *SIZE_HW)
     frames = []
     for tilt, grip, swing in zip(mech.tilt, mech.grip, swings, strict=True):
-        image = warp(texture, mech.field(tilt, grip))
+        image = illumination * warp(texture, mech.field(tilt, grip))
         if spec.lighting:
             image *= 1.0 + spec.lighting * (swing * ramps)
         frames.append(add_noise(image, spec.noise_grey, rng))

@@ -40,6 +40,23 @@ TEXTURES = {
 }
 
 
+ILLUMINATION_SIGMA_PX = 8.0
+
+
+def split_illumination(texture: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(illumination, albedo) with ``texture = illumination * albedo``, float32 BGR.
+
+    The illumination is the LED shading, fixed to the camera: per channel, the texture with
+    its dark markers closed away (grey-level closing with a 15 px disk, wider than a marker)
+    and smoothed (Gaussian, sigma ``ILLUMINATION_SIGMA_PX``). The albedo is the rest: the
+    markers and the gel's fine texture, which move with the gel."""
+    disk = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (15, 15))
+    closed = cv2.morphologyEx(texture, cv2.MORPH_CLOSE, disk)
+    illumination = cv2.GaussianBlur(closed, (0, 0), ILLUMINATION_SIGMA_PX)
+    illumination = np.maximum(illumination, 1.0)
+    return illumination, texture / illumination
+
+
 def load_texture(name: str) -> np.ndarray:
     """The capture ``name`` (a key of TEXTURES) as float32 BGR (240, 320, 3)."""
     path = DATA_DIR / TEXTURES[name].file
