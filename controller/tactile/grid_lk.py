@@ -70,7 +70,10 @@ def grid_laplacian(rows: int, cols: int) -> sparse.csr_matrix:
 
 
 class GridLKFlow:
-    """The grid field by regularised Lucas-Kanade (module docstring); a ``GridFlow``."""
+    """The grid field by regularised Lucas-Kanade (module docstring); a ``GridFlow``.
+
+    Buffers are allocated here and when the reference is set; per frame only OpenCV's and
+    the sparse solver's outputs are."""
 
     def __init__(self, config: FlowConfig, shape_hw: tuple[int, int], rows: int, cols: int) -> None:
         if config.method != "grid_lk":
@@ -91,14 +94,21 @@ class GridLKFlow:
         self._warped = np.empty(plane, np.float32)
         self._residual = np.empty(plane, np.float32)
         self._product = np.empty(plane, np.float32)
+        cells = (rows, cols) if self._gray else (rows, cols, 3)
+        self._pooled = np.empty(cells, np.float32)
+        self._pooled_centre = np.empty(cells, np.float32)
+        self._residual_cells = np.empty(cells, np.float32)
         grid_y, grid_x = np.mgrid[0:h, 0:w].astype(np.float32)
         self._grid = (grid_x, grid_y)
         self._map = (np.empty((h, w), np.float32), np.empty((h, w), np.float32))
         self._dense = np.empty((h, w, 2), np.float32)
-        self._prior = sparse.kron(grid_laplacian(rows, cols), sparse.identity(2), format="csr")
+        self._field = np.empty((rows, cols, 2), np.float32)
+        self._laplacian = grid_laplacian(rows, cols)
         n = rows * cols
+        self._blocks = np.zeros((n, 2, 2))
         self._theta = np.zeros((n, 2))
         self._rhs = np.empty((n, 2))
+        self._term = np.empty(n)
         self._has_previous = False
 
     # -- images ------------------------------------------------------------------------------
@@ -120,19 +130,19 @@ class GridLKFlow:
             cv2.GaussianBlur(out, (0, 0), sigma, dst=out)
         return out
 
-    def _cell_means(self, plane: np.ndarray) -> np.ndarray:
-        """Area mean of ``plane`` over each grid cell: (rows, cols[, channels]) float64."""
-        pooled = cv2.resize(plane, (self.cols, self.rows), interpolation=cv2.INTER_AREA)
-        return pooled.astype(np.float64)
+    def _cell_means(self, plane: np.ndarray, out: np.ndarray) -> np.ndarray:
+        """Area mean of ``plane`` over each grid cell, per channel, into ``out``."""
+        size = (self.cols, self.rows)
+        return cv2.resize(plane, size, dst=out, interpolation=cv2.INTER_AREA)
 
-    def _moment(self, a: np.ndarray, b: np.ndarray, a_cell, b_cell) -> np.ndarray:
-        """Cell means of a*b summed over channels, (rows*cols,); with cell means of a and b
-        given (brightness normalisation), of (a - mean a)(b - mean b)."""
+    def _moment(self, a: np.ndarray, b: np.ndarray, a_cells, b_cells, out: np.ndarray) -> None:
+        """Cell means of a*b summed over channels into ``out`` (rows*cols,); given the cell
+        means of a and b (brightness normalisation), of (a - mean a)(b - mean b)."""
         np.multiply(a, b, out=self._product)
-        value = self._cell_means(self._product)
-        if a_cell is not None:
-            value -= a_cell * b_cell
-        return value.reshape(self.rows * self.cols, -1).sum(axis=1)
+        pooled = self._cell_means(self._product, self._pooled)
+        if a_cells is not None:
+            pooled -= np.multiply(a_cells, b_cells, out=self._pooled_centre)
+        np.sum(pooled.reshape(self.rows * self.cols, -1), axis=1, out=out)
 
     # -- GridFlow ----------------------------------------------------------------------------
 
@@ -143,25 +153,29 @@ class GridLKFlow:
             cv2.sepFilter2D(reference, cv2.CV_32F, _IDENTITY, _DERIVATIVE),
         )
         if self.params.normalize_brightness:
-            self._gradient_cells = tuple(self._cell_means(g) for g in self._gradients)
+            self._gradient_cells = tuple(
+                self._cell_means(g, np.empty_like(self._pooled)) for g in self._gradients
+            )
         else:
             self._gradient_cells = (None, None)
-        n = self.rows * self.cols
-        blocks = np.empty((n, 2, 2))
+        blocks = self._blocks
         for i in range(2):
             for j in range(i, 2):
-                blocks[:, i, j] = blocks[:, j, i] = self._moment(
+                self._moment(
                     self._gradients[i],
                     self._gradients[j],
                     self._gradient_cells[i],
                     self._gradient_cells[j],
+                    self._term,
                 )
+                blocks[:, i, j] = blocks[:, j, i] = self._term
         weight = max(float(np.trace(blocks, axis1=1, axis2=2).mean()) / 2.0, 1e-12)
-        self._lambda = self.params.smoothness * weight
+        blocks[:, 0, 0] += _RIDGE * weight
+        blocks[:, 1, 1] += _RIDGE * weight
+        prior = sparse.kron(self._laplacian, sparse.identity(2), format="csr")
         matrix = (
             sparse.block_diag(list(blocks), format="csr")
-            + self._lambda * self._prior
-            + _RIDGE * weight * sparse.identity(2 * n, format="csr")
+            + (self.params.smoothness * weight) * prior
         )
         self._solve = factorized(matrix.tocsc())
         self._has_previous = False
@@ -169,9 +183,9 @@ class GridLKFlow:
     def _warp_back(self, current: np.ndarray) -> np.ndarray:
         """``current`` sampled at x + u(x), u the estimate interpolated bilinearly between
         cell centres, into the warped buffer."""
-        field = self._theta.reshape(self.rows, self.cols, 2).astype(np.float32)
+        np.copyto(self._field, self._theta.reshape(self.rows, self.cols, 2), casting="unsafe")
         size = (self.flow_shape[1], self.flow_shape[0])
-        cv2.resize(field, size, dst=self._dense, interpolation=cv2.INTER_LINEAR)
+        cv2.resize(self._field, size, dst=self._dense, interpolation=cv2.INTER_LINEAR)
         for axis in range(2):
             np.add(self._grid[axis], self._dense[..., axis], out=self._map[axis])
         cv2.remap(
@@ -188,24 +202,31 @@ class GridLKFlow:
         warm = self.config.warm_start and self._has_previous
         if not warm:
             self._theta.fill(0.0)
-        n = self.rows * self.cols
+        normalize = self.params.normalize_brightness
         for step in range(self.params.iterations):
             moved = warm or step > 0
             source = self._warp_back(current) if moved else current
             np.subtract(source, self._reference, out=self._residual)
-            residual_cell = (
-                self._cell_means(self._residual) if self.params.normalize_brightness else None
+            residual_cells = (
+                self._cell_means(self._residual, self._residual_cells) if normalize else None
             )
             for axis in range(2):
-                self._rhs[:, axis] = -self._moment(
+                self._moment(
                     self._gradients[axis],
                     self._residual,
                     self._gradient_cells[axis],
-                    residual_cell,
+                    residual_cells,
+                    self._term,
                 )
+                np.negative(self._term, out=self._rhs[:, axis])
             if moved:
-                self._rhs -= self._lambda * (self._prior @ self._theta.ravel()).reshape(n, 2)
-            self._theta += self._solve(self._rhs.ravel()).reshape(n, 2)
+                # The step du solves (G + lambda L) du = -b - lambda L u, so the new estimate
+                # u + du solves (G + lambda L) (u + du) = G u - b: add G u.
+                for i in range(2):
+                    for j in range(2):
+                        np.multiply(self._blocks[:, i, j], self._theta[:, j], out=self._term)
+                        self._rhs[:, i] += self._term
+            np.copyto(self._theta, self._solve(self._rhs.ravel()).reshape(-1, 2))
         self._has_previous = True
-        out.reshape(-1, 2)[:] = self._theta / self.config.scale
+        np.multiply(self._theta.reshape(self.rows, self.cols, 2), 1.0 / self.config.scale, out=out)
         return out
