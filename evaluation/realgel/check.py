@@ -71,17 +71,19 @@ def sequence_specs(
 
     The mechanics (contact, signals, push amplitude in [0.3, 0.5]) and the noise sigma (in
     [2, 4] grey levels) of a (amplitude, axis, push) combination are the same on every
-    texture; the noise itself differs."""
+    texture, and do not depend on the other amplitudes asked for; the noise itself differs
+    per texture."""
     specs = []
-    combination = 0
     for amplitude in amplitudes_px:
         for pushing in (False, True):
             for axis in ("x", "y"):
-                combo_seed = seed * 1000 + combination
+                # One seed per combination: seed, amplitude in 1/1000 px, pushing, axis.
+                combo_seed = ((seed * 100_000 + round(amplitude * 1000)) * 2 + pushing) * 2 + (
+                    axis == "y"
+                )
                 rng = np.random.default_rng([combo_seed, 2])
                 push = float(rng.uniform(*PUSH_RANGE)) if pushing else 0.0
                 noise = float(rng.uniform(*NOISE_RANGE_GREY))
-                combination += 1
                 specs.extend(
                     SequenceSpec(
                         texture,

@@ -7,7 +7,7 @@ from scipy.ndimage import map_coordinates
 
 from controller.tactile.settings import estimator_config
 from evaluation.realgel import cli
-from evaluation.realgel.check import Entry, run_check
+from evaluation.realgel.check import Entry, run_check, sequence_specs
 from evaluation.realgel.elastic import ContactPatch, PressureBasis, halfspace_inplane_px
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import (
@@ -214,3 +214,10 @@ def test_bad_arguments_exit_2_naming_the_input(args, message, capsys):
         cli.main(args)
     assert stop.value.code == 2
     assert message in capsys.readouterr().err
+
+
+def test_a_sequence_does_not_depend_on_the_other_amplitudes_asked_for():
+    alone = sequence_specs(["gelsight_background"], [0.4], 16, seed=3)
+    among = sequence_specs(["gelsight_background"], [0.2, 0.4, 1.0], 16, seed=3)
+    assert alone == [spec for spec in among if spec.tilt_px == 0.4]
+    assert len({spec.seed for spec in among}) == len(among)
