@@ -140,7 +140,10 @@ class TactileEstimator:
     def _install_reference(self, mean_image: np.ndarray) -> None:
         """Build the flow on the reference first, then replace the buffers: a ValueError
         leaves the estimator as it was."""
-        reference = np.clip(mean_image + 0.5, 0, 255).astype(np.uint8)
+        # Round half to even: the mean of 2 integer frames ends in .5 half the time, and
+        # rounding those up would brighten the reference by 0.25 grey levels, which dense
+        # flow on a smooth gel reads as motion.
+        reference = np.clip(np.rint(mean_image), 0, 255).astype(np.uint8)
         height, width = reference.shape[:2]
         rows, cols = field_grid(self.config, height, width)
         mismatch = dipole_grid_mismatch(self.config, rows, cols)

@@ -1,6 +1,6 @@
 """From tactile images to a displacement field on the grid, in working-image pixels.
 
-Two families, behind one small interface (``GridFlow``):
+Three families, behind one small interface (``GridFlow``):
 
 * ``DenseGridFlow``: dense optical flow (OpenCV DIS or Farneback) between the reference and
   the current image, on the luminance or on each colour channel (averaged), optionally on a
@@ -8,8 +8,10 @@ Two families, behind one small interface (``GridFlow``):
 * ``MarkerGridFlow``: the gel's printed markers, found once in the reference and tracked
   from it with pyramidal Lucas-Kanade at sub-pixel precision, then spread onto the grid by
   normalised Gaussian weights. Needs a marker gel (GelSight Mini), not a plain DIGIT.
+* ``GridLKFlow`` (controller/tactile/grid_lk.py): the grid field fitted to every pixel of
+  every channel at once by regularised Lucas-Kanade; for gels with or without markers.
 
-Both return ``(rows, cols, 2)`` displacements in pixels of the working image, [..., 0] along
+All return ``(rows, cols, 2)`` displacements in pixels of the working image, [..., 0] along
 x (columns) and [..., 1] along y (rows): the displacement of the gel point that was at the
 cell in the reference. Images are BGR uint8 (H, W, 3) at the working resolution. Buffers are
 allocated when the reference is set; per frame only OpenCV's own outputs are allocated.
@@ -22,6 +24,7 @@ from typing import Protocol
 import cv2
 import numpy as np
 
+from controller.tactile.grid_lk import GridLKFlow
 from controller.tactile.settings import DisParams, FarnebackParams, FlowConfig, MarkerParams
 
 _DIS_PRESETS = {
@@ -45,6 +48,8 @@ def make_grid_flow(config: FlowConfig, shape_hw: tuple[int, int], rows: int, col
     """The GridFlow that ``config.method`` names, for images of ``shape_hw`` = (H, W)."""
     if config.method == "markers":
         return MarkerGridFlow(config.markers, shape_hw, rows, cols, config.warm_start)
+    if config.method == "grid_lk":
+        return GridLKFlow(config, shape_hw, rows, cols)
     return DenseGridFlow(config, shape_hw, rows, cols)
 
 

@@ -12,7 +12,7 @@ from typing import Literal
 from drivers.config import Config, ConfigError, load_config, number, resolve_config_path
 from drivers.tactile.profile import SensorProfile
 
-FlowMethod = Literal["dis", "farneback", "markers"]
+FlowMethod = Literal["dis", "farneback", "markers", "grid_lk"]
 
 
 @dataclass(frozen=True)
@@ -85,6 +85,20 @@ class MarkerParams(Config):
 
 
 @dataclass(frozen=True)
+class GridLKParams(Config):
+    """Regularised Lucas-Kanade on the grid (controller/tactile/grid_lk.py): one displacement
+    per grid cell fitted to every pixel, with a membrane prior of relative weight
+    ``smoothness``; images blurred by ``blur_sigma_px`` (px of the working image, 0: none);
+    ``iterations`` Gauss-Newton steps; ``normalize_brightness``: a free brightness offset per
+    cell and channel."""
+
+    smoothness: float = number(0.0, 1000.0)
+    blur_sigma_px: float = number(0.0, 10.0)
+    iterations: int = number(1, 20)
+    normalize_brightness: bool
+
+
+@dataclass(frozen=True)
 class FlowConfig(Config):
     """How the displacement field is measured from images.
 
@@ -101,6 +115,7 @@ class FlowConfig(Config):
     dis: DisParams
     farneback: FarnebackParams
     markers: MarkerParams
+    grid_lk: GridLKParams
 
 
 @dataclass(frozen=True)
