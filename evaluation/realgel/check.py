@@ -120,6 +120,23 @@ class TruthGridFlow:
         return out
 
 
+def _not_run(common: dict, note: str) -> Row:
+    """The row of a configuration that could not run on a sequence, saying why."""
+    nan = float("nan")
+    return Row(
+        **common,
+        r2=nan,
+        rmse_rel=nan,
+        gain=nan,
+        fv_r2=nan,
+        ms_per_frame=nan,
+        degenerate=nan,
+        zero_tilt=nan,
+        slip=nan,
+        note=note,
+    )
+
+
 def run_one(
     sequence: RenderedSequence, name: str, config: EstimatorConfig, oracle: bool = False
 ) -> Row:
@@ -136,40 +153,17 @@ def run_one(
         tilt_px=spec.tilt_px,
         noise_grey=spec.noise_grey,
     )
-    nan = float("nan")
     if oracle:  # the flow is replaced below; any dense method builds without markers
         config = replace(config, flow=replace(config.flow, method="dis"))
     elif config.flow.method == "markers" and not texture.markers:
-        return Row(
-            **common,
-            r2=nan,
-            rmse_rel=nan,
-            gain=nan,
-            fv_r2=nan,
-            ms_per_frame=nan,
-            degenerate=nan,
-            zero_tilt=nan,
-            slip=nan,
-            note="no markers",
-        )
+        return _not_run(common, "no markers")
     profile = sensor_profile(texture.sensor)
     estimator = TactileEstimator(config, profile)
     fps = profile.fps_hz
     try:
         estimator.set_reference(sequence.references[: config.reference_frames])
     except ValueError as error:
-        return Row(
-            **common,
-            r2=nan,
-            rmse_rel=nan,
-            gain=nan,
-            fv_r2=nan,
-            ms_per_frame=nan,
-            degenerate=nan,
-            zero_tilt=nan,
-            slip=nan,
-            note=str(error).split(";")[0],
-        )
+        return _not_run(common, str(error).split(";")[0])
     if oracle:
         rows, cols = field_grid(config, *SIZE_HW)
         # The estimator's own flow is swapped for the truth; everything after it is unchanged.
