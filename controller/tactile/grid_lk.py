@@ -11,8 +11,8 @@ motion model is one displacement ``u_k`` (px) per grid cell, with the membrane p
 
 Gauss-Newton, linearised with the reference's gradient ``g`` (fourth-order central
 differences; inverse compositional: the normal matrix depends on the reference only, so it
-is factorised once per reference). Each
-step solves ``(G + lambda L) du = -b - lambda L u``: G is block diagonal with the cell means
+is factorised once per reference). Each step solves ``(G + lambda L) du = -b - lambda L u``:
+G is block diagonal with the cell means
 of ``g g^T`` (summed over channels), b holds the cell means of ``g r``, r being the current
 image warped back by the estimate minus the reference, and L is the Laplacian of the grid
 graph. ``lambda = smoothness * mean(trace of G's blocks) / 2``: the prior's weight follows
@@ -33,8 +33,8 @@ matters for motions of several px, where one linearisation about zero falls shor
 
 Per frame: one conversion to float, the blur, and per step a warp (bilinear; from the second
 step, or from the first with ``warm_start``), two products and two area means per gradient
-component, and a sparse solve.
-Displacements are in px of the working image, like every ``GridFlow``'s.
+component, and a sparse solve. Displacements are in px of the working image, like every
+``GridFlow``'s.
 """
 
 from __future__ import annotations

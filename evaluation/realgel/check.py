@@ -120,6 +120,23 @@ class TruthGridFlow:
         return out
 
 
+def _not_run(common: dict, note: str) -> Row:
+    """The row of a configuration that could not run on a sequence, saying why."""
+    nan = float("nan")
+    return Row(
+        **common,
+        r2=nan,
+        rmse_rel=nan,
+        gain=nan,
+        fv_r2=nan,
+        ms_per_frame=nan,
+        degenerate=nan,
+        zero_tilt=nan,
+        slip=nan,
+        note=note,
+    )
+
+
 def run_one(
     sequence: RenderedSequence, name: str, config: EstimatorConfig, oracle: bool = False
 ) -> Row:
