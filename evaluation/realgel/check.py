@@ -219,20 +219,3 @@ def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=
             if progress is not None:
                 progress(rows[-1])
     return rows
-
-
-def _not_run(common: dict, note: str) -> Row:
-    """The row of a configuration that could not run on this sequence, saying why."""
-    nan = float("nan")
-    return Row(
-        **common,
-        r2=nan,
-        rmse_rel=nan,
-        gain=nan,
-        fv_r2=nan,
-        ms_per_frame=nan,
-        degenerate=nan,
-        zero_tilt=nan,
-        slip=nan,
-        note=note,
-    )
