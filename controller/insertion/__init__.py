@@ -1,0 +1,1 @@
+"""The insertion state machine: Observation in, Command out, no I/O (see interface.py)."""

@@ -1,0 +1,128 @@
+"""What the insertion state machine takes and gives each tick, and its phases.
+
+The machine is pure (no I/O): the control loop (``controller.loop``) reads the devices, builds
+an ``Observation`` and calls ``step(observation) -> Command``; the loop then clamps the command
+(``controller.safety``) and sends it. Frames (docs/ARCHITECTURE.md): ``B`` the arm base, ``T``
+the tool (TCP at the stick's grasp point), ``S`` the tactile sensor; SI units throughout.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Protocol
+
+from controller.tactile.wrench import WrenchEstimate
+from drivers.base import ArmStatus, GripperStatus, Pose, Twist
+
+
+class Phase(Enum):
+    """The machine's states. DONE and FAILED are terminal; TELEOP and ESTOP are overrides."""
+
+    GRASP = "grasp"
+    APPROACH = "approach"
+    SEARCH = "search"
+    ALIGN = "align"
+    INSERT = "insert"
+    BACKOFF = "backoff"  # jam detected during INSERT: lift a little, then ALIGN again
+    RELEASE = "release"
+    RETRACT = "retract"
+    DONE = "done"
+    FAILED = "failed"
+    TELEOP = "teleop"
+    ESTOP = "estop"
+
+
+class FailureReason(Enum):
+    """Why a run ended in FAILED (``Transition.reason`` names it)."""
+
+    TIMEOUT = "timeout"
+    LIMIT_EXCEEDED = "limit_exceeded"
+    SLIP = "slip"
+    CONTACT_LOST = "contact_lost"
+    TOO_MANY_RETRIES = "too_many_retries"
+    DEVICE_FAULT = "device_fault"
+
+
+@dataclass(frozen=True)
+class TeleopInput:
+    """The gamepad's arbitration state for one tick (``controller.teleop`` builds it).
+
+    ``connected``: the pad is attached. ``in_control``: the operator holds control (a stick
+    moved past the dead zone since the last hand-back). ``twist``: the operator's TCP twist
+    in B, zero unless in control. ``gripper_open`` / ``gripper_close``: the gripper buttons
+    this tick. ``hand_back``: the hand-back button was pressed this tick. ``estop``: the
+    e-stop button is held; ``estop_ack``: the acknowledge button was pressed this tick.
+    """
+
+    connected: bool = False
+    in_control: bool = False
+    twist: Twist = field(default_factory=Twist)
+    gripper_open: bool = False
+    gripper_close: bool = False
+    hand_back: bool = False
+    estop: bool = False
+    estop_ack: bool = False
+
+
+@dataclass(frozen=True)
+class Observation:
+    """Everything the machine may know at one tick. ``wrench`` is the tactile estimate of the
+    newest frame (None before the first frame is processed); ``fault`` names a device or
+    watchdog fault the loop detected this tick (None: none)."""
+
+    t_s: float
+    wrench: WrenchEstimate | None
+    arm: ArmStatus
+    gripper: GripperStatus
+    teleop: TeleopInput
+    fault: str | None = None
+
+
+@dataclass(frozen=True)
+class GripperTarget:
+    """A gripper command: finger opening in m, speed in m/s, force in N."""
+
+    width_m: float
+    speed_m_s: float
+    force_n: float
+
+
+@dataclass(frozen=True)
+class Command:
+    """One tick's output. At most one of ``twist`` (TCP velocity in B, held for the loop's
+    command duration) and ``pose`` (servo target of T in B); neither: hold still.
+    ``gripper``: a new gripper target, or None to leave it. ``rezero_tactile``: the loop
+    re-zeroes the estimator's reference from the next frames (after a grasp or a re-grasp).
+    """
+
+    twist: Twist | None = None
+    pose: Pose | None = None
+    gripper: GripperTarget | None = None
+    rezero_tactile: bool = False
+
+    def __post_init__(self) -> None:
+        if self.twist is not None and self.pose is not None:
+            raise ValueError("Command: expected a twist or a pose target, not both")
+
+
+@dataclass(frozen=True)
+class Transition:
+    """A phase change at ``t_s``, with its reason (a FailureReason's value for FAILED)."""
+
+    t_s: float
+    source: Phase
+    target: Phase
+    reason: str
+
+
+class Machine(Protocol):
+    """What the loop drives: a pure, non-blocking state machine."""
+
+    @property
+    def phase(self) -> Phase: ...
+
+    @property
+    def transitions(self) -> tuple[Transition, ...]: ...
+
+    def step(self, observation: Observation) -> Command: ...

@@ -1,0 +1,1 @@
+"""Insertion trials: one trial (runner), batches (local or Ray), summaries and charts."""
