@@ -1,10 +1,13 @@
 """Offline estimation on recorded tactile video or a folder of images.
 
-    python scripts/estimate.py INPUT --reference SPEC --out OUT.csv [--sensor gelsight_mini]
-        [--method NAME] [--calibration FILE [--force]] [--fps F] [--allow-damaged]
+    python scripts/estimate.py INPUT [IMAGE ...] --reference SPEC --out OUT.csv
+        [--sensor gelsight_mini] [--method NAME] [--calibration FILE [--force]] [--fps F]
+        [--allow-damaged]
 
-INPUT is a video file OpenCV can read, or a folder of images read in natural sorted order
-(frame_2 before frame_10). SPEC is a frame number (``0``) or a range ``a:b`` whose frames
+INPUT is a video file OpenCV can read, a folder of images read in natural sorted order
+(frame_2 before frame_10), or one or more image files read in the order given (still
+captures: ``shot_rest.png shot_pressed.png``). All frames must have one size (one sensor's
+images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` whose frames
 (a included, b excluded) are averaged into the zeroing reference. ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
@@ -13,18 +16,19 @@ estimator configuration is refused unless ``--force``.
 The CSV has one row per frame: ``frame,time_s,tau_x,tau_y,tau_z,shear_x,shear_y,normal,
 fv_tau_x,fv_tau_y,fv_tau_z,contact,degenerate,slip_suspected,slip_gross,rezero_recommended,
 latency_ms``. ``frame`` is the frame's number in the recording (by the container's
-timestamps for a video, the sorted position for a folder) and ``time_s = frame / rate``
-(``--fps``, else the video's rate, else the sensor's), so a lost frame leaves a gap and
-every time stays true. Without a calibration file the values are raw (mm, mm^2; see
-controller/tactile/wrench.py); the flags are 0 or 1; ``latency_ms`` is the estimator's time
-for that frame.
+timestamps for a video, the position in the sorted folder or the list of images) and
+``time_s = frame / rate`` (``--fps``, else the video's rate, else the sensor's), so a lost
+frame leaves a gap and every time stays true. Without a calibration file the values are
+raw (mm, mm^2; see controller/tactile/wrench.py); the flags are 0 or 1; ``latency_ms`` is
+the estimator's time for that frame.
 
 Damaged input (frames that do not decode, a video that ends before the frame count in its
 header) is an error by default; with ``--allow-damaged`` the frames that decode are
 estimated and each kind of loss is one ``estimate: warning: ...`` line. The CSV is written
 to a temporary file and renamed over OUT only when complete: an error or an interruption
 leaves an earlier OUT as it was. Expected failures (unreadable input, empty folder,
-mismatched frame sizes, reference out of range, bad configuration, an OUT that is an input
+mismatched frame sizes (naming the image), several inputs that are not all image files,
+reference out of range, bad configuration, an OUT that is an input
 or cannot be written) print one line ``estimate: error: ...`` and exit with code 2; SIGINT
 and SIGTERM exit with 130 and 143 (evaluation/cli.py).
 """
@@ -36,7 +40,7 @@ import csv
 import re
 import sys
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -76,8 +80,9 @@ def _warn(message: str) -> None:
 
 @dataclass
 class FrameSource:
-    """Frames of a video file or an image folder, read in order and numbered (see the
-    module doc); ``frame_count`` and ``fps`` come from the video's header (None: unknown)."""
+    """Frames of a video file, an image folder or a list of images, read in order and
+    numbered (see the module doc); ``frame_count`` and ``fps`` come from the video's header
+    (None: unknown)."""
 
     path: Path
     images: list[Path] | None  # None for a video
@@ -91,6 +96,12 @@ class FrameSource:
         else:
             assert self.video is not None
             self.frame_count, self.fps = self.video.header_frames, self.video.fps
+
+    def describe(self, number: int) -> str:
+        """``frame N``, with the image's file name for images."""
+        if self.images is None or not 0 <= number < len(self.images):
+            return f"frame {number}"
+        return f"frame {number} ({self.images[number].name})"
 
     def frames(self, log: ReadLog) -> Iterator[tuple[int, np.ndarray]]:
         """(frame number, image) of every frame that decodes; ``log`` records the pass."""
@@ -116,8 +127,29 @@ class FrameSource:
         return [f"'{self.path}': {len(bad)} images did not decode ({names})"]
 
 
-def open_source(path: Path) -> FrameSource:
-    """Open INPUT, checking that it exists and holds at least one readable frame."""
+def open_images(paths: list[Path]) -> FrameSource:
+    """A list of image files, in the order given, read as one recording."""
+    for path in paths:
+        if not path.exists():
+            raise InputError(f"input '{path}' does not exist")
+        if not path.is_file() or path.suffix.lower() not in IMAGE_SUFFIXES:
+            raise InputError(
+                f"input '{path}': with several inputs, expected image files only "
+                f"({', '.join(IMAGE_SUFFIXES)}); give one video or one folder on its own"
+            )
+    return FrameSource(paths[0] if len(paths) == 1 else paths[0].parent, list(paths), None)
+
+
+def open_source(path: Path | Sequence[Path]) -> FrameSource:
+    """Open INPUT (one path, or several image files), checking that it exists and holds at
+    least one readable frame."""
+    if not isinstance(path, Path):
+        paths = list(path)
+        if len(paths) != 1:
+            return open_images(paths)
+        path = paths[0]
+    if path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES:
+        return open_images([path])
     if not path.exists():
         raise InputError(f"input '{path}' does not exist")
     if path.is_dir():
@@ -200,7 +232,7 @@ def load_calibration(
 
 
 def estimate_file(
-    input_path: Path,
+    input_path: Path | Sequence[Path],
     out_csv: Path,
     reference: str = "0",
     sensor: str = "gelsight_mini",
@@ -211,8 +243,9 @@ def estimate_file(
     allow_damaged: bool = False,
     warn: Callable[[str], None] = _warn,
 ) -> int:
-    """Run the estimator over INPUT and write the CSV; returns the number of rows. Every
-    argument and the output path are checked before any frame is read."""
+    """Run the estimator over INPUT (a video or folder path, or image file paths) and write
+    the CSV; returns the number of rows. Every argument and the output path are checked
+    before any frame is read."""
     start, stop = parse_reference(reference)
     if fps is not None and not MIN_RATE_HZ <= fps <= MAX_RATE_HZ:
         raise InputError(
@@ -225,7 +258,7 @@ def estimate_file(
         fit = load_calibration(calibration, profile.name, estimator.config, force, warn)
         estimator = estimator_for_sensor(profile, method, fit)
     inputs = [
-        input_path,
+        *([input_path] if isinstance(input_path, Path) else input_path),
         resolved_config_path(sensor, "sensors"),
         resolved_config_path(estimator.config_name, "estimators"),
         calibration,
@@ -260,7 +293,14 @@ def estimate_file(
             try:
                 estimate = estimator.push(frame, t_s)
             except ValueError as exc:
-                raise InputError(f"frame {number}: {exc}; nothing written") from None
+                hint = (
+                    "; a recording's frames share one size: give the images of one sensor"
+                    if source.images is not None and "does not match" in str(exc)
+                    else ""
+                )
+                raise InputError(
+                    f"{source.describe(number)}: {exc}{hint}; nothing written"
+                ) from None
             latency_ms = (time.perf_counter() - began) * 1e3
             writer.writerow(_row(number, t_s, estimate, latency_ms))
             count += 1
@@ -280,7 +320,12 @@ def build_parser() -> argparse.ArgumentParser:
         prog="estimate",
         description="Estimate in-grasp torques from recorded visuotactile frames.",
     )
-    parser.add_argument("input", type=Path, help="video file, or folder of images")
+    parser.add_argument(
+        "input",
+        type=Path,
+        nargs="+",
+        help="video file, folder of images, or image files (read in the order given)",
+    )
     parser.add_argument(
         "--reference",
         default="0",
