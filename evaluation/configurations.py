@@ -1,7 +1,9 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
-paper's, the default (the sensor profiles' ``estimator``), and one-knob variants of the
-default (flow method and preset, image scale, grey or per-channel, grid stride, divergence
-of the raw field or of its NHHD part, the dipole's grid, temporal filter). The grid stride
+paper's, the default (the sensor profiles' ``estimator``: grid Lucas-Kanade), one-knob
+variants of the default (colour, warm start, smoothness, the dipole's grid), and the DIS
+family around ``dis_half`` (the default until session 6: flow preset, image scale, grey or
+per-channel, patch stride, variational refinement, divergence of the raw field or of its
+NHHD part, the dipole's grid, temporal filter) and cheaper Farneback settings. The grid stride
 is varied through the dipole's grid: with square blocks pooling is exact
 (tests/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole exactly.
 ``PAPER`` and ``DEFAULT`` are the labels of the paper's and the default configuration."""
@@ -13,13 +15,15 @@ from dataclasses import replace
 from controller.tactile.settings import DipoleGrid, EstimatorConfig, estimator_config
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
-DEFAULT = "**default** (DIS tuned, gray, 16x12, dipole on 4x4 curl-free)"
+DEFAULT = "**default** (grid LK per-channel, 16x12, dipole on 4x4 curl-free)"
+DIS_HALF = "dis_half (DIS tuned, gray, half resolution)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
     default = estimator_config("default")
     paper = estimator_config("paper")
-    fl = default.flow
+    dis_half = estimator_config("dis_half")
+    fl = dis_half.flow
     fb = paper.flow.farneback
     plain_dis = replace(
         fl.dis,
@@ -30,27 +34,44 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         variational_refinement_iterations=None,
         use_spatial_propagation=None,
     )
-    configs = [(PAPER, paper), (DEFAULT, default), ("markers", estimator_config("markers"))]
+    configs = [
+        (PAPER, paper),
+        (DEFAULT, default),
+        (DIS_HALF, dis_half),
+        ("markers", estimator_config("markers")),
+    ]
     if quick:
         return configs
+    lk = default.flow
+
+    def grid_lk(**change) -> EstimatorConfig:
+        return replace(default, flow=replace(lk, grid_lk=replace(lk.grid_lk, **change)))
 
     def dis(**change) -> EstimatorConfig:
-        return replace(default, flow=replace(fl, dis=replace(fl.dis, **change)))
+        return replace(dis_half, flow=replace(fl, dis=replace(fl.dis, **change)))
 
     presets = [
         (
             f"DIS {p} gray, scale {s}",
-            replace(default, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
+            replace(dis_half, flow=replace(fl, scale=s, dis=replace(plain_dis, preset=p))),
         )
         for p in ("ultrafast", "fast", "medium")
         for s in (1.0, 0.5)
     ]
+    refined = replace(plain_dis, preset="ultrafast", variational_refinement_iterations=5)
     return configs + [
+        ("default, grey", replace(default, flow=replace(lk, color="gray"))),
+        ("default, cold start", replace(default, flow=replace(lk, warm_start=False))),
+        ("default, one Gauss-Newton step", grid_lk(iterations=1)),
+        ("default, smoothness 0.1", grid_lk(smoothness=0.1)),
+        ("default, smoothness 1", grid_lk(smoothness=1.0)),
+        ("default, dipole on 8x6 blocks", replace(default, dipole_grid=DipoleGrid(8, 6))),
+        ("default, dipole on the 16x12 grid", replace(default, dipole_grid=None)),
         ("Farneback w32 gray, 12x9", replace(paper, flow=replace(paper.flow, color="gray"))),
         (
             "Farneback w12 gray, scale 0.5, 1 level",
             replace(
-                default,
+                dis_half,
                 flow=replace(
                     paper.flow,
                     color="gray",
@@ -61,24 +82,17 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
         ),
         *presets,
         (
-            "DIS ultrafast per-channel",
-            replace(default, flow=replace(fl, color="per_channel", dis=plain_dis)),
+            "DIS ultrafast gray, scale 1.0, variational refinement",
+            replace(dis_half, flow=replace(fl, scale=1.0, dis=refined)),
         ),
-        ("default, DIS spatial propagation", dis(use_spatial_propagation=True)),
-        ("default, DIS patches every 4 px", dis(patch_stride=4)),
-        ("default, DIS patches every 8 px", dis(patch_stride=8)),
-        ("default, warm start", replace(default, flow=replace(fl, warm_start=True))),
-        ("default, dipole on 4x3 blocks", replace(default, dipole_grid=DipoleGrid(4, 3))),
-        ("default, dipole on 8x6 blocks", replace(default, dipole_grid=DipoleGrid(8, 6))),
-        ("default, dipole on the 16x12 grid", replace(default, dipole_grid=None)),
-        ("default, raw-field divergence", replace(default, divergence_of="raw")),
         (
-            "session 3's default (patches every 4 px, dipole on 8x6)",
-            replace(
-                default,
-                dipole_grid=DipoleGrid(8, 6),
-                flow=replace(fl, dis=replace(fl.dis, patch_stride=4)),
-            ),
+            "DIS ultrafast per-channel",
+            replace(dis_half, flow=replace(fl, color="per_channel", dis=plain_dis)),
         ),
-        ("default, EMA 0.6 (the paper's filter)", replace(default, ema_alpha=0.6)),
+        ("dis_half, DIS spatial propagation", dis(use_spatial_propagation=True)),
+        ("dis_half, DIS patches every 4 px", dis(patch_stride=4)),
+        ("dis_half, DIS patches every 8 px", dis(patch_stride=8)),
+        ("dis_half, dipole on 8x6 blocks", replace(dis_half, dipole_grid=DipoleGrid(8, 6))),
+        ("dis_half, raw-field divergence", replace(dis_half, divergence_of="raw")),
+        ("dis_half, EMA 0.6 (the paper's filter)", replace(dis_half, ema_alpha=0.6)),
     ]

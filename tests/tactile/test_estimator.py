@@ -13,13 +13,13 @@ from drivers.sim.scenes.synthetic_sequence import phase_patterns
 from drivers.tactile.profile import sensor_profile
 
 PROFILE = sensor_profile("gelsight_mini")
-CONFIG = estimator_config("default")
+CONFIG = estimator_config("dis_half")  # cold start: a frame pushed twice gives one answer
 PATTERNS = phase_patterns((240, 320))
 
 
 @pytest.fixture
 def estimator(renderer):
-    est = estimator_for_sensor(PROFILE, "default")
+    est = estimator_for_sensor(PROFILE, "dis_half")  # cold start: one frame, one answer
     est.set_reference(renderer.render())
     return est
 

@@ -10,13 +10,13 @@ from controller.tactile.settings import estimator_config
 from drivers.sim.render.marker_images import area_mean_field, smooth_random_field
 
 ROWS, COLS = 12, 16
-BASE = estimator_config("default").flow
+BASE = estimator_config("dis_half").flow
 PAPER = estimator_config("paper").flow
 GRID_LK = estimator_config("grid_lk").flow
 # Tolerances: grid RMSE in px over warps with peak 0.1-3 px (docs/BENCHMARKS.md has the
 # measured errors; these bounds leave about 2x headroom).
 METHODS = {
-    "default": (BASE, 0.15),  # 8 px patches every 6 px: 0.086 px at the 3 px warp
+    "dis_half": (BASE, 0.15),  # 8 px patches every 6 px: 0.086 px at the 3 px warp
     "paper_farneback_per_channel": (PAPER, 0.08),
     "dis_ultrafast": (
         replace(
