@@ -116,7 +116,8 @@ def tilt_rad(rpy_rad: tuple[float, float, float]) -> float:
 def over_budget(wrench: WrenchEstimate | None, limits: LimitsConfig) -> str | None:
     """Which budget the estimate exceeds (``tilt_torque``, ``twist_torque``, ``normal``),
     or None. ValueError if its units are not ``limits.wrench_units``."""
-    if wrench is None or wrench.zeroing:
+    budgets = (limits.max_tilt_torque, limits.max_twist_torque, limits.max_normal)
+    if wrench is None or wrench.zeroing or all(b is None for b in budgets):
         return None
     if wrench.calibrated != (limits.wrench_units == "calibrated"):
         got = "calibrated" if wrench.calibrated else "raw"
