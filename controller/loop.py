@@ -40,6 +40,7 @@ from __future__ import annotations
 import dataclasses
 import logging
 import math
+import os
 import signal
 import threading
 from collections.abc import Callable
@@ -92,7 +93,11 @@ class LoopConfig(Config):
     accepted. ``rezero_frames``: frames averaged into a new tactile reference on a
     ``rezero_tactile`` command. Overrun policy: the watchdog trips on
     ``max_consecutive_overruns`` overruns in a row or ``max_overruns_in_window`` within the
-    last ``overrun_window_ticks`` ticks.
+    last ``overrun_window_ticks`` ticks. ``rt_priority``: run the loop's thread under the
+    SCHED_FIFO real-time policy at this priority (1..99; Linux, needs CAP_SYS_NICE or an
+    ``rtprio`` limit), restoring its policy afterwards; None: the default scheduler. On a
+    shared or loaded machine this is what keeps the period error under a millisecond
+    (docs/BENCHMARKS.md, "Control loop period").
     """
 
     rate_hz: float = number(1.0, 1000.0, default=100.0)
@@ -102,6 +107,7 @@ class LoopConfig(Config):
     max_consecutive_overruns: int = number(1, 100_000, default=5)
     max_overruns_in_window: int = number(1, 100_000, default=20)
     overrun_window_ticks: int = number(1, 100_000, default=100)
+    rt_priority: int | None = number(1, 99, default=None)
 
     def __post_init__(self) -> None:
         if self.hold_s < 1.0 / self.rate_hz:
@@ -271,6 +277,7 @@ class ControlLoop:
     def run(self, max_duration_s: float | None = None) -> LoopResult:
         """Tick until the machine is DONE or FAILED, a watchdog trip, a signal, or
         ``max_duration_s`` on the clock; always ends with a safe stop."""
+        scheduling = _enter_realtime(self.config.rt_priority)
         previous = self._install_signal_handlers()
         try:
             reason, message = self._run(max_duration_s)
@@ -280,6 +287,8 @@ class ControlLoop:
             finally:
                 for signum, handler in previous.items():
                     signal.signal(signum, handler)
+                if scheduling is not None:
+                    os.sched_setscheduler(0, *scheduling)
         return LoopResult(reason, message, self.machine.phase, self.stats(), self._stop_error)
 
     def stats(self) -> LoopStats:
@@ -448,6 +457,24 @@ class ControlLoop:
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:
         del frame
         self._signal = signum
+
+
+def _enter_realtime(priority: int | None) -> tuple[int, os.sched_param] | None:
+    """Switch the calling thread to SCHED_FIFO at ``priority``; its previous policy and
+    parameters (None: nothing changed). PermissionError naming the key if refused."""
+    if priority is None:
+        return None
+    if not hasattr(os, "sched_setscheduler"):
+        raise OSError("loop: key 'rt_priority': SCHED_FIFO is not available on this system")
+    previous = (os.sched_getscheduler(0), os.sched_getparam(0))
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+    except PermissionError:
+        raise PermissionError(
+            f"loop: key 'rt_priority': SCHED_FIFO priority {priority} refused; grant "
+            "CAP_SYS_NICE or an rtprio limit (/etc/security/limits.conf), or set it to null"
+        ) from None
+    return previous
 
 
 def _read(read: Callable[..., Any], errors: dict[str, Exception], role: str, *args: Any) -> Any:

@@ -7,7 +7,10 @@ import dataclasses
 import math
 import os
 import signal
+import subprocess
+import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -339,3 +342,38 @@ def test_loop_config_checks_its_keys():
         LoopConfig(max_overruns_in_window=20, overrun_window_ticks=10)
     with pytest.raises(ValueError, match="key 'rate_hz'"):
         LoopConfig(rate_hz=0.0)
+
+
+def test_rt_priority_switches_to_sched_fifo_and_back(devices, clock, monkeypatch):
+    calls = []
+    monkeypatch.setattr(os, "sched_getscheduler", lambda pid: os.SCHED_OTHER)
+    monkeypatch.setattr(os, "sched_getparam", lambda pid: os.sched_param(0))
+    monkeypatch.setattr(os, "sched_setscheduler", lambda pid, *a: calls.append(a))
+    make_loop(ScriptedMachine(done_after=2), devices, clock, rt_priority=40).run()
+    assert calls == [(os.SCHED_FIFO, os.sched_param(40)), (os.SCHED_OTHER, os.sched_param(0))]
+
+
+def test_a_refused_rt_priority_is_a_one_line_error_before_any_tick(devices, clock, monkeypatch):
+    def refuse(pid, *args):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "sched_setscheduler", refuse)
+    machine = ScriptedMachine(done_after=2)
+    with pytest.raises(PermissionError, match="key 'rt_priority': SCHED_FIFO priority 40 refused"):
+        make_loop(machine, devices, clock, rt_priority=40).run()
+    assert machine.steps == 0
+
+
+def test_the_bench_script_runs():
+    root = Path(__file__).resolve().parents[2]
+    result = subprocess.run(
+        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--duration-s", "0.3"],
+        capture_output=True, text=True, cwd=root, timeout=120,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "tick-start lateness" in result.stdout and "Machine:" in result.stdout
+    bad = subprocess.run(
+        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--rate-hz", "0"],
+        capture_output=True, text=True, cwd=root, timeout=120,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "--rate-hz" in bad.stderr
