@@ -1,0 +1,396 @@
+"""Safety of the control loop: command limits, the watchdog and the safe stop.
+
+**Limits** (``CommandLimiter.limit``, applied by the loop to every command before it is
+sent; frames: B the arm base, T the tool; SI units). The arm driver enforces its own
+envelope as well (drivers/arm/envelope.py); these are the task's, usually tighter.
+
+* Twist (held for the loop's ``hold_s``): the linear speed is scaled down to
+  ``max_linear_speed_m_s`` and the angular one to ``max_angular_speed_rad_s`` (directions
+  kept); each linear component is then cut so the TCP stays in the workspace box for
+  ``hold_s`` (a component leaving the box at its face becomes zero; moving back in is
+  allowed); if the rotation would tilt the tool beyond ``max_tilt_rad`` from the downward
+  vertical (or beyond its current tilt, if already outside) within ``hold_s``, the
+  horizontal angular components are zeroed, leaving the rotation about the vertical, which
+  keeps the tilt.
+* Pose target: clipped into the box, its tilt turned back to ``max_tilt_rad`` along the
+  shortest arc, then stepped from the previous pose target (or, for the first, the measured
+  TCP) by at most ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` times one period.
+* **Tactile budget**: the newest ``WrenchEstimate`` is over budget when ``|(tau_x, tau_y)|
+  > max_tilt_torque``, ``|tau_z| > max_twist_torque`` or ``|normal| > max_normal`` (each
+  ``None``: unchecked), in the estimate's own units, which must be ``wrench_units``
+  (``calibrated``: N*m and N; ``raw``: the uncalibrated mm, mm^2 of
+  controller/tactile/wrench.py); a mismatch is a ValueError, since a budget in the wrong
+  units guards nothing. Over budget, with ``over_budget: lift_only``, only lifting is let
+  through: the twist keeps only its upward (+z_B) linear part, a pose target only its rise
+  in z at the reference pose; with ``stop`` the arm holds still. Rule and reason: every load
+  the gel sees during insertion comes from pressing the plug down onto the board or into
+  the receptacle, so moving up unloads it whatever the torque's sign, and this needs no
+  sensor-to-base calibration. The wrist spring's deflection is not used (not measured on
+  hardware).
+
+**Watchdog** (``Watchdog``): trips, once and latched, on a tactile frame older than
+``tactile_max_age_s`` (or a sensor that refuses its stale frame), a device error or a
+device reporting an error code, ``max_consecutive_overruns`` overruns in a row or
+``max_overruns_in_window`` within the last ``overrun_window_ticks`` ticks, and a gamepad
+lost while the operator holds control.
+
+**Safe stop** (``safe_stop``): see its docstring.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from controller.insertion.interface import Command, TeleopInput
+from controller.tactile.wrench import WrenchEstimate
+from controller.teleop import lost_in_control
+from drivers.base import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
+from drivers.config import Config, number
+from drivers.errors import DeviceTimeoutError
+
+_DOWN_B = np.array([0.0, 0.0, -1.0])
+_TILT_SAMPLES = 8  # points along the twist's horizon where the tilt is checked
+_ROUNDING = 1e-12
+
+
+@dataclass(frozen=True)
+class LimitsConfig(Config):
+    """The task YAML's ``limits:`` section (see the module doc): the workspace box of the TCP
+    in B (m), speeds, the tilt from the downward vertical (rad) and the tactile budget."""
+
+    x_min_m: float = number(-2.0, 2.0, default=0.20)
+    x_max_m: float = number(-2.0, 2.0, default=0.55)
+    y_min_m: float = number(-2.0, 2.0, default=-0.25)
+    y_max_m: float = number(-2.0, 2.0, default=0.25)
+    z_min_m: float = number(-2.0, 2.0, default=0.02)
+    z_max_m: float = number(-2.0, 2.0, default=0.40)
+    max_linear_speed_m_s: float = number(0.0, 1.0, default=0.05)
+    max_angular_speed_rad_s: float = number(0.0, math.pi, default=0.5)
+    max_tilt_rad: float = number(0.0, math.pi / 2, default=0.35)
+    wrench_units: Literal["calibrated", "raw"] = "calibrated"
+    max_tilt_torque: float | None = number(0.0, 1e6, default=None)
+    max_twist_torque: float | None = number(0.0, 1e6, default=None)
+    max_normal: float | None = number(0.0, 1e6, default=None)
+    over_budget: Literal["lift_only", "stop"] = "lift_only"
+
+    def __post_init__(self) -> None:
+        for axis in "xyz":
+            low, high = f"{axis}_min_m", f"{axis}_max_m"
+            if not getattr(self, low) < getattr(self, high):
+                raise ValueError(
+                    f"key '{high}': expected a number greater than {low} "
+                    f"({getattr(self, low)!r}), got {getattr(self, high)!r}"
+                )
+
+    @property
+    def box_min_m(self) -> np.ndarray:
+        return np.array([self.x_min_m, self.y_min_m, self.z_min_m])
+
+    @property
+    def box_max_m(self) -> np.ndarray:
+        return np.array([self.x_max_m, self.y_max_m, self.z_max_m])
+
+
+@dataclass(frozen=True)
+class LimitedCommand:
+    """The command to send and the limits that changed it (``speed``, ``workspace``,
+    ``tilt``, ``step``, ``budget:<what>``), empty when it passed unchanged."""
+
+    command: Command
+    limited: tuple[str, ...] = ()
+
+
+def tilt_rad(rpy_rad: tuple[float, float, float]) -> float:
+    """Angle (rad, [0, pi]) between the tool z-axis of ``rpy_rad`` (T2B, the xArm's fixed-axis
+    roll, pitch, yaw) and the downward vertical of B."""
+    return _tilt_of(Rotation.from_euler("xyz", rpy_rad).as_matrix()[:, 2])
+
+
+def over_budget(wrench: WrenchEstimate | None, limits: LimitsConfig) -> str | None:
+    """Which budget the estimate exceeds (``tilt_torque``, ``twist_torque``, ``normal``),
+    or None. ValueError if its units are not ``limits.wrench_units``."""
+    budgets = (limits.max_tilt_torque, limits.max_twist_torque, limits.max_normal)
+    if wrench is None or wrench.zeroing or all(b is None for b in budgets):
+        return None
+    if wrench.calibrated != (limits.wrench_units == "calibrated"):
+        got = "calibrated" if wrench.calibrated else "raw"
+        raise ValueError(
+            f"limits: key 'wrench_units' is '{limits.wrench_units}' but the tactile estimates "
+            f"are {got}: the budget would compare different units"
+        )
+    checks = (
+        ("tilt_torque", math.hypot(wrench.tau_x, wrench.tau_y), limits.max_tilt_torque),
+        ("twist_torque", abs(wrench.tau_z), limits.max_twist_torque),
+        ("normal", abs(wrench.normal), limits.max_normal),
+    )
+    for name, value, budget in checks:
+        if budget is not None and value > budget:
+            return name
+    return None
+
+
+class CommandLimiter:
+    """Applies ``LimitsConfig`` to each command (module doc). ``period_s``: the loop period
+    (the step of a pose target); ``hold_s``: how long a twist is held (its horizon)."""
+
+    def __init__(self, limits: LimitsConfig, period_s: float, hold_s: float) -> None:
+        if not period_s > 0 or not hold_s > 0:
+            raise ValueError(f"period_s and hold_s: expected > 0, got {period_s}, {hold_s}")
+        self.limits = limits
+        self.period_s = period_s
+        self.hold_s = hold_s
+        self._last_target: Pose | None = None  # the previous pose target sent
+
+    def limit(self, command: Command, tcp: Pose, wrench: WrenchEstimate | None) -> LimitedCommand:
+        """``command`` within the limits, from the measured TCP pose ``tcp`` (T2B) and the
+        newest tactile estimate. Call it once per sent command: it remembers the last pose
+        target."""
+        budget = over_budget(wrench, self.limits)
+        limited: list[str] = []
+        if command.twist is not None:
+            self._last_target = None
+            twist = self._limit_twist(command.twist, tcp, limited)
+            if budget is not None:
+                twist = self._unloading_twist(twist)
+                limited.append(f"budget:{budget}")
+            out = Command(twist=twist, gripper=command.gripper,
+                          rezero_tactile=command.rezero_tactile)  # fmt: skip
+        elif command.pose is not None:
+            reference = self._last_target if self._last_target is not None else tcp
+            pose = self._limit_pose(command.pose, reference, limited)
+            if budget is not None:
+                pose = self._unloading_pose(pose, reference)
+                limited.append(f"budget:{budget}")
+            self._last_target = pose
+            out = Command(pose=pose, gripper=command.gripper,
+                          rezero_tactile=command.rezero_tactile)  # fmt: skip
+        else:
+            self._last_target = None
+            out = command
+        return LimitedCommand(out, tuple(limited))
+
+    # -- twists --------------------------------------------------------------------------
+
+    def _limit_twist(self, twist: Twist, tcp: Pose, limited: list[str]) -> Twist:
+        lim = self.limits
+        linear = np.asarray(twist.linear_m_s, dtype=float)
+        angular = np.asarray(twist.angular_rad_s, dtype=float)
+        if not (np.all(np.isfinite(linear)) and np.all(np.isfinite(angular))):
+            raise ValueError(f"command twist: expected finite numbers, got {twist!r}")
+        linear, cut = _scaled_to(linear, lim.max_linear_speed_m_s)
+        angular, turned = _scaled_to(angular, lim.max_angular_speed_rad_s)
+        if cut or turned:
+            limited.append("speed")
+
+        position = np.asarray(tcp.xyz_m, dtype=float)
+        low = np.minimum(0.0, (lim.box_min_m - position) / self.hold_s)
+        high = np.maximum(0.0, (lim.box_max_m - position) / self.hold_s)
+        boxed = np.clip(linear, low, high)
+        if not np.array_equal(boxed, linear):
+            limited.append("workspace")
+
+        z_t = Rotation.from_euler("xyz", tcp.rpy_rad).as_matrix()[:, 2]
+        allowed = max(lim.max_tilt_rad, _tilt_of(z_t)) + _ROUNDING
+        times = np.linspace(self.hold_s / _TILT_SAMPLES, self.hold_s, _TILT_SAMPLES)
+        z_path = Rotation.from_rotvec(np.outer(times, angular)).apply(z_t)
+        if np.any(_tilts_of(z_path) > allowed):
+            angular = np.array([0.0, 0.0, angular[2]])
+            limited.append("tilt")
+        return Twist(_vec3(boxed), _vec3(angular))
+
+    def _unloading_twist(self, twist: Twist) -> Twist:
+        if self.limits.over_budget == "stop":
+            return Twist()
+        return Twist((0.0, 0.0, max(0.0, twist.linear_m_s[2])), (0.0, 0.0, 0.0))
+
+    # -- pose targets ----------------------------------------------------------------------
+
+    def _limit_pose(self, target: Pose, reference: Pose, limited: list[str]) -> Pose:
+        lim = self.limits
+        values = np.asarray((*target.xyz_m, *target.rpy_rad), dtype=float)
+        if not np.all(np.isfinite(values)):
+            raise ValueError(f"command pose: expected finite numbers, got {target!r}")
+        goal_xyz = np.clip(values[:3], lim.box_min_m, lim.box_max_m)
+        if not np.array_equal(goal_xyz, values[:3]):
+            limited.append("workspace")
+        goal_rot = Rotation.from_euler("xyz", values[3:])
+        clamped = _clamp_tilt(goal_rot, lim.max_tilt_rad)
+        if clamped is not goal_rot:
+            limited.append("tilt")
+            goal_rot = clamped
+
+        start = np.asarray(reference.xyz_m, dtype=float)
+        delta = goal_xyz - start
+        max_step_m = lim.max_linear_speed_m_s * self.period_s
+        distance = float(np.linalg.norm(delta))
+        xyz = goal_xyz
+        if distance > max_step_m:
+            xyz = np.clip(start + delta * (max_step_m / distance), lim.box_min_m, lim.box_max_m)
+            limited.append("step")
+
+        start_rot = Rotation.from_euler("xyz", reference.rpy_rad)
+        max_step_rad = lim.max_angular_speed_rad_s * self.period_s
+        angle = (goal_rot * start_rot.inv()).magnitude()
+        rotation = goal_rot
+        if angle > max_step_rad:
+            if "step" not in limited:
+                limited.append("step")
+            slerp = Slerp([0.0, 1.0], Rotation.concatenate([start_rot, goal_rot]))
+            fraction = max_step_rad / angle
+            for _ in range(2):  # the re-clamp turns by at most the step: one halving suffices
+                rotation = _clamp_tilt(slerp(fraction), lim.max_tilt_rad)
+                if (rotation * start_rot.inv()).magnitude() <= max_step_rad + _ROUNDING:
+                    break
+                fraction /= 2.0
+        return Pose(_vec3(xyz), _rpy_near(rotation, target.rpy_rad))
+
+    def _unloading_pose(self, pose: Pose, reference: Pose) -> Pose:
+        if self.limits.over_budget == "stop":
+            return reference
+        x, y, z = reference.xyz_m
+        return Pose((x, y, max(z, pose.xyz_m[2])), reference.rpy_rad)
+
+
+# -- watchdog ------------------------------------------------------------------------------
+
+
+class Watchdog:
+    """Decides each tick whether the loop must stop (module doc). ``trip`` holds the first
+    reason (a one-line message), latched."""
+
+    def __init__(
+        self,
+        tactile_max_age_s: float,
+        max_consecutive_overruns: int,
+        max_overruns_in_window: int,
+        overrun_window_ticks: int,
+    ) -> None:
+        self.tactile_max_age_s = tactile_max_age_s
+        self.max_consecutive_overruns = max_consecutive_overruns
+        self.max_overruns_in_window = max_overruns_in_window
+        self._window: deque[bool] = deque(maxlen=overrun_window_ticks)
+        self._consecutive = 0
+        self.trip: str | None = None
+
+    def check(
+        self,
+        now_s: float,
+        *,
+        frame_t_s: float | None,
+        arm: ArmStatus | None,
+        gripper: GripperStatus | None,
+        teleop: TeleopInput,
+        errors: Mapping[str, Exception],
+    ) -> str | None:
+        """The trip message for this tick's readings, or None. ``errors`` maps a device's
+        role (``arm``, ``gripper``, ``tactile``, ``gamepad``) to the error its read raised."""
+        if errors:
+            role, error = next(iter(errors.items()))  # the first failure is the root cause
+            if role == "tactile" and isinstance(error, DeviceTimeoutError):
+                return self._latch(f"stale tactile frame: {error}")
+            return self._latch(f"device fault ({role}): {error}")
+        if frame_t_s is not None and now_s - frame_t_s > self.tactile_max_age_s:
+            return self._latch(
+                f"stale tactile frame: {now_s - frame_t_s:.3f} s old "
+                f"(budget {self.tactile_max_age_s} s)"
+            )
+        if arm is not None and arm.error_code != 0:
+            return self._latch(f"device fault (arm): error code {arm.error_code}")
+        if gripper is not None and gripper.fault_code != 0:
+            return self._latch(
+                f"device fault (gripper): fault code {gripper.fault_code:#04x} "
+                f"{gripper.fault_message}".rstrip()
+            )
+        if lost_in_control(teleop):
+            return self._latch("gamepad lost while the operator was in control")
+        return self.trip
+
+    def record_tick(self, overran: bool) -> str | None:
+        """Count one finished tick; the trip message if overruns now exceed the policy."""
+        self._window.append(overran)
+        self._consecutive = self._consecutive + 1 if overran else 0
+        if self._consecutive >= self.max_consecutive_overruns:
+            return self._latch(f"overruns: {self._consecutive} in a row")
+        in_window = sum(self._window)
+        if in_window >= self.max_overruns_in_window:
+            return self._latch(f"overruns: {in_window} in the last {len(self._window)} ticks")
+        return self.trip
+
+    def _latch(self, message: str) -> str:
+        if self.trip is None:
+            self.trip = message
+        return self.trip
+
+
+# -- safe stop -----------------------------------------------------------------------------
+
+
+def safe_stop(arm: Arm, gripper: Gripper | None = None) -> Exception | None:
+    """Bring the devices to a safe state; never raises: returns the first error, or None.
+
+    The arm gets ``stop()`` (decelerate, hold position); if that raises, ``emergency_stop()``
+    is tried as well. The gripper is left as commanded: holding the plug is its safe state
+    (opening could drop it, and the Hand-E has no stop of its own), so nothing is sent to it.
+    Errors are returned rather than raised so a caller inside ``finally`` does not mask the
+    exception that brought it there; the control loop reports it in its result.
+    """
+    first: Exception | None = None
+    try:
+        arm.stop()
+    except Exception as error:  # noqa: BLE001 - every failure must leave the others tried
+        first = error
+        try:
+            arm.emergency_stop()
+        except Exception:  # noqa: BLE001,S110 - the first error is the one reported
+            pass
+    del gripper  # nothing to send: see the docstring
+    return first
+
+
+# -- geometry helpers ------------------------------------------------------------------------
+
+
+def _tilt_of(z_t: np.ndarray) -> float:
+    return math.atan2(math.hypot(z_t[0], z_t[1]), -z_t[2])
+
+
+def _tilts_of(z_t: np.ndarray) -> np.ndarray:
+    return np.arctan2(np.hypot(z_t[:, 0], z_t[:, 1]), -z_t[:, 2])
+
+
+def _clamp_tilt(rotation: Rotation, max_tilt_rad: float) -> Rotation:
+    """``rotation`` turned toward vertical along the shortest arc until its tilt is at most
+    ``max_tilt_rad``; the same object when already within."""
+    z_t = rotation.as_matrix()[:, 2]
+    tilt = _tilt_of(z_t)
+    if tilt <= max_tilt_rad + _ROUNDING:
+        return rotation
+    axis = np.cross(z_t, _DOWN_B)
+    norm = float(np.linalg.norm(axis))
+    axis = np.array([1.0, 0.0, 0.0]) if norm < 1e-12 else axis / norm
+    return Rotation.from_rotvec(axis * (tilt - max_tilt_rad)) * rotation
+
+
+def _rpy_near(rotation: Rotation, reference: tuple[float, float, float]) -> tuple[float, ...]:
+    rpy = rotation.as_euler("xyz")
+    ref = np.asarray(reference, dtype=float)
+    return _vec3(rpy + 2.0 * np.pi * np.round((ref - rpy) / (2.0 * np.pi)))
+
+
+def _scaled_to(vector: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
+    norm = float(np.linalg.norm(vector))
+    if norm > limit:
+        return vector * (limit / norm), True
+    return vector, False
+
+
+def _vec3(values: np.ndarray) -> tuple[float, float, float]:
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)

@@ -1,0 +1,379 @@
+"""The control loop on sim twins: pacing, overruns, the watchdog's trips, the safe stop,
+signals, and what it sends. Time is a ManualClock except in one short real-time run."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import signal
+import subprocess
+import sys
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from controller.insertion.interface import Command, GripperTarget, Phase
+from controller.loop import ControlLoop, LoopConfig, LoopStats
+from controller.safety import LimitsConfig
+from controller.tactile import estimator_for_sensor
+from controller.tactile.wrench import WrenchEstimate
+from drivers.base import ArmState, Pose, Twist
+from drivers.clock import MonotonicClock
+from drivers.sim.twins.gamepad import PadEvent
+from tests.controller.conftest import ScriptedEstimator, ScriptedMachine, sim_devices
+
+PERIOD = 0.01
+
+
+class StopSpy:
+    """Wraps the arm, noting the clock time of every ``stop()``."""
+
+    def __init__(self, arm, clock) -> None:
+        self._arm, self._clock = arm, clock
+        self.stops: list[float] = []
+
+    def __getattr__(self, name):
+        return getattr(self._arm, name)
+
+    def stop(self) -> None:
+        self.stops.append(self._clock.now())
+        self._arm.stop()
+
+
+def make_loop(machine, devices, clock, *, estimator=None, observer=None, arm=None, **config):
+    if arm is not None:
+        devices = dataclasses.replace(devices, arm=arm)
+    return ControlLoop(
+        machine,
+        devices,
+        estimator if estimator is not None else ScriptedEstimator(),
+        clock,
+        LoopConfig(**config),
+        observer=observer,
+    )
+
+
+def test_ticks_start_on_deadlines_k_periods_from_the_start(devices, clock):
+    records = []
+    loop = make_loop(ScriptedMachine(done_after=20), devices, clock, observer=records.append)
+    t0 = clock.now()
+    result = loop.run()
+    assert result.reason == "done" and result.phase is Phase.DONE
+    starts = [r.timing.start_s for r in records]
+    assert starts == pytest.approx([t0 + k * PERIOD for k in range(20)], abs=1e-9)
+    assert [r.timing.index for r in records] == list(range(20))
+    assert result.stats.ticks == 20 and result.stats.overruns == 0
+    assert result.stats.period_p50_s == pytest.approx(PERIOD)
+    assert result.stats.lateness_max_s == pytest.approx(0.0, abs=1e-9)
+
+
+def test_a_slow_step_is_an_overrun_and_the_missed_deadlines_are_skipped(devices, clock):
+    def script(obs, k):
+        if k in (3, 7):
+            clock.advance(0.025)  # 2.5 periods of work
+        return Command()
+
+    records = []
+    loop = make_loop(
+        ScriptedMachine(script, done_after=12), devices, clock, observer=records.append
+    )
+    t0 = clock.now()
+    result = loop.run()
+    assert result.stats.overruns == 2 and result.stats.skipped == 4
+    indices = [r.timing.index for r in records]
+    assert indices == [0, 1, 2, 3, 6, 7, 8, 9, 12, 13, 14, 15]
+    assert [r.timing.overran for r in records].count(True) == 2
+    for r in records:  # still on the grid
+        assert r.timing.start_s == pytest.approx(t0 + r.timing.index * PERIOD, abs=1e-9)
+    assert result.stats.period_max_s == pytest.approx(3 * PERIOD)
+    assert result.stats.work_max_s == pytest.approx(0.025)
+
+
+def test_repeated_overruns_trip_the_watchdog(devices, clock):
+    def script(obs, k):
+        clock.advance(0.012)
+        return Command()
+
+    machine = ScriptedMachine(script)
+    loop = make_loop(machine, devices, clock, max_consecutive_overruns=3)
+    result = loop.run()
+    assert result.reason == "fault" and "3 in a row" in result.message
+    assert machine.phase is Phase.FAILED and machine.observations[-1].fault == result.message
+    assert result.stats.overruns == 3
+
+
+def test_overruns_in_a_window_trip_the_watchdog(devices, clock):
+    def script(obs, k):
+        if k % 2 == 0:
+            clock.advance(0.012)
+        return Command()
+
+    loop = make_loop(
+        ScriptedMachine(script), devices, clock, max_consecutive_overruns=3,
+        max_overruns_in_window=4, overrun_window_ticks=10,
+    )  # fmt: skip
+    result = loop.run()
+    assert result.reason == "fault" and "4 in the last" in result.message
+
+
+def test_stats_percentiles():
+    starts = [0.0, 0.010, 0.021, 0.030, 0.040]
+    deadlines = [0.0, 0.010, 0.020, 0.030, 0.040]
+    ends = [0.002, 0.012, 0.023, 0.031, 0.045]
+    stats = LoopStats.of(starts, deadlines, ends, overruns=0, skipped=0)
+    assert stats.ticks == 5
+    assert stats.period_max_s == pytest.approx(0.011)
+    assert stats.period_p50_s == pytest.approx(np.percentile([0.01, 0.011, 0.009, 0.01], 50))
+    assert stats.lateness_max_s == pytest.approx(0.001)
+    assert stats.work_max_s == pytest.approx(0.005)
+    assert math.isnan(LoopStats.of([], [], [], 0, 0).period_p99_s)
+
+
+def test_a_frozen_tactile_stream_trips_the_watchdog_and_stops_the_arm(devices, clock):
+    spy = StopSpy(devices.arm, clock)
+    stalled = []
+
+    def observer(record):
+        if record.timing.index == 20:
+            devices.tactile.stall()
+            stalled.append(clock.now())
+
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.02, 0.0, 0.0))))
+    estimator = ScriptedEstimator()
+    loop = make_loop(machine, devices, clock, estimator=estimator, observer=observer, arm=spy,
+                     tactile_max_age_s=0.1)  # fmt: skip
+    result = loop.run()
+    assert result.reason == "fault" and result.message.startswith("stale tactile frame")
+    assert machine.phase is Phase.FAILED
+    # The newest frame before the stall was at most one frame (40 ms) old; it turns stale
+    # 0.1 s after it was captured, and the stop follows in that tick.
+    assert spy.stops and spy.stops[0] - estimator.pushed[-1] <= 0.1 + PERIOD + 1e-9
+    assert spy.stops[0] - stalled[0] <= 0.1 + PERIOD + 1e-9
+    clock.advance(0.5)
+    assert devices.arm.read_status().state is not ArmState.MOVING
+
+
+def test_a_driver_fault_mid_run_stops_within_one_period(devices, clock):
+    spy = StopSpy(devices.arm, clock)
+    injected = []
+
+    def observer(record):
+        if record.timing.index == 30:
+            devices.arm.inject_fault(21, "simulated joint overcurrent")
+            injected.append(clock.now())
+
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.02, 0.0, 0.0))))
+    result = make_loop(machine, devices, clock, observer=observer, arm=spy).run()
+    assert result.reason == "fault" and "error code 21" in result.message
+    assert len(spy.stops) == 1 and 0 < spy.stops[0] - injected[0] <= PERIOD + 1e-9
+    assert machine.phase is Phase.FAILED
+    assert machine.transitions[-1].reason == "device_fault"
+
+
+def test_a_silent_gripper_is_a_driver_fault(devices, clock):
+    def observer(record):
+        if record.timing.index == 5:
+            devices.gripper.set_responding(False)
+
+    result = make_loop(ScriptedMachine(), devices, clock, observer=observer).run()
+    assert result.reason == "fault" and result.message.startswith("device fault (gripper)")
+
+
+def test_a_refused_command_is_a_driver_fault(devices, clock):
+    devices.arm.emergency_stop()  # latched: motion commands raise, status shows no code
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.01, 0.0, 0.0))))
+    result = make_loop(machine, devices, clock).run()
+    assert result.reason == "fault" and "device fault (arm)" in result.message
+    assert "fault latched" in result.message
+
+
+def takeover_machine(obs, k):
+    return Command(twist=obs.teleop.twist) if obs.teleop.in_control else Command()
+
+
+def test_a_lost_gamepad_in_control_trips_the_watchdog(devices, clock):
+    devices.gamepad.play([PadEvent(0.05, axes={"vx": 0.5}), PadEvent(0.20, attached=False)])
+    records = []
+    machine = ScriptedMachine(takeover_machine)
+    result = make_loop(machine, devices, clock, observer=records.append).run()
+    assert result.reason == "fault" and "gamepad lost" in result.message
+    assert any(r.observation.teleop.in_control for r in records)
+    moving = [r.command.twist.linear_m_s[0] for r in records if r.command and r.command.twist]
+    assert max(moving) > 0  # the operator drove the arm before the pad was lost
+
+
+def test_a_lost_gamepad_not_in_control_does_not_trip(devices, clock):
+    devices.gamepad.play([PadEvent(0.05, attached=False)])
+    result = make_loop(ScriptedMachine(takeover_machine, done_after=50), devices, clock).run()
+    assert result.reason == "done"
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_signal_stops_safely_within_one_period_and_restores_handlers(devices, clock, signum):
+    before = signal.getsignal(signum)
+    spy = StopSpy(devices.arm, clock)
+    sent = []
+
+    def observer(record):
+        if record.timing.index == 10:
+            sent.append(clock.now())
+            os.kill(os.getpid(), signum)
+
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.02, 0.0, 0.0))))
+    result = make_loop(machine, devices, clock, observer=observer, arm=spy).run()
+    assert result.reason == "signal" and result.message == signal.Signals(signum).name
+    assert result.stats.ticks == 11
+    assert len(spy.stops) == 1 and spy.stops[0] - sent[0] <= PERIOD + 1e-9
+    assert signal.getsignal(signum) is before
+
+
+def test_outside_the_main_thread_no_handler_is_installed(devices, clock):
+    seen = []
+    machine = ScriptedMachine(done_after=3)
+    loop = make_loop(machine, devices, clock,
+                     observer=lambda r: seen.append(signal.getsignal(signal.SIGTERM)))  # fmt: skip
+    before = signal.getsignal(signal.SIGTERM)
+    thread = threading.Thread(target=loop.run)
+    thread.start()
+    thread.join()
+    assert seen == [before] * 3 and machine.phase is Phase.DONE
+
+
+def test_an_exception_in_the_machine_still_stops_and_restores(devices, clock):
+    def script(obs, k):
+        if k == 4:
+            raise RuntimeError("bug in a handler")
+        return Command(twist=Twist((0.02, 0.0, 0.0)))
+
+    spy = StopSpy(devices.arm, clock)
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(RuntimeError, match="bug in a handler"):
+        make_loop(ScriptedMachine(script), devices, clock, arm=spy).run()
+    assert len(spy.stops) == 1 and signal.getsignal(signal.SIGTERM) is before
+
+
+def test_safe_stop_errors_are_reported_not_raised(devices, clock):
+    class Broken(StopSpy):
+        def stop(self):
+            raise OSError("link down")
+
+    result = make_loop(
+        ScriptedMachine(done_after=2), devices, clock, arm=Broken(devices.arm, clock)
+    ).run()
+    assert result.reason == "done" and isinstance(result.safe_stop_error, OSError)
+
+
+def test_commands_reach_the_devices(devices, clock):
+    target = GripperTarget(width_m=0.012, speed_m_s=0.05, force_n=20.0)
+    start = devices.arm.read_status().tcp
+
+    def script(obs, k):
+        if k < 50:
+            return Command(twist=Twist((0.02, 0.0, 0.0)), gripper=target)
+        if k == 50:
+            return Command(rezero_tactile=True)
+        goal = Pose((start.xyz_m[0], 0.01, start.xyz_m[2]), start.rpy_rad)
+        return Command(pose=goal, gripper=target)
+
+    moves = []
+    gripper_move = devices.gripper.move
+    devices.gripper.move = lambda *a: (moves.append(a), gripper_move(*a))
+    estimator = ScriptedEstimator()
+    machine = ScriptedMachine(script, done_after=120)
+    result = make_loop(machine, devices, clock, estimator=estimator, rezero_frames=7).run()
+    assert result.reason == "done"
+    after_twist = machine.observations[51].arm.tcp.xyz_m
+    assert after_twist[0] > start.xyz_m[0] + 0.005  # the twist moved it along +x
+    assert devices.arm.read_status().tcp.xyz_m[1] > 0.005  # the pose target along +y
+    assert moves == [(0.012, 0.05, 20.0)]  # sent once: unchanged targets are not resent
+    assert estimator.rezeroed == [7]
+    # A new frame is pushed once: 25 fps frames over 1.2 s of 100 Hz ticks.
+    assert len(estimator.pushed) == len(set(estimator.pushed)) == pytest.approx(30, abs=1)
+
+
+def test_the_tactile_budget_limits_the_command_in_the_loop(devices, clock):
+    def pressed(t_s):
+        base = WrenchEstimate.zero(t_s, zeroing=False, calibrated=True)
+        return dataclasses.replace(base, tau_x=0.03, contact=True, degenerate=False)
+
+    records = []
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.01, 0.0, -0.01))),
+                              done_after=5)  # fmt: skip
+    loop = ControlLoop(
+        machine, devices, ScriptedEstimator(pressed), clock, LoopConfig(),
+        LimitsConfig(max_tilt_torque=0.02), observer=records.append,
+    )  # fmt: skip
+    loop.run()
+    assert all(r.command.twist == Twist() for r in records)
+    assert all("budget:tilt_torque" in r.limited for r in records)
+
+
+def test_max_duration_ends_the_run(devices, clock):
+    t0 = clock.now()
+    result = make_loop(ScriptedMachine(), devices, clock).run(max_duration_s=0.5)
+    assert result.reason == "max_duration" and result.stats.ticks == 50
+    assert clock.now() - t0 == pytest.approx(0.5)
+
+
+def test_with_the_real_estimator(devices, clock):
+    estimator = estimator_for_sensor("gelsight_mini")
+    machine = ScriptedMachine(done_after=30)
+    make_loop(machine, devices, clock, estimator=estimator).run()
+    wrenches = [obs.wrench for obs in machine.observations]
+    assert wrenches[0] is not None and wrenches[-1] is not None
+    assert not wrenches[-1].contact
+
+
+def test_real_time_mode_is_the_same_loop():
+    clock = MonotonicClock()
+    machine = ScriptedMachine(done_after=5)
+    with sim_devices(clock, activate=False) as devices:
+        result = ControlLoop(machine, devices, ScriptedEstimator(), clock).run()
+    assert result.reason == "done" and result.stats.ticks == 5
+
+
+def test_loop_config_checks_its_keys():
+    with pytest.raises(ValueError, match="key 'hold_s': expected at least one period"):
+        LoopConfig(rate_hz=100.0, hold_s=0.005)
+    with pytest.raises(ValueError, match="key 'max_overruns_in_window'"):
+        LoopConfig(max_overruns_in_window=20, overrun_window_ticks=10)
+    with pytest.raises(ValueError, match="key 'rate_hz'"):
+        LoopConfig(rate_hz=0.0)
+
+
+def test_rt_priority_switches_to_sched_fifo_and_back(devices, clock, monkeypatch):
+    calls = []
+    monkeypatch.setattr(os, "sched_getscheduler", lambda pid: os.SCHED_OTHER)
+    monkeypatch.setattr(os, "sched_getparam", lambda pid: os.sched_param(0))
+    monkeypatch.setattr(os, "sched_setscheduler", lambda pid, *a: calls.append(a))
+    make_loop(ScriptedMachine(done_after=2), devices, clock, rt_priority=40).run()
+    assert calls == [(os.SCHED_FIFO, os.sched_param(40)), (os.SCHED_OTHER, os.sched_param(0))]
+
+
+def test_a_refused_rt_priority_is_a_one_line_error_before_any_tick(devices, clock, monkeypatch):
+    def refuse(pid, *args):
+        raise PermissionError(1, "Operation not permitted")
+
+    monkeypatch.setattr(os, "sched_setscheduler", refuse)
+    machine = ScriptedMachine(done_after=2)
+    with pytest.raises(PermissionError, match="key 'rt_priority': SCHED_FIFO priority 40 refused"):
+        make_loop(machine, devices, clock, rt_priority=40).run()
+    assert machine.steps == 0
+
+
+def test_the_bench_script_runs():
+    root = Path(__file__).resolve().parents[2]
+    result = subprocess.run(
+        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--duration-s", "0.3"],
+        capture_output=True, text=True, cwd=root, timeout=120,
+    )  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    assert "tick-start lateness" in result.stdout and "Machine:" in result.stdout
+    bad = subprocess.run(
+        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--rate-hz", "0"],
+        capture_output=True, text=True, cwd=root, timeout=120,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "--rate-hz" in bad.stderr
