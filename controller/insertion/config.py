@@ -149,8 +149,10 @@ class SearchSettings(Config):
     Hole found: the *drag resistance* r (the normalised torque's component about the axis
     z_T x d, d the drag direction in B: the torque an edge catching the tip produces) rises
     by ``hole_rise_sigma`` above its slow average (weight ``reference_alpha``) for
-    ``hole_frames`` successive estimates. Contact lost: the signal norm below
-    ``contact_lost_sigma`` for ``contact_lost_frames`` successive estimates.
+    ``hole_frames`` successive estimates. For the first ``settle_s`` of SEARCH (the preload
+    building up) the average is only learned, with the signals' ``ema_alpha``. Contact lost:
+    the signal norm below ``contact_lost_sigma`` for ``contact_lost_frames`` successive
+    estimates.
     ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
     (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
 
@@ -163,6 +165,7 @@ class SearchSettings(Config):
     hole_rise_sigma: float = number(0.5, 1e4, default=10.0)
     hole_frames: int = number(1, 100, default=3)
     reference_alpha: float = number(0.001, 1.0, default=0.05)
+    settle_s: float = number(0.0, 10.0, default=0.5)
     contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
     contact_lost_frames: int = number(1, 1000, default=15)
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
@@ -262,7 +265,7 @@ class Timeouts(Config):
 
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)
-    search_s: float = number(0.1, 600.0, default=20.0)
+    search_s: float = number(0.1, 600.0, default=30.0)
     align_s: float = number(0.1, 600.0, default=5.0)
     insert_s: float = number(0.1, 600.0, default=8.0)
     backoff_s: float = number(0.1, 600.0, default=3.0)

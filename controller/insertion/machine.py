@@ -72,9 +72,10 @@ class _Stage:
     seen_zeroing: bool = False
     z0_m: float = 0.0  # a height recorded on entry (TCP or tip, per phase)
     s_m: float = 0.0  # SEARCH: path length travelled
-    reference: float | None = None  # SEARCH: slow average of the drag resistance
+    references: list = field(default_factory=lambda: [None, None])  # SEARCH: per tool axis
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
     lost: int = 0  # SEARCH: successive estimates without contact
+    drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last tip velocity
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
 
 
@@ -343,10 +344,18 @@ class InsertionMachine:
         stage, settings = self._stage, self.config.search
         stage.s_m += settings.speed_m_s * self._tick_s
         offset = self._planar(self._pattern.offset(stage.s_m))
-        ahead = self._planar(self._pattern.offset(stage.s_m + 1e-4))
-        drag = ahead - offset
-        drag = drag / np.linalg.norm(drag) if np.linalg.norm(drag) > 0 else drag
+        ahead = self._planar(self._pattern.offset(stage.s_m + 1e-4)) - offset
+        tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        gain = self.config.approach.pose_gain_1_s
+        v_tip = np.zeros(3)
+        v_tip[:2] = settings.speed_m_s * tangent[:2] + gain * (
+            self._hole_xyz[:2] + offset[:2] - tip[:2]
+        )
+        v_tip[:2] = clamp_norm(v_tip[:2], 2.0 * settings.speed_m_s)
+        z_target = stage.z0_m - settings.press_depth_m
+        v_tip[2] = gain * (z_target - obs.arm.tcp.xyz_m[2])
+        v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
         rotation = rotation_of(obs.arm.tcp)
         if new:
             if self.signals.magnitude < settings.contact_lost_sigma:
@@ -355,34 +364,41 @@ class InsertionMachine:
                 stage.lost = 0
             if stage.lost >= settings.contact_lost_frames:
                 return self._fail(obs, FailureReason.CONTACT_LOST)
-            if self._hole_found(rotation, drag):
+            if self._hole_found(obs, rotation, stage.drag):
                 self._go(obs, Phase.ALIGN, "hole_found")
                 return _hold()
-        gain = self.config.approach.pose_gain_1_s
-        target_xy = self._hole_xyz[:2] + offset[:2]
-        v_tip = np.zeros(3)
-        v_tip[:2] = settings.speed_m_s * drag[:2] + gain * (target_xy - tip[:2])
-        z_target = stage.z0_m - settings.press_depth_m
-        v_tip[2] = gain * (z_target - obs.arm.tcp.xyz_m[2])
-        v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
+        stage.drag = np.array([v_tip[0], v_tip[1], 0.0])
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
-    def _hole_found(self, rotation: Rotation, drag: np.ndarray) -> bool:
-        """The drag resistance rule (config.SearchSettings), on one new estimate."""
+    def _hole_found(self, obs: Observation, rotation: Rotation, drag: np.ndarray) -> bool:
+        """The drag resistance rule (config.SearchSettings), on one new estimate; ``drag``:
+        the tip's horizontal velocity last commanded, in B (none below half the search speed).
+
+        The friction torque's axis e = z_T x d lies in T's x-y plane; the tool axis a with
+        the larger |e_a| measures the resistance r = n_a / e_a (n the normalised torque in
+        T), so r is the same for any drag direction served by that axis even though the two
+        axes are measured by different estimators (T x: a dipole tilt torque, T y: the NHHD
+        in-plane torque, by default). Each axis keeps its own reference."""
         stage, settings = self._stage, self.config.search
-        axis = np.cross(rotation.apply([0.0, 0.0, 1.0]), drag)
-        norm = np.linalg.norm(axis)
-        if norm < 1e-9:
+        if np.linalg.norm(drag) < 0.5 * settings.speed_m_s:
             return False
-        resistance = float(np.dot(rotation.apply(self.signals.torque_t), axis / norm))
-        if stage.reference is None:
-            stage.reference = resistance
+        axis_b = np.cross(rotation.apply([0.0, 0.0, 1.0]), drag)
+        norm = np.linalg.norm(axis_b)
+        e_t = rotation.inv().apply(axis_b / norm)
+        a = int(np.argmax(np.abs(e_t[:2])))
+        resistance = float(self.signals.torque_t[a] / e_t[a])
+        reference = stage.references[a]
+        if reference is None or obs.t_s - stage.entered_t_s < settings.settle_s:
+            alpha = self.config.signals.ema_alpha
+            previous = resistance if reference is None else reference
+            stage.references[a] = alpha * resistance + (1.0 - alpha) * previous
+            stage.count = 0
             return False
-        rising = resistance - stage.reference >= settings.hole_rise_sigma
+        rising = resistance - reference >= settings.hole_rise_sigma
         stage.count = stage.count + 1 if rising else 0
         if not rising:
             alpha = settings.reference_alpha
-            stage.reference = alpha * resistance + (1.0 - alpha) * stage.reference
+            stage.references[a] = alpha * resistance + (1.0 - alpha) * reference
         return stage.count >= settings.hole_frames
 
     def _align(self, obs: Observation, new: bool) -> Command:

@@ -77,7 +77,8 @@ class SearchPattern:
 
     ``spiral``: Archimedean, r = pitch theta / (2 pi), out to radius sqrt(2) half_width
     (the corners of the uncertainty square); s ~ pitch theta^2 / (4 pi).
-    ``raster``: lines along u from -half_width to half_width, ``pitch`` apart in v.
+    ``raster``: from the centre straight to the corner (-half_width, -half_width), then lines
+    along u from -half_width to half_width, ``pitch`` apart in v.
     """
 
     def __init__(self, kind: str, pitch_m: float, half_width_m: float) -> None:
@@ -90,8 +91,9 @@ class SearchPattern:
             self.length_m = self._a * theta_max**2 / 2.0
         else:
             self._lines = int(math.floor(2.0 * half_width_m / pitch_m + 1e-9)) + 1
+            self._lead_m = math.sqrt(2.0) * half_width_m
             span = 2.0 * half_width_m
-            self.length_m = self._lines * span + (self._lines - 1) * pitch_m
+            self.length_m = self._lead_m + self._lines * span + (self._lines - 1) * pitch_m
 
     def offset(self, s_m: float) -> np.ndarray:
         """(u, v) offset in m at path length ``s_m`` (folded into the path)."""
@@ -108,6 +110,9 @@ class SearchPattern:
         return np.array([r * math.cos(theta), r * math.sin(theta)])
 
     def _raster(self, s: float) -> np.ndarray:
+        if s < self._lead_m:
+            return -np.full(2, s / math.sqrt(2.0))
+        s -= self._lead_m
         span = 2.0 * self.half_width_m
         unit = span + self.pitch_m
         line = min(int(s // unit), self._lines - 1)
