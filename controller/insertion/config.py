@@ -78,8 +78,8 @@ class NoiseFloor(Config):
     noise-free (simulated) signal does not make every departure infinitely significant:
     ``tilt`` (tau_x, tau_y), ``inplane`` (tau_z), ``shear`` (shear_x, shear_y), ``normal``."""
 
-    tilt: float = number(1e-9, 1e3, default=0.002)
-    inplane: float = number(1e-9, 1e3, default=0.02)
+    tilt: float = number(1e-9, 1e3, default=0.0002)
+    inplane: float = number(1e-9, 1e3, default=0.005)
     shear: float = number(1e-9, 1e3, default=0.002)
     normal: float = number(1e-9, 1e3, default=0.002)
 
@@ -148,8 +148,11 @@ class SearchSettings(Config):
 
     Hole found: the *drag resistance* r (the normalised torque's component about the axis
     z_T x d, d the drag direction in B: the torque an edge catching the tip produces) rises
-    by ``hole_rise_sigma`` above its slow average (weight ``reference_alpha``) for
-    ``hole_frames`` successive estimates. For the first ``settle_s`` of SEARCH (the preload
+    by max(``hole_rise_sigma``, ``hole_rise_ratio`` x |expected|) above the expected
+    resistance for ``hole_frames`` successive estimates. Expected: the present load (the
+    normalised axial force, at least 1) times the slow average (weight ``reference_alpha``)
+    of r / load, since friction grows with the load (the drag direction is filtered like
+    the signals, so their lags match). For the first ``settle_s`` of SEARCH (the preload
     building up) the average is only learned, with the signals' ``ema_alpha``. Contact lost:
     the signal norm below ``contact_lost_sigma`` for ``contact_lost_frames`` successive
     estimates.
@@ -163,6 +166,7 @@ class SearchSettings(Config):
     uncertainty_yaw_rad: float = number(0.0, 0.5, default=3 * _DEG)
     press_depth_m: float = number(0.0, 0.01, default=0.001)
     hole_rise_sigma: float = number(0.5, 1e4, default=10.0)
+    hole_rise_ratio: float = number(0.0, 100.0, default=1.0)
     hole_frames: int = number(1, 100, default=3)
     reference_alpha: float = number(0.001, 1.0, default=0.05)
     settle_s: float = number(0.0, 10.0, default=0.5)
@@ -205,7 +209,7 @@ class InsertSettings(Config):
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
     depth_m: float = number(1e-4, 0.05, default=0.005)
     compliance_scale: float = number(0.0, 1.0, default=0.5)
-    force_budget: float = number(1e-6, 1e4, default=0.3)
+    force_budget: float = number(1e-6, 1e4, default=0.2)
     jam_rise_sigma: float = number(0.5, 1e4, default=15.0)
     jam_frames: int = number(1, 100, default=3)
 
@@ -250,9 +254,9 @@ class Limits(Config):
     plug's tilt from straight down. Every command's twist is bounded by
     ``max_linear_m_s`` and ``max_angular_rad_s`` (norms)."""
 
-    tilt_torque_limit: float = number(1e-6, 1e4, default=1.5)
-    inplane_torque_limit: float = number(1e-6, 1e6, default=15.0)
-    force_limit: float = number(1e-6, 1e4, default=1.0)
+    tilt_torque_limit: float = number(1e-6, 1e4, default=0.05)
+    inplane_torque_limit: float = number(1e-6, 1e6, default=2.5)
+    force_limit: float = number(1e-6, 1e4, default=0.5)
     max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=30 * _DEG)
     max_linear_m_s: float = number(1e-4, 0.5, default=0.05)
     max_angular_rad_s: float = number(1e-3, 3.0, default=0.6)

@@ -48,6 +48,7 @@ from controller.insertion.signals import TactileSignals
 from drivers.base import Twist
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
+_STEADY_COSINE = 0.95  # SEARCH judges the drag resistance only on a steady drag direction
 _MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only
 _TIMEOUT_KEYS = {
     Phase.GRASP: "grasp_s",
@@ -73,9 +74,11 @@ class _Stage:
     z0_m: float = 0.0  # a height recorded on entry (TCP or tip, per phase)
     s_m: float = 0.0  # SEARCH: path length travelled
     references: list = field(default_factory=lambda: [None, None])  # SEARCH: per tool axis
+    learned: list = field(default_factory=lambda: [0, 0])  # SEARCH: samples per tool axis
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
     lost: int = 0  # SEARCH: successive estimates without contact
-    drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last tip velocity
+    drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: filtered drag
+    pending_drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # latest command
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
 
 
@@ -364,41 +367,60 @@ class InsertionMachine:
                 stage.lost = 0
             if stage.lost >= settings.contact_lost_frames:
                 return self._fail(obs, FailureReason.CONTACT_LOST)
-            if self._hole_found(obs, rotation, stage.drag):
+            if self._hole_found(obs, rotation, stage.drag, stage.pending_drag):
                 self._go(obs, Phase.ALIGN, "hole_found")
                 return _hold()
-        stage.drag = np.array([v_tip[0], v_tip[1], 0.0])
+            alpha = self.config.signals.ema_alpha
+            stage.drag = alpha * stage.pending_drag + (1.0 - alpha) * stage.drag
+        stage.pending_drag = np.array([v_tip[0], v_tip[1], 0.0])
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
-    def _hole_found(self, obs: Observation, rotation: Rotation, drag: np.ndarray) -> bool:
+    def _hole_found(
+        self, obs: Observation, rotation: Rotation, drag: np.ndarray, commanded: np.ndarray
+    ) -> bool:
         """The drag resistance rule (config.SearchSettings), on one new estimate; ``drag``:
-        the tip's horizontal velocity last commanded, in B (none below half the search speed).
+        the tip's commanded horizontal velocity in B, filtered like the signals (so its lag
+        matches theirs), ``commanded`` the latest. Judged only while dragging steadily:
+        ``drag`` at least half the search speed and within acos(0.95) of ``commanded``.
 
         The friction torque's axis e = z_T x d lies in T's x-y plane; the tool axis a with
         the larger |e_a| measures the resistance r = n_a / e_a (n the normalised torque in
         T), so r is the same for any drag direction served by that axis even though the two
         axes are measured by different estimators (T x: a dipole tilt torque, T y: the NHHD
-        in-plane torque, by default). Each axis keeps its own reference."""
+        in-plane torque, by default). Friction grows with the load, so each axis keeps the
+        ratio of r to the load (the normalised axial force, at least 1) as its reference,
+        and the expected resistance is that ratio times the present load."""
         stage, settings = self._stage, self.config.search
-        if np.linalg.norm(drag) < 0.5 * settings.speed_m_s:
-            return False
-        axis_b = np.cross(rotation.apply([0.0, 0.0, 1.0]), drag)
-        norm = np.linalg.norm(axis_b)
-        e_t = rotation.inv().apply(axis_b / norm)
-        a = int(np.argmax(np.abs(e_t[:2])))
-        resistance = float(self.signals.torque_t[a] / e_t[a])
-        reference = stage.references[a]
-        if reference is None or obs.t_s - stage.entered_t_s < settings.settle_s:
-            alpha = self.config.signals.ema_alpha
-            previous = resistance if reference is None else reference
-            stage.references[a] = alpha * resistance + (1.0 - alpha) * previous
+        speed = float(np.linalg.norm(drag))
+        if speed < 0.5 * settings.speed_m_s or np.dot(drag, commanded) < _STEADY_COSINE * (
+            speed * np.linalg.norm(commanded)
+        ):
             stage.count = 0
             return False
-        rising = resistance - reference >= settings.hole_rise_sigma
+        axis_b = np.cross(rotation.apply([0.0, 0.0, 1.0]), drag)
+        e_t = rotation.inv().apply(axis_b / np.linalg.norm(axis_b))
+        a = int(np.argmax(np.abs(e_t[:2])))
+        resistance = float(self.signals.torque_t[a] / e_t[a])
+        load = max(self.signals.axial_force_n, 1.0)
+        ratio = stage.references[a]
+        stage.learned[a] += 1
+        if (
+            ratio is None
+            or stage.learned[a] <= settings.hole_frames
+            or obs.t_s - stage.entered_t_s < settings.settle_s
+        ):
+            alpha = self.config.signals.ema_alpha
+            previous = resistance / load if ratio is None else ratio
+            stage.references[a] = alpha * resistance / load + (1.0 - alpha) * previous
+            stage.count = 0
+            return False
+        expected = ratio * load
+        rise = max(settings.hole_rise_sigma, settings.hole_rise_ratio * abs(expected))
+        rising = resistance - expected >= rise
         stage.count = stage.count + 1 if rising else 0
         if not rising:
             alpha = settings.reference_alpha
-            stage.references[a] = alpha * resistance + (1.0 - alpha) * reference
+            stage.references[a] = alpha * resistance / load + (1.0 - alpha) * ratio
         return stage.count >= settings.hole_frames
 
     def _align(self, obs: Observation, new: bool) -> Command:

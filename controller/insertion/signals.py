@@ -101,6 +101,11 @@ class TactileSignals:
         return self._filtered * self._sigma
 
     @property
+    def axial_force_n(self) -> float:
+        """The filtered force along T z in noise units (see ``axial_force``)."""
+        return float((self.s2t @ self._filtered[3:])[2])
+
+    @property
     def axial_force(self) -> float:
         """The filtered force along T z (toward the plug's tip), estimate units: the force
         vector (shear_x, shear_y, normal) of S, relative to its baseline, rotated into T.
