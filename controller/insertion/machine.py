@@ -34,7 +34,6 @@ from controller.insertion.interface import (
     Transition,
 )
 from controller.insertion.motion import (
-    SearchPattern,
     approach_rotation,
     bounded_twist,
     clamp_norm,
@@ -44,11 +43,11 @@ from controller.insertion.motion import (
     tilt_from_down,
     tip_position,
 )
+from controller.insertion.search import HoleDetector, SearchPattern
 from controller.insertion.signals import TactileSignals
 from drivers.base import Twist
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
-_STEADY_COSINE = 0.95  # SEARCH judges the drag resistance only on a steady drag direction
 _MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only
 _TIMEOUT_KEYS = {
     Phase.GRASP: "grasp_s",
@@ -69,16 +68,13 @@ class _Stage:
     entered_t_s: float
     name: str = ""
     since_t_s: float = 0.0  # when ``name`` began, or a condition started to hold
-    count: int = 0  # successive new estimates satisfying the phase's rule
+    count: int = 0  # successive new estimates satisfying the phase's rule (SEARCH: no contact)
     seen_zeroing: bool = False
     z0_m: float = 0.0  # a height recorded on entry (TCP or tip, per phase)
     s_m: float = 0.0  # SEARCH: path length travelled
-    references: list = field(default_factory=lambda: [None, None])  # SEARCH: per tool axis
-    learned: list = field(default_factory=lambda: [0, 0])  # SEARCH: samples per tool axis
+    detector: HoleDetector | None = None  # SEARCH: the hole-found rule
+    v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
-    lost: int = 0  # SEARCH: successive estimates without contact
-    drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: filtered drag
-    pending_drag: np.ndarray = field(default_factory=lambda: np.zeros(3))  # latest command
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
 
 
@@ -139,7 +135,7 @@ class InsertionMachine:
     def step(self, observation: Observation) -> Command:
         """One tick: the command for ``observation`` (see the module doc for the order)."""
         obs = observation
-        dt = 0.0 if self._last_t_s is None else min(max(obs.t_s - self._last_t_s, 0.0), _MAX_DT_S)
+        dt = 0.0 if self._last_t_s is None else max(obs.t_s - self._last_t_s, 0.0)
         self._last_t_s = obs.t_s
         self._tick_s = dt
         if self._stage is None:
@@ -160,7 +156,7 @@ class InsertionMachine:
             self._go(obs, Phase.TELEOP, "operator_takeover")
         if self._phase is Phase.TELEOP:
             return self._teleop(obs)
-        failure = self._checks(obs, new)
+        failure = self._checks(obs)
         if failure is not None:
             return failure
         if self._phase in _HOLDING and self._slipped(obs, new):
@@ -201,7 +197,7 @@ class InsertionMachine:
 
     # -- checks common to the autonomous phases ------------------------------------------
 
-    def _checks(self, obs: Observation, new: bool) -> Command | None:
+    def _checks(self, obs: Observation) -> Command | None:
         """FAILED for a timeout or an exceeded hard limit, else None."""
         timeouts = self.config.timeouts
         in_phase = obs.t_s - self._stage.entered_t_s
@@ -345,83 +341,33 @@ class InsertionMachine:
     def _search(self, obs: Observation, new: bool) -> Command:
         """Drag the tip along the pattern with a preload; watch the drag resistance."""
         stage, settings = self._stage, self.config.search
-        stage.s_m += settings.speed_m_s * self._tick_s
+        if stage.detector is None:
+            stage.detector = HoleDetector(settings, self.config.signals.ema_alpha)
+        stage.s_m += settings.speed_m_s * min(self._tick_s, _MAX_DT_S)
         offset = self._planar(self._pattern.offset(stage.s_m))
         ahead = self._planar(self._pattern.offset(stage.s_m + 1e-4)) - offset
         tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
         gain = self.config.approach.pose_gain_1_s
+        rotation = rotation_of(obs.arm.tcp)
+        if new:
+            stage.count = stage.count + 1 if (
+                self.signals.magnitude < settings.contact_lost_sigma
+            ) else 0
+            if stage.count >= settings.contact_lost_frames:
+                return self._fail(obs, FailureReason.CONTACT_LOST)
+            elapsed = obs.t_s - stage.entered_t_s
+            if stage.detector.update(self.signals, rotation, stage.v_tip, elapsed):
+                self._go(obs, Phase.ALIGN, "hole_found")
+                return _hold()
         v_tip = np.zeros(3)
         v_tip[:2] = settings.speed_m_s * tangent[:2] + gain * (
             self._hole_xyz[:2] + offset[:2] - tip[:2]
         )
         v_tip[:2] = clamp_norm(v_tip[:2], 2.0 * settings.speed_m_s)
-        z_target = stage.z0_m - settings.press_depth_m
-        v_tip[2] = gain * (z_target - obs.arm.tcp.xyz_m[2])
-        v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
-        rotation = rotation_of(obs.arm.tcp)
-        if new:
-            if self.signals.magnitude < settings.contact_lost_sigma:
-                stage.lost += 1
-            else:
-                stage.lost = 0
-            if stage.lost >= settings.contact_lost_frames:
-                return self._fail(obs, FailureReason.CONTACT_LOST)
-            if self._hole_found(obs, rotation, stage.drag, stage.pending_drag):
-                self._go(obs, Phase.ALIGN, "hole_found")
-                return _hold()
-            alpha = self.config.signals.ema_alpha
-            stage.drag = alpha * stage.pending_drag + (1.0 - alpha) * stage.drag
-        stage.pending_drag = np.array([v_tip[0], v_tip[1], 0.0])
-        return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
-
-    def _hole_found(
-        self, obs: Observation, rotation: Rotation, drag: np.ndarray, commanded: np.ndarray
-    ) -> bool:
-        """The drag resistance rule (config.SearchSettings), on one new estimate; ``drag``:
-        the tip's commanded horizontal velocity in B, filtered like the signals (so its lag
-        matches theirs), ``commanded`` the latest. Judged only while dragging steadily:
-        ``drag`` at least half the search speed and within acos(0.95) of ``commanded``.
-
-        The friction torque's axis e = z_T x d lies in T's x-y plane; the tool axis a with
-        the larger |e_a| measures the resistance r = n_a / e_a (n the normalised torque in
-        T), so r is the same for any drag direction served by that axis even though the two
-        axes are measured by different estimators (T x: a dipole tilt torque, T y: the NHHD
-        in-plane torque, by default). Friction grows with the load, so each axis keeps the
-        ratio of r to the load (the normalised axial force, at least 1) as its reference,
-        and the expected resistance is that ratio times the present load."""
-        stage, settings = self._stage, self.config.search
-        speed = float(np.linalg.norm(drag))
-        if speed < 0.5 * settings.speed_m_s or np.dot(drag, commanded) < _STEADY_COSINE * (
-            speed * np.linalg.norm(commanded)
-        ):
-            stage.count = 0
-            return False
-        axis_b = np.cross(rotation.apply([0.0, 0.0, 1.0]), drag)
-        e_t = rotation.inv().apply(axis_b / np.linalg.norm(axis_b))
-        a = int(np.argmax(np.abs(e_t[:2])))
-        resistance = float(self.signals.torque_t[a] / e_t[a])
-        load = max(self.signals.axial_force_n, 1.0)
-        ratio = stage.references[a]
-        stage.learned[a] += 1
-        if (
-            ratio is None
-            or stage.learned[a] <= settings.hole_frames
-            or obs.t_s - stage.entered_t_s < settings.settle_s
-        ):
-            alpha = self.config.signals.ema_alpha
-            previous = resistance / load if ratio is None else ratio
-            stage.references[a] = alpha * resistance / load + (1.0 - alpha) * previous
-            stage.count = 0
-            return False
-        expected = ratio * load
-        rise = max(settings.hole_rise_sigma, settings.hole_rise_ratio * abs(expected))
-        rising = resistance - expected >= rise
-        stage.count = stage.count + 1 if rising else 0
-        if not rising:
-            alpha = settings.reference_alpha
-            stage.references[a] = alpha * resistance / load + (1.0 - alpha) * ratio
-        return stage.count >= settings.hole_frames
+        v_tip[2] = gain * (stage.z0_m - settings.press_depth_m - obs.arm.tcp.xyz_m[2])
+        stage.v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
+        return self._tip_command(obs, stage.v_tip, self._hold_rotation(rotation))
 
     def _align(self, obs: Observation, new: bool) -> Command:
         """Turn about the tip to null the torques and upright the plug."""

@@ -7,13 +7,13 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from controller.insertion.motion import (
-    SearchPattern,
     approach_rotation,
     bounded_twist,
     pivot_twist,
     tilt_from_down,
     tip_position,
 )
+from controller.insertion.search import SearchPattern
 from drivers.base import Pose
 
 

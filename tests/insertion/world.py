@@ -20,6 +20,7 @@ from scipy.spatial.transform import Rotation
 from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry, s2t_matrix
 from controller.insertion.interface import Command, Observation, Phase, TeleopInput
 from controller.insertion.machine import InsertionMachine
+from controller.insertion.motion import cross
 from controller.tactile.wrench import WrenchEstimate
 from drivers.base import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
 
@@ -147,7 +148,7 @@ class ToyWorld:
         tip = self.tip
         z_t = self.rotation.apply([0.0, 0.0, 1.0])
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
-        drag_axis = np.cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
+        drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
         if self.board and tip[2] < surface:
             if in_region:
@@ -157,8 +158,8 @@ class ToyWorld:
         if self.board and tip[2] < surface:
             if self.caught:
                 angle = math.acos(float(np.clip(np.dot(z_t, [0.0, 0.0, -1.0]), -1, 1)))
-                cross = np.cross(z_t, [0.0, 0.0, -1.0])
-                axis = cross / np.linalg.norm(cross) if np.linalg.norm(cross) > 1e-12 else cross
+                turn = cross(z_t, [0.0, 0.0, -1.0])
+                axis = turn / np.linalg.norm(turn) if np.linalg.norm(turn) > 1e-12 else turn
                 torque_b += self.catch * drag_axis - self.upright * angle * axis
                 normal = self.wall_normal
                 if self.jam_depth_m is not None and tip[2] < surface - self.jam_depth_m:
@@ -211,7 +212,7 @@ class ToyWorld:
         if command.twist is not None:
             v = np.array(command.twist.linear_m_s)
             w = np.array(command.twist.angular_rad_s)
-            self.v_tip = v + np.cross(w, self.tip - self.p)
+            self.v_tip = v + cross(w, self.tip - self.p)
             self.p = self.p + v * DT_S
             self.rotation = Rotation.from_rotvec(w * DT_S) * self.rotation
         self.t_s += DT_S
