@@ -17,6 +17,7 @@ from controller.insertion.config import (
     Timeouts,
 )
 from controller.insertion.interface import Phase
+from controller.insertion.search import SearchPattern
 from tests.insertion.world import ToyWorld, make_machine, path
 
 HAPPY = [
@@ -116,6 +117,18 @@ def test_search_timeout():
     assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
     assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
     assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(2.0, abs=0.02)
+
+
+@pytest.mark.parametrize("pattern", ["spiral", "raster"])
+def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
+    world = ToyWorld(hole_offset_m=(0.02, 0.0), seed=5)
+    search = replace(SearchSettings(), pattern=pattern)
+    cfg = config(search=search, timeouts=replace(Timeouts(), search_s=24.0))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.FAILED, max_s=60.0)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
+    covered = SearchPattern(pattern, search.pitch_m, search.uncertainty_xy_m).length_m
+    assert 24.0 * search.speed_m_s > covered  # the whole pattern was dragged
 
 
 def test_total_timeout():
@@ -233,8 +246,17 @@ def test_slip_regrasp_beyond_the_retries_fails():
     assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
 
 
-@pytest.mark.parametrize("phase", [Phase.GRASP, Phase.SEARCH, Phase.INSERT, Phase.RETRACT])
-@pytest.mark.parametrize("source", ["loop", "arm", "gripper"])
+@pytest.mark.parametrize(
+    ("phase", "source"),
+    [
+        (Phase.GRASP, "loop"),
+        (Phase.APPROACH, "gripper"),
+        (Phase.SEARCH, "arm"),
+        (Phase.ALIGN, "loop"),
+        (Phase.INSERT, "gripper"),
+        (Phase.RETRACT, "arm"),
+    ],
+)
 def test_a_device_fault_fails_from_any_phase(phase, source):
     world = ToyWorld()
     machine = make_machine(world)
