@@ -313,7 +313,8 @@ class InsertionMachine:
         return _hold()
 
     def _approach(self, obs: Observation, new: bool) -> Command:
-        """Servo to the tilted pose above the opening, then descend until contact."""
+        """Servo to the tilted pose above the opening (rising first if the tip is below its
+        height there, so the plug never sweeps over the board), then descend until contact."""
         stage, settings = self._stage, self.config.approach
         rotation = rotation_of(obs.arm.tcp)
         target_tip = self._hole_xyz + np.array([0.0, 0.0, settings.height_m])
@@ -321,6 +322,9 @@ class InsertionMachine:
             target_tcp = target_tip - self._approach_rot.apply([0.0, 0.0, self.plug.length_m])
             error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
             turn = rotation_error(rotation, self._approach_rot)
+            tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
+            if tip_z < target_tip[2] - settings.pose_tol_m:
+                error[:2] = 0.0
             if np.linalg.norm(error) <= settings.pose_tol_m and (
                 np.linalg.norm(turn) <= settings.angle_tol_rad
             ):

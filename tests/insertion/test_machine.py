@@ -79,6 +79,19 @@ def test_grasp_settles_then_rezeroes_then_measures_the_baseline():
     assert world.rezero_count == 1
 
 
+def test_approach_from_below_rises_before_moving_sideways():
+    world = ToyWorld()
+    machine = make_machine(world)
+    world.run_until(machine, Phase.APPROACH)
+    world.p = world.p + np.array([0.01, 0.0, -0.037])  # tip 3 mm above the board, 10 mm off
+    start = world.p.copy()
+    target_z = world.hole.z_m + MachineConfig().approach.height_m
+    while world.tip[2] < target_z - 0.0005:
+        world.step(machine)
+        assert abs(world.p[0] - start[0]) < 1e-3  # no sideways travel while low
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+
+
 def test_a_jam_backs_off_and_realigns_then_succeeds():
     world = ToyWorld(jam_depth_m=0.002, jams=1)
     machine = make_machine(world)
