@@ -4,7 +4,7 @@ The phases, their rules and the transition table are documented in docs/ARCHITEC
 ("Insertion state machine"); the table itself is data (``definition.py``), checked when the
 machine is built, and every transition the machine takes must be in it. Each tick, in this
 order: a device fault ends the run; the e-stop button latches ESTOP; an operator in control
-takes over (TELEOP); the timeouts, the slip policy and the hard limits are checked; then the
+takes over (TELEOP); the timeouts, the hard limits and the slip policy are checked; then the
 current phase's handler computes the command and may move on.
 """
 
@@ -69,8 +69,7 @@ class _Stage:
     name: str = ""
     since_t_s: float = 0.0  # when ``name`` began, or a condition started to hold
     count: int = 0  # successive new estimates satisfying the phase's rule (SEARCH: no contact)
-    seen_zeroing: bool = False
-    z0_m: float = 0.0  # a height recorded on entry (TCP or tip, per phase)
+    z0_m: float = 0.0  # the TCP's height on entry
     s_m: float = 0.0  # SEARCH: path length travelled
     detector: HoleDetector | None = None  # SEARCH: the hole-found rule
     v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command
