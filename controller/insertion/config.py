@@ -1,0 +1,346 @@
+"""The insertion machine's configuration: the task file's ``machine:``, ``plug:`` and ``hole:``
+sections (configs/tasks/usb_c.yaml, usb_a.yaml).
+
+Units are SI and in the key names. Tactile thresholds come in two kinds:
+
+* **noise units** (keys ending ``_sigma``): a filtered tactile signal's departure from its
+  per-run baseline divided by that channel's noise, both measured on the first
+  ``signals.baseline_frames`` contact-free estimates after zeroing (``signals.py``). They do
+  not depend on whether the estimate is calibrated;
+* **estimate units** (keys ``noise_floor.*``, ``limits.*_limit``, ``insert.force_budget``):
+  the ``WrenchEstimate``'s own units -- raw (uncalibrated): tilt torques, shear and normal in
+  mm, the in-plane torque in mm^2; calibrated: N*m and N. A budget or limit cannot be relative.
+
+Frames: ``B`` the arm base, ``T`` the tool (TCP at the grasp point, z along the plug toward its
+tip), ``S`` the tactile sensor. ``signals.torque_axes`` says which axis of T each of S's axes
+is (docs/ARCHITECTURE.md, "Insertion state machine").
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+import numpy as np
+
+from drivers.config import Config, ConfigError, build, number
+
+SignedAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
+_AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
+_DEG = math.pi / 180.0
+
+
+@dataclass(frozen=True)
+class PlugGeometry(Config):
+    """The grasped plug (task file ``plug:``): its cross-section ``width_m`` (along T x) by
+    ``thickness_m`` (along the gripper's closing axis), and ``length_m`` from the grasp point
+    (the TCP) to the tip, along T z."""
+
+    width_m: float = number(1e-4, 0.1, default=0.00825)
+    thickness_m: float = number(1e-4, 0.05, default=0.0024)
+    length_m: float = number(0.0, 0.2, default=0.012)
+
+
+@dataclass(frozen=True)
+class HoleNominal(Config):
+    """The opening's nominal pose in B (task file ``hole:``): ``x_m``, ``y_m``, ``z_m`` the
+    centre of the opening at the board surface, ``yaw_rad`` the angle of its width axis from
+    B's x axis. The true pose differs by up to ``machine.search.uncertainty_*``."""
+
+    x_m: float = number(-2.0, 2.0, default=0.4)
+    y_m: float = number(-2.0, 2.0, default=0.0)
+    z_m: float = number(-1.0, 2.0, default=0.1)
+    yaw_rad: float = number(-math.pi, math.pi, default=0.0)
+
+
+@dataclass(frozen=True)
+class GripperSettings(Config):
+    """Grasp and release. The close command targets ``close_width_m`` (below the plug's
+    thickness, so the fingers stop on it) at ``close_speed_m_s`` with ``close_force_n``; the
+    grasp has settled once the gripper reports holding, not moving, for ``settle_s``. Release
+    opens to ``open_width_m`` at ``open_speed_m_s``. A re-grasp (slip policy ``regrasp``)
+    first opens by ``regrasp_gap_m`` beyond the current width, then closes again."""
+
+    close_width_m: float = number(0.0, 0.05, default=0.0)
+    close_speed_m_s: float = number(0.001, 0.2, default=0.02)
+    close_force_n: float = number(1.0, 200.0, default=40.0)
+    open_width_m: float = number(0.001, 0.05, default=0.02)
+    open_speed_m_s: float = number(0.001, 0.2, default=0.05)
+    settle_s: float = number(0.0, 5.0, default=0.3)
+    regrasp_gap_m: float = number(0.0, 0.01, default=0.0005)
+
+
+@dataclass(frozen=True)
+class NoiseFloor(Config):
+    """Lowest noise level each channel group is credited with, in estimate units, so a
+    noise-free (simulated) signal does not make every departure infinitely significant:
+    ``tilt`` (tau_x, tau_y), ``inplane`` (tau_z), ``shear`` (shear_x, shear_y), ``normal``."""
+
+    tilt: float = number(1e-9, 1e3, default=0.0002)
+    inplane: float = number(1e-9, 1e3, default=0.005)
+    shear: float = number(1e-9, 1e3, default=0.002)
+    normal: float = number(1e-9, 1e3, default=0.002)
+
+
+@dataclass(frozen=True)
+class SignalSettings(Config):
+    """How the tactile estimate becomes the machine's signals.
+
+    ``zeroing_frames``: frames the loop averages into the new reference when the machine asks
+    for a re-zero (``TactileEstimator.rezero``). ``baseline_frames``: contact-free estimates
+    after zeroing from which each channel's mean (subtracted) and noise (standard deviation,
+    at least its ``noise_floor``) are measured. ``ema_alpha``: weight of a new estimate in the
+    exponential moving average of every normalised channel (1: no filtering). ``torque_axes``:
+    which signed axis of T each of S's x, y, z axes is (a proper rotation); default: image
+    columns along the plug's width (T x), image rows down toward the fingertips (T z), so the
+    camera's axis S z is -T y.
+    """
+
+    zeroing_frames: int = number(1, 100, default=5)
+    baseline_frames: int = number(2, 200, default=10)
+    ema_alpha: float = number(0.01, 1.0, default=0.4)
+    noise_floor: NoiseFloor = field(default_factory=NoiseFloor)
+    torque_axes: tuple[SignedAxis, SignedAxis, SignedAxis] = ("+x", "+z", "-y")
+
+    def __post_init__(self) -> None:
+        try:
+            s2t_matrix(self.torque_axes)
+        except ValueError as exc:
+            raise ValueError(f"key 'torque_axes': {exc}") from None
+
+
+@dataclass(frozen=True)
+class ApproachSettings(Config):
+    """APPROACH: move the tip to ``height_m`` above the nominal opening with the plug tilted by
+    ``tilt_rad`` about T's ``tilt_axis`` (the paper's tilted approach), moving at up to
+    ``move_speed_m_s`` / ``rotate_speed_rad_s`` until within ``pose_tol_m`` / ``angle_tol_rad``;
+    the position and orientation servo of every phase has the gain ``pose_gain_1_s`` (speed
+    = gain x error, bounded). Then descend at ``descend_speed_m_s`` until contact: the norm
+    of the normalised signals at least ``contact_sigma`` for ``contact_frames`` successive
+    estimates. A tip more than
+    ``overtravel_m`` below the board surface without contact: limit exceeded."""
+
+    height_m: float = number(0.0, 0.1, default=0.005)
+    tilt_rad: float = number(-45 * _DEG, 45 * _DEG, default=15 * _DEG)
+    tilt_axis: Literal["x", "y"] = "x"
+    move_speed_m_s: float = number(1e-4, 0.25, default=0.03)
+    rotate_speed_rad_s: float = number(1e-3, 2.0, default=0.5)
+    descend_speed_m_s: float = number(1e-4, 0.05, default=0.003)
+    pose_gain_1_s: float = number(0.1, 50.0, default=4.0)
+    pose_tol_m: float = number(1e-5, 0.01, default=0.0003)
+    angle_tol_rad: float = number(1e-4, 0.2, default=0.5 * _DEG)
+    overtravel_m: float = number(0.0, 0.05, default=0.004)
+    contact_sigma: float = number(0.5, 1e4, default=8.0)
+    contact_frames: int = number(1, 100, default=3)
+
+
+@dataclass(frozen=True)
+class SearchSettings(Config):
+    """SEARCH: drag the tilted tip over the board along ``pattern`` (``spiral``: Archimedean,
+    ``pitch_m`` between turns; ``raster``: lines ``pitch_m`` apart along the hole's width
+    axis) at ``speed_m_s``, centred on the nominal opening and bounded by the pose
+    uncertainty ``uncertainty_xy_m`` (half-width of the square searched; the spiral's radius
+    reaches its corner) and ``uncertainty_yaw_rad`` (corrected by ALIGN's in-plane servo).
+    The TCP is held ``press_depth_m`` below the height where contact was found (a preload
+    into the compliant wrist). When a pattern is exhausted it starts again.
+
+    Hole found: the *drag resistance* r (the normalised torque's component about the axis
+    z_T x d, d the drag direction in B: the torque an edge catching the tip produces) rises
+    by max(``hole_rise_sigma``, ``hole_rise_ratio`` x |expected|) above the expected
+    resistance for ``hole_frames`` successive estimates. Expected: the present load (the
+    normalised axial force, at least 1) times the slow average (weight ``reference_alpha``)
+    of r / load, since friction grows with the load (the drag direction is filtered like
+    the signals, so their lags match). For the first ``settle_s`` of SEARCH (the preload
+    building up) the average is only learned, with the signals' ``ema_alpha``. Contact lost:
+    the signal norm below ``contact_lost_sigma`` for ``contact_lost_frames`` successive
+    estimates.
+    ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
+    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
+
+    pattern: Literal["spiral", "raster"] = "spiral"
+    pitch_m: float = number(1e-4, 0.01, default=0.0008)
+    speed_m_s: float = number(1e-4, 0.05, default=0.004)
+    uncertainty_xy_m: float = number(0.0, 0.05, default=0.003)
+    uncertainty_yaw_rad: float = number(0.0, 0.5, default=3 * _DEG)
+    press_depth_m: float = number(0.0, 0.01, default=0.001)
+    hole_rise_sigma: float = number(0.5, 1e4, default=10.0)
+    hole_rise_ratio: float = number(0.0, 100.0, default=1.0)
+    hole_frames: int = number(1, 100, default=3)
+    reference_alpha: float = number(0.001, 1.0, default=0.05)
+    settle_s: float = number(0.0, 10.0, default=0.5)
+    contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
+    contact_lost_frames: int = number(1, 1000, default=15)
+    in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
+
+
+@dataclass(frozen=True)
+class AlignSettings(Config):
+    """ALIGN: rotate the TCP about the plug's tip (the tip stays put). The angular velocity in
+    T is w_T = -R_S2T (k * n_S) (the TCP yields to the contact's torque; n_S the normalised,
+    filtered torques tau_x, tau_y, tau_z, zero within their tolerance) plus the uprighting
+    term ``upright_gain_1_s`` x (tilt of T z from straight down). Gains ``gain_tau_*`` in
+    rad/s per noise unit; tolerances ``tol_tau_*_sigma`` in noise units. Aligned: every
+    torque within its tolerance and the tilt within ``tilt_tol_rad`` for ``frames``
+    successive estimates."""
+
+    gain_tau_x: float = number(0.0, 10.0, default=0.004)
+    gain_tau_y: float = number(0.0, 10.0, default=0.004)
+    gain_tau_z: float = number(0.0, 10.0, default=0.004)
+    tol_tau_x_sigma: float = number(0.1, 1e4, default=4.0)
+    tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
+    tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
+    upright_gain_1_s: float = number(0.0, 20.0, default=1.5)
+    tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
+    max_angular_rad_s: float = number(1e-3, 1.0, default=0.2)
+    frames: int = number(1, 100, default=3)
+
+
+@dataclass(frozen=True)
+class InsertSettings(Config):
+    """INSERT: move the tip straight down (B's -z) at ``speed_m_s``, keeping the ALIGN torque
+    servo at ``compliance_scale`` of its gains. The axial force (the estimated force along T
+    z, estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
+    torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
+    INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF). Success: the tip
+    ``depth_m`` below the board surface."""
+
+    speed_m_s: float = number(1e-4, 0.05, default=0.004)
+    depth_m: float = number(1e-4, 0.05, default=0.005)
+    compliance_scale: float = number(0.0, 1.0, default=0.5)
+    force_budget: float = number(1e-6, 1e4, default=0.2)
+    jam_rise_sigma: float = number(0.5, 1e4, default=15.0)
+    jam_frames: int = number(1, 100, default=3)
+
+
+@dataclass(frozen=True)
+class BackoffSettings(Config):
+    """BACKOFF: lift the tip ``distance_m`` at ``speed_m_s``, then ALIGN again. More than
+    ``max_retries`` back-offs and re-grasps in one run: too many retries."""
+
+    distance_m: float = number(1e-5, 0.02, default=0.001)
+    speed_m_s: float = number(1e-4, 0.05, default=0.004)
+    max_retries: int = number(0, 100, default=5)
+
+
+@dataclass(frozen=True)
+class ReleaseSettings(Config):
+    """RELEASE opens the gripper and waits until it stops (at least ``settle_s``); RETRACT
+    lifts the TCP ``retract_distance_m`` at ``retract_speed_m_s``."""
+
+    settle_s: float = number(0.0, 5.0, default=0.2)
+    retract_distance_m: float = number(0.0, 0.2, default=0.03)
+    retract_speed_m_s: float = number(1e-4, 0.25, default=0.03)
+
+
+@dataclass(frozen=True)
+class SlipSettings(Config):
+    """What a slip does: ``trigger`` ``gross`` (the estimate's ``slip_gross``) or ``suspected``
+    (also incipient slip), or the gripper no longer holding. ``policy`` ``regrasp``: lift the
+    tip ``lift_m`` clear of the board, re-grasp, re-zero and approach again (a retry);
+    ``fail``: FAILED (slip)."""
+
+    policy: Literal["regrasp", "fail"] = "regrasp"
+    trigger: Literal["gross", "suspected"] = "gross"
+    lift_m: float = number(0.0, 0.05, default=0.005)
+
+
+@dataclass(frozen=True)
+class Limits(Config):
+    """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in estimate units on the
+    baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|),
+    ``inplane_torque_limit`` (|tau_z|), ``force_limit`` (axial force). ``max_tilt_rad``: the
+    plug's tilt from straight down. Every command's twist is bounded by
+    ``max_linear_m_s`` and ``max_angular_rad_s`` (norms)."""
+
+    tilt_torque_limit: float = number(1e-6, 1e4, default=0.05)
+    inplane_torque_limit: float = number(1e-6, 1e6, default=2.5)
+    force_limit: float = number(1e-6, 1e4, default=0.5)
+    max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=30 * _DEG)
+    max_linear_m_s: float = number(1e-4, 0.5, default=0.05)
+    max_angular_rad_s: float = number(1e-3, 3.0, default=0.6)
+
+
+@dataclass(frozen=True)
+class Timeouts(Config):
+    """Longest time in each autonomous phase, and in all of them together (time under TELEOP
+    or ESTOP does not count): exceeded -> FAILED (timeout)."""
+
+    grasp_s: float = number(0.1, 600.0, default=5.0)
+    approach_s: float = number(0.1, 600.0, default=10.0)
+    search_s: float = number(0.1, 600.0, default=30.0)
+    align_s: float = number(0.1, 600.0, default=5.0)
+    insert_s: float = number(0.1, 600.0, default=8.0)
+    backoff_s: float = number(0.1, 600.0, default=3.0)
+    release_s: float = number(0.1, 600.0, default=3.0)
+    retract_s: float = number(0.1, 600.0, default=5.0)
+    total_s: float = number(1.0, 3600.0, default=60.0)
+
+
+@dataclass(frozen=True)
+class MachineConfig(Config):
+    """The insertion machine (task file ``machine:``); see each part's docstring."""
+
+    gripper: GripperSettings = field(default_factory=GripperSettings)
+    signals: SignalSettings = field(default_factory=SignalSettings)
+    approach: ApproachSettings = field(default_factory=ApproachSettings)
+    search: SearchSettings = field(default_factory=SearchSettings)
+    align: AlignSettings = field(default_factory=AlignSettings)
+    insert: InsertSettings = field(default_factory=InsertSettings)
+    backoff: BackoffSettings = field(default_factory=BackoffSettings)
+    release: ReleaseSettings = field(default_factory=ReleaseSettings)
+    slip: SlipSettings = field(default_factory=SlipSettings)
+    limits: Limits = field(default_factory=Limits)
+    timeouts: Timeouts = field(default_factory=Timeouts)
+
+    def __post_init__(self) -> None:
+        if abs(self.approach.tilt_rad) >= self.limits.max_tilt_rad:
+            raise ValueError(
+                f"key 'approach.tilt_rad': expected less than limits.max_tilt_rad "
+                f"({self.limits.max_tilt_rad}) in magnitude, got {self.approach.tilt_rad}"
+            )
+        if self.insert.force_budget > self.limits.force_limit:
+            raise ValueError(
+                f"key 'insert.force_budget': expected at most limits.force_limit "
+                f"({self.limits.force_limit}), got {self.insert.force_budget}"
+            )
+        if self.search.contact_lost_sigma >= self.approach.contact_sigma:
+            raise ValueError(
+                f"key 'search.contact_lost_sigma': expected below approach.contact_sigma "
+                f"({self.approach.contact_sigma}), got {self.search.contact_lost_sigma}"
+            )
+
+
+@dataclass(frozen=True)
+class MachineSetup(Config):
+    """What the machine needs from a task file: its ``plug:``, ``hole:`` and ``machine:``."""
+
+    plug: PlugGeometry
+    hole: HoleNominal
+    machine: MachineConfig
+
+
+def machine_setup_from_task(data: Mapping[str, Any], source: str) -> MachineSetup:
+    """The ``plug:``, ``hole:`` and ``machine:`` sections of a task file's mapping ``data``
+    (other sections, e.g. ``scene:``, are the scene's); ConfigError naming ``source`` and the
+    key otherwise."""
+    missing = [key for key in ("plug", "hole", "machine") if key not in data]
+    if missing:
+        raise ConfigError(f"{source}: missing key '{missing[0]}'")
+    return build(MachineSetup, {k: data[k] for k in ("plug", "hole", "machine")}, source)
+
+
+def s2t_matrix(axes: tuple[str, str, str]) -> np.ndarray:
+    """The rotation R_S2T (3x3, columns: S's axes in T) for signed tool axes such as
+    ``("+x", "+z", "-y")``; ValueError unless they form a proper rotation."""
+    matrix = np.zeros((3, 3))
+    for column, name in enumerate(axes):
+        if len(name) != 2 or name[0] not in "+-" or name[1] not in _AXIS_INDEX:
+            raise ValueError(f"expected signed axes like '+x', got {name!r}")
+        matrix[_AXIS_INDEX[name[1]], column] = 1.0 if name[0] == "+" else -1.0
+    if not np.allclose(matrix @ matrix.T, np.eye(3)) or np.linalg.det(matrix) < 0:
+        raise ValueError(
+            f"expected each tool axis once and a right-handed frame, got {list(axes)}"
+        )
+    return matrix

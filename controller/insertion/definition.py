@@ -1,0 +1,137 @@
+"""The insertion machine's transition table, as data, and its check.
+
+Each ``Edge`` says that ``source`` may go to ``target`` when the guard ``guard`` holds; the
+guard's name is the reason the machine records (for FAILED, a ``FailureReason`` value). The
+machine refuses a transition that is not in its table, and the table is checked when the
+machine is built: every phase reachable from the initial one, none a trap (each non-terminal
+phase can reach a terminal one), terminal phases without outgoing edges.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from controller.insertion.interface import FailureReason, Phase
+
+AUTONOMOUS = (
+    Phase.GRASP,
+    Phase.APPROACH,
+    Phase.SEARCH,
+    Phase.ALIGN,
+    Phase.INSERT,
+    Phase.BACKOFF,
+    Phase.RELEASE,
+    Phase.RETRACT,
+)
+TERMINAL = (Phase.DONE, Phase.FAILED)
+# Where autonomy resumes after TELEOP or an acknowledged ESTOP (machine.py decides which).
+RESUMABLE = (Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.ALIGN, Phase.RETRACT)
+# Phases in which the plug touches the board or the opening.
+IN_CONTACT = (Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
+
+F = FailureReason
+
+
+class DefinitionError(ValueError):
+    """The transition table is malformed: an unreachable phase, a trap, a terminal exit."""
+
+
+@dataclass(frozen=True)
+class Edge:
+    """``source`` may go to ``target`` when the guard ``guard`` holds."""
+
+    source: Phase
+    target: Phase
+    guard: str
+
+
+@dataclass(frozen=True)
+class Definition:
+    """A machine's phases, where it starts, where it ends, and its edges."""
+
+    phases: tuple[Phase, ...]
+    initial: Phase
+    terminal: tuple[Phase, ...]
+    edges: tuple[Edge, ...]
+
+    def allows(self, source: Phase, target: Phase, guard: str) -> bool:
+        """True if the table has the edge ``source -> target`` under ``guard``."""
+        return Edge(source, target, guard) in self.edges
+
+
+def _edges(sources: Iterable[Phase], target: Phase, guards: Iterable[str]) -> list[Edge]:
+    guards = tuple(guards)
+    return [Edge(s, target, g) for s in sources for g in guards]
+
+
+def _insertion_edges() -> tuple[Edge, ...]:
+    edges = [
+        Edge(Phase.GRASP, Phase.APPROACH, "grasped_and_zeroed"),
+        Edge(Phase.APPROACH, Phase.SEARCH, "surface_contact"),
+        Edge(Phase.SEARCH, Phase.ALIGN, "hole_found"),
+        Edge(Phase.ALIGN, Phase.INSERT, "aligned"),
+        Edge(Phase.INSERT, Phase.BACKOFF, "jam"),
+        Edge(Phase.INSERT, Phase.RELEASE, "depth_reached"),
+        Edge(Phase.BACKOFF, Phase.ALIGN, "backed_off"),
+        Edge(Phase.RELEASE, Phase.RETRACT, "released"),
+        Edge(Phase.RETRACT, Phase.DONE, "retracted"),
+    ]
+    holding = (Phase.APPROACH, Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
+    edges += _edges(holding, Phase.GRASP, ["slip_regrasp"])
+    edges += _edges(AUTONOMOUS, Phase.FAILED, [F.TIMEOUT.value, F.DEVICE_FAULT.value])
+    edges += _edges(holding, Phase.FAILED, [F.SLIP.value, F.LIMIT_EXCEEDED.value])
+    edges += _edges(holding, Phase.FAILED, [F.TOO_MANY_RETRIES.value])
+    edges += _edges((Phase.SEARCH,), Phase.FAILED, [F.CONTACT_LOST.value])
+    edges += _edges(AUTONOMOUS, Phase.TELEOP, ["operator_takeover"])
+    edges += _edges((Phase.TELEOP,), Phase.FAILED, [F.DEVICE_FAULT.value])
+    edges += _edges((Phase.TELEOP,), Phase.ESTOP, ["estop"])
+    edges += [Edge(Phase.TELEOP, p, "hand_back") for p in RESUMABLE]
+    edges += _edges(AUTONOMOUS, Phase.ESTOP, ["estop"])
+    edges += [Edge(Phase.ESTOP, p, "estop_acknowledged") for p in (*RESUMABLE, Phase.TELEOP)]
+    edges += _edges((Phase.ESTOP,), Phase.FAILED, [F.DEVICE_FAULT.value])
+    return tuple(edges)
+
+
+INSERTION = Definition(
+    phases=tuple(Phase),
+    initial=Phase.GRASP,
+    terminal=TERMINAL,
+    edges=_insertion_edges(),
+)
+
+
+def check_definition(definition: Definition) -> None:
+    """Raise DefinitionError unless every edge joins known phases, terminal phases have no
+    outgoing edge, every phase is reachable from the initial one, and every non-terminal
+    phase can reach a terminal one."""
+    known = set(definition.phases)
+    if definition.initial not in known or not set(definition.terminal) <= known:
+        raise DefinitionError("the initial and terminal phases must be among the phases")
+    for edge in definition.edges:
+        if edge.source not in known or edge.target not in known:
+            raise DefinitionError(f"edge {edge} joins a phase that is not in the machine")
+        if edge.source in definition.terminal:
+            raise DefinitionError(f"terminal phase {edge.source.name} has an outgoing edge")
+    forward = _closure({definition.initial}, definition.edges, reverse=False)
+    unreachable = [p.name for p in definition.phases if p not in forward]
+    if unreachable:
+        raise DefinitionError(f"unreachable phases: {', '.join(unreachable)}")
+    backward = _closure(set(definition.terminal), definition.edges, reverse=True)
+    traps = [p.name for p in definition.phases if p not in backward]
+    if traps:
+        raise DefinitionError(f"trap phases (cannot reach a terminal phase): {', '.join(traps)}")
+
+
+def _closure(start: set[Phase], edges: tuple[Edge, ...], reverse: bool) -> set[Phase]:
+    """The phases reachable from ``start`` along ``edges`` (against them with ``reverse``)."""
+    seen = set(start)
+    frontier = list(start)
+    while frontier:
+        phase = frontier.pop()
+        for edge in edges:
+            here, there = (edge.target, edge.source) if reverse else (edge.source, edge.target)
+            if here is phase and there not in seen:
+                seen.add(there)
+                frontier.append(there)
+    return seen

@@ -1,0 +1,532 @@
+"""The insertion state machine: ``step(observation) -> Command``, pure and non-blocking.
+
+The phases, their rules and the transition table are documented in docs/ARCHITECTURE.md
+("Insertion state machine"); the table itself is data (``definition.py``), checked when the
+machine is built, and every transition the machine takes must be in it. Each tick, in this
+order: a device fault ends the run; the e-stop button latches ESTOP; an operator in control
+takes over (TELEOP); the timeouts, the hard limits and the slip policy are checked; then the
+current phase's handler computes the command and may move on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry
+from controller.insertion.definition import (
+    AUTONOMOUS,
+    IN_CONTACT,
+    INSERTION,
+    TERMINAL,
+    Definition,
+    check_definition,
+)
+from controller.insertion.interface import (
+    Command,
+    FailureReason,
+    GripperTarget,
+    Observation,
+    Phase,
+    Transition,
+)
+from controller.insertion.motion import (
+    approach_rotation,
+    bounded_twist,
+    clamp_norm,
+    pivot_twist,
+    rotation_error,
+    rotation_of,
+    tilt_from_down,
+    tip_position,
+)
+from controller.insertion.search import HoleDetector, SearchPattern
+from controller.insertion.signals import TactileSignals
+from drivers.base import Twist
+
+_HOLDING = (Phase.APPROACH, *IN_CONTACT)
+_MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only
+_TIMEOUT_KEYS = {
+    Phase.GRASP: "grasp_s",
+    Phase.APPROACH: "approach_s",
+    Phase.SEARCH: "search_s",
+    Phase.ALIGN: "align_s",
+    Phase.INSERT: "insert_s",
+    Phase.BACKOFF: "backoff_s",
+    Phase.RELEASE: "release_s",
+    Phase.RETRACT: "retract_s",
+}
+
+
+@dataclass
+class _Stage:
+    """What the current phase has done so far (reset on every phase entry)."""
+
+    entered_t_s: float
+    name: str = ""
+    since_t_s: float = 0.0  # when ``name`` began, or a condition started to hold
+    count: int = 0  # successive new estimates satisfying the phase's rule (SEARCH: no contact)
+    z0_m: float = 0.0  # the TCP's height on entry
+    s_m: float = 0.0  # SEARCH: path length travelled
+    detector: HoleDetector | None = None  # SEARCH: the hole-found rule
+    v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command
+    lowest: float = math.inf  # INSERT: lowest tilt torque so far
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
+
+
+class InsertionMachine:
+    """The insertion machine for one run (implements ``interface.Machine``).
+
+    ``config``: the task's ``machine:`` section; ``plug``: the grasped plug; ``hole``: the
+    opening's nominal pose in B. ``definition``: the transition table (the insertion table by
+    default; checked here, DefinitionError if malformed).
+    """
+
+    def __init__(
+        self,
+        config: MachineConfig,
+        plug: PlugGeometry,
+        hole: HoleNominal,
+        definition: Definition = INSERTION,
+    ) -> None:
+        check_definition(definition)
+        self.config = config
+        self.plug = plug
+        self.hole = hole
+        self.definition = definition
+        self.signals = TactileSignals(config.signals)
+        self._pattern = SearchPattern(
+            config.search.pattern, config.search.pitch_m, config.search.uncertainty_xy_m
+        )
+        self._hole_xyz = np.array([hole.x_m, hole.y_m, hole.z_m])
+        self._hole_yaw = Rotation.from_euler("z", hole.yaw_rad)
+        self._approach_rot = approach_rotation(
+            hole.yaw_rad, config.approach.tilt_rad, config.approach.tilt_axis
+        )
+        self._phase = definition.initial
+        self._transitions: list[Transition] = []
+        self._stage: _Stage | None = None
+        self._last_t_s: float | None = None
+        self._tick_s = 0.0
+        self._autonomous_s = 0.0
+        self._retries = 0
+        self._regrasp = False
+        self._released = False
+
+    # -- the Machine protocol ------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        return self._phase
+
+    @property
+    def transitions(self) -> tuple[Transition, ...]:
+        return tuple(self._transitions)
+
+    @property
+    def retries(self) -> int:
+        """Back-offs and re-grasps so far."""
+        return self._retries
+
+    def step(self, observation: Observation) -> Command:
+        """One tick: the command for ``observation`` (see the module doc for the order)."""
+        obs = observation
+        dt = 0.0 if self._last_t_s is None else max(obs.t_s - self._last_t_s, 0.0)
+        self._last_t_s = obs.t_s
+        self._tick_s = dt
+        if self._stage is None:
+            self._stage = _Stage(entered_t_s=obs.t_s, since_t_s=obs.t_s)
+            self._stage.z0_m = float(obs.arm.tcp.xyz_m[2])
+        if self._phase in AUTONOMOUS:
+            self._autonomous_s += dt
+        new = self.signals.update(obs.wrench)
+        if self._phase in TERMINAL:
+            return _hold()
+        if _has_fault(obs):
+            return self._fail(obs, FailureReason.DEVICE_FAULT)
+        if obs.teleop.estop and self._phase is not Phase.ESTOP:
+            self._go(obs, Phase.ESTOP, "estop")
+        if self._phase is Phase.ESTOP:
+            return self._estop(obs)
+        if obs.teleop.in_control and self._phase in AUTONOMOUS:
+            self._go(obs, Phase.TELEOP, "operator_takeover")
+        if self._phase is Phase.TELEOP:
+            return self._teleop(obs)
+        failure = self._checks(obs)
+        if failure is not None:
+            return failure
+        if self._phase in _HOLDING and self._slipped(obs, new):
+            return self._on_slip(obs)
+        return self._handlers[self._phase](self, obs, new)
+
+    # -- transitions -----------------------------------------------------------------------
+
+    def _go(self, obs: Observation, target: Phase, guard: str) -> None:
+        if not self.definition.allows(self._phase, target, guard):
+            raise RuntimeError(f"transition {self._phase.name} -> {target.name} ({guard}) "
+                               "is not in the machine's definition")
+        self._transitions.append(Transition(obs.t_s, self._phase, target, guard))
+        self._phase = target
+        self._stage = _Stage(entered_t_s=obs.t_s, since_t_s=obs.t_s)
+        self._stage.z0_m = float(obs.arm.tcp.xyz_m[2])
+        if target is Phase.RELEASE:
+            self._released = True
+
+    def _fail(self, obs: Observation, reason: FailureReason) -> Command:
+        self._go(obs, Phase.FAILED, reason.value)
+        return _hold()
+
+    def _resume_phase(self, obs: Observation) -> Phase:
+        """Where autonomy resumes after TELEOP or ESTOP, from the contact state: after the
+        plug was released, RETRACT; no grasp or no tactile baseline, GRASP; grasped without
+        contact, APPROACH; in contact with the tip in the opening, ALIGN; otherwise SEARCH."""
+        if self._released:
+            return Phase.RETRACT
+        if not obs.gripper.holding or not self.signals.ready:
+            return Phase.GRASP
+        if self.signals.magnitude < self.config.approach.contact_sigma:
+            return Phase.APPROACH
+        tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
+        if tip_z < self.hole.z_m - self.config.search.in_hole_depth_m:
+            return Phase.ALIGN
+        return Phase.SEARCH
+
+    # -- checks common to the autonomous phases ------------------------------------------
+
+    def _checks(self, obs: Observation) -> Command | None:
+        """FAILED for a timeout or an exceeded hard limit, else None."""
+        timeouts = self.config.timeouts
+        in_phase = obs.t_s - self._stage.entered_t_s
+        if self._autonomous_s > timeouts.total_s or in_phase > getattr(
+            timeouts, _TIMEOUT_KEYS[self._phase]
+        ):
+            return self._fail(obs, FailureReason.TIMEOUT)
+        if self._phase in _HOLDING and self._limit_exceeded(obs):
+            return self._fail(obs, FailureReason.LIMIT_EXCEEDED)
+        return None
+
+    def _limit_exceeded(self, obs: Observation) -> bool:
+        limits = self.config.limits
+        rotation = rotation_of(obs.arm.tcp)
+        if tilt_from_down(rotation)[0] > limits.max_tilt_rad:
+            return True
+        if self._phase is Phase.APPROACH:
+            overtravel = self.hole.z_m - self.config.approach.overtravel_m
+            if tip_position(obs.arm.tcp, self.plug.length_m)[2] < overtravel:
+                return True
+        if not self.signals.ready:
+            return False
+        deviation = np.abs(self.signals.deviation)
+        return bool(
+            max(deviation[0], deviation[1]) > limits.tilt_torque_limit
+            or deviation[2] > limits.inplane_torque_limit
+            or self.signals.axial_force > limits.force_limit
+        )
+
+    def _slipped(self, obs: Observation, new: bool) -> bool:
+        if not obs.gripper.holding:
+            return True
+        wrench = obs.wrench
+        if not new or wrench is None:
+            return False
+        if self.config.slip.trigger == "suspected":
+            return wrench.slip_suspected or wrench.slip_gross
+        return wrench.slip_gross
+
+    def _on_slip(self, obs: Observation) -> Command:
+        if self.config.slip.policy == "fail":
+            return self._fail(obs, FailureReason.SLIP)
+        if self._retries >= self.config.backoff.max_retries:
+            return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
+        self._retries += 1
+        self._regrasp = True
+        self._go(obs, Phase.GRASP, "slip_regrasp")
+        return _hold()
+
+    # -- overrides -------------------------------------------------------------------------
+
+    def _estop(self, obs: Observation) -> Command:
+        teleop = obs.teleop
+        if not teleop.estop and teleop.estop_ack:
+            target = Phase.TELEOP if teleop.in_control else self._resume_phase(obs)
+            self._go(obs, target, "estop_acknowledged")
+        return _hold()
+
+    def _teleop(self, obs: Observation) -> Command:
+        teleop = obs.teleop
+        if teleop.hand_back:
+            self._go(obs, self._resume_phase(obs), "hand_back")
+            return _hold()
+        limits = self.config.limits
+        twist = bounded_twist(
+            np.asarray(teleop.twist.linear_m_s),
+            np.asarray(teleop.twist.angular_rad_s),
+            limits.max_linear_m_s,
+            limits.max_angular_rad_s,
+        )
+        gripper = None
+        if teleop.gripper_close:
+            gripper = self._close_target()
+        elif teleop.gripper_open:
+            gripper = self._open_target(self.config.gripper.open_width_m)
+        return Command(twist=twist, gripper=gripper)
+
+    # -- phases ----------------------------------------------------------------------------
+
+    def _grasp(self, obs: Observation, new: bool) -> Command:
+        """Lift (after a slip), open a little (re-grasp), close, settle, re-zero, baseline."""
+        stage, settings = self._stage, self.config.gripper
+        if stage.name == "":
+            stage.name = "lift" if self._regrasp else "close"
+            stage.since_t_s = obs.t_s
+        if stage.name == "lift":
+            if obs.arm.tcp.xyz_m[2] >= stage.z0_m + self.config.slip.lift_m:
+                self._next_stage(obs, "open")
+                return Command(
+                    twist=Twist(),
+                    gripper=self._open_target(obs.gripper.width_m + settings.regrasp_gap_m),
+                )
+            return self._tcp_twist(np.array([0.0, 0.0, self.config.approach.move_speed_m_s]))
+        if stage.name == "open":
+            if obs.t_s - stage.since_t_s >= settings.settle_s and not obs.gripper.moving:
+                self._regrasp = False
+                self._next_stage(obs, "close")
+            return _hold()
+        if stage.name == "close":
+            self._next_stage(obs, "settle")
+            return Command(twist=Twist(), gripper=self._close_target())
+        if stage.name == "settle":
+            if not (obs.gripper.holding and not obs.gripper.moving):
+                stage.since_t_s = obs.t_s
+            elif obs.t_s - stage.since_t_s >= settings.settle_s:
+                self._next_stage(obs, "zero")
+                self.signals.reset()
+                return Command(twist=Twist(), rezero_tactile=True)
+            return _hold()
+        # "zero": wait for the estimator's zeroing, then for the baseline
+        if self.signals.ready:
+            self._go(obs, Phase.APPROACH, "grasped_and_zeroed")
+        return _hold()
+
+    def _approach(self, obs: Observation, new: bool) -> Command:
+        """Servo to the tilted pose above the opening (rising first if the tip is below its
+        height there, so the plug never sweeps over the board), then descend until contact."""
+        stage, settings = self._stage, self.config.approach
+        rotation = rotation_of(obs.arm.tcp)
+        target_tip = self._hole_xyz + np.array([0.0, 0.0, settings.height_m])
+        if stage.name == "":
+            target_tcp = target_tip - self._approach_rot.apply([0.0, 0.0, self.plug.length_m])
+            error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
+            turn = rotation_error(rotation, self._approach_rot)
+            tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
+            if tip_z < target_tip[2] - settings.pose_tol_m:
+                error[:2] = 0.0
+            if np.linalg.norm(error) <= settings.pose_tol_m and (
+                np.linalg.norm(turn) <= settings.angle_tol_rad
+            ):
+                self._next_stage(obs, "descend")
+            else:
+                v = clamp_norm(settings.pose_gain_1_s * error, settings.move_speed_m_s)
+                w = clamp_norm(settings.pose_gain_1_s * turn, settings.rotate_speed_rad_s)
+                return self._command(v, w)
+        if new:
+            contact = self.signals.magnitude >= settings.contact_sigma
+            stage.count = stage.count + 1 if contact else 0
+        if stage.count >= settings.contact_frames:
+            self._go(obs, Phase.SEARCH, "surface_contact")
+            return _hold()
+        v_tip = np.array([0.0, 0.0, -settings.descend_speed_m_s])
+        return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
+
+    def _search(self, obs: Observation, new: bool) -> Command:
+        """Drag the tip along the pattern with a preload; watch the drag resistance."""
+        stage, settings = self._stage, self.config.search
+        if stage.detector is None:
+            stage.detector = HoleDetector(settings, self.config.signals.ema_alpha)
+        stage.s_m += settings.speed_m_s * min(self._tick_s, _MAX_DT_S)
+        offset = self._planar(self._pattern.offset(stage.s_m))
+        ahead = self._planar(self._pattern.offset(stage.s_m + 1e-4)) - offset
+        tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        gain = self.config.approach.pose_gain_1_s
+        rotation = rotation_of(obs.arm.tcp)
+        if new:
+            stage.count = stage.count + 1 if (
+                self.signals.magnitude < settings.contact_lost_sigma
+            ) else 0
+            if stage.count >= settings.contact_lost_frames:
+                return self._fail(obs, FailureReason.CONTACT_LOST)
+            elapsed = obs.t_s - stage.entered_t_s
+            if stage.detector.update(self.signals, rotation, stage.v_tip, elapsed):
+                self._go(obs, Phase.ALIGN, "hole_found")
+                return _hold()
+        v_tip = np.zeros(3)
+        v_tip[:2] = settings.speed_m_s * tangent[:2] + gain * (
+            self._hole_xyz[:2] + offset[:2] - tip[:2]
+        )
+        v_tip[:2] = clamp_norm(v_tip[:2], 2.0 * settings.speed_m_s)
+        v_tip[2] = gain * (stage.z0_m - settings.press_depth_m - obs.arm.tcp.xyz_m[2])
+        stage.v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
+        return self._tip_command(obs, stage.v_tip, self._hold_rotation(rotation))
+
+    def _align(self, obs: Observation, new: bool) -> Command:
+        """Turn about the tip to null the torques and upright the plug."""
+        stage, settings = self._stage, self.config.align
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        if stage.name == "":
+            stage.name = "servo"
+            stage.point = tip
+        rotation = rotation_of(obs.arm.tcp)
+        if new:
+            aligned = self._torques_within_tolerance() and (
+                tilt_from_down(rotation)[0] <= settings.tilt_tol_rad
+            )
+            stage.count = stage.count + 1 if aligned else 0
+        if stage.count >= settings.frames:
+            self._go(obs, Phase.INSERT, "aligned")
+            return _hold()
+        w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_rad_s)
+        v_tip = self.config.approach.pose_gain_1_s * (stage.point - tip)
+        return self._tip_command(obs, v_tip, w)
+
+    def _insert(self, obs: Observation, new: bool) -> Command:
+        """Push straight down within the budgets; a jam backs off; the depth is success."""
+        stage, settings = self._stage, self.config.insert
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        if tip[2] <= self.hole.z_m - settings.depth_m:
+            self._go(obs, Phase.RELEASE, "depth_reached")
+            return _hold()
+        if new:
+            torque = self.signals.torque_t
+            tilt = float(math.hypot(torque[0], torque[1]))
+            stage.lowest = min(stage.lowest, tilt)
+            jammed = (
+                tilt - stage.lowest >= settings.jam_rise_sigma
+                or self.signals.axial_force > settings.force_budget
+            )
+            stage.count = stage.count + 1 if jammed else 0
+        if stage.count >= settings.jam_frames:
+            if self._retries >= self.config.backoff.max_retries:
+                return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
+            self._retries += 1
+            self._go(obs, Phase.BACKOFF, "jam")
+            return _hold()
+        rotation = rotation_of(obs.arm.tcp)
+        w = clamp_norm(
+            self._align_rate(rotation, settings.compliance_scale),
+            self.config.align.max_angular_rad_s,
+        )
+        return self._tip_command(obs, np.array([0.0, 0.0, -settings.speed_m_s]), w)
+
+    def _backoff(self, obs: Observation, new: bool) -> Command:
+        """Lift the tip straight up by the back-off distance, then ALIGN again."""
+        settings = self.config.backoff
+        if obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.distance_m:
+            self._go(obs, Phase.ALIGN, "backed_off")
+            return _hold()
+        return self._tcp_twist(np.array([0.0, 0.0, settings.speed_m_s]))
+
+    def _release(self, obs: Observation, new: bool) -> Command:
+        """Open the gripper; wait until it has stopped."""
+        stage = self._stage
+        if stage.name == "":
+            self._next_stage(obs, "opening")
+            return Command(twist=Twist(), gripper=self._open_target(
+                self.config.gripper.open_width_m))
+        if obs.t_s - stage.since_t_s >= self.config.release.settle_s and not obs.gripper.moving:
+            self._go(obs, Phase.RETRACT, "released")
+        return _hold()
+
+    def _retract(self, obs: Observation, new: bool) -> Command:
+        """Lift the TCP straight up by the retract distance."""
+        settings = self.config.release
+        if obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.retract_distance_m:
+            self._go(obs, Phase.DONE, "retracted")
+            return _hold()
+        return self._tcp_twist(np.array([0.0, 0.0, settings.retract_speed_m_s]))
+
+    _handlers = {
+        Phase.GRASP: _grasp,
+        Phase.APPROACH: _approach,
+        Phase.SEARCH: _search,
+        Phase.ALIGN: _align,
+        Phase.INSERT: _insert,
+        Phase.BACKOFF: _backoff,
+        Phase.RELEASE: _release,
+        Phase.RETRACT: _retract,
+    }
+
+    # -- helpers ---------------------------------------------------------------------------
+
+    def _next_stage(self, obs: Observation, name: str) -> None:
+        self._stage.name = name
+        self._stage.since_t_s = obs.t_s
+        self._stage.count = 0
+
+    def _planar(self, offset_uv: np.ndarray) -> np.ndarray:
+        """A (u, v) offset in the opening's frame as a vector in B."""
+        return self._hole_yaw.apply([offset_uv[0], offset_uv[1], 0.0])
+
+    def _torques_within_tolerance(self) -> bool:
+        settings = self.config.align
+        tolerance = np.array(
+            [settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma]
+        )
+        return bool(np.all(np.abs(self.signals.normalised[:3]) <= tolerance))
+
+    def _align_rate(self, rotation: Rotation, scale: float) -> np.ndarray:
+        """Angular velocity in B: yield to the torques outside tolerance (w_T = -R_S2T k n_S,
+        scaled) plus turning T z toward straight down."""
+        settings = self.config.align
+        gains = np.array([settings.gain_tau_x, settings.gain_tau_y, settings.gain_tau_z])
+        tolerance = np.array(
+            [settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma]
+        )
+        torque_s = self.signals.normalised[:3]
+        outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
+        w_t = -self.signals.s2t @ (gains * outside) * scale
+        angle, axis = tilt_from_down(rotation)
+        return rotation.apply(w_t) + settings.upright_gain_1_s * angle * axis
+
+    def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
+        """Angular velocity in B servoing the TCP to the approach rotation."""
+        settings = self.config.approach
+        return clamp_norm(
+            settings.pose_gain_1_s * rotation_error(rotation, self._approach_rot),
+            settings.rotate_speed_rad_s,
+        )
+
+    def _tip_command(self, obs: Observation, v_tip: np.ndarray, w: np.ndarray) -> Command:
+        """The command moving the tip at ``v_tip`` while turning at ``w`` (both in B)."""
+        p_tcp = np.asarray(obs.arm.tcp.xyz_m, dtype=float)
+        p_tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        v_tcp, w = pivot_twist(p_tcp, p_tip, v_tip, w)
+        return self._command(v_tcp, w)
+
+    def _tcp_twist(self, v: np.ndarray) -> Command:
+        return self._command(v, np.zeros(3))
+
+    def _command(self, v: np.ndarray, w: np.ndarray) -> Command:
+        limits = self.config.limits
+        return Command(twist=bounded_twist(v, w, limits.max_linear_m_s, limits.max_angular_rad_s))
+
+    def _close_target(self) -> GripperTarget:
+        g = self.config.gripper
+        return GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n)
+
+    def _open_target(self, width_m: float) -> GripperTarget:
+        g = self.config.gripper
+        return GripperTarget(width_m, g.open_speed_m_s, g.close_force_n)
+
+
+def _hold() -> Command:
+    """Hold still: a zero twist."""
+    return Command(twist=Twist())
+
+
+def _has_fault(obs: Observation) -> bool:
+    """A device fault this tick: the loop's, the arm's error code or the gripper's."""
+    return obs.fault is not None or obs.arm.error_code != 0 or obs.gripper.fault_code != 0

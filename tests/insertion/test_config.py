@@ -1,0 +1,109 @@
+"""The machine's configuration: the example task sections load; bad values give one line."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import yaml
+
+from controller.insertion.config import (
+    ApproachSettings,
+    MachineConfig,
+    SignalSettings,
+    machine_setup_from_task,
+    s2t_matrix,
+)
+from drivers.config import CONFIG_ROOT, ConfigError, load_yaml
+
+EXAMPLE = CONFIG_ROOT / "tasks" / "machine_usb_c.example.yaml"
+
+
+def example() -> dict:
+    return load_yaml(EXAMPLE)
+
+
+def test_the_example_loads_and_matches_the_code_defaults():
+    setup = machine_setup_from_task(example(), str(EXAMPLE))
+    machine = setup.machine
+    defaults = MachineConfig()
+    for part in dataclasses.fields(MachineConfig):
+        mine, theirs = getattr(machine, part.name), getattr(defaults, part.name)
+        for key in dataclasses.fields(type(mine)):
+            a, b = getattr(mine, key.name), getattr(theirs, key.name)
+            assert a == pytest.approx(b, rel=1e-3) if isinstance(a, float) else a == b, key.name
+
+
+def test_other_sections_of_a_task_file_are_left_to_the_scene():
+    data = {**example(), "scene": {"friction": 0.5}}
+    assert machine_setup_from_task(data, "t.yaml").hole.x_m == 0.4
+
+
+@pytest.mark.parametrize(
+    ("where", "value", "expected"),
+    [
+        ("machine.search.pattern", "zigzag",
+         "key 'machine.search.pattern': expected one of 'spiral', 'raster', got 'zigzag'"),
+        ("machine.approach.contact_frames", 0,
+         "key 'machine.approach.contact_frames': expected an integer in [1, 100], got 0"),
+        ("machine.slip.policy", "retry",
+         "key 'machine.slip.policy': expected one of 'regrasp', 'fail', got 'retry'"),
+        ("plug.length_m", -0.01,
+         "key 'plug.length_m': expected a number in [0.0, 0.2], got -0.01"),
+        ("machine.signals.torque_axes", ["+x", "+x", "-y"],
+         "key 'machine.signals.torque_axes': expected each tool axis once"),
+        ("machine.signals.torque_axes", ["+x", "+z", "+y"], "right-handed frame"),
+        ("machine.insert.force_budget", 0.9,
+         "key 'machine.insert.force_budget': expected at most limits.force_limit (0.5)"),
+        ("machine.approach.tilt_rad", 0.6,
+         "key 'machine.approach.tilt_rad': expected less than limits.max_tilt_rad"),
+        ("machine.search.pitch_m", True, "key 'machine.search.pitch_m': expected a number"),
+    ],
+)
+def test_bad_values_give_one_line_naming_the_file_and_key(where, value, expected):
+    data = example()
+    *parents, key = where.split(".")
+    node = data
+    for name in parents:
+        node = node[name]
+    node[key] = value
+    with pytest.raises(ConfigError) as error:
+        machine_setup_from_task(data, "configs/tasks/usb_c.yaml")
+    message = str(error.value)
+    assert message.startswith("configs/tasks/usb_c.yaml: ")
+    assert expected in message and "\n" not in message
+
+
+def test_unknown_and_missing_keys():
+    data = example()
+    data["machine"]["search"]["spiral_turns"] = 3
+    with pytest.raises(ConfigError, match="unknown key 'machine.search.spiral_turns'"):
+        machine_setup_from_task(data, "t.yaml")
+    data = example()
+    del data["machine"]["timeouts"]["total_s"]
+    with pytest.raises(ConfigError, match="missing key 'machine.timeouts.total_s'"):
+        machine_setup_from_task(data, "t.yaml")
+    with pytest.raises(ConfigError, match="t.yaml: missing key 'hole'"):
+        machine_setup_from_task({"plug": {}, "machine": {}}, "t.yaml")
+
+
+def test_cross_field_rules_apply_in_code_too():
+    with pytest.raises(ValueError, match="key 'approach.tilt_rad'"):
+        MachineConfig(approach=ApproachSettings(tilt_rad=0.6)).limits  # noqa: B018
+    with pytest.raises(ValueError, match="key 'search.contact_lost_sigma'"):
+        from controller.insertion.config import SearchSettings
+
+        MachineConfig(search=SearchSettings(contact_lost_sigma=9.0))
+    with pytest.raises(ValueError, match="key 'torque_axes'"):
+        SignalSettings(torque_axes=("+x", "+y", "+y"))
+
+
+def test_s2t_matrix_default_mapping():
+    r = s2t_matrix(("+x", "+z", "-y"))
+    np.testing.assert_array_equal(r @ [1, 0, 0], [1, 0, 0])  # S x (image columns) = T x
+    np.testing.assert_array_equal(r @ [0, 1, 0], [0, 0, 1])  # S y (image rows) = T z
+    np.testing.assert_array_equal(r @ [0, 0, 1], [0, -1, 0])  # S z (camera axis) = -T y
+    assert np.linalg.det(r) == pytest.approx(1.0)
+
+
+def test_the_example_file_is_valid_yaml_with_every_section():
+    assert set(yaml.safe_load(EXAMPLE.read_text())) == {"plug", "hole", "machine"}

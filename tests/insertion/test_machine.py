@@ -1,0 +1,297 @@
+"""The insertion machine on synthetic observation sequences (tests/insertion/world.py): every
+transition and every failure path."""
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller.insertion.config import (
+    BackoffSettings,
+    GripperSettings,
+    InsertSettings,
+    Limits,
+    MachineConfig,
+    SearchSettings,
+    SlipSettings,
+    Timeouts,
+)
+from controller.insertion.interface import Phase
+from controller.insertion.search import SearchPattern
+from tests.insertion.world import ToyWorld, make_machine, path
+
+HAPPY = [
+    ("GRASP", "APPROACH", "grasped_and_zeroed"),
+    ("APPROACH", "SEARCH", "surface_contact"),
+    ("SEARCH", "ALIGN", "hole_found"),
+    ("ALIGN", "INSERT", "aligned"),
+    ("INSERT", "RELEASE", "depth_reached"),
+    ("RELEASE", "RETRACT", "released"),
+    ("RETRACT", "DONE", "retracted"),
+]
+
+
+def config(**parts) -> MachineConfig:
+    return replace(MachineConfig(), **parts)
+
+
+@pytest.mark.parametrize(
+    ("pattern", "offset"),
+    [("spiral", (0.0012, -0.0009)), ("raster", (0.0012, -0.0009)), ("spiral", (-0.002, -0.001))],
+)
+def test_happy_path_reaches_done_through_every_phase(pattern, offset):
+    world = ToyWorld(hole_offset_m=offset)
+    machine = make_machine(world, config(search=replace(SearchSettings(), pattern=pattern)))
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+    assert path(machine) == HAPPY
+    times = [t.t_s for t in machine.transitions]
+    assert times == sorted(times)
+    assert world.rezero_count == 1
+    grippers = [c.gripper for c in world.commands if c.gripper is not None]
+    assert [g.width_m for g in grippers] == [0.0, MachineConfig().gripper.open_width_m]
+
+
+def test_commands_are_bounded_twists_and_hold_still_while_grasping():
+    world = ToyWorld()
+    cfg = MachineConfig()
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.DONE)
+    for command in world.commands:
+        assert command.pose is None and command.twist is not None
+        assert np.linalg.norm(command.twist.linear_m_s) <= cfg.limits.max_linear_m_s + 1e-12
+        assert np.linalg.norm(command.twist.angular_rad_s) <= cfg.limits.max_angular_rad_s + 1e-12
+    grasp_ticks = int(machine.transitions[0].t_s / 0.01)
+    assert all(c.twist == type(c.twist)() for c in world.commands[:grasp_ticks])
+
+
+def test_grasp_settles_then_rezeroes_then_measures_the_baseline():
+    world = ToyWorld(frame_every=3, zeroing_frames=4)
+    cfg = MachineConfig()
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.APPROACH)
+    rezero_tick = next(i for i, c in enumerate(world.commands) if c.rezero_tactile)
+    close_tick = next(i for i, c in enumerate(world.commands) if c.gripper is not None)
+    # the gripper moves for 0.15 s, then must hold for settle_s
+    assert (rezero_tick - close_tick) * 0.01 >= 0.15 + cfg.gripper.settle_s - 0.011
+    approach_tick = round(machine.transitions[0].t_s / 0.01)
+    frames_after = (approach_tick - rezero_tick) / world.frame_every
+    assert frames_after >= world.zeroing_frames + cfg.signals.baseline_frames - 1
+    assert world.rezero_count == 1
+
+
+def test_approach_from_below_rises_before_moving_sideways():
+    world = ToyWorld()
+    machine = make_machine(world)
+    world.run_until(machine, Phase.APPROACH)
+    world.p = world.p + np.array([0.01, 0.0, -0.037])  # tip 3 mm above the board, 10 mm off
+    start = world.p.copy()
+    target_z = world.hole.z_m + MachineConfig().approach.height_m
+    while world.tip[2] < target_z - 0.0005:
+        world.step(machine)
+        assert abs(world.p[0] - start[0]) < 1e-3  # no sideways travel while low
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+
+
+def test_a_jam_backs_off_and_realigns_then_succeeds():
+    world = ToyWorld(jam_depth_m=0.002, jams=1)
+    machine = make_machine(world)
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+    assert path(machine)[3:8] == [
+        ("ALIGN", "INSERT", "aligned"),
+        ("INSERT", "BACKOFF", "jam"),
+        ("BACKOFF", "ALIGN", "backed_off"),
+        ("ALIGN", "INSERT", "aligned"),
+        ("INSERT", "RELEASE", "depth_reached"),
+    ]
+    assert machine.retries == 1
+
+
+def test_the_force_budget_counts_as_a_jam():
+    world = ToyWorld(depth_limit_m=0.002)  # the opening is too shallow for the depth
+    cfg = config(backoff=replace(BackoffSettings(), max_retries=1))
+    machine = make_machine(world, cfg)
+    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
+    assert ("INSERT", "BACKOFF", "jam") in path(machine)
+    assert path(machine)[-1] == ("INSERT", "FAILED", "too_many_retries")
+
+
+def test_too_many_jams_fail_with_too_many_retries():
+    world = ToyWorld(jam_depth_m=0.002, jams=100)
+    machine = make_machine(world, config(backoff=replace(BackoffSettings(), max_retries=2)))
+    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
+    reasons = [r for _, _, r in path(machine)]
+    assert reasons.count("jam") == 2
+    assert path(machine)[-1] == ("INSERT", "FAILED", "too_many_retries")
+
+
+def test_search_timeout():
+    world = ToyWorld(hole_offset_m=(0.02, 0.0))  # outside the searched square
+    machine = make_machine(world, config(timeouts=replace(Timeouts(), search_s=2.0)))
+    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
+    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(2.0, abs=0.02)
+
+
+@pytest.mark.parametrize("pattern", ["spiral", "raster"])
+def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
+    world = ToyWorld(hole_offset_m=(0.02, 0.0), seed=5)
+    search = replace(SearchSettings(), pattern=pattern)
+    cfg = config(search=search, timeouts=replace(Timeouts(), search_s=24.0))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.FAILED, max_s=60.0)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
+    covered = SearchPattern(pattern, search.pitch_m, search.uncertainty_xy_m).length_m
+    assert 24.0 * search.speed_m_s > covered  # the whole pattern was dragged
+
+
+def test_total_timeout():
+    world = ToyWorld()
+    machine = make_machine(world, config(timeouts=replace(Timeouts(), total_s=1.5)))
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1] == ("APPROACH", "FAILED", "timeout")
+
+
+def test_grasp_timeout_when_the_gripper_never_holds():
+    world = ToyWorld()
+    cfg = config(gripper=replace(GripperSettings(), close_width_m=0.01))  # wider than the plug
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine) == [("GRASP", "FAILED", "timeout")]
+
+
+def test_limit_exceeded_without_a_board_overtravel():
+    world = ToyWorld(board=False)
+    machine = make_machine(world)
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1] == ("APPROACH", "FAILED", "limit_exceeded")
+    overtravel = MachineConfig().approach.overtravel_m
+    assert world.tip[2] == pytest.approx(world.hole.z_m - overtravel, abs=1e-4)
+
+
+def test_limit_exceeded_on_the_force_limit():
+    world = ToyWorld()
+    cfg = config(
+        limits=replace(Limits(), force_limit=0.05),
+        insert=replace(InsertSettings(), force_budget=0.04),
+    )
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "limit_exceeded")
+
+
+def test_limit_exceeded_on_the_tilt_torque_limit():
+    world = ToyWorld(jam_depth_m=0.002, jams=1, jam_torque=0.2)
+    machine = make_machine(world)
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1][1:] == ("FAILED", "limit_exceeded")
+    assert path(machine)[-1][0] in ("INSERT", "BACKOFF")
+
+
+def test_contact_lost_during_search():
+    world = ToyWorld(hole_offset_m=(0.02, 0.0))
+    machine = make_machine(world)
+    world.run_until(machine, Phase.SEARCH)
+    for _ in range(60):
+        world.step(machine)
+    assert machine.phase is Phase.SEARCH
+    world.board = False
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "contact_lost")
+
+
+def test_slip_with_the_fail_policy():
+    world = ToyWorld()
+    machine = make_machine(world, config(slip=replace(SlipSettings(), policy="fail")))
+    world.run_until(machine, Phase.SEARCH)
+    world.slip_gross = True
+    world.run_until(machine, Phase.FAILED, max_s=world.t_s + 0.1)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "slip")
+
+
+def test_a_lost_grasp_is_a_slip():
+    world = ToyWorld()
+    machine = make_machine(world, config(slip=replace(SlipSettings(), policy="fail")))
+    world.run_until(machine, Phase.APPROACH)
+    world.step(machine)
+    world.drop_plug = True
+    world.step(machine)
+    assert path(machine)[-1] == ("APPROACH", "FAILED", "slip")
+
+
+@pytest.mark.parametrize(("trigger", "slips"), [("gross", False), ("suspected", True)])
+def test_the_slip_trigger_decides_whether_incipient_slip_counts(trigger, slips):
+    world = ToyWorld()
+    cfg = config(slip=replace(SlipSettings(), policy="fail", trigger=trigger))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.SEARCH)
+    world.slip_suspected = True
+    for _ in range(10):
+        world.step(machine)
+    assert (machine.phase is Phase.FAILED) is slips
+
+
+def test_slip_with_the_regrasp_policy_regrasps_rezeroes_and_succeeds():
+    world = ToyWorld()
+    machine = make_machine(world)
+    world.run_until(machine, Phase.SEARCH)
+    world.slip_gross = True
+    world.run_until(machine, Phase.GRASP, max_s=world.t_s + 0.1)
+    world.slip_gross = False
+    lifted_from = world.p[2]
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+    assert ("SEARCH", "GRASP", "slip_regrasp") in path(machine)
+    assert path(machine)[-7:] == HAPPY
+    assert machine.retries == 1
+    assert world.rezero_count == 2
+    widths = [c.gripper.width_m for c in world.commands if c.gripper is not None]
+    assert widths[1] == pytest.approx(world.plug.thickness_m + 0.0005)  # opened a little
+    assert widths[2] == 0.0  # and closed again
+    assert max(c.twist.linear_m_s[2] for c in world.commands) > 0  # lifted first
+    assert lifted_from < world.hole.z_m + 0.02
+
+
+def test_slip_regrasp_beyond_the_retries_fails():
+    world = ToyWorld()
+    machine = make_machine(world, config(backoff=replace(BackoffSettings(), max_retries=0)))
+    world.run_until(machine, Phase.SEARCH)
+    world.slip_gross = True
+    world.run_until(machine, Phase.FAILED, max_s=world.t_s + 0.1)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
+
+
+@pytest.mark.parametrize(
+    ("phase", "source"),
+    [
+        (Phase.GRASP, "loop"),
+        (Phase.APPROACH, "gripper"),
+        (Phase.SEARCH, "arm"),
+        (Phase.ALIGN, "loop"),
+        (Phase.INSERT, "gripper"),
+        (Phase.RETRACT, "arm"),
+    ],
+)
+def test_a_device_fault_fails_from_any_phase(phase, source):
+    world = ToyWorld()
+    machine = make_machine(world)
+    assert world.run_until(machine, phase) is phase
+    if source == "loop":
+        world.fault = "tactile frame stale"
+    elif source == "arm":
+        world.arm_error = 31
+    else:
+        world.gripper_fault = 7
+    command = world.step(machine)
+    assert path(machine)[-1] == (phase.name, "FAILED", "device_fault")
+    assert command.twist == type(command.twist)() and command.gripper is None
+
+
+def test_a_terminal_phase_stays_and_holds_still():
+    world = ToyWorld(board=False)
+    machine = make_machine(world)
+    world.run_until(machine, Phase.FAILED)
+    count = len(machine.transitions)
+    world.teleop = replace(world.teleop, in_control=True, estop=True)
+    for _ in range(5):
+        command = world.step(machine)
+        assert command.twist == type(command.twist)()
+    assert len(machine.transitions) == count and machine.phase is Phase.FAILED

@@ -1,0 +1,244 @@
+"""A toy world for the machine's tests: a kinematic TCP, a gripper, and a tactile estimate made
+from the geometry (a board with an opening), so observation sequences follow the commands.
+
+The estimate is synthetic, in raw estimate units, with the machine's default S->T mapping:
+* below the board surface outside the opening: an axial force k_board x penetration (S's
+  shear_y is T z) and a friction torque about z_T x (drag direction);
+* once the tip has dropped into the opening (``caught``): a catch torque about z_T x (drag
+  direction) while it moves sideways, a torque turning the plug upright, a wall contact
+  level on ``normal``, and a jam torque deeper than ``jam_depth_m`` (while ``jams`` lasts).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry, s2t_matrix
+from controller.insertion.interface import Command, Observation, Phase, TeleopInput
+from controller.insertion.machine import InsertionMachine
+from controller.insertion.motion import cross
+from controller.tactile.wrench import WrenchEstimate
+from drivers.base import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
+
+DT_S = 0.01
+
+
+def estimate(t_s: float, **values: float | bool) -> WrenchEstimate:
+    """A WrenchEstimate at ``t_s``: zeros and flags off unless given."""
+    base = WrenchEstimate.zero(t_s, zeroing=False, calibrated=False)
+    return replace(base, degenerate=False, **values)
+
+
+def arm_status(t_s: float, xyz: tuple, rpy: tuple, error_code: int = 0) -> ArmStatus:
+    return ArmStatus(
+        t_s=t_s,
+        tcp=Pose(tuple(map(float, xyz)), tuple(map(float, rpy))),
+        joints_rad=(math.nan,) * 6,
+        mode=ArmMode.VELOCITY,
+        state=ArmState.READY,
+        error_code=error_code,
+    )
+
+
+def gripper_status(
+    t_s: float, holding: bool, moving: bool = False, width_m: float = 0.0024, fault_code: int = 0
+) -> GripperStatus:
+    obj = GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET
+    if moving:
+        obj = GripperObject.MOVING
+    return GripperStatus(t_s, True, moving, obj, width_m, fault_code, "")
+
+
+@dataclass
+class ToyWorld:
+    plug: PlugGeometry = field(default_factory=PlugGeometry)
+    hole: HoleNominal = field(default_factory=HoleNominal)
+    hole_offset_m: tuple[float, float] = (0.0012, -0.0009)
+    hole_radius_m: float = 0.0006
+    depth_limit_m: float = 0.012  # the opening's bottom below the surface
+    board: bool = True
+    k_board: float = 100.0  # axial force per m of penetration (estimate units)
+    friction: float = 0.1
+    catch: float = 0.03  # catch torque (estimate units)
+    upright: float = 0.05  # upright torque per rad of tilt
+    wall_normal: float = 0.05
+    jam_depth_m: float | None = None
+    jams: int = 0  # how many times the jam appears (one per INSERT)
+    jam_torque: float = 0.03
+    noise: float = 0.0003
+    frame_every: int = 2  # ticks per new tactile estimate
+    zeroing_frames: int = 3
+    seed: int = 0
+    teleop: TeleopInput = field(default_factory=TeleopInput)
+    fault: str | None = None
+    arm_error: int = 0
+    gripper_fault: int = 0
+    slip_gross: bool = False
+    slip_suspected: bool = False
+    drop_plug: bool = False
+
+    def __post_init__(self) -> None:
+        self.rng = np.random.default_rng(self.seed)
+        self.s2t = s2t_matrix(("+x", "+z", "-y"))
+        self.t_s = 0.0
+        self.tick = 0
+        self.rotation = Rotation.from_euler("xyz", (math.pi, 0.0, 0.0))
+        self.p = np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + 0.04 + self.plug.length_m])
+        self.gripper_holding = False
+        self.gripper_width = 0.02
+        self.gripper_busy_until = -1.0
+        self.gripper_target: float | None = None
+        self.zeroing_left = 0
+        self.caught = False
+        self.jammed_in_this_insert = False
+        self.v_tip = np.zeros(3)
+        self.last_estimate = estimate(0.0)
+        self.commands: list[Command] = []
+        self.rezero_count = 0
+
+    # -- geometry ----------------------------------------------------------------------
+
+    @property
+    def tip(self) -> np.ndarray:
+        return self.p + self.rotation.apply([0.0, 0.0, self.plug.length_m])
+
+    @property
+    def hole_xy(self) -> np.ndarray:
+        return np.array([self.hole.x_m, self.hole.y_m]) + np.array(self.hole_offset_m)
+
+    def pose(self) -> Pose:
+        return Pose(tuple(map(float, self.p)), tuple(map(float, self.rotation.as_euler("xyz"))))
+
+    # -- the observation -----------------------------------------------------------------
+
+    def observe(self) -> Observation:
+        if self.tick % self.frame_every == 0:
+            self.last_estimate = self._estimate()
+        moving = self.t_s < self.gripper_busy_until
+        holding = self.gripper_holding and not moving and not self.drop_plug
+        return Observation(
+            t_s=self.t_s,
+            wrench=self.last_estimate,
+            arm=ArmStatus(
+                self.t_s, self.pose(), (math.nan,) * 6, ArmMode.VELOCITY, ArmState.READY,
+                self.arm_error,
+            ),
+            gripper=GripperStatus(
+                self.t_s, True, moving,
+                GripperObject.MOVING if moving else (
+                    GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET),
+                self.gripper_width, self.gripper_fault, "fault" if self.gripper_fault else "",
+            ),
+            teleop=self.teleop,
+            fault=self.fault,
+        )
+
+    def _estimate(self) -> WrenchEstimate:
+        if self.zeroing_left > 0:
+            self.zeroing_left -= 1
+            return WrenchEstimate.zero(self.t_s, zeroing=True, calibrated=False)
+        force_t = np.zeros(3)
+        torque_b = np.zeros(3)
+        normal = 0.0
+        surface = self.hole.z_m
+        tip = self.tip
+        z_t = self.rotation.apply([0.0, 0.0, 1.0])
+        drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
+        drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
+        in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        if self.board and tip[2] < surface:
+            if in_region:
+                self.caught = True
+        else:
+            self.caught = False
+        if self.board and tip[2] < surface:
+            if self.caught:
+                angle = math.acos(float(np.clip(np.dot(z_t, [0.0, 0.0, -1.0]), -1, 1)))
+                turn = cross(z_t, [0.0, 0.0, -1.0])
+                axis = turn / np.linalg.norm(turn) if np.linalg.norm(turn) > 1e-12 else turn
+                torque_b += self.catch * drag_axis - self.upright * angle * axis
+                normal = self.wall_normal
+                if self.jam_depth_m is not None and tip[2] < surface - self.jam_depth_m:
+                    if self.jams > 0:
+                        self.jammed_in_this_insert = True
+                        torque_b += self.jam_torque * self.rotation.apply([1.0, 0.0, 0.0])
+                if tip[2] < surface - self.depth_limit_m:
+                    force_t[2] = self.k_board * (surface - self.depth_limit_m - tip[2])
+            else:
+                axial = self.k_board * (surface - tip[2])
+                force_t[2] = axial
+                torque_b += self.friction * axial * drag_axis
+        if self.jammed_in_this_insert and not (
+            self.jam_depth_m is not None and tip[2] < surface - self.jam_depth_m
+        ):
+            self.jammed_in_this_insert = False
+            self.jams -= 1
+        torque_s = self.s2t.T @ self.rotation.inv().apply(torque_b)
+        force_s = self.s2t.T @ force_t
+        noise = self.rng.normal(0.0, self.noise, 6)
+        return estimate(
+            self.t_s,
+            tau_x=float(torque_s[0] + noise[0]),
+            tau_y=float(torque_s[1] + noise[1]),
+            tau_z=float(torque_s[2] + noise[2]),
+            shear_x=float(force_s[0] + noise[3]),
+            shear_y=float(force_s[1] + noise[4]),
+            normal=float(force_s[2] + normal + noise[5]),
+            contact=bool(normal or force_t.any()),
+            slip_gross=self.slip_gross,
+            slip_suspected=self.slip_suspected,
+        )
+
+    # -- applying a command ------------------------------------------------------------
+
+    def apply(self, command: Command) -> None:
+        self.commands.append(command)
+        if command.rezero_tactile:
+            self.rezero_count += 1
+            self.zeroing_left = self.zeroing_frames
+        if command.gripper is not None:
+            closing = command.gripper.width_m < self.gripper_width
+            self.gripper_busy_until = self.t_s + 0.15
+            if closing and command.gripper.width_m < self.plug.thickness_m:
+                self.gripper_width = self.plug.thickness_m
+                self.gripper_holding = True
+            else:
+                self.gripper_width = command.gripper.width_m
+                self.gripper_holding = False
+        if command.twist is not None:
+            v = np.array(command.twist.linear_m_s)
+            w = np.array(command.twist.angular_rad_s)
+            self.v_tip = v + cross(w, self.tip - self.p)
+            self.p = self.p + v * DT_S
+            self.rotation = Rotation.from_rotvec(w * DT_S) * self.rotation
+        self.t_s += DT_S
+        self.tick += 1
+
+    def step(self, machine: InsertionMachine) -> Command:
+        command = machine.step(self.observe())
+        self.apply(command)
+        return command
+
+    def run_until(
+        self, machine: InsertionMachine, phases: Phase | tuple[Phase, ...], max_s: float = 60.0
+    ) -> Phase:
+        """Step until the machine is in one of ``phases`` (or terminal); its phase then."""
+        wanted = phases if isinstance(phases, tuple) else (phases,)
+        while self.t_s < max_s:
+            if machine.phase in wanted or machine.phase in (Phase.DONE, Phase.FAILED):
+                return machine.phase
+            self.step(machine)
+        return machine.phase
+
+
+def make_machine(world: ToyWorld, config: MachineConfig | None = None) -> InsertionMachine:
+    return InsertionMachine(config or MachineConfig(), world.plug, world.hole)
+
+
+def path(machine: InsertionMachine) -> list[tuple[str, str, str]]:
+    """The machine's transitions as (source, target, reason) names."""
+    return [(t.source.name, t.target.name, t.reason) for t in machine.transitions]
