@@ -12,7 +12,10 @@ Bodies and frames (every name below is looked up by name in ``physics``):
 * ``gripper``: at the wrist's pivot, ``pivot_above_tcp_m`` from the TCP back along the
   tool axis, axes as T's when the wrist is at rest; six joints (slide x, y, z, hinge x, y,
   z of T) with the wrist's stiffness and damping. Its weight is compensated
-  (``gravcomp``), as the arm's payload setting does; it has no collision geometry.
+  (``gravcomp``), as the arm's payload setting does: hanging below the pivot, 0.9 kg would
+  add about 0.8 N*m/rad of pendulum stiffness to the tilt spring's 0.5 and pull a
+  commanded tilt mostly back to vertical, so the configured rates would not be the ones
+  that act. It has no collision geometry.
 * ``plug``: at the grasp point (the TCP when nothing deflects), axes those of the sensor
   frame S (``frames.S_IN_T``); six joints (slide x, y, z, hinge x, y, z of S) with the gel
   spring's stiffness and damping. A box ``width_m`` x (``length_m`` + 5 mm above the
@@ -72,9 +75,7 @@ def board_blocks(scene: InsertionSceneConfig) -> list[tuple[str, tuple, tuple]]:
     ]
 
 
-def scene_xml(
-    scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePose
-) -> str:
+def scene_xml(scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePose) -> str:
     """The MJCF text of the scene with the board at ``hole_true`` (see the module doc)."""
     wrist, spring, contact = scene.wrist, scene.gel_spring, scene.contact
     solref = _vec(contact.solref)
@@ -151,4 +152,3 @@ def scene_xml(
   </sensor>
 </mujoco>
 """
-
