@@ -12,7 +12,8 @@ the largest contact force.
 
     python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
 
-The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads.
+The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads, and OpenCV to
+one thread.
 """
 
 from __future__ import annotations
@@ -22,6 +23,8 @@ import math
 import time
 from dataclasses import dataclass
 
+import cv2
+import mujoco
 import numpy as np
 
 from controller.tactile import estimator_for_sensor
@@ -186,7 +189,9 @@ def main(argv: list[str] | None = None) -> int:
 
 def bench(args: argparse.Namespace) -> int:
     estimate = not args.no_estimate
-    print(f"Machine: {describe_machine('1 thread (OMP/OpenBLAS/MKL 1)')}.")
+    cv2.setNumThreads(1)
+    one_thread = "1 thread (cv2.setNumThreads(1), OMP/OpenBLAS/MKL 1)"
+    print(f"Machine: {describe_machine(one_thread)}; MuJoCo {mujoco.__version__}.")
     what = "physics, gel, rendering" + (", estimation" if estimate else "")
     print(f"Task {args.task}, {what}; {args.runs} runs (seeds {args.seed}..).\n")
     print("| seed | sim s | wall s | x real time | CPU s | x per CPU s | frames | depth mm |")
