@@ -243,7 +243,7 @@ def _write_task(tmp_path: Path, edit) -> Path:
 @pytest.mark.parametrize(
     ("edit", "expected"),
     [
-        (lambda d: d["scene"]["contact"].update(friction=-1), "key 'scene.contact.friction'"),
+        (lambda d: d["scene"].update(friction=-1), "key 'scene.friction'"),
         (lambda d: d["scene"].update(timestep_s=0.001), "key 'scene.contact.solref'"),
         (lambda d: d["scene"]["wrist"].update(tilt_gain=1), "unknown key 'scene.wrist.tilt_gain'"),
         (lambda d: d["scene"].update(tactile_appearance="glossy"), "scene.tactile_appearance"),
@@ -307,3 +307,16 @@ def test_the_scene_clock_syncs_the_world_to_the_present_then_sleeps_the_rest():
     assert synced == [1.0]
     assert base.sleeps == [pytest.approx(0.008)]
     assert clock.now() == pytest.approx(1.010)
+
+
+def test_in_real_time_the_world_follows_the_monotonic_clock():
+    section = task("usb_c")
+    sim = build_insertion_sim(
+        section.scene, section.plug, HOLE, default_devices(), seed=0, realtime=True
+    )
+    sim.arm.connect()
+    start = sim.clock.now()
+    sim.clock.sleep(0.03)
+    assert sim.clock.now() - start >= 0.03
+    sim.clock.sleep(0.0)  # syncs to the present
+    assert sim.world.physics.t_s >= start + 0.03 - section.scene.timestep_s

@@ -121,12 +121,10 @@ class GelSpringConfig(Config):
 
 @dataclass(frozen=True)
 class ContactConfig(Config):
-    """MuJoCo contact between the plug and the board: ``friction`` (sliding, Coulomb),
-    ``solref`` (time constant s, damping ratio) and ``solimp`` (dmin, dmax, width m,
-    midpoint, power); see MuJoCo's "Solver parameters". The time constant must be at least
-    twice the physics time step."""
+    """MuJoCo's contact softness between the plug and the board: ``solref`` (time constant
+    s, damping ratio) and ``solimp`` (dmin, dmax, width m, midpoint, power); see MuJoCo's
+    "Solver parameters". The time constant must be at least twice the physics time step."""
 
-    friction: float = number(0.0, 3.0, default=0.3)
     solref: tuple[float, float] = number(1e-4, 10.0, default=(0.001, 1.0))
     solimp: tuple[float, float, float, float, float] = number(
         1e-4, 10.0, default=(0.95, 0.99, 0.0005, 0.5, 2.0)
@@ -144,6 +142,7 @@ class ContactConfig(Config):
 class InsertionSceneConfig(Config):
     """The ``scene:`` section of a task YAML (see the module docstring).
 
+    ``friction``: sliding (Coulomb) friction between the plug and the board.
     ``timestep_s``: the physics step. ``gripper_mass_kg``: the gripper body behind the
     wrist (its weight is compensated, as the arm's payload setting does). ``grip_*``: the
     tactile coupling (module ``coupling``). ``start_above_hole_m``: the SimArm starts
@@ -157,6 +156,7 @@ class InsertionSceneConfig(Config):
     wrist: WristConfig = WristConfig()
     gel_spring: GelSpringConfig = GelSpringConfig()
     contact: ContactConfig = ContactConfig()
+    friction: float = number(0.0, 3.0, default=0.3)
     timestep_s: float = number(1e-4, 0.005, default=0.0005)
     gripper_mass_kg: float = number(0.05, 10.0, default=0.9)
     start_above_hole_m: float = number(0.0, 0.3, default=0.03)

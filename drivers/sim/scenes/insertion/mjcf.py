@@ -80,7 +80,7 @@ def scene_xml(scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePo
     wrist, spring, contact = scene.wrist, scene.gel_spring, scene.contact
     solref = _vec(contact.solref)
     solimp = _vec(contact.solimp)
-    friction = f"{contact.friction:.9g} 0.005 0.0001"
+    friction = f"{scene.friction:.9g} 0.005 0.0001"
     yaw = hole_true.yaw_rad
     board_quat = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
     blocks = "\n".join(
