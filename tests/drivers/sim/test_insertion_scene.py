@@ -28,7 +28,7 @@ from drivers.sim.scenes.insertion.config import PlugGeometry, check_fits
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
-from drivers.sim.scenes.insertion.physics import InsertionPhysics
+from drivers.sim.scenes.insertion.physics import InsertionPhysics, UnstablePhysicsError
 from drivers.sim.scenes.insertion.truth import TruthLog
 from drivers.sim.scenes.insertion.world import InsertionWorld
 
@@ -51,10 +51,14 @@ def tilted_pose(hole: HolePose, length_m: float, tip_h: tuple[float, float, floa
     return Pose(tuple(float(v) for v in tcp), tuple(float(v) for v in rotation.as_euler("xyz")))
 
 
-def lower(name: str, tip_x_m: float, rotvec_t=(0.0, 0.0, 0.0), below_m: float | None = None):
+def lower(
+    name: str, tip_x_m: float, rotvec_t=(0.0, 0.0, 0.0), below_m: float | None = None, **scene
+):
     """Lower the plug from 2 mm above the board to ``below_m`` under the surface (default:
-    1 mm past the floor) at 20 mm/s, then hold 0.2 s; the truth's arrays."""
+    1 mm past the floor) at 20 mm/s, then hold 0.2 s; the truth's arrays. ``scene``:
+    overrides of the task's scene keys."""
     section = task(name)
+    section = dataclasses.replace(section, scene=dataclasses.replace(section.scene, **scene))
     plug, depth = section.plug, section.scene.receptacle.depth_m
     below = depth + 0.001 if below_m is None else below_m
     truth = TruthLog(HOLE, HOLE)
@@ -103,6 +107,23 @@ def test_a_plug_lowered_3_mm_off_stays_on_the_surface_and_pushes(name):
     assert truth["contact_force_n"][-1] > 1.0
     # the gel pushes the plug toward its tip (+y_S) against the surface
     assert truth["gel_wrench_s"][-1, 1] > 0.5
+
+
+@pytest.mark.parametrize("friction", (0.0, 2.0))
+def test_the_extremes_of_friction_stay_stable(friction):
+    truth, depth = lower("usb_c", 0.0, (0.05, 0.05, 0.0), friction=friction)
+    assert np.isfinite(np.concatenate([v.ravel() for v in truth.values()])).all()
+    assert truth["depth_m"][-1] > 0.0  # into the opening, tilted as it is
+
+
+def test_an_unstable_physics_is_an_error_not_a_silent_reset():
+    section = task("usb_c")
+    truth = TruthLog(HOLE, HOLE)
+    start = upright_pose((HOLE.x_m, HOLE.y_m, 0.05), HOLE.yaw_rad)
+    physics = InsertionPhysics(section.scene, section.plug, HOLE, start, 0.0, truth)
+    physics.data.qvel[:] = 1e12
+    with pytest.raises(UnstablePhysicsError, match="unstable"):
+        physics.step_to(0.01, 0.01, start)
 
 
 @pytest.mark.parametrize("sign", (1.0, -1.0))

@@ -47,15 +47,22 @@ def _box_inertia(mass: float, size: tuple[float, float, float]) -> tuple[float, 
     return (mass * (b * b + c * c) / 12, mass * (a * a + c * c) / 12, mass * (a * a + b * b) / 12)
 
 
-def _joints(prefix: str, axes: str, kind: str, stiffness: float, damping: float) -> str:
-    lines = []
-    for axis in axes:
-        vector = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}[axis]
-        lines.append(
-            f'<joint name="{prefix}_{axis}" type="{kind}" axis="{vector}" '
-            f'stiffness="{stiffness:.9g}" damping="{damping:.9g}" armature="0"/>'
-        )
-    return "\n".join(lines)
+def _joint(
+    name: str, kind: str, axis: str, stiffness: float, damping: float, armature: float = 0.0
+) -> str:
+    vector = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}[axis]
+    return (
+        f'<joint name="{name}" type="{kind}" axis="{vector}" stiffness="{stiffness:.9g}" '
+        f'damping="{damping:.9g}" armature="{armature:.9g}"/>'
+    )
+
+
+def stable_armature(stiffness: float, inertia: float, timestep_s: float) -> float:
+    """The armature (kg or kg*m^2) that keeps a spring's mode at most ``1 / timestep_s``
+    rad/s: MuJoCo integrates joint stiffness explicitly, and about its own axis the plug
+    (a few 1e-8 kg*m^2) would ring at several times that under the gel's rotational spring.
+    Zero when the body's own ``inertia`` about the joint suffices."""
+    return max(0.0, stiffness * timestep_s**2 - inertia)
 
 
 def board_blocks(scene: InsertionSceneConfig) -> list[tuple[str, tuple, tuple]]:
@@ -81,11 +88,13 @@ def scene_xml(scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePo
     solref = _vec(contact.solref)
     solimp = _vec(contact.solimp)
     friction = f"{scene.friction:.9g} 0.005 0.0001"
+    # Frictionless contacts have one dimension: a pyramid of zero friction is degenerate.
+    condim = 1 if scene.friction == 0 else 3
     yaw = hole_true.yaw_rad
     board_quat = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
     blocks = "\n".join(
         f'<geom name="{name}" type="box" pos="{_vec(pos)}" size="{_vec(half)}" '
-        f'contype="2" conaffinity="1" friction="{friction}" solref="{solref}" '
+        f'contype="2" conaffinity="1" condim="{condim}" friction="{friction}" solref="{solref}" '
         f'solimp="{solimp}" rgba="0.3 0.5 0.3 1"/>'
         for name, pos, half in board_blocks(scene)
     )
@@ -100,6 +109,45 @@ def scene_xml(scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePo
     # The plug's inertia about the grasp point matters for the gel spring's stability; its
     # centre of mass is the box's.
     half_plug = (plug.width_m / 2, length / 2, plug.thickness_m / 2)
+    wrist_joints = "\n".join(
+        [
+            _joint(f"wrist_{a}", "slide", a, wrist.xy_stiffness_n_m, wrist.xy_damping_n_s_m)
+            for a in "xy"
+        ]
+        + [_joint("wrist_z", "slide", "z", wrist.z_stiffness_n_m, wrist.z_damping_n_s_m)]
+        + [
+            _joint(
+                f"wrist_r{a}", "hinge", a, wrist.tilt_stiffness_nm_rad, wrist.tilt_damping_nm_s_rad
+            )
+            for a in "xy"
+        ]
+        + [
+            _joint(
+                "wrist_rz", "hinge", "z", wrist.twist_stiffness_nm_rad, wrist.twist_damping_nm_s_rad
+            )
+        ]
+    )
+    dt = scene.timestep_s
+    k, k_rot = spring.stiffness_n_m, spring.rotational_stiffness_nm_rad
+    offset = p_mass * p_centre_y**2  # the centre of mass is on the plug's axis, off the grasp
+    about_grasp = (p_inertia[0] + offset, p_inertia[1], p_inertia[2] + offset)
+    gel_joints = "\n".join(
+        [
+            _joint(f"gel_{a}", "slide", a, k, spring.damping_n_s_m, stable_armature(k, p_mass, dt))
+            for a in "xyz"
+        ]
+        + [
+            _joint(
+                f"gel_r{a}",
+                "hinge",
+                a,
+                k_rot,
+                spring.rotational_damping_nm_s_rad,
+                stable_armature(k_rot, inertia, dt),
+            )
+            for a, inertia in zip("xyz", about_grasp, strict=True)
+        ]
+    )
     return f"""
 <mujoco model="insertion">
   <compiler angle="radian" autolimits="true"/>
@@ -113,31 +161,15 @@ def scene_xml(scene: InsertionSceneConfig, plug: PlugGeometry, hole_true: HolePo
       <body name="gripper" pos="0 0 {-pivot:.9g}" gravcomp="1">
         <inertial pos="0 0 {pivot / 2:.9g}" mass="{g_mass:.9g}"
                   diaginertia="{_vec(g_inertia)}"/>
-{_joints("wrist", "xy", "slide", wrist.xy_stiffness_n_m, wrist.xy_damping_n_s_m)}
-{_joints("wrist", "z", "slide", wrist.z_stiffness_n_m, wrist.z_damping_n_s_m)}
-<joint name="wrist_rx" type="hinge" axis="1 0 0" stiffness="{wrist.tilt_stiffness_nm_rad:.9g}"
-       damping="{wrist.tilt_damping_nm_s_rad:.9g}"/>
-<joint name="wrist_ry" type="hinge" axis="0 1 0" stiffness="{wrist.tilt_stiffness_nm_rad:.9g}"
-       damping="{wrist.tilt_damping_nm_s_rad:.9g}"/>
-<joint name="wrist_rz" type="hinge" axis="0 0 1" stiffness="{wrist.twist_stiffness_nm_rad:.9g}"
-       damping="{wrist.twist_damping_nm_s_rad:.9g}"/>
+{wrist_joints}
         <site name="wrist" pos="0 0 0"/>
         <body name="plug" pos="0 0 {pivot:.9g}" quat="{_vec(S_IN_T_QUAT_WXYZ)}">
           <inertial pos="0 {p_centre_y:.9g} 0" mass="{p_mass:.9g}"
                     diaginertia="{_vec(p_inertia)}"/>
-{_joints("gel", "xyz", "slide", spring.stiffness_n_m, spring.damping_n_s_m)}
-<joint name="gel_rx" type="hinge" axis="1 0 0"
-       stiffness="{spring.rotational_stiffness_nm_rad:.9g}"
-       damping="{spring.rotational_damping_nm_s_rad:.9g}"/>
-<joint name="gel_ry" type="hinge" axis="0 1 0"
-       stiffness="{spring.rotational_stiffness_nm_rad:.9g}"
-       damping="{spring.rotational_damping_nm_s_rad:.9g}"/>
-<joint name="gel_rz" type="hinge" axis="0 0 1"
-       stiffness="{spring.rotational_stiffness_nm_rad:.9g}"
-       damping="{spring.rotational_damping_nm_s_rad:.9g}"/>
+{gel_joints}
           <geom name="plug" type="box" pos="0 {p_centre_y:.9g} 0" size="{_vec(half_plug)}"
-                contype="1" conaffinity="2" friction="{friction}" solref="{solref}"
-                solimp="{solimp}" mass="0" rgba="0.8 0.8 0.85 1"/>
+                contype="1" conaffinity="2" condim="{condim}" friction="{friction}"
+                solref="{solref}" solimp="{solimp}" mass="0" rgba="0.8 0.8 0.85 1"/>
           <site name="grasp" pos="0 0 0"/>
           <site name="tip" pos="0 {plug.length_m:.9g} 0"/>
         </body>

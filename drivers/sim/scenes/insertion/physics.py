@@ -32,7 +32,17 @@ from drivers.sim.scenes.insertion.truth import TruthLog
 RING_S = 1.0  # how far back the grasp's wrench is kept, s
 _WRIST = ("wrist_x", "wrist_y", "wrist_z", "wrist_rx", "wrist_ry", "wrist_rz")
 _GEL = ("gel_x", "gel_y", "gel_z", "gel_rx", "gel_ry", "gel_rz")
+_BAD_STATE = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
 _RELEASED_DAMPING = 1e-4  # the gel joints' damping once the fingers let go (numerical only)
+
+
+class UnstablePhysicsError(RuntimeError):
+    """MuJoCo found a non-finite or huge position, velocity or acceleration (and reset its
+    state)."""
 
 
 class InsertionPhysics:
@@ -127,6 +137,12 @@ class InsertionPhysics:
                 self._record()
         self.t_s = float(times[-1])
         self._pos, self._quat = positions[-1].copy(), quats[-1].copy()
+        if any(d.warning[w].number for w in _BAD_STATE):
+            # MuJoCo has reset the state: the run's physics is no longer the scene's.
+            raise UnstablePhysicsError(
+                f"insertion scene: the physics went unstable before t = {self.t_s:.4f} s "
+                "(MuJoCo reset it); use a smaller scene.timestep_s or softer springs"
+            )
 
     # ----------------------------------------------------------------- the grasp
 
