@@ -116,7 +116,8 @@ def test_the_extremes_of_friction_stay_stable(friction):
     assert truth["depth_m"][-1] > 0.0  # into the opening, tilted as it is
 
 
-def test_an_unstable_physics_is_an_error_not_a_silent_reset():
+def test_an_unstable_physics_is_an_error_not_a_silent_reset(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs its warning to ./MUJOCO_LOG.TXT
     section = task("usb_c")
     truth = TruthLog(HOLE, HOLE)
     start = upright_pose((HOLE.x_m, HOLE.y_m, 0.05), HOLE.yaw_rad)
