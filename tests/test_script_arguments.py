@@ -27,6 +27,9 @@ def script_main(name: str):
         ("bench_camera_decode", ["--runs", "0"], "--runs"),
         ("bench_camera_decode", ["--seed", "-3"], "--seed"),
         ("demo", ["--seed", "nan"], "--seed"),
+        ("bench_insertion_scene", ["--runs", "0"], "--runs"),
+        ("bench_insertion_scene", ["--seed", "-3"], "--seed"),
+        ("bench_insertion_scene", ["--task", "usb_b"], "--task"),
     ],
 )
 def test_nonsense_counts_are_usage_errors(name, args, message, capsys):

@@ -107,6 +107,7 @@ class SimGripper(ContextManagedDevice):
         self._motion = self._hold(config.sim.start_width_m, GripperObject.AT_TARGET)
         self._fault = 0
         self._sticky = False
+        self._force_n = 0.0
 
     @classmethod
     def from_config(
@@ -173,7 +174,7 @@ class SimGripper(ContextManagedDevice):
         cfg = self.config
         position = regs.position_count(width_m, cfg.open_count, cfg.closed_count, cfg.stroke_m)
         speed_count = regs.speed_count(speed_m_s)
-        regs.force_count(force_n)
+        force_count = regs.force_count(force_n)
         if not self._driver_activated:
             raise DeviceFaultError(
                 self.name, "not activated: call activate() before move()", code=_NOT_ACTIVATED_CODE
@@ -184,6 +185,8 @@ class SimGripper(ContextManagedDevice):
         self._fault = 0  # only a minor fault can be present here: the new action clears it
         low, high = regs.SPEED_RANGE_M_S
         self._target_m = self._width_of(position)
+        low_n, high_n = regs.FORCE_RANGE_N
+        self._force_n = low_n + force_count / 0xFF * (high_n - low_n)
         self._start_motion(self._target_m, low + speed_count / 0xFF * (high - low))
 
     def read_status(self) -> GripperStatus:
@@ -206,6 +209,12 @@ class SimGripper(ContextManagedDevice):
         )
 
     # -- simulation hooks --------------------------------------------------------------
+
+    @property
+    def commanded_force_n(self) -> float:
+        """The grip force of the last accepted ``move()``, N, as its register count
+        quantises it (0 before any); what a scene presses a held object with."""
+        return self._force_n
 
     def set_object_width(self, width_m: float | None) -> None:
         """Put an object of ``width_m`` (m) between the fingers, or remove it (``None``); a

@@ -92,7 +92,8 @@ class SimTactileConfig(TactileCameraConfig):
 
 class SimTactileSensor(ContextManagedDevice):
     """The tactile camera twin; see the module docstring. ``clock`` defaults to real time,
-    ``rng`` to ``numpy.random.default_rng(config.sim.seed)``."""
+    ``rng`` to ``numpy.random.default_rng(config.sim.seed)``; ``appearance`` names the
+    gel's look (drivers/sim/render/appearance.py; the speckle gel by default)."""
 
     def __init__(
         self,
@@ -100,6 +101,7 @@ class SimTactileSensor(ContextManagedDevice):
         clock: Clock | None = None,
         rng: np.random.Generator | None = None,
         field_source: FieldSource | None = None,
+        appearance: str = "speckle",
     ) -> None:
         self.config = config
         self.name = config.name
@@ -113,6 +115,7 @@ class SimTactileSensor(ContextManagedDevice):
             dot_radius_px=sim.marker_radius_px or 0.0,
             effects=ImageEffects(noise_grey=sim.noise_grey),
             rng=rng,
+            appearance=appearance,
         )
         self._source = field_source
         self._present = True

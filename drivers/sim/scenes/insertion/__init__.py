@@ -1,0 +1,35 @@
+"""The simulated insertion scene (issue 13 section 3; docs/SIMULATION.md, "The insertion
+scene"): MuJoCo rigid contacts between a grasped USB plug and a board with a receptacle,
+the commanded TCP as a mocap body behind a compliant wrist, the plug in a stiff gel spring
+whose wrench drives the gel model and the rendered tactile frames.
+
+Modules: ``config`` (the task YAML's ``scene:``, ``plug:``, ``hole:``), ``frames``,
+``mjcf`` (the model text), ``physics`` (MuJoCo stepping, the grasp's wrench, the truth
+rows), ``truth`` (``TruthLog``), ``world`` (the physics in step with the arm and gripper
+twins), ``coupling`` (grasp wrench -> gel model -> camera field), ``clock``
+(``SceneClock``), ``builder`` (``build_insertion_sim``).
+"""
+
+from drivers.sim.scenes.insertion.builder import (
+    DEVICE_FILES,
+    InsertionSim,
+    SimDevices,
+    build_insertion_sim,
+    default_devices,
+    draw_hole,
+)
+from drivers.sim.scenes.insertion.clock import SceneClock
+from drivers.sim.scenes.insertion.config import (
+    HolePose,
+    InsertionSceneConfig,
+    PlugGeometry,
+    SceneSection,
+    load_scene_section,
+)
+from drivers.sim.scenes.insertion.truth import TruthLog
+
+__all__ = [
+    "DEVICE_FILES", "HolePose", "InsertionSceneConfig", "InsertionSim", "PlugGeometry",
+    "SceneClock", "SceneSection", "SimDevices", "TruthLog", "build_insertion_sim",
+    "default_devices", "draw_hole", "load_scene_section",
+]  # fmt: skip

@@ -1,0 +1,169 @@
+"""Building the simulated insertion: the world, its clock, the twins the controller drives,
+and the ground truth it never sees.
+
+``build_insertion_sim(scene, plug, hole_nominal, devices, seed)`` draws the true hole from
+the nominal one (``hole_uncertainty``, seeded by ``seed``), builds the physics, and the
+twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realtime``:
+``MonotonicClock``):
+
+* the SimArm, its configuration adapted to the scene through the config objects: it
+  starts upright over the nominal hole, the plug's tip ``start_above_hole_m`` above the
+  board, turned to the nominal yaw; its envelope's floor is lowered when needed so that
+  the TCP can reach the receptacle's floor (2 mm spare);
+* the SimGripper, its object width the plug's thickness;
+* the SimTactileSensor on the gel coupling (``coupling``) with the scene's appearance, its
+  noise seeded by its configuration's seed and ``seed``;
+* a SimGamepad when a gamepad configuration is given.
+
+The devices carry nothing of the truth: the world reaches them only through the clock's
+and the camera's private references. The truth is ``InsertionSim.truth`` (``TruthLog``).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from drivers.clock import ManualClock, MonotonicClock
+from drivers.config import CONFIG_ROOT
+from drivers.registry import load_device_config
+from drivers.sim.gel.model import GelModel
+from drivers.sim.gel.profile import ObjectShape, gel_profile
+from drivers.sim.scenes.insertion.clock import SceneClock
+from drivers.sim.scenes.insertion.config import (
+    HolePose,
+    HoleUncertainty,
+    InsertionSceneConfig,
+    PlugGeometry,
+    check_fits,
+)
+from drivers.sim.scenes.insertion.coupling import GelCoupling
+from drivers.sim.scenes.insertion.frames import upright_pose
+from drivers.sim.scenes.insertion.physics import InsertionPhysics
+from drivers.sim.scenes.insertion.truth import TruthLog
+from drivers.sim.scenes.insertion.world import InsertionWorld
+from drivers.sim.twins.arm import SimArm, SimArmConfig
+from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
+from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
+from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
+
+FLOOR_SPARE_M = 0.002  # how far below full insertion the TCP may still go, m
+
+DEVICE_FILES = {
+    "arm": CONFIG_ROOT / "robot" / "xarm6.yaml",
+    "gripper": CONFIG_ROOT / "gripper" / "hande.yaml",
+    "tactile": CONFIG_ROOT / "sensors" / "gelsight_mini_camera.yaml",
+    "gamepad": CONFIG_ROOT / "gamepad" / "xbox.yaml",
+}
+
+
+@dataclass(frozen=True)
+class SimDevices:
+    """The twins' configurations (``backend: sim``)."""
+
+    arm: SimArmConfig
+    gripper: SimGripperConfig
+    tactile: SimTactileConfig
+    gamepad: SimGamepadConfig | None = None
+
+
+def default_devices() -> SimDevices:
+    """The product's device files (``DEVICE_FILES``) read with ``backend: sim``."""
+    configs = {
+        kind: load_device_config(path, backend="sim", kind=kind).config
+        for kind, path in DEVICE_FILES.items()
+    }
+    return SimDevices(**configs)
+
+
+@dataclass
+class InsertionSim:
+    """A built scene. The controller gets ``clock``, ``arm``, ``gripper``, ``tactile`` and
+    ``gamepad``; ``truth`` goes to the run's record only. ``sync()`` brings the world to the
+    clock's present (e.g. before reading the truth at the end of a run)."""
+
+    clock: SceneClock
+    arm: SimArm
+    gripper: SimGripper
+    tactile: SimTactileSensor
+    gamepad: SimGamepad | None
+    truth: TruthLog
+    world: InsertionWorld
+
+    def sync(self) -> None:
+        self.world.sync(self.clock.now())
+
+
+def draw_hole(nominal: HolePose, uncertainty: HoleUncertainty, seed: int) -> HolePose:
+    """The true hole: ``nominal`` moved by uniform draws within ``uncertainty`` (seeded)."""
+    rng = np.random.default_rng(seed)
+    dx, dy, dyaw = rng.uniform(-1.0, 1.0, 3) * (
+        uncertainty.x_m,
+        uncertainty.y_m,
+        uncertainty.yaw_rad,
+    )
+    return HolePose(
+        nominal.x_m + float(dx),
+        nominal.y_m + float(dy),
+        nominal.z_m,
+        nominal.yaw_rad + float(dyaw),
+    )
+
+
+def scene_arm_config(
+    arm: SimArmConfig, scene: InsertionSceneConfig, plug: PlugGeometry, hole: HolePose
+) -> SimArmConfig:
+    """``arm`` starting over the nominal ``hole`` with a floor low enough to insert."""
+    start = upright_pose(
+        (hole.x_m, hole.y_m, hole.z_m + plug.length_m + scene.start_above_hole_m), hole.yaw_rad
+    )
+    lowest = hole.z_m + plug.length_m - scene.receptacle.depth_m - FLOOR_SPARE_M
+    envelope = dataclasses.replace(arm.envelope, z_min_m=min(arm.envelope.z_min_m, lowest))
+    (x, y, z), (roll, pitch, yaw) = start.xyz_m, start.rpy_rad
+    sim = dataclasses.replace(
+        arm.sim,
+        start_x_m=x,
+        start_y_m=y,
+        start_z_m=z,
+        start_roll_rad=roll,
+        start_pitch_rad=pitch,
+        start_yaw_rad=yaw,
+    )
+    return dataclasses.replace(arm, envelope=envelope, sim=sim)
+
+
+def build_insertion_sim(
+    scene: InsertionSceneConfig,
+    plug: PlugGeometry,
+    hole_nominal: HolePose,
+    devices: SimDevices,
+    seed: int,
+    realtime: bool = False,
+) -> InsertionSim:
+    """The scene for one trial (see the module docstring); ValueError if the plug does not
+    fit the opening or the start pose leaves the arm's envelope."""
+    check_fits(scene, plug)
+    hole = draw_hole(hole_nominal, scene.hole_uncertainty, seed)
+    clock = SceneClock(MonotonicClock() if realtime else ManualClock())
+    arm_config = scene_arm_config(devices.arm, scene, plug, hole_nominal)
+    start = arm_config.sim.start_pose
+    arm = SimArm(arm_config, clock)
+    gripper_sim = dataclasses.replace(devices.gripper.sim, object_width_m=plug.thickness_m)
+    gripper = SimGripper(dataclasses.replace(devices.gripper, sim=gripper_sim), clock)
+    truth = TruthLog(hole=hole, hole_nominal=hole_nominal)
+    physics = InsertionPhysics(scene, plug, hole, start, clock.now(), truth)
+    world = InsertionWorld(physics, arm, gripper, plug.thickness_m, start)
+    clock.attach(world.sync)
+    profile = gel_profile(devices.tactile.model)
+    gel = GelModel(profile, ObjectShape("square_peg", plug.width_m, "y"))
+    tactile = SimTactileSensor(
+        devices.tactile,
+        clock,
+        rng=np.random.default_rng([devices.tactile.sim.seed, seed]),
+        field_source=GelCoupling(world, gel),
+        appearance=scene.tactile_appearance,
+    )
+    gamepad = None if devices.gamepad is None else SimGamepad(devices.gamepad, clock)
+    return InsertionSim(clock, arm, gripper, tactile, gamepad, truth, world)

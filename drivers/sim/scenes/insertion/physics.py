@@ -1,0 +1,211 @@
+"""The MuJoCo side of the insertion scene: the model, its stepping with the commanded TCP,
+the grasp's wrench and the ground truth.
+
+``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s)`` builds the model of
+``mjcf.scene_xml``. ``step_to(t_s, pose_t_s, pose)`` advances in fixed steps of
+``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
+linear interpolation of the quaternion) from its last pose to ``pose`` reached at
+``pose_t_s`` and held after it. Each step keeps the grasp's wrench in a ring buffer
+(``grasp_wrench_at``: the wrench at a past step, for the tactile frames) and the ground
+truth's running contact-force maximum; a ``TruthLog`` row is written every
+``1 / truth_rate_hz`` s.
+
+The grasp's wrench is the wrench the gripper exerts on the plug through the gel spring,
+in S's axes about the grasp point on the plug's axis (MuJoCo's force/torque sensors at the
+plug body's origin: the interaction between the plug and its parent; it includes the
+plug's own weight and inertia, as a real grasp carries them).
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from drivers.base import Pose
+from drivers.sim.scenes.insertion.config import HolePose, InsertionSceneConfig, PlugGeometry
+from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
+from drivers.sim.scenes.insertion.mjcf import scene_xml
+from drivers.sim.scenes.insertion.truth import TruthLog
+
+RING_S = 1.0  # how far back the grasp's wrench is kept, s
+_WRIST = ("wrist_x", "wrist_y", "wrist_z", "wrist_rx", "wrist_ry", "wrist_rz")
+_GEL = ("gel_x", "gel_y", "gel_z", "gel_rx", "gel_ry", "gel_rz")
+_BAD_STATE = (
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_BADQACC,
+)
+_RELEASED_DAMPING = 1e-4  # the gel joints' damping once the fingers let go (numerical only)
+
+
+class UnstablePhysicsError(RuntimeError):
+    """MuJoCo found a non-finite or huge position, velocity or acceleration (and reset its
+    state)."""
+
+
+class InsertionPhysics:
+    """See the module docstring. ``truth`` receives the rows; ``share`` scales the grasp's
+    wrench to the sensing gel's (``gel_spring.load_share``) in the truth's ``gel_wrench_s``."""
+
+    def __init__(
+        self,
+        scene: InsertionSceneConfig,
+        plug: PlugGeometry,
+        hole_true: HolePose,
+        start_pose: Pose,
+        t0_s: float,
+        truth: TruthLog,
+    ) -> None:
+        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene, plug, hole_true))
+        self.data = mujoco.MjData(self.model)
+        self.dt_s = self.model.opt.timestep
+        self._share = scene.gel_spring.load_share
+        self._hole_z = hole_true.z_m
+        self._truth = truth
+        m = self.model
+        self._tip = m.site("tip").id
+        self._plug = m.body("plug").id
+        force = m.sensor_adr[m.sensor("gel_force").id]
+        if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
+            raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
+        self._grasp = slice(int(force), int(force) + 6)
+        wrist = [m.joint(name) for name in _WRIST]
+        self._wrist_j = np.array([j.id for j in wrist])
+        self._wrist_q = np.array([j.qposadr[0] for j in wrist])
+        self._wrist_v = np.array([j.dofadr[0] for j in wrist])
+        gel = [m.joint(name) for name in _GEL]
+        self._gel_j = np.array([j.id for j in gel])
+        self._gel_q = np.array([j.qposadr[0] for j in gel])
+        self._gel_v = np.array([j.dofadr[0] for j in gel])
+        self._gel_stiffness = m.jnt_stiffness[self._gel_j].copy()
+        self._gel_damping = m.dof_damping[self._gel_v].copy()
+        self.released = False
+        self._pos = np.array(start_pose.xyz_m, float)
+        self._quat = quat_wxyz_from_pose(start_pose)
+        self.data.mocap_pos[0] = self._pos
+        self.data.mocap_quat[0] = self._quat
+        mujoco.mj_forward(m, self.data)
+        self.t_s = float(t0_s)
+        self._t0_s = float(t0_s)
+        self._steps = 0
+        n_ring = max(2, math.ceil(RING_S / self.dt_s))
+        self._ring = np.zeros((n_ring, 6))
+        self._ring[0] = self._grasp_now()
+        self._truth_every = max(1, round(1.0 / (scene.truth_rate_hz * self.dt_s)))
+        self._peak_force_n = 0.0
+        self._record()
+
+    # ----------------------------------------------------------------- stepping
+
+    def step_to(self, t_s: float, pose_t_s: float, pose: Pose) -> None:
+        """Advance to ``t_s`` (whole steps; no-op for a past time), the TCP moving toward
+        ``pose`` reached at ``pose_t_s`` (see the module docstring)."""
+        target = math.floor((t_s - self._t0_s) / self.dt_s + 1e-9)
+        n = target - self._steps
+        if n <= 0:
+            return
+        m, d = self.model, self.data
+        times = self._t0_s + (self._steps + np.arange(1, n + 1)) * self.dt_s
+        span = pose_t_s - self.t_s
+        share = np.ones(n) if span <= 0 else np.clip((times - self.t_s) / span, 0.0, 1.0)
+        end_pos = np.array(pose.xyz_m, float)
+        end_quat = quat_wxyz_from_pose(pose)
+        if float(np.dot(end_quat, self._quat)) < 0:
+            end_quat = -end_quat
+        positions = self._pos + share[:, None] * (end_pos - self._pos)
+        quats = self._quat + share[:, None] * (end_quat - self._quat)
+        quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        ring, n_ring = self._ring, len(self._ring)
+        grasp, sensors = self._grasp, d.sensordata
+        every = self._truth_every
+        for i in range(n):
+            d.mocap_pos[0] = positions[i]
+            d.mocap_quat[0] = quats[i]
+            mujoco.mj_step(m, d)
+            self._steps += 1
+            ring[self._steps % n_ring] = sensors[grasp]
+            if d.nefc:
+                # Pyramidal cones: a contact's normal force is the sum of its edges' forces,
+                # and every constraint row of this model is a contact's.
+                total = float(d.efc_force[: d.nefc].sum())
+                if total > self._peak_force_n:
+                    self._peak_force_n = total
+            if self._steps % every == 0:
+                self.t_s = float(times[i])
+                self._record()
+        self.t_s = float(times[-1])
+        self._pos, self._quat = positions[-1].copy(), quats[-1].copy()
+        if any(d.warning[w].number for w in _BAD_STATE):
+            # MuJoCo has reset the state: the run's physics is no longer the scene's.
+            raise UnstablePhysicsError(
+                f"insertion scene: the physics went unstable before t = {self.t_s:.4f} s "
+                "(MuJoCo reset it); use a smaller scene.timestep_s or softer springs"
+            )
+
+    # ----------------------------------------------------------------- the grasp
+
+    def grasp_wrench_at(self, t_s: float) -> np.ndarray:
+        """The grasp's wrench (6,) in S about the grasp point at the last step at or before
+        ``t_s`` (within the last ``RING_S`` s; the oldest kept otherwise), N and N*m."""
+        step = math.floor((t_s - self._t0_s) / self.dt_s + 1e-9)
+        step = min(max(step, self._steps - len(self._ring) + 1, 0), self._steps)
+        return self._ring[step % len(self._ring)].copy()
+
+    def gel_wrench_at(self, t_s: float) -> np.ndarray:
+        """The sensing gel's share of the grasp's wrench at ``t_s`` (see ``TruthLog``)."""
+        return self._share * self.grasp_wrench_at(t_s)
+
+    def release(self) -> None:
+        """The fingers let go: the gel spring carries nothing (the plug moves freely)."""
+        if self.released:
+            return
+        self.model.jnt_stiffness[self._gel_j] = 0.0
+        self.model.dof_damping[self._gel_v] = _RELEASED_DAMPING
+        self.released = True
+
+    def grasp(self) -> None:
+        """The fingers close on the plug where it is: the gel spring's rest is its pose."""
+        if not self.released:
+            return
+        self.model.qpos_spring[self._gel_q] = self.data.qpos[self._gel_q]
+        self.model.jnt_stiffness[self._gel_j] = self._gel_stiffness
+        self.model.dof_damping[self._gel_v] = self._gel_damping
+        self.released = False
+
+    # ----------------------------------------------------------------- truth
+
+    def wrist_wrench(self) -> np.ndarray:
+        """The wrench (6,) of the wrist's springs and dampers on the gripper along its
+        joint axes (T's at rest), N and N*m."""
+        m, d = self.model, self.data
+        q = d.qpos[self._wrist_q] - m.qpos_spring[self._wrist_q]
+        k = m.jnt_stiffness[self._wrist_j]
+        return -(k * q + m.dof_damping[self._wrist_v] * d.qvel[self._wrist_v])
+
+    def tip_xyz(self) -> np.ndarray:
+        """The plug's tip in B, m."""
+        return self.data.site_xpos[self._tip].copy()
+
+    def plug_quat(self) -> np.ndarray:
+        """The plug's orientation S2B, (w, x, y, z)."""
+        return self.data.xquat[self._plug].copy()
+
+    def _grasp_now(self) -> np.ndarray:
+        return self.data.sensordata[self._grasp].copy()
+
+    def _record(self) -> None:
+        tip = self.tip_xyz()
+        row = np.concatenate(
+            [
+                [self.t_s],
+                self._share * self._grasp_now(),
+                self.wrist_wrench(),
+                tip,
+                self.plug_quat(),
+                [self._hole_z - tip[2], self._peak_force_n],
+            ]
+        )
+        self._truth.append(row)
+        self._peak_force_n = 0.0

@@ -1,0 +1,214 @@
+"""Speed of the simulated insertion scene (drivers/sim/scenes/insertion/) on one thread:
+physics, gel solve and rendering, and optionally the tactile estimator, in a 100 Hz loop.
+
+No controller: a scripted TCP trajectory streamed to the arm twin (``servo_pose``) at
+100 Hz, built from the TRUE hole (a benchmark may look; a controller may not): grasp the
+plug, a tilted approach beside the opening, touch the surface, drag the tip over the
+opening's edge, turn upright over the hole and insert to the floor. Every tick reads the
+arm, the gripper and the newest tactile frame (25 Hz: the gel is solved and the frame
+rendered once per new frame) and runs the estimator on each new frame. Reported: simulated
+seconds per wall second (the median over runs), the frames, the final insertion depth and
+the largest contact force.
+
+    python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
+
+The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads, and OpenCV to
+one thread.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+
+import cv2
+import mujoco
+import numpy as np
+
+from controller.tactile import estimator_for_sensor
+from drivers.base import Pose
+from drivers.config import CONFIG_ROOT
+from drivers.sim.scenes.insertion import (
+    InsertionSim,
+    build_insertion_sim,
+    default_devices,
+    load_scene_section,
+)
+from evaluation.cli import integer, run_tool
+from evaluation.machine import describe_machine
+
+RATE_HZ = 100.0
+TILT_RAD = 0.15  # the tilted approach's tilt, about the hole's y
+GRIP_FORCE_N = 40.0
+TASKS = ("usb_c", "usb_a")
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """The plug's tip at ``offset_x_m`` along the hole's x and ``height_m`` above the
+    surface, the tool tilted by ``tilt_rad`` about the hole's y, reached ``duration_s``
+    after the previous waypoint (linear in between)."""
+
+    duration_s: float
+    offset_x_m: float
+    height_m: float
+    tilt_rad: float
+
+
+def script(half_width_m: float, depth_m: float) -> list[Waypoint]:
+    """Approach tilted beside the opening, touch, drag over the edge, upright, insert."""
+    beside = -(half_width_m + 0.002)
+    return [
+        Waypoint(1.0, beside, 0.004, TILT_RAD),  # tilted approach
+        Waypoint(0.6, beside, -0.0015, TILT_RAD),  # touch: press about 1.5 mm into the wrist
+        Waypoint(1.0, -half_width_m + 0.001, -0.0015, TILT_RAD),  # drag over the edge
+        Waypoint(0.8, 0.0, 0.0, 0.0),  # upright over the hole
+        Waypoint(1.5, 0.0, -(depth_m + 0.001), 0.0),  # insert to the floor
+        Waypoint(0.4, 0.0, -(depth_m + 0.001), 0.0),  # settle
+    ]
+
+
+def tcp_for_tip(sim: InsertionSim, length_m: float, waypoint: Waypoint) -> Pose:
+    """The TCP pose that puts the plug's tip (with a rigid wrist) where ``waypoint`` says."""
+    hole = sim.truth.hole
+    c, s = math.cos(hole.yaw_rad), math.sin(hole.yaw_rad)
+    tip = np.array(
+        [
+            hole.x_m + c * waypoint.offset_x_m,
+            hole.y_m + s * waypoint.offset_x_m,
+            hole.z_m + waypoint.height_m,
+        ]
+    )
+    # rpy (pi, tilt, yaw): the tool axis is Rz(yaw) (-sin tilt, 0, -cos tilt)
+    axis = np.array([-math.sin(waypoint.tilt_rad) * c, -math.sin(waypoint.tilt_rad) * s, 0.0])
+    axis[2] = -math.cos(waypoint.tilt_rad)
+    tcp = tip - length_m * axis
+    return Pose(tuple(float(v) for v in tcp), (math.pi, waypoint.tilt_rad, hole.yaw_rad))
+
+
+@dataclass(frozen=True)
+class RunResult:
+    sim_s: float
+    wall_s: float
+    cpu_s: float
+    frames: int
+    depth_m: float
+    max_contact_force_n: float
+
+    @property
+    def speed_x(self) -> float:
+        """Simulated seconds per wall second."""
+        return self.sim_s / self.wall_s
+
+    @property
+    def cpu_speed_x(self) -> float:
+        """Simulated seconds per CPU second of this process (robust to a busy machine)."""
+        return self.sim_s / self.cpu_s
+
+
+def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
+    """One scripted insertion (see the module docstring), timed from the first command."""
+    section = load_scene_section(CONFIG_ROOT / "tasks" / f"{task}.yaml")
+    devices = default_devices()
+    sim = build_insertion_sim(section.scene, section.plug, section.hole, devices, seed)
+    estimator = estimator_for_sensor(devices.tactile.model) if estimate else None
+    clock, arm, gripper, tactile = sim.clock, sim.arm, sim.gripper, sim.tactile
+    for device in (arm, gripper, tactile):
+        device.connect()
+    begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), clock.now()
+    loop = _Loop(sim, estimator)
+    gripper.activate()
+    gripper.move(0.0, 0.05, GRIP_FORCE_N)
+    while not gripper.read_status().holding:
+        loop.tick(None)
+    for _ in range(round(0.2 * RATE_HZ)):
+        loop.tick(None)
+    if estimator is not None:
+        estimator.rezero(1)
+    previous = arm.read_status().tcp
+    receptacle = section.scene.receptacle
+    for waypoint in script(receptacle.width_m / 2, receptacle.depth_m):
+        goal = tcp_for_tip(sim, section.plug.length_m, waypoint)
+        ticks = max(1, round(waypoint.duration_s * RATE_HZ))
+        for k in range(1, ticks + 1):
+            share = k / ticks
+            xyz = tuple(
+                a + share * (b - a) for a, b in zip(previous.xyz_m, goal.xyz_m, strict=True)
+            )
+            rpy = tuple(
+                a + share * (b - a) for a, b in zip(previous.rpy_rad, goal.rpy_rad, strict=True)
+            )
+            loop.tick(Pose(xyz, rpy))
+        previous = goal
+    sim.sync()
+    wall, cpu = time.perf_counter() - begin_wall, time.process_time() - begin_cpu
+    depth = float(sim.truth.arrays()["depth_m"][-1])
+    return RunResult(
+        clock.now() - begin_sim, wall, cpu, loop.frames, depth, sim.truth.max_contact_force_n
+    )
+
+
+class _Loop:
+    """One 100 Hz tick: read the arm, the gripper and the newest frame (estimating on a new
+    one), send the servo target if any, sleep to the period's end."""
+
+    def __init__(self, sim: InsertionSim, estimator) -> None:
+        self.sim, self.estimator = sim, estimator
+        self.frames = 0
+        self._last_t: float | None = None
+
+    def tick(self, target: Pose | None) -> None:
+        sim = self.sim
+        start = sim.clock.now()
+        sim.arm.read_status()
+        sim.gripper.read_status()
+        frame = sim.tactile.read_latest(0.2)
+        if frame.t_s != self._last_t:
+            self._last_t = frame.t_s
+            self.frames += 1
+            if self.estimator is not None:
+                self.estimator.push(frame.image, frame.t_s)
+        if target is not None:
+            sim.arm.servo_pose(target)
+        sim.clock.sleep(start + 1.0 / RATE_HZ - sim.clock.now())
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--task", choices=TASKS, default="usb_c")
+    parser.add_argument("--runs", type=integer(1, 1000), default=3, help="timed runs (median)")
+    parser.add_argument("--seed", type=integer(0, 2**31 - 1), default=0, help="first seed")
+    parser.add_argument(
+        "--no-estimate", action="store_true", help="leave the tactile estimator out of the loop"
+    )
+    args = parser.parse_args(argv)
+    return run_tool("bench_insertion_scene", lambda: bench(args))
+
+
+def bench(args: argparse.Namespace) -> int:
+    estimate = not args.no_estimate
+    cv2.setNumThreads(1)
+    one_thread = "1 thread (cv2.setNumThreads(1), OMP/OpenBLAS/MKL 1)"
+    print(f"Machine: {describe_machine(one_thread)}; MuJoCo {mujoco.__version__}.")
+    what = "physics, gel, rendering" + (", estimation" if estimate else "")
+    print(f"Task {args.task}, {what}; {args.runs} runs (seeds {args.seed}..).\n")
+    print("| seed | sim s | wall s | x real time | CPU s | x per CPU s | frames | depth mm |")
+    print("|---|---|---|---|---|---|---|---|")
+    results = []
+    for seed in range(args.seed, args.seed + args.runs):
+        r = scripted_run(args.task, seed, estimate)
+        results.append(r)
+        print(
+            f"| {seed} | {r.sim_s:.2f} | {r.wall_s:.2f} | {r.speed_x:.1f} | {r.cpu_s:.2f} | "
+            f"{r.cpu_speed_x:.1f} | {r.frames} | {r.depth_m * 1e3:.2f} |"
+        )
+    median = float(np.median([r.speed_x for r in results]))
+    median_cpu = float(np.median([r.cpu_speed_x for r in results]))
+    print(
+        f"\nMedian: {median:.1f} x real time (simulated s per wall s); {median_cpu:.1f} x per "
+        "CPU second of the process (the same on an idle core; lower wall figures mean a busy "
+        "machine)."
+    )
+    return 0

@@ -1,0 +1,344 @@
+"""The simulated insertion scene (drivers/sim/scenes/insertion/): the model, contacts, signs,
+seeding, the information barrier and its configuration."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import mujoco
+import numpy as np
+import pytest
+import yaml
+from scipy.spatial.transform import Rotation
+
+from drivers.arm.envelope import rotation_from_rpy
+from drivers.base import Pose
+from drivers.config import CONFIG_ROOT, ConfigError
+from drivers.sim.scenes.insertion import (
+    HolePose,
+    InsertionSceneConfig,
+    build_insertion_sim,
+    default_devices,
+    draw_hole,
+    load_scene_section,
+)
+from drivers.sim.scenes.insertion.config import PlugGeometry, check_fits
+from drivers.sim.scenes.insertion.coupling import GelCoupling
+from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
+from drivers.sim.scenes.insertion.mjcf import scene_xml
+from drivers.sim.scenes.insertion.physics import InsertionPhysics, UnstablePhysicsError
+from drivers.sim.scenes.insertion.truth import TruthLog
+from drivers.sim.scenes.insertion.world import InsertionWorld
+
+TASKS = ("usb_c", "usb_a")
+HOLE = HolePose(0.40, 0.01, 0.0, 0.04)
+
+
+def task(name: str):
+    return load_scene_section(CONFIG_ROOT / "tasks" / f"{name}.yaml")
+
+
+def tilted_pose(hole: HolePose, length_m: float, tip_h: tuple[float, float, float], rotvec_t):
+    """The TCP that puts the plug's tip at ``tip_h`` (in H, m) with the upright tool (yaw of
+    the hole) turned by ``rotvec_t`` about T's own axes (rad)."""
+    rotation = rotation_from_rpy((math.pi, 0.0, hole.yaw_rad)) * Rotation.from_rotvec(rotvec_t)
+    c, s = math.cos(hole.yaw_rad), math.sin(hole.yaw_rad)
+    x, y, z = tip_h
+    tip = np.array([hole.x_m + c * x - s * y, hole.y_m + s * x + c * y, hole.z_m + z])
+    tcp = tip - length_m * rotation.as_matrix()[:, 2]
+    return Pose(tuple(float(v) for v in tcp), tuple(float(v) for v in rotation.as_euler("xyz")))
+
+
+def lower(
+    name: str, tip_x_m: float, rotvec_t=(0.0, 0.0, 0.0), below_m: float | None = None, **scene
+):
+    """Lower the plug from 2 mm above the board to ``below_m`` under the surface (default:
+    1 mm past the floor) at 20 mm/s, then hold 0.2 s; the truth's arrays. ``scene``:
+    overrides of the task's scene keys."""
+    section = task(name)
+    section = dataclasses.replace(section, scene=dataclasses.replace(section.scene, **scene))
+    plug, depth = section.plug, section.scene.receptacle.depth_m
+    below = depth + 0.001 if below_m is None else below_m
+    truth = TruthLog(HOLE, HOLE)
+
+    def pose(height):
+        return tilted_pose(HOLE, plug.length_m, (tip_x_m, 0.0, height), rotvec_t)
+
+    physics = InsertionPhysics(section.scene, plug, HOLE, pose(0.002), 0.0, truth)
+    duration = (0.002 + below) / 0.02
+    for k in range(1, round((duration + 0.2) / 0.01) + 1):
+        t = 0.01 * k
+        physics.step_to(t, t, pose(0.002 - 0.02 * min(t, duration)))
+    return truth.arrays(), depth
+
+
+@pytest.mark.parametrize("name", TASKS)
+def test_mjcf_builds_with_the_opening_of_the_task(name):
+    section = task(name)
+    model = mujoco.MjModel.from_xml_string(scene_xml(section.scene, section.plug, HOLE))
+    assert model.nmocap == 1 and model.nv == 12  # wrist 6 + gel spring 6, no arm joints
+    assert model.opt.timestep == section.scene.timestep_s
+    data = mujoco.MjData(model)
+    mujoco.mj_forward(model, data)
+    # The walls' inner faces bound exactly the opening, in H.
+    r = section.scene.receptacle
+    inner = {}
+    for name_ in ("wall_xn", "wall_xp", "wall_yn", "wall_yp"):
+        geom = model.geom(name_)
+        centre, half = geom.pos, geom.size
+        inner[name_] = (centre - np.sign(centre) * half)[0 if "x" in name_[5:] else 1]
+    assert inner["wall_xp"] - inner["wall_xn"] == pytest.approx(r.width_m)
+    assert inner["wall_yp"] - inner["wall_yn"] == pytest.approx(r.height_m)
+
+
+@pytest.mark.parametrize("name", TASKS)
+def test_a_plug_lowered_onto_the_true_hole_reaches_the_depth(name):
+    truth, depth = lower(name, 0.0)
+    assert truth["depth_m"][-1] == pytest.approx(depth, abs=1e-4)  # on the floor
+    assert truth["contact_force_n"][-1] > 0.1  # pressing on it through the wrist
+
+
+@pytest.mark.parametrize("name", TASKS)
+def test_a_plug_lowered_3_mm_off_stays_on_the_surface_and_pushes(name):
+    truth, _ = lower(name, 0.003, below_m=0.002)  # a 2 N push through the wrist
+    assert abs(truth["depth_m"][-1]) < 1e-4  # micrometre penetration at most
+    assert truth["contact_force_n"][-1] > 1.0
+    # the gel pushes the plug toward its tip (+y_S) against the surface
+    assert truth["gel_wrench_s"][-1, 1] > 0.5
+
+
+@pytest.mark.parametrize("friction", (0.0, 2.0))
+def test_the_extremes_of_friction_stay_stable(friction):
+    truth, depth = lower("usb_c", 0.0, (0.05, 0.05, 0.0), friction=friction)
+    assert np.isfinite(np.concatenate([v.ravel() for v in truth.values()])).all()
+    assert truth["depth_m"][-1] > 0.0  # into the opening, tilted as it is
+
+
+def test_an_unstable_physics_is_an_error_not_a_silent_reset(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # MuJoCo logs its warning to ./MUJOCO_LOG.TXT
+    section = task("usb_c")
+    truth = TruthLog(HOLE, HOLE)
+    start = upright_pose((HOLE.x_m, HOLE.y_m, 0.05), HOLE.yaw_rad)
+    physics = InsertionPhysics(section.scene, section.plug, HOLE, start, 0.0, truth)
+    physics.data.qvel[:] = 1e12
+    with pytest.raises(UnstablePhysicsError, match="unstable"):
+        physics.step_to(0.01, 0.01, start)
+
+
+@pytest.mark.parametrize("sign", (1.0, -1.0))
+def test_tilt_torque_signs_when_the_tilted_tip_touches_the_surface(sign):
+    """Documented in docs/SIMULATION.md: the tip's lowest edge (opposite its swing) takes the
+    surface's push up the plug's axis. Tilted about x_S = x_T with the tip swung toward +z_S
+    (away from the gel): tau_x > 0. Tilted about T's y with the tip swung toward +x_S:
+    tau_z < 0."""
+    away = 0.01  # beside the hole, on the board
+    truth, _ = lower("usb_c", -away, (sign * 0.15, 0.0, 0.0), below_m=0.002)
+    assert truth["contact_force_n"][-1] > 0.3
+    tau = truth["gel_wrench_s"][-1, 3:]
+    assert sign * tau[0] > 5e-4 and abs(tau[0]) > 5 * abs(tau[1])
+    truth, _ = lower("usb_c", -away, (0.0, sign * 0.15, 0.0), below_m=0.002)
+    tau = truth["gel_wrench_s"][-1, 3:]
+    assert -sign * tau[2] > 1e-3 and abs(tau[2]) > 5 * abs(tau[0])
+
+
+def test_the_hole_is_seeded_deterministic_and_within_the_uncertainty():
+    uncertainty = InsertionSceneConfig().hole_uncertainty
+    holes = [draw_hole(HOLE, uncertainty, seed) for seed in range(50)]
+    assert draw_hole(HOLE, uncertainty, 7) == holes[7]
+    assert draw_hole(HOLE, uncertainty, 8) != holes[7]
+    assert len({(h.x_m, h.y_m, h.yaw_rad) for h in holes}) == 50
+    offsets = np.array(
+        [(h.x_m - HOLE.x_m, h.y_m - HOLE.y_m, h.yaw_rad - HOLE.yaw_rad) for h in holes]
+    )
+    assert np.all(np.abs(offsets) <= [0.003, 0.003, math.radians(3.0)])
+    assert np.all(np.abs(offsets).max(axis=0) > [0.0025, 0.0025, math.radians(2.5)])
+    assert all(h.z_m == HOLE.z_m for h in holes)
+    section = task("usb_c")
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=7)
+    assert sim.truth.hole == draw_hole(HOLE, section.scene.hole_uncertainty, 7)
+    assert sim.truth.hole_nominal == HOLE
+
+
+def _public_objects(root, depth=3):
+    """Every object reachable from ``root`` through public attributes (not through names
+    starting with an underscore), ``depth`` levels deep."""
+    seen, frontier, found = {id(root)}, [root], []
+    for _ in range(depth):
+        nxt = []
+        for obj in frontier:
+            names = [n for n in dir(obj) if not n.startswith("_")]
+            for name in names:
+                try:
+                    value = getattr(obj, name)
+                except Exception:  # a property that needs a connection
+                    continue
+                if callable(value) or id(value) in seen:
+                    continue
+                seen.add(id(value))
+                found.append(value)
+                nxt.append(value)
+        frontier = nxt
+    return found
+
+
+def test_the_devices_and_the_clock_expose_no_truth():
+    section = task("usb_c")
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=3)
+    truth_types = (
+        InsertionPhysics, InsertionWorld, GelCoupling, TruthLog, HolePose, mujoco.MjModel,
+        mujoco.MjData,
+    )  # fmt: skip
+    facing = [sim.clock, sim.arm, sim.gripper, sim.tactile, sim.gamepad]
+    for device in (sim.arm, sim.gripper, sim.tactile):
+        device.connect()
+    sim.gripper.activate()
+    facing += [sim.arm.read_status(), sim.gripper.read_status(), sim.tactile.read_latest(1.0)]
+    for root in facing:
+        leaked = [type(o).__name__ for o in _public_objects(root) if isinstance(o, truth_types)]
+        assert not leaked, f"{type(root).__name__} exposes {leaked}"
+    # the check can fail: the world itself is truth
+    assert any(isinstance(o, InsertionPhysics) for o in _public_objects(sim.world))
+
+
+def test_a_grasped_plug_lowered_by_the_arm_inserts_and_the_frames_show_contact():
+    section = task("usb_c")
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=5)
+    for device in (sim.arm, sim.gripper, sim.tactile):
+        device.connect()
+    reference = sim.tactile.read_latest(1.0).image.astype(float)
+    sim.gripper.activate()
+    sim.gripper.move(0.0, 0.15, 40.0)
+    sim.clock.sleep(0.5)
+    assert sim.gripper.read_status().holding
+    squeezed = sim.tactile.read_latest(1.0).image.astype(float)
+    assert np.abs(squeezed - reference).mean() > 1.0  # the grip shows
+    hole, plug, depth = sim.truth.hole, section.plug, section.scene.receptacle.depth_m
+    above = upright_pose((hole.x_m, hole.y_m, plug.length_m + 0.002), hole.yaw_rad)
+    sim.arm.move_to(above, 0.05)
+    bottom = upright_pose((hole.x_m, hole.y_m, plug.length_m - depth - 0.001), hole.yaw_rad)
+    sim.arm.move_to(bottom, 0.01)
+    sim.clock.sleep(0.3)
+    sim.sync()
+    truth = sim.truth.arrays()
+    assert truth["depth_m"][-1] == pytest.approx(depth, abs=1e-4)
+    assert truth["t_s"][-1] == pytest.approx(sim.clock.now(), abs=0.011)
+    pressed = sim.tactile.read_latest(1.0).image.astype(float)
+    assert np.abs(pressed - squeezed).mean() > 0.2  # the floor's push shows
+    # Opening the fingers lets the plug go: it stays in the receptacle as the arm leaves.
+    sim.gripper.move(0.05, 0.15, 20.0)
+    sim.clock.sleep(0.4)
+    sim.arm.move_to(above, 0.05)
+    sim.sync()
+    assert sim.truth.arrays()["depth_m"][-1] > depth - 1e-3
+
+
+def test_the_arm_starts_over_the_nominal_hole_and_may_reach_the_floor():
+    section = task("usb_a")
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=0)
+    config = sim.arm.config
+    start = config.sim.start_pose
+    assert start.xyz_m[:2] == (HOLE.x_m, HOLE.y_m)
+    assert start.xyz_m[2] == pytest.approx(section.plug.length_m + section.scene.start_above_hole_m)
+    depth = section.scene.receptacle.depth_m
+    assert config.envelope.z_min_m <= section.plug.length_m - depth - 0.001
+    assert sim.gripper.config.sim.object_width_m == section.plug.thickness_m
+
+
+def test_the_closed_form_quaternion_matches_the_arm_convention():
+    rng = np.random.default_rng(0)
+    for rpy in rng.uniform(-math.pi, math.pi, (50, 3)):
+        x, y, z, w = rotation_from_rpy(rpy).as_quat()
+        q = quat_wxyz_from_pose(Pose((0.0, 0.0, 0.0), tuple(rpy)))
+        assert min(np.abs(q - [w, x, y, z]).max(), np.abs(q + [w, x, y, z]).max()) < 1e-12
+
+
+def _write_task(tmp_path: Path, edit) -> Path:
+    data = yaml.safe_load((CONFIG_ROOT / "tasks" / "usb_c.yaml").read_text())
+    edit(data)
+    path = tmp_path / "task.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    ("edit", "expected"),
+    [
+        (lambda d: d["scene"].update(friction=-1), "key 'scene.friction'"),
+        (lambda d: d["scene"].update(timestep_s=0.001), "key 'scene.contact.solref'"),
+        (lambda d: d["scene"]["wrist"].update(tilt_gain=1), "unknown key 'scene.wrist.tilt_gain'"),
+        (lambda d: d["scene"].update(tactile_appearance="glossy"), "scene.tactile_appearance"),
+        (lambda d: d["plug"].pop("length_m"), "missing key 'plug.length_m'"),
+        (lambda d: d.pop("hole"), "missing key 'hole'"),
+    ],
+)
+def test_a_bad_scene_section_is_a_one_line_config_error(tmp_path, edit, expected):
+    path = _write_task(tmp_path, edit)
+    with pytest.raises(ConfigError) as info:
+        load_scene_section(path)
+    message = str(info.value)
+    assert "\n" not in message and str(path) in message and expected in message
+
+
+def test_other_sections_of_the_task_file_are_left_to_their_readers(tmp_path):
+    path = _write_task(tmp_path, lambda d: d.update(loop={"rate_hz": 100}))
+    assert load_scene_section(path).plug == task("usb_c").plug
+
+
+def test_a_plug_that_does_not_fit_is_refused():
+    scene = InsertionSceneConfig()
+    with pytest.raises(ValueError, match="cross-section"):
+        check_fits(scene, PlugGeometry(0.009, 0.0024, 0.02))
+    with pytest.raises(ValueError, match="length_m"):
+        check_fits(scene, PlugGeometry(0.008, 0.0024, 0.006))
+    small = dataclasses.replace(scene.board, size_x_m=0.011)
+    wide = dataclasses.replace(scene.receptacle, width_m=0.012)
+    with pytest.raises(ValueError, match="board.size_x_m"):
+        dataclasses.replace(scene, receptacle=wide, board=small)
+
+
+class _RecordingClock:
+    """A base clock that records its sleeps (and advances as ManualClock does)."""
+
+    def __init__(self) -> None:
+        self.t, self.sleeps = 0.0, []
+
+    def now(self) -> float:
+        return self.t
+
+    def sleep(self, seconds: float) -> None:
+        self.sleeps.append(seconds)
+        self.t += max(0.0, seconds)
+
+
+def test_the_scene_clock_syncs_the_world_to_the_present_then_sleeps_the_rest():
+    from drivers.sim.scenes.insertion.clock import SceneClock
+
+    base = _RecordingClock()
+    clock = SceneClock(base)
+    synced = []
+
+    def sync(t_s):
+        synced.append(t_s)
+        base.t += 0.002  # the physics takes 2 ms of the base clock's time
+
+    clock.attach(sync)
+    base.t = 1.0
+    clock.sleep(0.010)
+    assert synced == [1.0]
+    assert base.sleeps == [pytest.approx(0.008)]
+    assert clock.now() == pytest.approx(1.010)
+
+
+def test_in_real_time_the_world_follows_the_monotonic_clock():
+    section = task("usb_c")
+    sim = build_insertion_sim(
+        section.scene, section.plug, HOLE, default_devices(), seed=0, realtime=True
+    )
+    sim.arm.connect()
+    start = sim.clock.now()
+    sim.clock.sleep(0.03)
+    assert sim.clock.now() - start >= 0.03
+    sim.clock.sleep(0.0)  # syncs to the present
+    assert sim.world.physics.t_s >= start + 0.03 - section.scene.timestep_s
