@@ -5,7 +5,7 @@ source)`` reads its ``plug:``, ``hole:`` and ``machine:`` sections from a task f
 """
 
 from controller.insertion.config import (
-    HoleNominal,
+    HolePose,
     MachineConfig,
     MachineSetup,
     PlugGeometry,
@@ -26,7 +26,7 @@ from controller.insertion.machine import InsertionMachine
 
 __all__ = [
     "INSERTION", "Command", "Definition", "DefinitionError", "Edge", "FailureReason",
-    "GripperTarget", "HoleNominal", "InsertionMachine", "Machine", "MachineConfig",
+    "GripperTarget", "HolePose", "InsertionMachine", "Machine", "MachineConfig",
     "MachineSetup", "Observation", "Phase", "PlugGeometry", "TeleopInput", "Transition",
     "machine_setup_from_task",
 ]  # fmt: skip

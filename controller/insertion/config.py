@@ -26,33 +26,11 @@ from typing import Any, Literal
 import numpy as np
 
 from drivers.config import Config, ConfigError, build, number
+from drivers.task_geometry import HolePose, PlugGeometry
 
 SignedAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 _DEG = math.pi / 180.0
-
-
-@dataclass(frozen=True)
-class PlugGeometry(Config):
-    """The grasped plug (task file ``plug:``): its cross-section ``width_m`` (along T x) by
-    ``thickness_m`` (along the gripper's closing axis), and ``length_m`` from the grasp point
-    (the TCP) to the tip, along T z."""
-
-    width_m: float = number(1e-4, 0.1, default=0.00825)
-    thickness_m: float = number(1e-4, 0.05, default=0.0024)
-    length_m: float = number(0.0, 0.2, default=0.012)
-
-
-@dataclass(frozen=True)
-class HoleNominal(Config):
-    """The opening's nominal pose in B (task file ``hole:``): ``x_m``, ``y_m``, ``z_m`` the
-    centre of the opening at the board surface, ``yaw_rad`` the angle of its width axis from
-    B's x axis. The true pose differs by up to ``machine.search.uncertainty_*``."""
-
-    x_m: float = number(-2.0, 2.0, default=0.4)
-    y_m: float = number(-2.0, 2.0, default=0.0)
-    z_m: float = number(-1.0, 2.0, default=0.1)
-    yaw_rad: float = number(-math.pi, math.pi, default=0.0)
 
 
 @dataclass(frozen=True)
@@ -317,7 +295,7 @@ class MachineSetup(Config):
     """What the machine needs from a task file: its ``plug:``, ``hole:`` and ``machine:``."""
 
     plug: PlugGeometry
-    hole: HoleNominal
+    hole: HolePose
     machine: MachineConfig
 
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry
+from controller.insertion.config import HolePose, MachineConfig, PlugGeometry
 from controller.insertion.definition import (
     AUTONOMOUS,
     IN_CONTACT,
@@ -89,7 +89,7 @@ class InsertionMachine:
         self,
         config: MachineConfig,
         plug: PlugGeometry,
-        hole: HoleNominal,
+        hole: HolePose,
         definition: Definition = INSERTION,
     ) -> None:
         check_definition(definition)

@@ -274,6 +274,7 @@ def test_controller_imports_only_the_driver_interfaces():
         "drivers.config",
         "drivers.clock",
         "drivers.tactile.profile",  # sensor geometry: a driver-level fact, not a driver
+        "drivers.task_geometry",  # the task's plug and hole, shared with the scene
     }
     imported = _imports("controller")
     assert not [(p, m) for p, m in imported if m.startswith("drivers") and m not in allowed]

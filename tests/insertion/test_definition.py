@@ -4,7 +4,7 @@ from dataclasses import replace
 
 import pytest
 
-from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry
+from controller.insertion.config import HolePose, MachineConfig, PlugGeometry
 from controller.insertion.definition import (
     INSERTION,
     DefinitionError,
@@ -17,7 +17,7 @@ from tests.insertion.world import ToyWorld
 
 
 def build(definition):
-    return InsertionMachine(MachineConfig(), PlugGeometry(), HoleNominal(), definition)
+    return InsertionMachine(MachineConfig(), PlugGeometry(), HolePose(), definition)
 
 
 def test_the_insertion_table_passes_and_names_every_failure_reason():

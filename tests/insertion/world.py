@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import HoleNominal, MachineConfig, PlugGeometry, s2t_matrix
+from controller.insertion.config import HolePose, MachineConfig, PlugGeometry, s2t_matrix
 from controller.insertion.interface import Command, Observation, Phase, TeleopInput
 from controller.insertion.machine import InsertionMachine
 from controller.insertion.motion import cross
@@ -56,7 +56,7 @@ def gripper_status(
 @dataclass
 class ToyWorld:
     plug: PlugGeometry = field(default_factory=PlugGeometry)
-    hole: HoleNominal = field(default_factory=HoleNominal)
+    hole: HolePose = field(default_factory=HolePose)
     hole_offset_m: tuple[float, float] = (0.0012, -0.0009)
     hole_radius_m: float = 0.0006
     depth_limit_m: float = 0.012  # the opening's bottom below the surface

@@ -28,30 +28,9 @@ from pathlib import Path
 
 from drivers.config import Config, ConfigError, build, load_yaml, number
 from drivers.sim.render.appearance import appearance_names
+from drivers.task_geometry import HolePose, PlugGeometry
 
 SCENE_SECTION = "scene"
-
-
-@dataclass(frozen=True)
-class PlugGeometry(Config):
-    """The plug in the grasp: a box ``width_m`` (along the tool's x) by ``thickness_m``
-    (along the tool's y, the fingers' closing direction: the gel presses its wide face), and
-    ``length_m`` from the grasp point (the TCP) to the tip along the tool's z."""
-
-    width_m: float = number(1e-3, 0.05)
-    thickness_m: float = number(5e-4, 0.02)
-    length_m: float = number(5e-3, 0.1)
-
-
-@dataclass(frozen=True)
-class HolePose(Config):
-    """A hole pose in the base frame B: the opening's centre at the board surface (m) and
-    its yaw about B's z (rad); the opening's width runs along the hole frame H's x."""
-
-    x_m: float = number(-2.0, 2.0)
-    y_m: float = number(-2.0, 2.0)
-    z_m: float = number(-2.0, 2.0)
-    yaw_rad: float = number(-math.pi, math.pi)
 
 
 @dataclass(frozen=True)
