@@ -15,7 +15,7 @@ from controller.insertion.config import (
 )
 from drivers.config import CONFIG_ROOT, ConfigError, load_yaml
 
-EXAMPLE = CONFIG_ROOT / "tasks" / "machine_usb_c.example.yaml"
+EXAMPLE = CONFIG_ROOT / "tasks" / "usb_c.yaml"
 
 
 def example() -> dict:
