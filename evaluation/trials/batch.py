@@ -130,29 +130,29 @@ def run_batches(
                 raise ValueError(f"trial {spec} is given twice")
             owner[spec] = batch
     stopped: str | None = None
-    with ExitStack() as stack:
-        logs = {id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME)))
-                for b in batches}
-        bar = stack.enter_context(
-            tqdm(total=len(owner), unit="trial", file=sys.stderr, disable=not progress,
-                 dynamic_ncols=True)
-        )
-        successes = 0
-        try:
-            with executor:
-                for spec, result in executor.run(function, list(owner)):
-                    batch = owner[spec]
-                    logs[id(batch)].write(result)
-                    batch.results.append(result)
-                    successes += result.success
-                    bar.set_postfix(succeeded=successes, refresh=False)
-                    bar.update(1)
-                    if on_result is not None:
-                        on_result(result)
-        except KeyboardInterrupt:
-            stopped = "SIGINT"
-        except Terminated:
-            stopped = "SIGTERM"
+    try:
+        with executor, ExitStack() as stack:
+            logs = {
+                id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME)))
+                for b in batches
+            }
+            bar = stack.enter_context(
+                tqdm(total=len(owner), unit="trial", file=sys.stderr, disable=not progress)
+            )
+            successes = 0
+            for spec, result in executor.run(function, list(owner)):
+                batch = owner[spec]
+                logs[id(batch)].write(result)
+                batch.results.append(result)
+                successes += result.success
+                bar.set_postfix(succeeded=successes, refresh=False)
+                bar.update(1)
+                if on_result is not None:
+                    on_result(result)
+    except KeyboardInterrupt:
+        stopped = "SIGINT"
+    except Terminated:
+        stopped = "SIGTERM"
     for batch in batches:
         batch.summary = summarize(
             batch.results, **batch.context, requested=len(batch.specs), complete=stopped is None

@@ -18,13 +18,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from evaluation.cli import ToolError
 from evaluation.trials.result import TrialResult
 
 CONTROLLERS = ("dipole", "fingervision", "blind", "oracle")
 MAX_SEED = 2**32 - 1
 
 
-class SpecError(ValueError):
+class SpecError(ToolError, ValueError):
     """A batch argument (seeds, controller, override) is malformed; the message is one line."""
 
 
