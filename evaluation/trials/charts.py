@@ -14,11 +14,12 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
+from matplotlib.ticker import MaxNLocator
 
 from evaluation.outputs import atomic_file
 
 DPI = 90
-ORACLE_NOTE = "oracle: the simulator's true wrench (an upper bound, not a real controller)"
+DODGE = 0.012  # relative horizontal shift between controllers, so equal points stay visible
 
 
 def _save(fig: Figure, path: Path) -> None:
@@ -26,8 +27,9 @@ def _save(fig: Figure, path: Path) -> None:
         fig.savefig(temporary, dpi=DPI)
 
 
-def _label(controller: str) -> str:
-    return "oracle (upper bound)" if controller == "oracle" else controller
+def controller_label(controller: str) -> str:
+    """The controller's name in charts and tables; the oracle is marked as an upper bound."""
+    return "oracle (true wrench: upper bound)" if controller == "oracle" else controller
 
 
 def speed_success_chart(
@@ -37,14 +39,16 @@ def speed_success_chart(
     title: str,
 ) -> None:
     """``series``: controller -> [(speed setting, batch summary)]; each point is the
-    summary's ``success_rate`` with its ``success_ci95`` as the error bar."""
+    summary's ``success_rate`` with its ``success_ci95`` as the error bar (the controllers'
+    points shifted apart by a hair, so that equal ones stay visible)."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
-    for controller, points in series.items():
+    middle = (len(series) - 1) / 2
+    for index, (controller, points) in enumerate(series.items()):
         ordered = sorted((s, p) for s, p in points if p.get("n"))
         if not ordered:
             continue
-        speeds = np.array([s for s, _ in ordered])
+        speeds = np.array([s for s, _ in ordered]) * (1 + DODGE * (index - middle))
         rates = np.array([p["success_rate"] for _, p in ordered]) * 100
         lows = np.array([p["success_ci95"][0] for _, p in ordered]) * 100
         highs = np.array([p["success_ci95"][1] for _, p in ordered]) * 100
@@ -55,7 +59,7 @@ def speed_success_chart(
             marker="o",
             capsize=4,
             linestyle="--" if controller == "oracle" else "-",
-            label=_label(controller),
+            label=controller_label(controller),
         )
     ax.set_xlabel(speed_label)
     ax.set_ylabel("success rate, % (95% Wilson interval)")
@@ -63,8 +67,6 @@ def speed_success_chart(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="lower left")
     ax.set_title(title, fontsize=10)
-    if "oracle" in series:
-        fig.text(0.01, 0.0, ORACLE_NOTE, fontsize=7, va="bottom")
     _save(fig, path)
 
 
@@ -84,10 +86,11 @@ def time_histogram(
             histtype="step",
             linewidth=1.5,
             linestyle="--" if controller == "oracle" else "-",
-            label=f"{_label(controller)} (n={values.size})",
+            label=f"{controller_label(controller)} (n={values.size})",
         )
     ax.set_xlabel("time to insert, s (simulated)")
     ax.set_ylabel("trials")
+    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(True, alpha=0.3)
     ax.legend()
     ax.set_title(title, fontsize=10)

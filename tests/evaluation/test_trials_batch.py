@@ -7,7 +7,13 @@ import time
 
 import pytest
 
+from drivers.config import ConfigError
+from evaluation.cli import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
+from evaluation.trials.batch_cli import TRIAL_FUNCTION
+from evaluation.trials.batch_cli import main as batch_main
+from evaluation.trials.charts import speed_success_chart, time_histogram
+from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import SpecError, TrialSpec, format_seeds, parse_seeds
@@ -176,7 +182,6 @@ def test_csv_streams_each_result_as_it_arrives(tmp_path):
 
 
 def test_a_folder_holding_a_batch_is_refused(tmp_path):
-    from evaluation.cli import ToolError
     from evaluation.trials.batch import check_batch_folder
 
     _run(tmp_path, LocalExecutor(1), seeds=range(2))
@@ -224,3 +229,130 @@ def test_ray_gives_the_same_summary_as_local(tmp_path, ray_available):
     assert json.loads((tmp_path / "ray" / SUMMARY_NAME).read_text()) == json.loads(
         (tmp_path / "local" / SUMMARY_NAME).read_text()
     )
+
+
+# -- command line --------------------------------------------------------------------------
+
+FAKE = f"{__name__}:fake_trial"
+
+
+def check_spec(spec: TrialSpec) -> None:
+    """The fake trial function's check: only usb_a and usb_c, only known override keys."""
+    if spec.task not in ("usb_a", "usb_c"):
+        raise ConfigError(f"unknown task configuration {spec.task!r}")
+    for item in spec.overrides:
+        if item.partition("=")[0] not in ("machine.insert_speed_m_s", "scene.friction"):
+            raise ConfigError(f"override {item!r}: unknown key")
+
+
+def run_cli(tmp_path, *args, out="out"):
+    return batch_main(
+        ["--task", "usb_c", "--out", str(tmp_path / out), "--trial-function", FAKE, *args]
+    )
+
+
+def test_cli_runs_a_batch(tmp_path, capsys):
+    assert run_cli(tmp_path, "--seeds", "0:8", "--workers", "2", "--set", "scene.friction=0.4") == 0
+    summary = json.loads((tmp_path / "out" / SUMMARY_NAME).read_text())
+    assert summary["seeds"] == "0:8" and summary["n"] == 8 and summary["successes"] == 5
+    assert summary["overrides"] == ["scene.friction=0.4"]
+    assert summary["executor"] == "local" and summary["workers"] == 2
+    assert summary["controller"] == "dipole" and summary["task"] == "usb_c"
+    assert "5/8 succeeded" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--seeds", "5:2"], "argument --seeds"),
+        (["--seeds", "0:2", "--workers", "0"], "argument --workers"),
+        (["--seeds", "0:2", "--controller", "magic"], "argument --controller"),
+        (["--seeds", "0:2", "--executor", "dask"], "argument --executor"),
+        (["--seeds", "0:2", "--set", "scene.friction"], "argument --set"),
+        (["--seeds", "0:2", "--ray-address", "auto"], "only with --executor ray"),
+    ],
+)
+def test_bad_cli_arguments_exit_2(tmp_path, capsys, args, message):
+    with pytest.raises(SystemExit) as caught:
+        run_cli(tmp_path, *args)
+    assert caught.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--seeds", "0:2", "--set", "scene.frction=1"], "override 'scene.frction=1'"),
+        (["--seeds", "0:2", "--trial-function", "nowhere.at_all:run"], "cannot be imported"),
+    ],
+)
+def test_bad_inputs_found_before_any_trial_exit_2(tmp_path, capsys, args, message):
+    assert run_cli(tmp_path, *args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and err.startswith("run_trials: error:")
+    assert not (tmp_path / "out" / CSV_NAME).exists()
+
+
+def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, capsys):
+    assert batch_main(["--task", "usb_x", "--seeds", "0:2", "--out", str(tmp_path / "a"),
+                       "--trial-function", FAKE]) == 2
+    assert "unknown task configuration 'usb_x'" in capsys.readouterr().err
+    assert run_cli(tmp_path, "--seeds", "0:2") == 0
+    assert run_cli(tmp_path, "--seeds", "0:2") == 2
+    assert "already holds a batch" in capsys.readouterr().err
+
+
+def test_default_trial_function_is_the_real_runner():
+    assert TRIAL_FUNCTION == "evaluation.trials.runner:run_trial"
+
+
+def test_ray_missing_is_a_one_line_error(monkeypatch):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "ray", None)
+    monkeypatch.delitem(sys.modules, "evaluation.trials.ray_executor", raising=False)
+    with pytest.raises(ToolError, match=r"^the Ray executor needs Ray.*tactile-insertion\[ray\]"):
+        open_executor("ray", workers=1)
+
+
+# -- comparison and charts ---------------------------------------------------------------------
+
+
+def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    code = compare_main(
+        ["--task", "usb_c", "--seeds", "0:6", "--controllers", "dipole,blind,oracle",
+         "--speeds", "0.01,0.02", "--out", str(out), "--trial-function", FAKE]
+    )
+    assert code == 0
+    for name in ("speed_success.png", "time_to_insert_0.01.png", "time_to_insert_0.02.png"):
+        assert (out / name).stat().st_size > 1000
+    table = (out / "comparison.md").read_text()
+    assert table.count("\n| ") == 1 + 6  # header and one row per cell
+    assert "oracle (true wrench: upper bound)" in table and "![success against" in table
+    summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
+    assert summary["overrides"] == ["machine.insert_speed_m_s=0.02"]
+    assert summary["controller"] == "blind" and summary["n"] == 6
+    every = json.loads((out / "comparison.json").read_text())
+    assert len(every) == 6
+    # the fake trial is slower at the lower speed: the histogram's data differ by speed
+    slow = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
+    assert slow["median_time_s"] > summary["median_time_s"]
+
+
+def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
+    with pytest.raises(SystemExit) as caught:
+        compare_main(["--task", "usb_c", "--seeds", "0:2", "--out", str(tmp_path),
+                      "--set", "machine.insert_speed_m_s=1", "--trial-function", FAKE])
+    assert caught.value.code == 2
+    assert "is the speed key" in capsys.readouterr().err
+
+
+def test_charts_with_an_empty_controller(tmp_path):
+    summary = summarize([_result(0, True, 4.0), _result(1, False, reason="timeout")])
+    speed_success_chart({"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png",
+                        "speed", "t")
+    time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
+    assert (tmp_path / "a.png").stat().st_size > 1000
+    assert (tmp_path / "b.png").stat().st_size > 1000
