@@ -116,8 +116,7 @@ class LocalExecutor:
         if kind is None:
             pool.shutdown(wait=True)
             return
-        pool.shutdown(wait=False, cancel_futures=True)
-        _terminate_workers(pool)
+        _terminate(pool)
 
     def run(
         self, function: TrialFunction, specs: Iterable[TrialSpec]
@@ -147,16 +146,19 @@ class LocalExecutor:
                 future.cancel()
 
 
-def _terminate_workers(pool: ProcessPoolExecutor) -> None:
-    """Stop the pool's worker processes now (their trials are abandoned). Python 3.14 has
-    ``terminate_workers``; before it, the processes are only reachable as ``_processes``."""
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Cancel the pool's queued trials and stop its worker processes now (their running
+    trials are abandoned). Python 3.14 has ``terminate_workers``; before it, the processes
+    are only reachable as ``_processes``, which ``shutdown`` clears: taken first."""
     terminate = getattr(pool, "terminate_workers", None)
     if terminate is not None:
         terminate()
         return
-    for process in list((getattr(pool, "_processes", None) or {}).values()):
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
         process.terminate()
-    for process in list((getattr(pool, "_processes", None) or {}).values()):
+    for process in processes:
         process.join(timeout=5)
 
 

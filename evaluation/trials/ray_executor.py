@@ -11,6 +11,7 @@ for the same seeds. The trial function and this package must be importable on th
 from __future__ import annotations
 
 import logging
+import socket
 import time
 from collections.abc import Iterable, Iterator
 from types import TracebackType
@@ -35,6 +36,24 @@ except ImportError:
     ) from None
 
 
+CONNECT_TIMEOUT_S = 5.0
+
+
+def check_reachable(address: str) -> None:
+    """Refuse a ``[ray://]HOST:PORT`` address that does not accept a TCP connection within
+    ``CONNECT_TIMEOUT_S`` (Ray itself would retry for minutes); ``auto`` is left to Ray."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not port.isdigit():
+        if address == "auto":
+            return
+        raise ToolError(f"--ray-address {address!r}: expected auto, HOST:PORT or ray://HOST:PORT")
+    try:
+        socket.create_connection((host, int(port)), timeout=CONNECT_TIMEOUT_S).close()
+    except OSError as exc:
+        reason = exc.strerror or type(exc).__name__
+        raise ToolError(f"--ray-address {address}: cannot connect ({reason})") from None
+
+
 class RayExecutor:
     """Runs trials as Ray tasks. ``address`` None starts a local Ray instance with
     ``workers`` CPUs (shut down on exit); an address (``auto``, ``ray://host:10001``) joins
@@ -55,6 +74,7 @@ class RayExecutor:
             if self.address is None:
                 ray.init(num_cpus=self.workers, **options)
             else:
+                check_reachable(self.address)
                 ray.init(address=self.address, **options)
         except (ConnectionError, ValueError, RuntimeError) as exc:
             where = self.address or "a local instance"

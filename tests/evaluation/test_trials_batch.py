@@ -3,7 +3,12 @@
 import csv
 import json
 import math
+import os
+import signal
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -19,6 +24,7 @@ from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import SpecError, TrialSpec, format_seeds, parse_seeds
 from evaluation.trials.summary import summarize, wilson_ci
 
+ROOT = Path(__file__).resolve().parents[2]
 FORCE_LIMIT_N = 20.0
 
 
@@ -308,8 +314,6 @@ def test_default_trial_function_is_the_real_runner():
 
 
 def test_ray_missing_is_a_one_line_error(monkeypatch):
-    import sys
-
     monkeypatch.setitem(sys.modules, "ray", None)
     monkeypatch.delitem(sys.modules, "evaluation.trials.ray_executor", raising=False)
     with pytest.raises(ToolError, match=r"^the Ray executor needs Ray.*tactile-insertion\[ray\]"):
@@ -356,3 +360,39 @@ def test_charts_with_an_empty_controller(tmp_path):
     time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
     assert (tmp_path / "a.png").stat().st_size > 1000
     assert (tmp_path / "b.png").stat().st_size > 1000
+
+
+def test_an_unreachable_ray_address_is_a_quick_one_line_error(ray_available):
+    from evaluation.trials.ray_executor import check_reachable
+
+    with pytest.raises(ToolError, match=r"--ray-address 127.0.0.1:1: cannot connect"):
+        check_reachable("127.0.0.1:1")
+    with pytest.raises(ToolError, match=r"expected auto, HOST:PORT"):
+        check_reachable("somewhere")
+
+
+def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
+    out = tmp_path / "out"
+    code = (
+        "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-c", code, "--task", "usb_c", "--seeds", "0:3", "--workers", "2",
+         "--out", str(out), "--trial-function", f"{__name__}:slow_trial"],
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (
+        (out / CSV_NAME).exists() and len(_read_csv(out / CSV_NAME)) == 1
+    ):
+        time.sleep(0.1)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 143, err
+    assert "interrupted by SIGTERM after 1 of 3 trials" in err
+    summary = json.loads((out / SUMMARY_NAME).read_text())
+    assert summary["complete"] is False and summary["n"] == 1 and summary["requested"] == 3
