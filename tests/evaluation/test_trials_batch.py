@@ -60,6 +60,13 @@ def slow_trial(spec: TrialSpec) -> TrialResult:
     return fake_trial(spec)
 
 
+def recording_trial(spec: TrialSpec) -> TrialResult:
+    """Writes the spec into its out_dir, as the real trial writes its record."""
+    spec.out_dir.mkdir(parents=True)
+    (spec.out_dir / "spec.txt").write_text(repr(spec))
+    return fake_trial(spec)
+
+
 def specs(seeds, controller="dipole", overrides=()):
     return [TrialSpec("usb_c", controller, s, tuple(overrides)) for s in seeds]
 
@@ -307,6 +314,13 @@ def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, caps
     assert run_cli(tmp_path, "--seeds", "0:2") == 0
     assert run_cli(tmp_path, "--seeds", "0:2") == 2
     assert "already holds a batch" in capsys.readouterr().err
+
+
+def test_records_give_each_trial_its_own_folder(tmp_path):
+    assert run_cli(tmp_path, "--seeds", "0:2", "--controller", "blind", "--records",
+                   "--trial-function", f"{__name__}:recording_trial") == 0
+    text = (tmp_path / "out" / "records" / "blind-1" / "spec.txt").read_text()
+    assert "seed=1" in text and "controller='blind'" in text
 
 
 def test_default_trial_function_is_the_real_runner():
