@@ -265,11 +265,11 @@ def run_cli(tmp_path, *args, out="out"):
 
 
 def test_cli_runs_a_batch(tmp_path, capsys):
-    assert run_cli(tmp_path, "--seeds", "0:8", "--workers", "2", "--set", "scene.friction=0.4") == 0
+    assert run_cli(tmp_path, "--seeds", "0:8", "--set", "scene.friction=0.4") == 0
     summary = json.loads((tmp_path / "out" / SUMMARY_NAME).read_text())
     assert summary["seeds"] == "0:8" and summary["n"] == 8 and summary["successes"] == 5
     assert summary["overrides"] == ["scene.friction=0.4"]
-    assert summary["executor"] == "local" and summary["workers"] == 2
+    assert summary["executor"] == "local" and summary["workers"] == 1
     assert summary["controller"] == "dipole" and summary["task"] == "usb_c"
     assert "5/8 succeeded" in capsys.readouterr().out
 
