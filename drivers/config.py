@@ -21,10 +21,14 @@ Loading from YAML adds the file: every key must be known and present (defaults s
 not files), and an error names the file, the dotted key path and what was expected::
 
     configs/estimators/default.yaml: key 'stride_px': expected a number in [4, 160], got 2
+
+Command-line overrides (``--set scene.friction=0.5``) go through ``apply_overrides`` on the
+raw mapping before ``build``, so an overridden value is validated exactly as one from YAML.
 """
 
 from __future__ import annotations
 
+import copy
 import copyreg
 import dataclasses
 import functools
@@ -32,7 +36,7 @@ import math
 import numbers
 import types
 import typing
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -375,3 +379,57 @@ def resolve_config_path(name_or_path: str, folder: str) -> Path:
             f"expected one of: {', '.join(known)} (or a path to a .yaml file)"
         )
     return candidate
+
+
+# -- overrides -----------------------------------------------------------------------
+
+
+def parse_override(item: str) -> tuple[str, Any]:
+    """``'KEY=VALUE'`` -> (dotted key, value parsed as YAML: ``0.5`` a float, ``true`` a bool,
+    ``[1, 2]`` a list, ``abc`` a string); ConfigError (one line) for anything else."""
+    key, sep, text = item.partition("=")
+    key = key.strip()
+    parts = key.split(".")
+    if not sep or not key or not all(part.strip() for part in parts):
+        raise ConfigError(f"override {show(item)}: expected KEY=VALUE with a dotted KEY")
+    try:
+        value = yaml.safe_load(text) if text.strip() else None
+    except yaml.YAMLError as exc:
+        raise ConfigError(
+            f"override {show(item)}: the value is not valid YAML ({_one_line(str(exc))})"
+        ) from None
+    return key, value
+
+
+def apply_overrides(raw: Mapping[str, Any], items: Sequence[str], source: str) -> dict[str, Any]:
+    """A deep copy of the raw mapping ``raw`` (as ``load_yaml`` returns it) with each
+    ``KEY=VALUE`` of ``items`` set at its dotted path, in order.
+
+    Only keys already in the mapping may be set (a typo is an error, not a new key); the
+    values are not checked here but when the mapping is built into its ``Config`` class, as
+    for a file. ConfigError (one line, naming ``source`` and the key) otherwise.
+    """
+    result = copy.deepcopy(dict(raw))
+    for item in items:
+        key, value = parse_override(item)
+        node: Any = result
+        path = key.split(".")
+        for depth, name in enumerate(path):
+            where = ".".join(path[:depth])
+            if not isinstance(node, dict):
+                raise ConfigError(
+                    f"{source}: override '{key}': key '{where}' is not a mapping, "
+                    f"so it has no key '{name}'"
+                )
+            if name not in node:
+                known = ", ".join(sorted(map(str, node))) or "none"
+                within = f" in '{where}'" if where else ""
+                raise ConfigError(
+                    f"{source}: override '{key}': unknown key '{name}'{within}; "
+                    f"expected one of: {known}"
+                )
+            if depth == len(path) - 1:
+                node[name] = value
+            else:
+                node = node[name]
+    return result

@@ -12,7 +12,15 @@ import yaml
 
 import drivers.config as config_module
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
-from drivers.config import Config, ConfigError, build, load_config, load_yaml, number
+from drivers.config import (
+    Config,
+    ConfigError,
+    apply_overrides,
+    build,
+    load_config,
+    load_yaml,
+    number,
+)
 from drivers.gripper.hande import HandEConfig
 from drivers.registry import load_device_config
 from drivers.sim.scenes.jig import JigConfig
@@ -369,3 +377,53 @@ def test_a_config_holding_a_mapping_survives_pickling():
     assert again == calibration and isinstance(again.axes, type(calibration.axes))
     with pytest.raises(TypeError):
         again.axes["tau_y"] = fit  # still read-only
+
+
+# -- command-line overrides ------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Scene(Config):
+    friction: float = number(0.0, 2.0)
+    shape: Literal["box", "round"]
+
+
+@dataclass(frozen=True)
+class _Task(Config):
+    rate_hz: float = number(1.0, 1000.0)
+    scene: _Scene
+
+
+_RAW = {"rate_hz": 100, "scene": {"friction": 0.3, "shape": "box"}}
+
+
+def test_overrides_set_dotted_keys_with_yaml_values():
+    raw = apply_overrides(_RAW, ["scene.friction=0.5", "scene.shape=round", "rate_hz=50"], "t")
+    task = build(_Task, raw, source="t")
+    assert task.scene.friction == 0.5 and task.scene.shape == "round" and task.rate_hz == 50.0
+    assert _RAW["scene"]["friction"] == 0.3  # the input is not changed
+
+
+def test_overrides_later_item_wins_and_value_is_validated_like_yaml():
+    raw = apply_overrides(_RAW, ["scene.friction=0.5", "scene.friction=7"], "task.yaml")
+    with pytest.raises(ConfigError, match=r"task.yaml: key 'scene.friction': expected a number"):
+        build(_Task, raw, source="task.yaml")
+
+
+@pytest.mark.parametrize(
+    "item, message",
+    [
+        ("scene.frction=0.5", r"t: override 'scene.frction': unknown key 'frction' in 'scene'; "
+         r"expected one of: friction, shape"),
+        ("speed=1", r"unknown key 'speed'; expected one of: rate_hz, scene"),
+        ("rate_hz.x=1", r"key 'rate_hz' is not a mapping"),
+        ("scene.friction", r"expected KEY=VALUE"),
+        ("=3", r"expected KEY=VALUE"),
+        ("scene..friction=3", r"expected KEY=VALUE"),
+        ("scene.friction=[1", r"the value is not valid YAML"),
+    ],
+)
+def test_bad_overrides_are_one_line_errors_naming_the_key(item, message):
+    with pytest.raises(ConfigError, match=message) as caught:
+        apply_overrides(_RAW, [item], "t")
+    assert "\n" not in str(caught.value)

@@ -1,0 +1,224 @@
+"""A batch of simulated insertion trials on consecutive seeds, locally or on Ray.
+
+    python scripts/run_trials.py --task usb_c --seeds 0:200 --out out/trials/usb_c
+        [--controller dipole|fingervision|blind|oracle] [--workers N]
+        [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records]
+
+Seeds run from A up to B, B excluded. ``--set`` overrides a task or scene configuration key
+by dotted path (``--set scene.friction=0.5``), validated like the YAML. ``--workers`` is the
+number of trials run at once (1: in this process); with ``--executor ray`` the trials are
+Ray tasks on a local Ray instance of that many CPUs, or on the cluster at ``--ray-address``
+(then its CPUs set the parallelism). ``--records`` lets each trial write its own record and
+chart under OUT/records/<controller>-<seed>/.
+
+OUT/trials.csv gets one row per trial as it finishes; OUT/summary.json (keys: docs/
+EVALUATION.md, ``evaluation.trials.summary``) is written at the end, also after Ctrl-C or
+SIGTERM, then holding only the finished trials and ``"complete": false`` (exit 130 or 143).
+A trial that raises is a failed trial (``error: ...``), not the end of the batch. Bad
+arguments, an unknown task or override key, an OUT that already holds a batch: one line
+``run_trials: error: ...`` and exit code 2.
+
+The trial function: ``TRIAL_FUNCTION`` below names it (``module:function``, see
+``evaluation.trials.spec`` for its contract and the optional ``check_spec``); the hidden
+option ``--trial-function`` replaces it (tests use a fake one).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from drivers.config import ConfigError, parse_override
+from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, one_line, run_tool
+from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
+from evaluation.trials.executors import EXECUTORS, Executor, open_executor
+from evaluation.trials.spec import (
+    CONTROLLERS,
+    SpecError,
+    TrialFunction,
+    TrialSpec,
+    format_seeds,
+    parse_seeds,
+)
+
+# The real trial (scene + controller). The integrator plugs it in here, and only here.
+TRIAL_FUNCTION = "evaluation.trials.runner:run_trial"
+MAX_WORKERS = 1024
+EXIT_CODES = {"SIGINT": EXIT_SIGINT, "SIGTERM": EXIT_SIGTERM}
+
+SpecCheck = Callable[[TrialSpec], None]
+
+
+def _seeds(text: str) -> range:
+    try:
+        return parse_seeds(text)
+    except SpecError as exc:
+        raise argparse.ArgumentTypeError(str(exc).removeprefix("seeds ")) from None
+
+
+def _override(text: str) -> str:
+    try:
+        parse_override(text)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def add_run_arguments(parser: argparse.ArgumentParser) -> None:
+    """The arguments every batch tool shares: task, seeds, executor, overrides."""
+    parser.add_argument("--task", required=True, help="task configuration name or YAML path")
+    parser.add_argument(
+        "--seeds", type=_seeds, required=True, help="A:B, the seeds A up to B (B excluded)"
+    )
+    parser.add_argument(
+        "--workers",
+        type=integer(1, MAX_WORKERS),
+        default=1,
+        help="trials run at once (default 1: in this process)",
+    )
+    parser.add_argument("--executor", choices=EXECUTORS, default="local")
+    parser.add_argument(
+        "--ray-address",
+        default=None,
+        help="Ray cluster to join (with --executor ray; default: start a local instance)",
+    )
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        metavar="KEY=VALUE",
+        type=_override,
+        action="append",
+        default=[],
+        help="override a task/scene configuration key by dotted path (repeatable)",
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument("--trial-function", default=TRIAL_FUNCTION, help=argparse.SUPPRESS)
+
+
+def check_run_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Cross-argument rules (argparse exits 2 with one error line)."""
+    if args.ray_address is not None and args.executor != "ray":
+        parser.error("argument --ray-address: only with --executor ray")
+
+
+def load_trial_function(path: str) -> tuple[TrialFunction, SpecCheck | None]:
+    """The trial function named ``module:function`` and its module's ``check_spec`` (None
+    when the module has none); ToolError when it cannot be imported."""
+    module_name, sep, name = path.partition(":")
+    if not sep or not module_name or not name:
+        raise ToolError(f"--trial-function {path!r}: expected module:function")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ToolError(f"the trial function {path} cannot be imported ({one_line(exc)})") from None
+    function = getattr(module, name, None)
+    if not callable(function):
+        raise ToolError(f"the trial function {path}: {module_name} has no function {name!r}")
+    check = getattr(module, "check_spec", None)
+    return function, check if callable(check) else None
+
+
+def check_specs(check: SpecCheck | None, specs: Sequence[TrialSpec]) -> None:
+    """Run ``check`` once per distinct (task, controller, overrides) before any trial."""
+    if check is None:
+        return
+    seen: set[tuple[Any, ...]] = set()
+    for spec in specs:
+        key = (spec.task, spec.controller, spec.overrides)
+        if key not in seen:
+            seen.add(key)
+            check(spec)
+
+
+def make_executor(args: argparse.Namespace) -> Executor:
+    return open_executor(args.executor, args.workers, args.ray_address)
+
+
+def executor_context(args: argparse.Namespace) -> dict[str, Any]:
+    """What the summary records about how the trials ran."""
+    context: dict[str, Any] = {"executor": args.executor, "workers": args.workers}
+    if args.ray_address is not None:
+        context["ray_address"] = args.ray_address
+    return context
+
+
+def describe(summary: dict[str, Any]) -> str:
+    """One line of a batch summary for the terminal."""
+    n = summary["n"]
+    if not n:
+        return "no trial finished"
+    low, high = summary["success_ci95"]
+    parts = [
+        f"{summary['successes']}/{n} succeeded ({summary['success_rate']:.1%}, "
+        f"95% CI {low:.1%}-{high:.1%})"
+    ]
+    if summary["median_time_s"] is not None:
+        parts.append(f"median {summary['median_time_s']:.2f} s, p90 {summary['p90_time_s']:.2f} s")
+    parts.append(
+        f"max true force {summary['max_true_force_n']:.2f} N "
+        f"({summary['over_force_trials']} over the limit)"
+    )
+    if summary["sim_speed_x_realtime"] is not None:
+        parts.append(f"{summary['sim_speed_x_realtime']:.1f}x real time")
+    return ", ".join(parts)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="run_trials", description="Run a batch of simulated insertion trials."
+    )
+    add_run_arguments(parser)
+    parser.add_argument("--controller", choices=CONTROLLERS, default="dipole")
+    parser.add_argument(
+        "--records",
+        action="store_true",
+        help="each trial writes its record and chart under OUT/records/<controller>-<seed>/",
+    )
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    check_run_arguments(parser, args)
+    return run_tool("run_trials", lambda: _run(args))
+
+
+def _run(args: argparse.Namespace) -> int:
+    check_batch_folder(args.out)
+    function, check = load_trial_function(args.trial_function)
+    records = args.out / "records" if args.records else None
+    specs = [
+        TrialSpec(
+            args.task,
+            args.controller,
+            seed,
+            tuple(args.overrides),
+            records / f"{args.controller}-{seed}" if records else None,
+        )
+        for seed in args.seeds
+    ]
+    check_specs(check, specs)
+    context = {
+        "task": args.task,
+        "controller": args.controller,
+        "seeds": format_seeds(args.seeds),
+        "overrides": list(args.overrides),
+        **executor_context(args),
+    }
+    batch = Batch(specs, args.out, context)
+    stopped = run_batches(function, [batch], make_executor(args))
+    line = describe(batch.summary)
+    if stopped is not None:
+        print(
+            f"run_trials: interrupted by {stopped} after {batch.summary['n']} of {len(specs)} "
+            f"trials; {line}; wrote {args.out / SUMMARY_NAME}",
+            file=sys.stderr,
+        )
+        return EXIT_CODES[stopped]
+    print(f"run_trials: {args.task} {args.controller}: {line}; wrote {args.out / SUMMARY_NAME}")
+    return 0

@@ -1,0 +1,283 @@
+"""Controllers compared side by side on the same seeds, across insertion speed settings.
+
+    python scripts/compare_trials.py --task usb_c --seeds 0:200 --out out/compare/usb_c
+        [--controllers dipole,fingervision,blind,oracle] [--speeds 0.005,0.01,0.02]
+        [--speed-key machine.insert_speed_m_s] [--workers N] [--executor local|ray]
+        [--ray-address ADDR] [--set KEY=VALUE ...]
+
+Every controller runs every speed setting (``--set SPEED_KEY=value`` added to the trials'
+overrides) on the same seeds; all the trials share one executor. OUT gets:
+
+* ``cells/<controller>/<speed>/{trials.csv,summary.json}``: one batch per grid cell;
+* ``speed_success.png``: success rate (95% Wilson interval) against the speed setting per
+  controller -- the insertion speed/success chart;
+* ``time_to_insert_<speed>.png``: histogram of time to insert per controller, one chart per
+  speed setting;
+* ``comparison.md``: the table and charts as a section for docs/EVALUATION.md;
+  ``comparison.json``: every cell's summary.
+
+The oracle controller reads the simulator's true wrench: an upper bound, labelled so.
+Ctrl-C or SIGTERM stops the grid; what finished is still summarised and charted (exit 130
+or 143). Bad arguments: one line ``compare_trials: error: ...`` and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from drivers.config import ConfigError, parse_override
+from evaluation.cli import distinct, number_list, run_tool
+from evaluation.outputs import check_output_folder, write_text
+from evaluation.trials.batch import Batch, check_batch_folder, run_batches
+from evaluation.trials.batch_cli import (
+    EXIT_CODES,
+    add_run_arguments,
+    check_run_arguments,
+    check_specs,
+    executor_context,
+    load_trial_function,
+    make_executor,
+)
+from evaluation.trials.charts import controller_label, speed_success_chart, time_histogram
+from evaluation.trials.spec import CONTROLLERS, TrialSpec, format_seeds
+
+DEFAULT_SPEED_KEY = "machine.insert_speed_m_s"
+DEFAULT_SPEEDS = (0.005, 0.01, 0.02)
+SPEED_CHART = "speed_success.png"
+TABLE = "comparison.md"
+SUMMARIES = "comparison.json"
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One point of the grid: a controller at one speed setting."""
+
+    controller: str
+    speed: float
+
+    @property
+    def folder(self) -> Path:
+        return Path("cells") / self.controller / f"{self.speed:g}"
+
+
+def histogram_name(speed: float) -> str:
+    return f"time_to_insert_{speed:g}.png"
+
+
+def grid(
+    task: str,
+    seeds: range,
+    controllers: Sequence[str],
+    speed_key: str,
+    speeds: Sequence[float],
+    overrides: Sequence[str],
+    out: Path,
+    context: Mapping[str, Any],
+) -> dict[Cell, Batch]:
+    """One batch per (controller, speed), every one on ``seeds``, in ``out/cells/...``."""
+    batches = {}
+    for controller in controllers:
+        for speed in speeds:
+            cell = Cell(controller, speed)
+            cell_overrides = (*overrides, f"{speed_key}={speed!r}")
+            specs = [TrialSpec(task, controller, seed, cell_overrides) for seed in seeds]
+            cell_context = {
+                "task": task,
+                "controller": controller,
+                "seeds": format_seeds(seeds),
+                "overrides": list(cell_overrides),
+                "speed_key": speed_key,
+                "speed": speed,
+                **context,
+            }
+            batches[cell] = Batch(specs, out / cell.folder, cell_context)
+    return batches
+
+
+def _percent(value: float | None) -> str:
+    return "–" if value is None else f"{value:.1%}"
+
+
+def _seconds(value: float | None) -> str:
+    return "–" if value is None else f"{value:.2f}"
+
+
+def comparison_markdown(
+    task: str, seeds: str, speed_key: str, cells: Mapping[Cell, Batch], command: str
+) -> str:
+    """The comparison as a markdown section: table, then the charts (paths relative to
+    the markdown file)."""
+    lines = [
+        f"## Insertion trials: controllers compared ({task})",
+        "",
+        f"Seeds {seeds} (B excluded), the same for every controller and speed; the speed "
+        f"setting is `{speed_key}`. Success rates with their 95% Wilson interval; times are "
+        "simulated seconds over the successful trials; forces are the simulator's true "
+        "contact force. Regenerate with:",
+        "",
+        f"    {command}",
+        "",
+        f"| controller | {speed_key} | trials | success | 95% CI | median time s | p90 time s "
+        "| max true force N | over force | failures |",
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|---|",
+    ]
+    for cell, batch in cells.items():
+        s = batch.summary
+        ci = s["success_ci95"]
+        failures = ", ".join(f"{k}: {v}" for k, v in s["failures"].items()) or "none"
+        force = "–" if s["max_true_force_n"] is None else f"{s['max_true_force_n']:.2f}"
+        lines.append(
+            f"| {controller_label(cell.controller)} | {cell.speed:g} | {s['n']} | "
+            f"{_percent(s['success_rate'])} | "
+            f"{'–' if ci is None else f'{ci[0]:.1%}–{ci[1]:.1%}'} | "
+            f"{_seconds(s['median_time_s'])} | {_seconds(s['p90_time_s'])} | {force} | "
+            f"{s['over_force_trials']} | {failures} |"
+        )
+    incomplete = sum(not b.summary["complete"] for b in cells.values())
+    if incomplete:
+        lines += ["", f"**Incomplete:** {incomplete} cells were stopped before all their trials."]
+    lines += ["", f"![success against {speed_key}]({SPEED_CHART})", ""]
+    for speed in sorted({c.speed for c in cells}):
+        lines += [f"![time to insert at {speed_key}={speed:g}]({histogram_name(speed)})", ""]
+    return "\n".join(lines)
+
+
+def write_comparison(
+    out: Path, task: str, seeds: str, speed_key: str, cells: Mapping[Cell, Batch], command: str
+) -> None:
+    """The charts, ``comparison.md`` and ``comparison.json`` of a finished grid in ``out``."""
+    series: dict[str, list[tuple[float, dict[str, Any]]]] = {}
+    for cell, batch in cells.items():
+        series.setdefault(cell.controller, []).append((cell.speed, batch.summary))
+    speed_success_chart(
+        series, out / SPEED_CHART, speed_key, f"{task}: success against insertion speed, "
+        f"seeds {seeds}"
+    )
+    for speed in sorted({c.speed for c in cells}):
+        times = {
+            cell.controller: [
+                r.time_to_insert_s
+                for r in batch.results
+                if r.success and r.time_to_insert_s is not None
+            ]
+            for cell, batch in cells.items()
+            if cell.speed == speed
+        }
+        time_histogram(
+            times, out / histogram_name(speed), f"{task}: time to insert at {speed_key}={speed:g}"
+        )
+    write_text(out / TABLE, comparison_markdown(task, seeds, speed_key, cells, command) + "\n")
+    every = [
+        {"controller": c.controller, "speed": c.speed, "summary": b.summary}
+        for c, b in cells.items()
+    ]
+    write_text(out / SUMMARIES, json.dumps(every, indent=2) + "\n")
+
+
+# -- command line ------------------------------------------------------------------------------
+
+
+def _controllers(text: str) -> tuple[str, ...]:
+    names = tuple(part.strip() for part in text.split(","))
+    for name in names:
+        if name not in CONTROLLERS:
+            raise argparse.ArgumentTypeError(
+                f"expected comma-separated controllers among {', '.join(CONTROLLERS)}, "
+                f"got {name!r}"
+            )
+    return names
+
+
+def _speed_key(text: str) -> str:
+    try:
+        key, _ = parse_override(f"{text}=0")
+    except ConfigError:
+        raise argparse.ArgumentTypeError(
+            f"expected a dotted configuration key, got {text!r}"
+        ) from None
+    return key
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="compare_trials",
+        description="Compare controllers across insertion speed settings on the same seeds.",
+    )
+    add_run_arguments(parser)
+    parser.add_argument(
+        "--controllers",
+        type=_controllers,
+        default=CONTROLLERS,
+        help=f"comma-separated (default {','.join(CONTROLLERS)})",
+    )
+    parser.add_argument("--speed-key", type=_speed_key, default=DEFAULT_SPEED_KEY)
+    parser.add_argument(
+        "--speeds",
+        type=number_list(0.0, 1e6, "the speed key's unit"),
+        default=DEFAULT_SPEEDS,
+        help="comma-separated speed settings (default "
+        f"{','.join(f'{s:g}' for s in DEFAULT_SPEEDS)})",
+    )
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    check_run_arguments(parser, args)
+    distinct(parser, "--controllers", list(args.controllers))
+    distinct(parser, "--speeds", [f"{s:g}" for s in args.speeds])
+    if any(parse_override(item)[0] == args.speed_key for item in args.overrides):
+        parser.error(f"argument --set: {args.speed_key} is the speed key; use --speeds")
+    return run_tool("compare_trials", lambda: _run(args))
+
+
+def _command(args: argparse.Namespace) -> str:
+    parts = [
+        "python scripts/compare_trials.py",
+        f"--task {args.task}",
+        f"--seeds {format_seeds(args.seeds)}",
+        f"--controllers {','.join(args.controllers)}",
+        f"--speed-key {args.speed_key}",
+        f"--speeds {','.join(f'{s:g}' for s in args.speeds)}",
+        *(f"--set {item}" for item in args.overrides),
+        f"--workers {args.workers}",
+        f"--out {args.out}",
+    ]
+    return " ".join(parts)
+
+
+def _run(args: argparse.Namespace) -> int:
+    check_output_folder(args.out, option="--out")
+    cells = grid(
+        args.task,
+        args.seeds,
+        args.controllers,
+        args.speed_key,
+        args.speeds,
+        args.overrides,
+        args.out,
+        executor_context(args),
+    )
+    for batch in cells.values():
+        check_batch_folder(batch.out_dir)
+    function, check = load_trial_function(args.trial_function)
+    check_specs(check, [spec for batch in cells.values() for spec in batch.specs])
+    stopped = run_batches(function, list(cells.values()), make_executor(args))
+    seeds = format_seeds(args.seeds)
+    write_comparison(args.out, args.task, seeds, args.speed_key, cells, _command(args))
+    print((args.out / TABLE).read_text())
+    if stopped is not None:
+        print(
+            f"compare_trials: interrupted by {stopped}; the comparison in {args.out} holds "
+            "the trials that finished",
+            file=sys.stderr,
+        )
+        return EXIT_CODES[stopped]
+    return 0

@@ -1,0 +1,176 @@
+"""Where a batch's trials run: in this process, in a local process pool, or on Ray.
+
+Every executor is a context manager whose ``run(function, specs)`` yields ``(spec,
+result)`` for each spec, in the order the trials finish. A trial that raises becomes a failed
+result (``failure_reason`` ``"error: <one line>"``, see ``guarded``), so one bad seed never
+ends the batch. Leaving the context on an exception (Ctrl-C, SIGTERM) stops the trials still
+running: the local pool's worker processes are terminated, Ray's tasks cancelled.
+
+The Ray executor lives in ``evaluation.trials.ray_executor`` (Ray is an optional extra);
+``open_executor`` imports it only when asked for.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Iterable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from multiprocessing import get_context
+from types import TracebackType
+from typing import Protocol
+
+from evaluation.cli import ignore_interrupts_in_worker, one_line
+from evaluation.machine import one_thread_env
+from evaluation.trials.result import TrialResult
+from evaluation.trials.spec import TrialFunction, TrialSpec
+
+EXECUTORS = ("local", "ray")
+
+
+class Executor(Protocol):
+    """Runs trials; see the module doc."""
+
+    name: str
+    workers: int
+
+    def __enter__(self) -> Executor: ...
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None: ...
+
+    def run(
+        self, function: TrialFunction, specs: Iterable[TrialSpec]
+    ) -> Iterator[tuple[TrialSpec, TrialResult]]:
+        """``(spec, result)`` per spec, as the trials finish."""
+        ...
+
+
+def error_result(spec: TrialSpec, reason: str, wall_time_s: float) -> TrialResult:
+    """The result of a trial that did not run to an outcome: failed with ``"error: ..."``,
+    no simulated time, no force measured (0 N) and an unknown force limit (NaN)."""
+    return TrialResult(
+        task=spec.task,
+        controller=spec.controller,
+        seed=spec.seed,
+        success=False,
+        failure_reason=f"error: {one_line(reason)}",
+        time_to_insert_s=None,
+        duration_s=0.0,
+        max_true_force_n=0.0,
+        force_limit_n=math.nan,
+        wall_time_s=wall_time_s,
+    )
+
+
+def is_error(result: TrialResult) -> bool:
+    """Whether the trial ended in an exception rather than an outcome."""
+    return (result.failure_reason or "").startswith("error:")
+
+
+def guarded(function: TrialFunction, spec: TrialSpec) -> TrialResult:
+    """``function(spec)``, with an exception turned into an error result naming its type
+    and message (module-level: the worker processes and Ray import it by name)."""
+    began = time.perf_counter()
+    try:
+        return function(spec)
+    except Exception as exc:  # noqa: BLE001 -- any trial failure is a result, not a crash
+        return error_result(spec, f"{type(exc).__name__}: {exc}", time.perf_counter() - began)
+
+
+class LocalExecutor:
+    """``workers`` = 1: the trials run one after the other in this process; more: in a pool
+    of that many worker processes (spawned, one BLAS/OpenMP thread each, SIGINT left to
+    this process)."""
+
+    name = "local"
+
+    def __init__(self, workers: int = 1) -> None:
+        if workers < 1:
+            raise ValueError(f"workers {workers}: expected at least 1")
+        self.workers = workers
+        self._pool: ProcessPoolExecutor | None = None
+
+    def __enter__(self) -> LocalExecutor:
+        if self.workers > 1:
+            one_thread_env()
+            self._pool = ProcessPoolExecutor(
+                self.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
+            )
+        return self
+
+    def __exit__(
+        self,
+        kind: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        pool, self._pool = self._pool, None
+        if pool is None:
+            return
+        if kind is None:
+            pool.shutdown(wait=True)
+            return
+        _terminate(pool)
+
+    def run(
+        self, function: TrialFunction, specs: Iterable[TrialSpec]
+    ) -> Iterator[tuple[TrialSpec, TrialResult]]:
+        if self._pool is None:
+            for spec in specs:
+                yield spec, guarded(function, spec)
+            return
+        pending: dict[Future[TrialResult], TrialSpec] = {
+            self._pool.submit(guarded, function, spec): spec for spec in specs
+        }
+        began = time.perf_counter()
+        try:
+            while pending:
+                done, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for future in done:
+                    spec = pending.pop(future)
+                    try:
+                        result = future.result()
+                    except BrokenProcessPool:
+                        result = error_result(
+                            spec, "a worker process died", time.perf_counter() - began
+                        )
+                    yield spec, result
+        finally:
+            for future in pending:
+                future.cancel()
+
+
+def _terminate(pool: ProcessPoolExecutor) -> None:
+    """Cancel the pool's queued trials and stop its worker processes now (their running
+    trials are abandoned). Python 3.14 has ``terminate_workers``; before it, the processes
+    are only reachable as ``_processes``, which ``shutdown`` clears: taken first."""
+    terminate = getattr(pool, "terminate_workers", None)
+    if terminate is not None:
+        terminate()
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.terminate()
+    for process in processes:
+        process.join(timeout=5)
+
+
+def open_executor(name: str, workers: int = 1, address: str | None = None) -> Executor:
+    """The executor called ``name`` (one of ``EXECUTORS``); ``address`` is the Ray cluster
+    to join (None: start a local Ray instance with ``workers`` CPUs)."""
+    if name == "local":
+        if address is not None:
+            raise ValueError("a Ray address is given but the executor is local")
+        return LocalExecutor(workers)
+    if name == "ray":
+        from evaluation.trials.ray_executor import RayExecutor
+
+        return RayExecutor(workers, address)
+    raise ValueError(f"executor {name!r}: expected one of {', '.join(EXECUTORS)}")

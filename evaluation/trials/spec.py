@@ -1,0 +1,74 @@
+"""What one trial of a batch is asked to do (``TrialSpec``) and the function that does it.
+
+A ``TrialFunction`` takes a ``TrialSpec`` and returns the trial's ``TrialResult``. It must be
+a module-level function (the local executor's worker processes and Ray's workers import it
+by name), deterministic for a given spec apart from ``wall_time_s``, and may raise: the
+batch turns an exception into a failed result (``failure_reason`` ``"error: ..."``).
+
+The module that defines it may also define ``check_spec(spec: TrialSpec) -> None``, which
+the batch calls once in the parent before any trial runs; it raises ``ConfigError`` (one
+line) for a task, controller or override the trial function would refuse, so that a typo is
+one error and exit code 2, not a batch of error trials.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from evaluation.cli import ToolError
+from evaluation.trials.result import TrialResult
+
+CONTROLLERS = ("dipole", "fingervision", "blind", "oracle")
+MAX_SEED = 2**32 - 1
+
+
+class SpecError(ToolError, ValueError):
+    """A batch argument (seeds, controller, override) is malformed; the message is one line."""
+
+
+@dataclass(frozen=True)
+class TrialSpec:
+    """One trial: ``task`` (a task configuration name, e.g. usb_c, or a YAML path),
+    ``controller`` (one of ``CONTROLLERS``), ``seed`` (the scene's seed), ``overrides``
+    (``"KEY=VALUE"`` strings applied in order to the task configuration by dotted path, see
+    ``drivers.config.apply_overrides``) and ``out_dir`` (where the trial writes its own
+    record and charts; None: it writes nothing)."""
+
+    task: str
+    controller: str
+    seed: int
+    overrides: tuple[str, ...] = ()
+    out_dir: Path | None = None
+
+    def __post_init__(self) -> None:
+        if self.controller not in CONTROLLERS:
+            raise SpecError(
+                f"controller {self.controller!r}: expected one of {', '.join(CONTROLLERS)}"
+            )
+        if not 0 <= self.seed <= MAX_SEED:
+            raise SpecError(f"seed {self.seed}: expected a whole number in [0, {MAX_SEED}]")
+        object.__setattr__(self, "overrides", tuple(self.overrides))
+
+
+TrialFunction = Callable[[TrialSpec], TrialResult]
+
+
+def parse_seeds(text: str) -> range:
+    """``'A:B'`` -> the seeds A, A+1, ..., B-1 (B excluded); SpecError otherwise."""
+    match = re.fullmatch(r"\s*(\d+)\s*:\s*(\d+)\s*", text)
+    if not match:
+        raise SpecError(f"seeds {text!r}: expected A:B, whole numbers with A < B, e.g. 0:200")
+    start, stop = int(match.group(1)), int(match.group(2))
+    if stop <= start:
+        raise SpecError(f"seeds {text!r}: expected A < B (B is excluded), e.g. 0:200")
+    if stop - 1 > MAX_SEED:
+        raise SpecError(f"seeds {text!r}: seeds must be at most {MAX_SEED}")
+    return range(start, stop)
+
+
+def format_seeds(seeds: range) -> str:
+    """The ``A:B`` text of a seed range."""
+    return f"{seeds.start}:{seeds.stop}"

@@ -1,0 +1,74 @@
+"""A batch's summary: success rate with its Wilson interval, times, forces, failures, speed.
+
+``summarize`` depends only on the set of results (not on the order they arrived in), so the
+same seeds give the same summary on every executor.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+from scipy.stats import binomtest
+
+from evaluation.trials.executors import is_error
+from evaluation.trials.result import TrialResult
+
+CONFIDENCE = 0.95
+
+
+def wilson_ci(successes: int, n: int, confidence: float = CONFIDENCE) -> tuple[float, float] | None:
+    """The Wilson score interval of a success rate (no continuity correction); None for
+    ``n`` = 0."""
+    if n == 0:
+        return None
+    interval = binomtest(successes, n).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(interval.low), float(interval.high)
+
+
+def _finite_or_none(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
+    """The batch summary of ``results`` (see docs: keys and meanings), with the keyword
+    ``context`` (task, controller, seeds, overrides, executor, workers, ...) merged in first.
+
+    Times are simulated seconds over the successful trials; ``max_true_force_n`` is over
+    every trial; a trial is over force when its ``max_true_force_n`` exceeds its own
+    ``force_limit_n``; ``sim_speed_x_realtime`` is the simulated time over the wall time of
+    the trials that ran to an outcome (error trials have no simulated time).
+    """
+    ordered = sorted(results, key=lambda r: (r.controller, r.seed))
+    n = len(ordered)
+    successes = sum(r.success for r in ordered)
+    times = [r.time_to_insert_s for r in ordered if r.success and r.time_to_insert_s is not None]
+    failed = [r for r in ordered if not r.success]
+    ran = [r for r in ordered if not is_error(r)]
+    wall_s = sum(r.wall_time_s for r in ran)
+    limits = sorted({r.force_limit_n for r in ran if math.isfinite(r.force_limit_n)})
+    summary = dict(context)
+    summary.update(
+        n=n,
+        successes=successes,
+        success_rate=successes / n if n else None,
+        success_ci95=wilson_ci(successes, n),
+        median_time_s=float(np.median(times)) if times else None,
+        p90_time_s=float(np.percentile(times, 90)) if times else None,
+        max_true_force_n=max((r.max_true_force_n for r in ordered), default=None),
+        force_limit_n=limits[0] if len(limits) == 1 else limits or None,
+        over_force_trials=sum(r.max_true_force_n > r.force_limit_n for r in ordered),
+        failures=dict(sorted(Counter(r.failure_reason or "unknown" for r in failed).items())),
+        failed_seeds=sorted({r.seed for r in failed}),
+        errors=sum(is_error(r) for r in ordered),
+        sim_duration_s=sum(r.duration_s for r in ran),
+        wall_time_s=wall_s,
+        sim_speed_x_realtime=_finite_or_none(sum(r.duration_s for r in ran) / wall_s)
+        if wall_s > 0
+        else None,
+    )
+    return summary
+
