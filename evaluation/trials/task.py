@@ -20,6 +20,7 @@ from drivers.config import (
     apply_overrides,
     build,
     load_yaml,
+    number,
     resolve_config_path,
 )
 from drivers.sim.scenes.insertion import InsertionSceneConfig
@@ -48,10 +49,13 @@ class DeviceFiles(Config):
 
 @dataclass(frozen=True)
 class TaskConfig(Config):
-    """A whole task file (see configs/tasks/usb_c.yaml's header)."""
+    """A whole task file (see configs/tasks/usb_c.yaml's header). ``force_limit_n``: the
+    largest true force (N) the compliant wrist may pass to the plug; a trial over it counts
+    against the controller (judged on the simulator's truth, never seen by the controller)."""
 
     task: str
     estimator: str | None
+    force_limit_n: float = number(0.1, 1000.0)
     devices: DeviceFiles
     plug: PlugGeometry
     hole: HolePose

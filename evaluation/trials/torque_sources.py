@@ -23,9 +23,6 @@ import numpy as np
 
 from controller.tactile import TactileEstimator, WrenchEstimate
 
-CONTROLLERS = ("dipole", "fingervision", "oracle", "blind")
-"""The controllers a trial can run (``blind``: no tactile feedback; evaluation/trials/blind.py)."""
-
 # Nominal slopes of the GelSight Mini's default estimator, N*m (or N) per raw unit
 # (docs/EVALUATION.md, section 1: tilt about 1.5-2.1, tau_z about 0.02-0.04).
 ORACLE_TILT_NM_PER_RAW = 1.8

@@ -1,0 +1,240 @@
+"""One insertion trial: the task's machine, control loop and estimator on the simulated
+scene (or on the real devices), with the ground truth recorded beside it.
+
+``run_trial(spec)`` is the batch's trial function (evaluation/trials/spec.py);
+``run(...)`` is what ``scripts/run_trial.py`` calls. The controller sees only what the
+devices give (rendered tactile frames, the arm's and the gripper's status); the scene's
+truth goes to the record and to the outcome, and, for the ``oracle`` controller only, in
+place of the estimate (evaluation/trials/torque_sources.py).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+from contextlib import ExitStack
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from controller.insertion import InsertionMachine, Phase
+from controller.loop import ControlLoop, Devices, LoopResult
+from controller.tactile import estimator_for_sensor
+from drivers.clock import MonotonicClock
+from drivers.config import ConfigError
+from drivers.registry import load_device, load_device_config
+from drivers.sim.scenes.insertion import SimDevices, build_insertion_sim
+from evaluation.trials.record import TrialRecorder
+from evaluation.trials.result import TrialResult
+from evaluation.trials.spec import TrialSpec
+from evaluation.trials.task import Task, TaskConfig, load_task
+from evaluation.trials.torque_sources import BaselineTorques, TrueWrench
+
+DEVICE_KINDS = ("arm", "gripper", "tactile", "gamepad")
+LOOP_MARGIN_S = 5.0  # the loop's own cap beyond the machine's total timeout, s
+
+
+@dataclass(frozen=True)
+class TrialOutcome:
+    """A finished trial: its ``result``, the loop's, the machine's transitions and, in
+    simulation, the ground truth arrays (None on hardware)."""
+
+    result: TrialResult
+    loop: LoopResult
+    transitions: tuple
+    truth: dict[str, np.ndarray] | None
+
+
+def check_spec(spec: TrialSpec) -> None:
+    """ConfigError (one line) if ``spec``'s task or overrides are wrong (the batch's check)."""
+    task = load_task(spec.task, spec.overrides)
+    if spec.controller == "blind":
+        raise ConfigError("controller 'blind': not available yet (see docs/EVALUATION.md)")
+    del task
+
+
+def run_trial(spec: TrialSpec) -> TrialResult:
+    """The batch's trial function: one simulated trial, as fast as possible."""
+    task = load_task(spec.task, spec.overrides)
+    return run(task, spec.controller, spec.seed, out_dir=spec.out_dir).result
+
+
+def _sim_device_configs(config: TaskConfig) -> SimDevices:
+    configs = {
+        kind: load_device_config(path, backend="sim", kind=kind).config
+        for kind in DEVICE_KINDS
+        if (path := config.devices.path(kind)) is not None
+    }
+    return SimDevices(**configs)
+
+
+def run(
+    task: Task,
+    controller: str,
+    seed: int,
+    *,
+    backend: str = "sim",
+    realtime: bool = False,
+    out_dir: Path | None = None,
+) -> TrialOutcome:
+    """Run one trial of ``task`` with ``controller`` on ``backend`` (see the module doc)."""
+    if backend == "real":
+        if controller == "oracle":
+            raise ConfigError("controller 'oracle' reads the simulator's truth: sim only")
+        return _run_real(task, controller, seed, out_dir)
+    config = task.config
+    devices = _sim_device_configs(config)
+    sim = build_insertion_sim(config.scene, config.plug, config.hole, devices, seed, realtime)
+    estimator = estimator_for_sensor(devices.tactile.model, config.estimator)
+    source = _torque_source(controller, estimator, sim)
+    machine = InsertionMachine(config.machine, config.plug, config.hole)
+    recorder = TrialRecorder(out_dir, machine) if out_dir is not None else None
+    began = time.perf_counter()
+    try:
+        loop_result = _run_loop(task, machine, source, sim, sim.clock, recorder)
+    finally:
+        if recorder is not None:
+            recorder.close()
+    wall_s = time.perf_counter() - began
+    sim.sync()
+    truth = sim.truth.arrays()
+    result = _result(task, controller, seed, machine, loop_result, truth, wall_s)
+    if recorder is not None:
+        hole = dataclasses.asdict(sim.truth.hole)
+        recorder.write_truth(truth, hole)
+        recorder.write_summary(_summary(task, controller, seed, result, loop_result, machine))
+    return TrialOutcome(result, loop_result, machine.transitions, truth)
+
+
+def _torque_source(controller: str, estimator, sim) -> Any:
+    if controller == "dipole":
+        return estimator
+    if controller == "fingervision":
+        return BaselineTorques(estimator)
+    if controller == "oracle":
+        def newest_true_wrench() -> np.ndarray:
+            sim.sync()
+            rows = sim.truth.arrays()["gel_wrench_s"]
+            return rows[-1] if len(rows) else np.zeros(6)
+
+        return TrueWrench(estimator, newest_true_wrench)
+    raise ConfigError(f"controller {controller!r}: not available yet")
+
+
+def _run_loop(task: Task, machine, source, sim, clock, recorder) -> LoopResult:
+    config = task.config
+    with sim.arm, sim.gripper, sim.tactile:
+        sim.gripper.activate()
+        devices = Devices(sim.arm, sim.gripper, sim.tactile, None)
+        loop = ControlLoop(
+            machine,
+            devices,
+            source,
+            clock,
+            config.loop,
+            config.limits,
+            config.teleop,
+            observer=recorder,
+        )
+        return loop.run(max_duration_s=config.machine.timeouts.total_s + LOOP_MARGIN_S)
+
+
+def _result(task, controller, seed, machine, loop_result, truth, wall_s) -> TrialResult:
+    config = task.config
+    depth = truth["depth_m"]
+    t = truth["t_s"]
+    required = config.machine.insert.depth_m
+    reached = np.flatnonzero(depth >= required)
+    time_to_insert = float(t[reached[0]]) if reached.size else None
+    done = machine.phase is Phase.DONE
+    success = done and reached.size > 0
+    failure = None
+    if not success:
+        failed = [tr for tr in machine.transitions if tr.target is Phase.FAILED]
+        if failed:
+            failure = failed[-1].reason
+        elif done:
+            failure = "done without reaching the depth"
+        else:
+            failure = f"loop ended: {loop_result.reason}"
+    wrist = truth["wrist_wrench_t"][:, :3]
+    max_force = float(np.linalg.norm(wrist, axis=1).max()) if len(wrist) else 0.0
+    return TrialResult(
+        task=config.task,
+        controller=controller,
+        seed=seed,
+        success=success,
+        failure_reason=failure,
+        time_to_insert_s=time_to_insert if success else None,
+        duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
+        max_true_force_n=max_force,
+        force_limit_n=config.force_limit_n,
+        wall_time_s=wall_s,
+    )
+
+
+def _summary(task, controller, seed, result, loop_result, machine) -> dict[str, Any]:
+    return {
+        "task": task.config.task,
+        "task_file": str(task.path),
+        "overrides": list(task.overrides),
+        "controller": controller,
+        "seed": seed,
+        "result": result.as_row(),
+        "loop": {"reason": loop_result.reason, "message": loop_result.message,
+                 **dataclasses.asdict(loop_result.stats)},
+        "transitions": [
+            {"t_s": tr.t_s, "from": tr.source.value, "to": tr.target.value, "reason": tr.reason}
+            for tr in machine.transitions
+        ],
+        "config": task.raw,
+    }
+
+
+def _run_real(task: Task, controller: str, seed: int, out_dir: Path | None) -> TrialOutcome:
+    """The same machine and loop on the real devices (real time; no truth: the outcome is
+    the machine's). ``seed`` is recorded only."""
+    config = task.config
+    clock = MonotonicClock()
+    with ExitStack() as stack:
+        built = {
+            kind: stack.enter_context(load_device(path, backend="real", kind=kind, clock=clock))
+            for kind in DEVICE_KINDS
+            if (path := config.devices.path(kind)) is not None
+        }
+        tactile_model = load_device_config(config.devices.path("tactile"), backend="real").config
+        estimator = estimator_for_sensor(tactile_model.model, config.estimator)
+        source = BaselineTorques(estimator) if controller == "fingervision" else estimator
+        machine = InsertionMachine(config.machine, config.plug, config.hole)
+        recorder = TrialRecorder(out_dir, machine) if out_dir is not None else None
+        if recorder is not None:
+            stack.callback(recorder.close)
+        built["gripper"].activate()
+        devices = Devices(built["arm"], built["gripper"], built["tactile"], built.get("gamepad"))
+        began = time.perf_counter()
+        loop = ControlLoop(
+            machine, devices, source, clock, config.loop, config.limits, config.teleop,
+            observer=recorder,
+        )
+        loop_result = loop.run(max_duration_s=config.machine.timeouts.total_s + LOOP_MARGIN_S)
+        wall_s = time.perf_counter() - began
+    success = machine.phase is Phase.DONE
+    failed = [tr.reason for tr in machine.transitions if tr.target is Phase.FAILED]
+    result = TrialResult(
+        task=config.task,
+        controller=controller,
+        seed=seed,
+        success=success,
+        failure_reason=None if success else (failed[-1] if failed else loop_result.reason),
+        time_to_insert_s=None,
+        duration_s=wall_s,
+        max_true_force_n=float("nan"),
+        force_limit_n=config.force_limit_n,
+        wall_time_s=wall_s,
+    )
+    if recorder is not None:
+        recorder.write_summary(_summary(task, controller, seed, result, loop_result, machine))
+    return TrialOutcome(result, loop_result, machine.transitions, None)
+
