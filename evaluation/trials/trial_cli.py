@@ -1,0 +1,110 @@
+"""``scripts/run_trial.py``: one insertion trial, simulated (default) or on the robot.
+
+    run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
+                 [--controller dipole|fingervision|oracle] [--realtime] [--set KEY=VALUE ...]
+
+It prints the phase timeline and the outcome, and writes into DIR the trial's record
+(evaluation/trials/record.py: ticks.jsonl, transitions.jsonl, truth.npz, trial.json) and
+``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
+path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
+is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
+possible. Exit codes as every tool's (evaluation/cli.py); a trial that fails still exits 0
+(the outcome is the result), a run stopped by SIGINT/SIGTERM exits 130/143 after its safe
+stop, with the record kept.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
+from evaluation.outputs import check_output_folder
+from evaluation.trials.batch_cli import _override
+from evaluation.trials.runner import TrialOutcome, run
+from evaluation.trials.spec import MAX_SEED
+from evaluation.trials.task import load_task
+from evaluation.trials.trial_chart import trial_chart
+
+TRIAL_CONTROLLERS = ("dipole", "fingervision", "oracle")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="run_trial", description=__doc__.splitlines()[0])
+    parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
+    parser.add_argument("--backend", choices=("sim", "real"), default="sim")
+    parser.add_argument("--seed", type=integer(0, MAX_SEED), default=0)
+    parser.add_argument("--controller", choices=TRIAL_CONTROLLERS, default="dipole")
+    parser.add_argument("--realtime", action="store_true", help="pace to the wall clock")
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        metavar="KEY=VALUE",
+        type=_override,
+        action="append",
+        default=[],
+        help="override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)",
+    )
+    parser.add_argument("--out", type=Path, required=True, help="output folder (new or empty)")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.backend == "real" and args.controller == "oracle":
+        parser.error("argument --controller: 'oracle' reads the simulator's truth: sim only")
+    return run_tool("run_trial", lambda: _run(args))
+
+
+def _run(args: argparse.Namespace) -> int:
+    task = load_task(args.task, args.overrides)
+    check_output_folder(args.out, [task.path], option="--out")
+    if args.out.exists() and any(args.out.iterdir()):
+        raise ToolError(f"--out '{args.out}': the folder is not empty")
+    outcome = run(
+        task,
+        args.controller,
+        args.seed,
+        backend=args.backend,
+        realtime=args.realtime,
+        out_dir=args.out,
+    )
+    print(timeline(outcome))
+    if outcome.truth is not None:
+        result = outcome.result
+        title = f"{result.task} seed {result.seed} ({result.controller}): " + (
+            "inserted" if result.success else f"failed: {result.failure_reason}"
+        )
+        trial_chart(args.out, args.out / "summary.png", title)
+    print(f"run_trial: wrote {args.out}")
+    if outcome.loop.reason == "signal":
+        return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
+    return 0
+
+
+def timeline(outcome: TrialOutcome) -> str:
+    """The phase timeline and the outcome, for the terminal."""
+    result = outcome.result
+    lines = [f"{'t (s)':>8}  phase change (reason)"]
+    for tr in outcome.transitions:
+        lines.append(f"{tr.t_s:8.2f}  {tr.source.value} -> {tr.target.value} ({tr.reason})")
+    verdict = "INSERTED" if result.success else f"FAILED ({result.failure_reason})"
+    lines.append(
+        f"outcome: {verdict} in {result.duration_s:.2f} s"
+        + (f", depth reached at {result.time_to_insert_s:.2f} s" if result.success else "")
+        + (
+            f"; max true wrist force {result.max_true_force_n:.2f} N "
+            f"(limit {result.force_limit_n:g} N)"
+            if result.max_true_force_n == result.max_true_force_n
+            else ""
+        )
+        + f"; {result.duration_s / max(result.wall_time_s, 1e-9):.1f}x real time"
+    )
+    loop = outcome.loop.stats
+    lines.append(
+        f"loop: {loop.ticks} ticks, {loop.overruns} overruns, period p50/p99/max "
+        f"{loop.period_p50_s * 1e3:.2f}/{loop.period_p99_s * 1e3:.2f}/"
+        f"{loop.period_max_s * 1e3:.2f} ms"
+    )
+    return "\n".join(lines)
