@@ -19,7 +19,8 @@ from typing import Any
 
 import numpy as np
 
-from controller.insertion import InsertionMachine, Phase
+from controller.insertion import InsertionMachine, Machine, Phase
+from controller.insertion.blind import BlindMachine
 from controller.loop import ControlLoop, Devices, LoopResult
 from controller.tactile import estimator_for_sensor
 from drivers.clock import MonotonicClock
@@ -49,10 +50,7 @@ class TrialOutcome:
 
 def check_spec(spec: TrialSpec) -> None:
     """ConfigError (one line) if ``spec``'s task or overrides are wrong (the batch's check)."""
-    task = load_task(spec.task, spec.overrides)
-    if spec.controller == "blind":
-        raise ConfigError("controller 'blind': not available yet (see docs/EVALUATION.md)")
-    del task
+    load_task(spec.task, spec.overrides)
 
 
 def run_trial(spec: TrialSpec) -> TrialResult:
@@ -89,7 +87,7 @@ def run(
     sim = build_insertion_sim(config.scene, config.plug, config.hole, devices, seed, realtime)
     estimator = estimator_for_sensor(devices.tactile.model, config.estimator)
     source = _torque_source(controller, estimator, sim)
-    machine = InsertionMachine(config.machine, config.plug, config.hole)
+    machine = _machine(config, controller)
     recorder = TrialRecorder(out_dir, machine) if out_dir is not None else None
     began = time.perf_counter()
     try:
@@ -108,8 +106,15 @@ def run(
     return TrialOutcome(result, loop_result, machine.transitions, truth)
 
 
+def _machine(config: TaskConfig, controller: str) -> Machine:
+    """The tactile machine, or the blind baseline."""
+    if controller == "blind":
+        return BlindMachine(config.blind, config.plug, config.hole)
+    return InsertionMachine(config.machine, config.plug, config.hole)
+
+
 def _torque_source(controller: str, estimator, sim) -> Any:
-    if controller == "dipole":
+    if controller in ("dipole", "blind"):  # blind: estimated, recorded, never used
         return estimator
     if controller == "fingervision":
         return BaselineTorques(estimator)
@@ -120,7 +125,7 @@ def _torque_source(controller: str, estimator, sim) -> Any:
             return rows[-1] if len(rows) else np.zeros(6)
 
         return TrueWrench(estimator, newest_true_wrench)
-    raise ConfigError(f"controller {controller!r}: not available yet")
+    raise ConfigError(f"controller {controller!r}: expected dipole, fingervision, oracle or blind")
 
 
 def _run_loop(task: Task, machine, source, sim, clock, recorder) -> LoopResult:
@@ -207,7 +212,7 @@ def _run_real(task: Task, controller: str, seed: int, out_dir: Path | None) -> T
         tactile_model = load_device_config(config.devices.path("tactile"), backend="real").config
         estimator = estimator_for_sensor(tactile_model.model, config.estimator)
         source = BaselineTorques(estimator) if controller == "fingervision" else estimator
-        machine = InsertionMachine(config.machine, config.plug, config.hole)
+        machine = _machine(config, controller)
         recorder = TrialRecorder(out_dir, machine) if out_dir is not None else None
         if recorder is not None:
             stack.callback(recorder.close)

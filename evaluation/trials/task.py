@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import Any
 
 from controller.insertion import MachineConfig
+from controller.insertion.blind import BlindConfig
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
@@ -61,6 +62,7 @@ class TaskConfig(Config):
     hole: HolePose
     scene: InsertionSceneConfig
     machine: MachineConfig
+    blind: BlindConfig
     loop: LoopConfig
     limits: LimitsConfig
     teleop: TeleopConfig

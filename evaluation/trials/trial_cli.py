@@ -1,7 +1,7 @@
 """``scripts/run_trial.py``: one insertion trial, simulated (default) or on the robot.
 
     run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
-                 [--controller dipole|fingervision|oracle] [--realtime] [--set KEY=VALUE ...]
+                 [--controller dipole|fingervision|oracle|blind] [--realtime] [--set KEY=VALUE ...]
 
 It prints the phase timeline and the outcome, and writes into DIR the trial's record
 (evaluation/trials/record.py: ticks.jsonl, transitions.jsonl, truth.npz, trial.json) and
@@ -26,7 +26,7 @@ from evaluation.trials.spec import MAX_SEED
 from evaluation.trials.task import load_task
 from evaluation.trials.trial_chart import trial_chart
 
-TRIAL_CONTROLLERS = ("dipole", "fingervision", "oracle")
+TRIAL_CONTROLLERS = ("dipole", "fingervision", "oracle", "blind")
 
 
 def build_parser() -> argparse.ArgumentParser:
