@@ -15,8 +15,8 @@ stores the gel as it looks with the gripper open. Each reference set afterwards 
 gives the grasp's own field (the reference against the open gel), from which the
 ``grasp_centroid`` dipole origin takes the contact's support and centre
 (dipole.grasp_support); without
-an open gel, or with no contact between it and the reference (mean displacement at most
-``contact_threshold_mm``), that origin falls back to ``centroid_midpoint``. In a grasp::
+an open gel, or with no contact between it and the reference (no grid cell moved by more
+than ``contact_threshold_mm``), that origin falls back to ``centroid_midpoint``. In a grasp::
 
     est.capture_open(n)   # gripper open, gel free: the next n pushed frames
     ...                   # close and settle (pushes return zeroing estimates)
@@ -234,7 +234,7 @@ class TactileEstimator:
         grid_flow.set_reference(reference)
         self._allocate(height, width, rows, cols)
         support = self._grasp_support(reference)
-        self._dipole.set_grasp_support(support)
+        self._grasp_dipole.set_grasp_support(support)
         self._contact_centre = None if support is None else support.centre_mm
         self._grid_flow = grid_flow
         self._rezero_policy.reset()
@@ -242,7 +242,7 @@ class TactileEstimator:
 
     def _grasp_support(self, reference: np.ndarray) -> GraspSupport | None:
         """The contact's support from the grasp's field (``reference`` against the open gel)
-        on the dipole's grid, or None (no open gel, no contact, no ``grasp_centroid``)."""
+        on the field's grid, or None (no open gel, no contact, no ``grasp_centroid``)."""
         if self._open_image is None or self.config.dipole_origin != "grasp_centroid":
             return None
         rows, cols = self._u.shape
@@ -253,9 +253,9 @@ class TactileEstimator:
             flow.measure(reference, self._grid_px)
         self._update_field()
         np.hypot(self._u, self._v, out=self._magnitude)
-        if float(self._magnitude.mean()) > self.config.contact_threshold_mm:
-            div = self._tilt_divergence(self._nhhd.decompose(self._u, self._v))
-            support = grasp_support(div, self._dipole.x_axis_mm, self._dipole.y_axis_mm)
+        if float(self._magnitude.max()) > self.config.contact_threshold_mm:
+            div = self._field_divergence(self._nhhd.decompose(self._u, self._v))
+            support = grasp_support(div, self.x_mm, self.y_mm)
         else:
             support = None
         self._grid_px.fill(0.0)
@@ -283,7 +283,10 @@ class TactileEstimator:
         self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
 
     def _allocate_dipole(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
-        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells)."""
+        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells);
+        with ``grasp_centroid`` that is the fallback's, the grasp's dipole is on the field's
+        grid (its support set when a reference is)."""
+        self._grasp_dipole = DipoleMomentCalculator(x_mm, y_mm, "grasp_centroid")
         grid = self.config.dipole_grid
         rows, cols = y_mm.size, x_mm.size
         if grid is None:
@@ -306,9 +309,10 @@ class TactileEstimator:
     def _dipole_calculator(self, x_mm: np.ndarray, y_mm: np.ndarray) -> DipoleMomentCalculator:
         """The dipole on the grid ``x_mm`` x ``y_mm`` with the configuration's origin rule."""
         config = self.config
-        return DipoleMomentCalculator(
-            x_mm, y_mm, config.dipole_origin, config.dipole_full_midpoint_ratio
-        )
+        origin = config.dipole_origin
+        if origin == "grasp_centroid":  # its fallback; the grasp's dipole is _grasp_dipole
+            origin = "centroid_midpoint"
+        return DipoleMomentCalculator(x_mm, y_mm, origin, config.dipole_full_midpoint_ratio)
 
     def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the
@@ -317,17 +321,21 @@ class TactileEstimator:
         block = self._dipole_block
         raw = self.config.divergence_of == "raw"
         if block == (1, 1):
-            if raw:
-                return decomposition.div
-            dx, dy = self._nhhd.dx, self._nhhd.dy
-            d_u, d_v = decomposition.d_u, decomposition.d_v
-            return divergence(d_u, d_v, dx, dy, self._div, self._work)
+            return self._field_divergence(decomposition)
         u = block_mean(self._u, block, self._pooled[0])
         v = block_mean(self._v, block, self._pooled[1])
         if not raw:
             u, v = self._coarse_curl_free(u, v)
         dx, dy = block[1] * self._nhhd.dx, block[0] * self._nhhd.dy
         return divergence(u, v, dx, dy, self._coarse_div, self._coarse_work)
+
+    def _field_divergence(self, decomposition: NHHDResult) -> np.ndarray:
+        """The divergence of the raw field or of its curl-free part on the field's grid."""
+        if self.config.divergence_of == "raw":
+            return decomposition.div
+        dx, dy = self._nhhd.dx, self._nhhd.dy
+        d_u, d_v = decomposition.d_u, decomposition.d_v
+        return divergence(d_u, d_v, dx, dy, self._div, self._work)
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -438,7 +446,10 @@ class TactileEstimator:
 
     def _estimate(self, t_s: float) -> WrenchEstimate:
         decomposition = self._nhhd.decompose(self._u, self._v)
-        dipole = self._dipole(self._tilt_divergence(decomposition))
+        if self._grasp_dipole.support is not None:
+            dipole = self._grasp_dipole(self._field_divergence(decomposition))
+        else:
+            dipole = self._dipole(self._tilt_divergence(decomposition))
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)
