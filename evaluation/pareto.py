@@ -66,7 +66,7 @@ def accuracy(folders: tuple[Path, ...], label: str, config: EstimatorConfig) -> 
         )
         frames = (f for f in dataset.frames() if tilt[f[0]])
         reference = reference_frames(dataset, dataset.meta.reference)
-        series = estimate_frames(frames, reference, _estimator(config, dataset))
+        series = estimate_frames(frames, reference, _estimator(config, dataset), _open(dataset))
         fits = fit_dataset(dataset, series, PARETO_AXES)
         by_dataset[folder.name] = float(np.mean([fits[(a, "ours")].rmse for a in PARETO_AXES]))
         worst = min([worst, *(fits[(a, "ours")].r2 for a in PARETO_AXES)])
@@ -83,8 +83,14 @@ def latency(folder: Path, config: EstimatorConfig, frames: int) -> tuple[float, 
     chosen = (f for f in dataset.frames() if f[1] >= start)
     sample = [next(chosen) for _ in range(min(frames, int((dataset.frame_t_s >= start).sum())))]
     reference = reference_frames(dataset, dataset.meta.reference)
-    series = estimate_frames(sample, reference, _estimator(config, dataset))
+    series = estimate_frames(sample, reference, _estimator(config, dataset), _open(dataset))
     return float(np.median(series.latency_ms)), float(np.percentile(series.latency_ms, 90))
+
+
+def _open(dataset: Dataset) -> list[np.ndarray] | None:
+    """The dataset's open-gel frames (before the grasp), or None if it has none."""
+    interval = dataset.meta.open
+    return None if interval is None else reference_frames(dataset, interval)
 
 
 def _estimator(config: EstimatorConfig, dataset: Dataset) -> TactileEstimator:

@@ -379,14 +379,19 @@ def run_level(
         frames.append((index_frame, float(t), image))
     interval = program.reference if setting.zero_on == "reference" else (0.0, jig.open_s)
     reference = [img for _, t, img in frames if interval[0] <= t < interval[1]]
+    # Zeroed on the grasp, the estimator also sees the open gel (the frames before it).
+    open_gel = None
+    if setting.zero_on == "reference":
+        open_gel = [img for _, t, img in frames if t < jig.open_s] or None
     calibration = calibrations[f"{setting.sensor}-{setting.shape}"]
     tactile = estimator_for_sensor(setting.sensor, estimator)
-    series = estimate_frames(frames, reference, tactile)
+    series = estimate_frames(frames, reference, tactile, open_gel)
     variants = {
         label: estimate_frames(
             frames,
             reference,
             TactileEstimator(dataclasses.replace(tactile.config, **change), tactile.profile),
+            open_gel,
         )
         for label, change in METHOD_CONFIG.items()
     }

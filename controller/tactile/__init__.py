@@ -6,8 +6,14 @@ slip, calibration). Build an estimator for a sensor and push frames::
     from controller.tactile import estimator_for_sensor
 
     est = estimator_for_sensor("gelsight_mini")  # the profile's own configuration
+    est.capture_open(4)  # gripper open, gel free: the next 4 pushed frames (optional)
     est.rezero(5)  # after the grasp: the next 5 frames become the reference
     estimate = est.push(frame_bgr, t_s)  # -> WrenchEstimate
+
+With the open gel seen first, ``grasp_centroid`` configurations (``grid_lk``) take the tilt
+about the contact's centre, which a swinging grip pressure does not disturb
+(``est.contact_centre_mm``); without it they use the centroid-midpoint rule. Offline:
+``est.set_open_reference(frames)`` and ``est.set_reference(frames)``.
 """
 
 from controller.tactile.calibration import Calibration

@@ -10,7 +10,14 @@ negative regions, C+ and C- their div-weighted centroids, and D = P - Q the net 
    (weak / strong mass ratio rho = min(P, Q) / max(P, Q) >= ``full_midpoint_ratio``) and
    falls smoothly to 0 (the gel centre) as the weaker region vanishes:
    w = smoothstep(rho / full_midpoint_ratio) = 3 t^2 - 2 t^3; with ``sensor_centre``, o = 0;
-2. p = (1/N) sum_i (x_i - o) div_i = (sum_i x_i div_i - o D) / N, in mm;
+   with ``grasp_centroid``, o = c, the centre of the contact's support w measured once per
+   grasp (``grasp_support``, set by ``set_grasp_support``), and until it is set (no
+   open-gel frames, or no contact in the grasp) the ``centroid_midpoint`` rule;
+2. p = (1/N) sum_i (x_i - o) div_i = (sum_i x_i div_i - o D) / N, in mm; with the grasp's
+   support, p = (1/N) sum_i w_i (x_i - c) div_i: on a contact whose divergence is
+   a + b (x - c) (a press a, a tilt b), the press drops out exactly, since c is w's centroid,
+   and the noise of cells off the contact does not enter; p is linear in div, so
+   |delta p| <= (2 R / N) sum_i |delta div_i| per axis;
 3. tilt torque tau = [c_x p_y, -c_y p_x]; with c = 1 this is the raw torque in mm.
 
 Why (docs/ARCHITECTURE.md, "The dipole under a net press"): sum_i (x_i - o) div_i is the
@@ -44,11 +51,17 @@ import numpy as np
 
 from controller.tactile.field import require_finite
 
-DipoleOrigin = Literal["centroid_midpoint", "sensor_centre"]
+DipoleOrigin = Literal["centroid_midpoint", "sensor_centre", "grasp_centroid"]
+DIPOLE_ORIGINS = ("centroid_midpoint", "sensor_centre", "grasp_centroid")
 
 # The weak / strong mass ratio from which on the paper's midpoint is used unchanged (the
 # estimator configurations' ``dipole_full_midpoint_ratio``; docs/ARCHITECTURE.md says why).
 FULL_MIDPOINT_RATIO = 0.25
+# The grasp's support (``grasp_support``): a cell whose grasp divergence (of the press's own
+# sign, relative to its largest value) is at most SUPPORT_LOW weighs 0, from SUPPORT_HIGH on
+# 1, smoothly between (chosen on the real-gel check, seeds 0 and 1; docs/REALGEL_CHECK.md).
+SUPPORT_LOW = 0.2
+SUPPORT_HIGH = 0.7
 
 
 @dataclass(frozen=True)
@@ -57,8 +70,8 @@ class DipoleMoment:
 
     ``midpoint_weight``: the share w of the centroid midpoint in that origin (1: the paper's
     midpoint; 0: the gel centre, when one sign of divergence is absent or with the
-    ``sensor_centre`` origin). ``degenerate``: the divergence was zero everywhere (p is then
-    zero)."""
+    ``sensor_centre`` origin, or the grasp's contact centre with ``grasp_centroid``).
+    ``degenerate``: the divergence was zero everywhere (p is then zero)."""
 
     p_x: float
     p_y: float
@@ -82,6 +95,38 @@ def midpoint_weight(ratio: float, full_ratio: float) -> float:
     return t * t * (3.0 - 2.0 * t)
 
 
+@dataclass(frozen=True)
+class GraspSupport:
+    """Where the grasp touches, from its closing press: ``weights`` (rows, cols) in [0, 1] per
+    grid cell and their centroid ``centre_mm`` (x, y), mm in frame S (``grasp_support``)."""
+
+    weights: np.ndarray
+    centre_mm: tuple[float, float]
+
+
+def grasp_support(div: np.ndarray, x_mm: np.ndarray, y_mm: np.ndarray) -> GraspSupport | None:
+    """The contact's support and centre from the divergence ``div`` (rows, cols) of the
+    grasp's own field (the grasped gel against the open gel) on the grid ``x_mm`` (cols,) x
+    ``y_mm`` (rows,); None if that divergence is zero everywhere.
+
+    The closing press is one-signed and carries no tilt: its divergence is about uniform over
+    the contact and falls to zero across the contact's edges, smeared over a cell or two.
+    With d_i the divergence of the press's sign (the sign of the net divergence), relative to
+    its largest value, w_i = smoothstep((d_i - SUPPORT_LOW) / (SUPPORT_HIGH - SUPPORT_LOW)):
+    0 outside and on the outer edge, 1 in the contact's interior. The centre is
+    sum w_i x_i / sum w_i (docs/ARCHITECTURE.md, "Under pushing")."""
+    require_finite("grasp divergence", div)
+    signed = div if float(div.sum()) >= 0.0 else -div
+    peak = float(signed.max())
+    if peak <= 0.0:
+        return None
+    t = np.clip((signed / peak - SUPPORT_LOW) / (SUPPORT_HIGH - SUPPORT_LOW), 0.0, 1.0)
+    weights = t * t * (3.0 - 2.0 * t)
+    total = float(weights.sum())
+    centre = float(weights.sum(axis=0) @ x_mm) / total, float(weights.sum(axis=1) @ y_mm) / total
+    return GraspSupport(weights, centre)
+
+
 class DipoleMomentCalculator:
     """Computes the dipole moment on a fixed grid without allocating per call.
 
@@ -96,19 +141,40 @@ class DipoleMomentCalculator:
         origin: DipoleOrigin = "centroid_midpoint",
         full_midpoint_ratio: float = FULL_MIDPOINT_RATIO,
     ) -> None:
-        if origin not in ("centroid_midpoint", "sensor_centre"):
+        if origin not in DIPOLE_ORIGINS:
             raise ValueError(
-                f"dipole origin must be 'centroid_midpoint' or 'sensor_centre', got {origin!r}"
+                f"dipole origin must be one of {', '.join(DIPOLE_ORIGINS)}, got {origin!r}"
             )
         if not 0.0 < full_midpoint_ratio <= 1.0:
             raise ValueError(f"full_midpoint_ratio must be in (0, 1], got {full_midpoint_ratio!r}")
         self.origin = origin
         self.full_midpoint_ratio = full_midpoint_ratio
+        self.x_axis_mm = np.asarray(x_mm, float)
+        self.y_axis_mm = np.asarray(y_mm, float)
         grid_x, grid_y = np.meshgrid(x_mm, y_mm)
         self._x = grid_x.ravel()
         self._y = grid_y.ravel()
         self._positive = np.empty_like(self._x)
         self._negative = np.empty_like(self._x)
+        self.support: GraspSupport | None = None
+        self._lever_x = np.empty_like(self._x)
+        self._lever_y = np.empty_like(self._x)
+
+    def set_grasp_support(self, support: GraspSupport | None) -> None:
+        """The contact's support for the ``grasp_centroid`` rule (on this grid), or None to
+        fall back to ``centroid_midpoint``. Ignored by the other rules."""
+        if support is not None:
+            weights = np.asarray(support.weights, float).reshape(-1)
+            if weights.shape != self._x.shape:
+                raise ValueError(
+                    f"grasp support must have {self._x.size} grid values, got "
+                    f"{np.shape(support.weights)}"
+                )
+            require_finite("grasp support", weights)
+            c_x, c_y = support.centre_mm
+            np.multiply(weights, self._x - c_x, out=self._lever_x)
+            np.multiply(weights, self._y - c_y, out=self._lever_y)
+        self.support = support
 
     def __call__(self, div: np.ndarray) -> DipoleMoment:
         """Dipole moment of ``div`` (rows, cols), dimensionless divergence of the field."""
@@ -127,8 +193,13 @@ class DipoleMomentCalculator:
         moment_y = float(self._y @ flat)
         degenerate = mass_pos + mass_neg == 0.0
 
+        support = self.support if self.origin == "grasp_centroid" else None
+        if support is not None:
+            p_x = float(self._lever_x @ flat) / n
+            p_y = float(self._lever_y @ flat) / n
+            return DipoleMoment(p_x, p_y, *support.centre_mm, 0.0, degenerate)
         weight = 0.0
-        if self.origin == "centroid_midpoint" and mass_pos > 0.0 and mass_neg > 0.0:
+        if self.origin != "sensor_centre" and mass_pos > 0.0 and mass_neg > 0.0:
             ratio = min(mass_pos, mass_neg) / max(mass_pos, mass_neg)
             weight = midpoint_weight(ratio, self.full_midpoint_ratio)
         if weight == 0.0:

@@ -8,7 +8,21 @@ calibration.
 Zeroing: the reference is the mean of ``reference_frames`` frames, captured from the frames
 pushed after ``rezero()`` (or on the first frames if no reference was ever set), or set
 directly with ``set_reference(frames)``. While it is being captured, ``push`` returns zero
-estimates flagged ``zeroing``. After gross slip the re-zero policy raises
+estimates flagged ``zeroing``.
+
+The open gel: ``capture_open()`` (the next pushed frames) or ``set_open_reference(frames)``
+stores the gel as it looks with the gripper open. Each reference set afterwards then also
+gives the grasp's own field (the reference against the open gel), from which the
+``grasp_centroid`` dipole origin takes the contact's support and centre
+(dipole.grasp_support); without
+an open gel, or with no contact between it and the reference (no grid cell moved by more
+than ``contact_threshold_mm``), that origin falls back to ``centroid_midpoint``. In a grasp::
+
+    est.capture_open(n)   # gripper open, gel free: the next n pushed frames
+    ...                   # close and settle (pushes return zeroing estimates)
+    est.rezero(n)         # the next n frames: the grasp reference and the contact centre
+
+After gross slip the re-zero policy raises
 ``rezero_recommended`` once the load is released and the field has settled; with
 ``slip.rezero.auto`` the estimator then starts capturing a new reference itself.
 
@@ -24,6 +38,7 @@ from __future__ import annotations
 
 import numbers
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
@@ -31,7 +46,7 @@ import numpy as np
 
 from controller.tactile.baseline import FingerVisionTorque
 from controller.tactile.calibration import Calibration
-from controller.tactile.dipole import DipoleMomentCalculator
+from controller.tactile.dipole import DipoleMomentCalculator, GraspSupport, grasp_support
 from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
 from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
@@ -47,6 +62,9 @@ from drivers.tactile.profile import SensorProfile, sensor_profile
 
 _ASPECT_TOLERANCE = 0.02
 MAX_REFERENCE_FRAMES = 10_000
+# Flow passes from the open gel to the grasp (each warm-started from the last): the grasp
+# moves the gel by several px, more than one linearisation of grid_lk covers.
+GRASP_FLOW_PASSES = 4
 
 
 def estimator_for_sensor(
@@ -88,6 +106,13 @@ class TactileEstimator:
         self._slip: SlipDetector | None = None
         self._last_slip: SlipStatus | None = None
         self._rezero_policy = RezeroPolicy(config.slip.rezero)
+        self._open_image: np.ndarray | None = None
+        self._open_shape: tuple[int, ...] | None = None
+        self._open_left = 0
+        self._open_sum: np.ndarray | None = None
+        self._open_count = 0
+        self._awaiting_rezero = False
+        self._contact_centre: tuple[float, float] | None = None
 
     # -- reference ---------------------------------------------------------------------------
 
@@ -102,6 +127,49 @@ class TactileEstimator:
 
         Raises ValueError, leaving the estimator as it was, unless ``n_frames`` is a whole
         number in [1, MAX_REFERENCE_FRAMES] (a bool, a float or NaN is refused)."""
+        n = self._frame_count("rezero", n_frames)
+        self._open_left = 0
+        self._awaiting_rezero = False
+        self._zeroing_left = n
+        self._zeroing_count = 0
+        self._reference_sum = None
+        self._rezero_policy.reset()
+
+    def capture_open(self, n_frames: int | None = None) -> None:
+        """Capture the open gel (gripper open, nothing touching) from the next ``n_frames``
+        pushed frames (default: ``reference_frames``); call ``rezero`` once the grasp has
+        settled. The current reference is dropped: until the next reference exists, ``push``
+        returns zero estimates flagged ``zeroing`` (it does not zero by itself on the
+        closing gripper). Raises ValueError as ``rezero`` does."""
+        n = self._frame_count("capture_open", n_frames)
+        self._open_left = n
+        self._open_count = 0
+        self._open_sum = None
+        self._zeroing_left = 0
+        self._grid_flow = None
+        self._contact_centre = None
+        self._awaiting_rezero = True
+
+    def set_open_reference(self, frames: np.ndarray | Sequence[np.ndarray] | None) -> None:
+        """Use the mean of ``frames`` as the open gel (module docstring), None to forget it.
+        Takes effect when the next reference is set (``rezero`` or ``set_reference``); the
+        reference must then have the open frames' size. On a ValueError (as
+        ``set_reference``) the estimator is left as it was."""
+        if frames is None:
+            self._open_image = self._open_shape = None
+            return
+        mean, shape = self._mean_image(frames, "open")
+        self._open_image = np.clip(np.rint(mean), 0, 255).astype(np.uint8)
+        self._open_shape = shape
+        self._open_left = 0
+
+    @property
+    def contact_centre_mm(self) -> tuple[float, float] | None:
+        """The contact's centre (x, y) in mm, frame S, measured from the grasp against the
+        open gel when the reference was set; None without an open gel or contact."""
+        return self._contact_centre
+
+    def _frame_count(self, what: str, n_frames: int | None) -> int:
         n = self.config.reference_frames if n_frames is None else n_frames
         if (
             isinstance(n, bool)
@@ -109,37 +177,50 @@ class TactileEstimator:
             or not 1 <= n <= MAX_REFERENCE_FRAMES
         ):
             raise ValueError(
-                f"rezero needs a whole number of frames in [1, {MAX_REFERENCE_FRAMES}], got {n!r}"
+                f"{what} needs a whole number of frames in [1, {MAX_REFERENCE_FRAMES}], "
+                f"got {n!r}"
             )
-        self._zeroing_left = int(n)
-        self._zeroing_count = 0
-        self._reference_sum = None
-        self._rezero_policy.reset()
+        return int(n)
 
     def set_reference(self, frames: np.ndarray | Sequence[np.ndarray]) -> None:
         """Use the mean of ``frames`` (one image, or a sequence / stack of images) now.
 
         Every frame is checked before anything changes: on a ValueError (no frame, a frame
-        that is not an image, frames of different sizes) the estimator is left as it was."""
+        that is not an image, frames of different sizes, or of another size than the open
+        gel's) the estimator is left as it was."""
+        mean, shape = self._mean_image(frames, "reference")
+        self._install_reference(mean, shape)
+        self._frame_shape = shape
+        self._zeroing_left = 0
+        self._open_left = 0
+        self._awaiting_rezero = False
+
+    def _mean_image(
+        self, frames: np.ndarray | Sequence[np.ndarray], what: str
+    ) -> tuple[np.ndarray, tuple[int, ...]]:
+        """The mean working image of ``frames`` (float32) and their (rows, cols)."""
         stack = [frames] if isinstance(frames, np.ndarray) and frames.ndim <= 3 else list(frames)
         if not stack:
-            raise ValueError("set_reference needs at least one frame")
+            raise ValueError(f"the {what} needs at least one frame")
         shape = None
         total = None
         for index, frame in enumerate(stack):
             try:
                 image = self._working_image(frame, shape)
             except ValueError as exc:
-                raise ValueError(f"reference frame {index}: {exc}") from None
+                raise ValueError(f"{what} frame {index}: {exc}") from None
             shape = frame.shape[:2]
             total = image.astype(np.float32) if total is None else total + image
-        self._install_reference(total / len(stack))
-        self._frame_shape = shape
-        self._zeroing_left = 0
+        return total / len(stack), shape
 
-    def _install_reference(self, mean_image: np.ndarray) -> None:
+    def _install_reference(self, mean_image: np.ndarray, shape: tuple[int, ...]) -> None:
         """Build the flow on the reference first, then replace the buffers: a ValueError
-        leaves the estimator as it was."""
+        leaves the estimator as it was. ``shape``: the frames' (rows, cols)."""
+        if self._open_image is not None and self._open_shape != shape:
+            raise ValueError(
+                f"frame of {shape[1]} x {shape[0]} px does not match the open gel's frames "
+                f"({self._open_shape[1]} x {self._open_shape[0]} px)"
+            )
         # Round half to even: the mean of 2 integer frames ends in .5 half the time, and
         # rounding those up would brighten the reference by 0.25 grey levels, which dense
         # flow on a smooth gel reads as motion.
@@ -152,9 +233,36 @@ class TactileEstimator:
         grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
         grid_flow.set_reference(reference)
         self._allocate(height, width, rows, cols)
+        support = self._grasp_support(reference)
+        self._grasp_dipole.set_grasp_support(support)
+        self._contact_centre = None if support is None else support.centre_mm
         self._grid_flow = grid_flow
         self._rezero_policy.reset()
         self._last_slip = None
+
+    def _grasp_support(self, reference: np.ndarray) -> GraspSupport | None:
+        """The contact's support from the grasp's field (``reference`` against the open gel)
+        on the field's grid, or None (no open gel, no contact, no ``grasp_centroid``)."""
+        if self._open_image is None or self.config.dipole_origin != "grasp_centroid":
+            return None
+        rows, cols = self._u.shape
+        flow_config = replace(self.config.flow, warm_start=True)
+        flow = make_grid_flow(flow_config, reference.shape[:2], rows, cols)
+        flow.set_reference(self._open_image)
+        for _ in range(GRASP_FLOW_PASSES):
+            flow.measure(reference, self._grid_px)
+        self._update_field()
+        np.hypot(self._u, self._v, out=self._magnitude)
+        if float(self._magnitude.max()) > self.config.contact_threshold_mm:
+            div = self._field_divergence(self._nhhd.decompose(self._u, self._v))
+            support = grasp_support(div, self.x_mm, self.y_mm)
+        else:
+            support = None
+        self._grid_px.fill(0.0)
+        self._u.fill(0.0)
+        self._v.fill(0.0)
+        self._filtered = False
+        return support
 
     def _allocate(self, height: int, width: int, rows: int, cols: int) -> None:
         x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
@@ -175,7 +283,10 @@ class TactileEstimator:
         self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
 
     def _allocate_dipole(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
-        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells)."""
+        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells);
+        with ``grasp_centroid`` that is the fallback's, the grasp's dipole is on the field's
+        grid (its support set when a reference is)."""
+        self._grasp_dipole = DipoleMomentCalculator(x_mm, y_mm, "grasp_centroid")
         grid = self.config.dipole_grid
         rows, cols = y_mm.size, x_mm.size
         if grid is None:
@@ -198,9 +309,10 @@ class TactileEstimator:
     def _dipole_calculator(self, x_mm: np.ndarray, y_mm: np.ndarray) -> DipoleMomentCalculator:
         """The dipole on the grid ``x_mm`` x ``y_mm`` with the configuration's origin rule."""
         config = self.config
-        return DipoleMomentCalculator(
-            x_mm, y_mm, config.dipole_origin, config.dipole_full_midpoint_ratio
-        )
+        origin = config.dipole_origin
+        if origin == "grasp_centroid":  # its fallback; the grasp's dipole is _grasp_dipole
+            origin = "centroid_midpoint"
+        return DipoleMomentCalculator(x_mm, y_mm, origin, config.dipole_full_midpoint_ratio)
 
     def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the
@@ -209,17 +321,21 @@ class TactileEstimator:
         block = self._dipole_block
         raw = self.config.divergence_of == "raw"
         if block == (1, 1):
-            if raw:
-                return decomposition.div
-            dx, dy = self._nhhd.dx, self._nhhd.dy
-            d_u, d_v = decomposition.d_u, decomposition.d_v
-            return divergence(d_u, d_v, dx, dy, self._div, self._work)
+            return self._field_divergence(decomposition)
         u = block_mean(self._u, block, self._pooled[0])
         v = block_mean(self._v, block, self._pooled[1])
         if not raw:
             u, v = self._coarse_curl_free(u, v)
         dx, dy = block[1] * self._nhhd.dx, block[0] * self._nhhd.dy
         return divergence(u, v, dx, dy, self._coarse_div, self._coarse_work)
+
+    def _field_divergence(self, decomposition: NHHDResult) -> np.ndarray:
+        """The divergence of the raw field or of its curl-free part on the field's grid."""
+        if self.config.divergence_of == "raw":
+            return decomposition.div
+        dx, dy = self._nhhd.dx, self._nhhd.dy
+        d_u, d_v = decomposition.d_u, decomposition.d_v
+        return divergence(d_u, d_v, dx, dy, self._div, self._work)
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -264,7 +380,13 @@ class TactileEstimator:
 
     def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
         """Estimate the wrench from one frame captured at ``t_s`` seconds."""
+        if self._open_left > 0:
+            return self._capture_open(frame, t_s)
         if self._grid_flow is None and self._zeroing_left == 0:
+            if self._awaiting_rezero:  # after capture_open: the caller calls rezero()
+                return WrenchEstimate.zero(
+                    t_s, zeroing=True, calibrated=self.calibration is not None
+                )
             self.rezero()
         if self._zeroing_left > 0:
             return self._capture_reference(frame, t_s)
@@ -273,6 +395,24 @@ class TactileEstimator:
         self._update_field()
         return self._estimate(t_s)
 
+    def _capture_open(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
+        first = self._open_count == 0
+        image = self._working_image(frame, None if first else self._open_shape)
+        total = image.astype(np.float32)
+        if self._open_sum is not None:
+            total += self._open_sum
+        if first:
+            self._open_shape = frame.shape[:2]
+        if self._open_left == 1:
+            self._open_image = np.clip(np.rint(total / (self._open_count + 1)), 0, 255).astype(
+                np.uint8
+            )
+            total = None
+        self._open_sum = total
+        self._open_count += 1
+        self._open_left -= 1
+        return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
+
     def _capture_reference(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
         first = self._zeroing_count == 0
         image = self._working_image(frame, None if first else self._frame_shape)
@@ -280,7 +420,8 @@ class TactileEstimator:
         if self._reference_sum is not None:
             total += self._reference_sum
         if self._zeroing_left == 1:
-            self._install_reference(total / (self._zeroing_count + 1))
+            shape = frame.shape[:2] if first else self._frame_shape
+            self._install_reference(total / (self._zeroing_count + 1), shape)
             total = None
         if first:
             self._frame_shape = frame.shape[:2]
@@ -305,7 +446,10 @@ class TactileEstimator:
 
     def _estimate(self, t_s: float) -> WrenchEstimate:
         decomposition = self._nhhd.decompose(self._u, self._v)
-        dipole = self._dipole(self._tilt_divergence(decomposition))
+        if self._grasp_dipole.support is not None:
+            dipole = self._grasp_dipole(self._field_divergence(decomposition))
+        else:
+            dipole = self._dipole(self._tilt_divergence(decomposition))
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)

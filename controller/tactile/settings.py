@@ -207,12 +207,16 @@ class EstimatorConfig(Config):
     blocks this is exactly what an estimator with a proportionally larger stride computes.
     ``dipole_origin``: the point the dipole moment is taken about: the paper's centroid
     midpoint, moved smoothly toward the gel centre as one sign of divergence vanishes, or
-    the gel centre (``sensor_centre``); ``dipole_full_midpoint_ratio``: the weak / strong
-    mass ratio of the two signs from which on the midpoint is used unchanged
+    the gel centre (``sensor_centre``), or, weighted by the contact's support, its centre,
+    both measured once per grasp from the closing press (``grasp_centroid``: needs the open
+    gel's frames before the grasp reference, ``TactileEstimator.capture_open``; without them
+    the centroid-midpoint rule on ``dipole_grid``; the grasp's own moment is always on the
+    field grid, where its support localises it); ``dipole_full_midpoint_ratio``: the weak /
+    strong mass ratio of the two signs from which on the midpoint is used unchanged
     (controller/tactile/dipole.py). ``tau_z_about``: the NHHD in-plane torque's origin, the
-    gel centre or the rotational potential's extremum (controller/tactile/nhhd.py). ``ema_alpha``:
-    weight of the newest field in the temporal filter (1 = off). ``reference_frames``:
-    frames averaged into the reference by ``rezero()``.
+    gel centre or the rotational potential's extremum (controller/tactile/nhhd.py).
+    ``ema_alpha``: weight of the newest field in the temporal filter (1 = off).
+    ``reference_frames``: frames averaged into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
     ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
     """
@@ -220,7 +224,7 @@ class EstimatorConfig(Config):
     flow: FlowConfig
     stride_px: float = number(4, 160)
     divergence_of: Literal["raw", "curl_free"]
-    dipole_origin: Literal["centroid_midpoint", "sensor_centre"]
+    dipole_origin: Literal["centroid_midpoint", "sensor_centre", "grasp_centroid"]
     dipole_full_midpoint_ratio: float = number(0.01, 1.0)
     tau_z_about: Literal["gel_centre", "rotation_centre"]
     dipole_grid: DipoleGrid | None

@@ -45,9 +45,12 @@ def estimate_frames(
     frames: Iterable[tuple[int, float, np.ndarray]],
     reference: list[np.ndarray],
     estimator: TactileEstimator,
+    open_gel: list[np.ndarray] | None = None,
 ) -> EstimateSeries:
     """Estimates for ``frames`` ((index, t_s, image) tuples) against the mean of
-    ``reference`` (which replaces the estimator's)."""
+    ``reference`` (which replaces the estimator's), with ``open_gel`` the frames of the open
+    gel before the grasp (``TactileEstimator.set_open_reference``; None: none)."""
+    estimator.set_open_reference(open_gel)
     estimator.set_reference(reference)
     t_s, rows, slip, gross, latency = [], [], [], [], []
     for _, t, image in frames:
@@ -81,11 +84,18 @@ def estimate_dataset(
     dataset: Dataset, estimator: TactileEstimator, zero_on: str = "reference"
 ) -> EstimateSeries:
     """Estimates for every frame, zeroed on the ``reference`` interval (after the grasp) or
-    on the ``open`` one (before it: no zeroing after the grasp)."""
+    on the ``open`` one (before it: no zeroing after the grasp). Zeroed on the grasp, the
+    estimator also sees the ``open`` interval's frames, if the dataset has them, as the open
+    gel (the ``grasp_centroid`` dipole origin's contact centre)."""
     interval = dataset.meta.reference if zero_on == "reference" else dataset.meta.open
     if interval is None:
         raise ValueError(f"{dataset.folder}: the dataset has no '{zero_on}' interval")
-    return estimate_frames(dataset.frames(), reference_frames(dataset, interval), estimator)
+    open_gel = None
+    if zero_on == "reference" and dataset.meta.open is not None:
+        open_gel = reference_frames(dataset, dataset.meta.open)
+    return estimate_frames(
+        dataset.frames(), reference_frames(dataset, interval), estimator, open_gel
+    )
 
 
 def segment_mask(dataset: Dataset, t_s: np.ndarray, axis: str) -> np.ndarray:

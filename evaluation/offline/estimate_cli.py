@@ -1,14 +1,17 @@
 """Offline estimation on recorded tactile video or a folder of images.
 
     python scripts/estimate.py INPUT [IMAGE ...] --reference SPEC --out OUT.csv
-        [--sensor gelsight_mini] [--method NAME] [--calibration FILE [--force]] [--fps F]
-        [--allow-damaged]
+        [--sensor gelsight_mini] [--method NAME] [--open SPEC] [--calibration FILE [--force]]
+        [--fps F] [--allow-damaged]
 
 INPUT is a video file OpenCV can read, a folder of images read in natural sorted order
 (frame_2 before frame_10), or one or more image files read in the order given (still
 captures: ``shot_rest.png shot_pressed.png``). All frames must have one size (one sensor's
 images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` whose frames
-(a included, b excluded) are averaged into the zeroing reference. ``--method`` names an
+(a included, b excluded) are averaged into the zeroing reference. ``--open`` names frames
+of the open gel (before the grasp, nothing touching), in the same form: the
+``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
+(without, it falls back to the centroid midpoint). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -169,19 +172,22 @@ def open_source(path: Path | Sequence[Path]) -> FrameSource:
         raise InputError(str(exc)) from None
 
 
-def parse_reference(spec: str) -> tuple[int, int]:
-    """``'5'`` -> (5, 6); ``'a:b'`` -> (a, b). Raises InputError on anything else."""
+def parse_reference(spec: str, option: str = "--reference") -> tuple[int, int]:
+    """``'5'`` -> (5, 6); ``'a:b'`` -> (a, b). Raises InputError, naming ``option``, on
+    anything else."""
     match = re.fullmatch(r"\s*(\d+)\s*(?::\s*(\d+)\s*)?", spec)
     if not match:
-        raise InputError(f"--reference '{spec}': expected a frame index N or a range A:B")
+        raise InputError(f"{option} '{spec}': expected a frame index N or a range A:B")
     start = int(match.group(1))
     stop = int(match.group(2)) if match.group(2) is not None else start + 1
     if stop <= start:
-        raise InputError(f"--reference '{spec}': the range A:B needs B > A")
+        raise InputError(f"{option} '{spec}': the range A:B needs B > A")
     return start, stop
 
 
-def read_reference(source: FrameSource, start: int, stop: int) -> list[np.ndarray]:
+def read_reference(
+    source: FrameSource, start: int, stop: int, option: str = "--reference"
+) -> list[np.ndarray]:
     """The frames numbered [start, stop) of the source; every one must have decoded."""
     frames = []
     log = ReadLog()
@@ -198,13 +204,13 @@ def read_reference(source: FrameSource, start: int, stop: int) -> list[np.ndarra
                 else ""
             )
             raise InputError(
-                f"--reference {start}:{stop} is out of range: '{source.path}' ended after "
+                f"{option} {start}:{stop} is out of range: '{source.path}' ended after "
                 f"{log.read} frames{header}"
             )
     if len(frames) < stop - start:
         raise InputError(
-            f"--reference {start}:{stop}: {stop - start - len(frames)} of these frames of "
-            f"'{source.path}' are missing or did not decode; choose another reference range"
+            f"{option} {start}:{stop}: {stop - start - len(frames)} of these frames of "
+            f"'{source.path}' are missing or did not decode; choose another range"
         )
     return frames
 
@@ -242,11 +248,13 @@ def estimate_file(
     force: bool = False,
     allow_damaged: bool = False,
     warn: Callable[[str], None] = _warn,
+    open_gel: str | None = None,
 ) -> int:
     """Run the estimator over INPUT (a video or folder path, or image file paths) and write
     the CSV; returns the number of rows. Every argument and the output path are checked
-    before any frame is read."""
+    before any frame is read. ``open_gel``: the open gel's frames (``--open``), or None."""
     start, stop = parse_reference(reference)
+    open_range = None if open_gel is None else parse_reference(open_gel, "--open")
     if fps is not None and not MIN_RATE_HZ <= fps <= MAX_RATE_HZ:
         raise InputError(
             f"--fps {fps:g}: expected a positive number of frames per second in "
@@ -267,6 +275,12 @@ def estimate_file(
     source = open_source(input_path)
     rate_hz = fps or source.fps or estimator.profile.fps_hz
 
+    if open_range is not None:
+        open_frames = read_reference(source, *open_range, "--open")
+        try:
+            estimator.set_open_reference(open_frames)
+        except ValueError as exc:
+            raise InputError(f"open frames {open_range[0]}:{open_range[1]}: {exc}") from None
     reference_frames = read_reference(source, start, stop)
     try:
         estimator.set_reference(reference_frames)
@@ -331,6 +345,12 @@ def build_parser() -> argparse.ArgumentParser:
         default="0",
         help="zeroing reference: frame number N, or range A:B averaged (default 0)",
     )
+    parser.add_argument(
+        "--open",
+        default=None,
+        help="the open gel before the grasp: frame number N, or range A:B averaged "
+        "(locates the contact for the grasp_centroid dipole origin)",
+    )
     parser.add_argument("--out", type=Path, required=True, help="output CSV path")
     parser.add_argument(
         "--sensor",
@@ -379,6 +399,7 @@ def main(argv: list[str] | None = None) -> int:
             args.fps,
             args.force,
             args.allow_damaged,
+            open_gel=args.open,
         )
         print(f"estimate: wrote {count} rows to {args.out}")
         return 0

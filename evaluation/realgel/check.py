@@ -1,12 +1,13 @@
 """Run estimator configurations on the real-texture tilt sequences and score them.
 
 For each sequence (sequences.py) and configuration: a fresh ``TactileEstimator`` on the
-texture's sensor profile is zeroed on the sequence's reference frames, then every frame is
-pushed and timed (the whole ``push``, one thread). Scores (scoring.py) are on the tilt axis
-of the sequence: the dipole's tilt torque and, for comparison, the FingerVision baseline's
-on the same field. Also counted, over the frames after zeroing: the frames flagged
-``degenerate``, the frames whose tilt is exactly zero on both axes, and the frames the slip
-detector flags (incipient or gross; every sequence is slip-free).
+texture's sensor profile is shown the open gel (``set_open_reference``, the sequence's open
+frames, as many as its ``reference_frames``) and zeroed on the sequence's reference frames
+(the grasp), then every frame is pushed and timed (the whole ``push``, one thread). Scores
+(scoring.py) are on the tilt axis of the sequence: the dipole's tilt torque and, for
+comparison, the FingerVision baseline's on the same field. Also counted, over the frames
+after zeroing: the frames flagged ``degenerate``, the frames whose tilt is exactly zero on
+both axes, and the frames the slip detector flags (incipient or gross; every sequence is slip-free).
 """
 
 from __future__ import annotations
@@ -161,6 +162,7 @@ def run_one(
     estimator = TactileEstimator(config, profile)
     fps = profile.fps_hz
     try:
+        estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
         estimator.set_reference(sequence.references[: config.reference_frames])
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])

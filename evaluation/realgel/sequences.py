@@ -15,7 +15,9 @@ choice); with "fixed" only its albedo is (markers and fine texture), under the c
 illumination, which stays with the camera as a real sensor's LEDs do
 (textures.split_illumination): harder, because a smooth gel's shading then carries no
 motion and a marker moving through a shading gradient changes brightness.
-The reference frame is the grasp without tilt (the estimator zeroes on it). Displacements
+The reference frame is the grasp without tilt (the estimator zeroes on it); before it, the
+open frames show the capture unwarped (the gel before the grasp, same illumination, own
+noise), which the estimator may use to locate the contact (every estimator gets them). Displacements
 are scaled so that the tilt's own part of the field peaks at ``tilt_px`` pixels at full
 tilt. The truth of each frame is the applied tilt torque (``elastic.PressureBasis``).
 
@@ -208,18 +210,21 @@ def mechanics(spec: SequenceSpec) -> Mechanics:
 
 @dataclass(frozen=True)
 class RenderedSequence:
-    """A sequence's images: ``references`` (noisy grasp frames without tilt, for zeroing)
-    and ``frames`` (uint8 BGR, 240 x 320), with its ``spec`` and ``mechanics``."""
+    """A sequence's images: ``open_frames`` (the noisy capture unwarped: the gel before the
+    grasp), ``references`` (noisy grasp frames without tilt, for zeroing) and ``frames``
+    (uint8 BGR, 240 x 320), with its ``spec`` and ``mechanics``."""
 
     spec: SequenceSpec
     mechanics: Mechanics
+    open_frames: list[np.ndarray]
     references: list[np.ndarray]
     frames: list[np.ndarray]
 
 
 def render(spec: SequenceSpec, reference_frames: int = 1) -> RenderedSequence:
-    """Render ``spec``'s frames and ``reference_frames`` noisy references. The noise is
-    seeded by the spec's seed and texture."""
+    """Render ``spec``'s frames, ``reference_frames`` noisy references and as many open
+    frames. The noise is seeded by the spec's seed and texture (the open frames' on a stream
+    of their own, so the other frames are those rendered before open frames existed)."""
     texture = load_texture(spec.texture)
     illumination = np.float32(1.0)
     if spec.shading == "fixed":
@@ -228,6 +233,11 @@ def render(spec: SequenceSpec, reference_frames: int = 1) -> RenderedSequence:
     rng = np.random.default_rng([spec.seed, 1, sorted(TEXTURES).index(spec.texture)])
     reference = illumination * warp(texture, mech.field(0.0, 1.0))
     references = [add_noise(reference, spec.noise_grey, rng) for _ in range(reference_frames)]
+    open_rng = np.random.default_rng([spec.seed, 4, sorted(TEXTURES).index(spec.texture)])
+    open_image = illumination * texture
+    open_frames = [
+        add_noise(open_image, spec.noise_grey, open_rng) for _ in range(reference_frames)
+    ]
     ramps, swings = lighting_drift(np.random.default_rng([spec.seed, 3]), spec.frames, *SIZE_HW)
     frames = []
     for tilt, grip, swing in zip(mech.tilt, mech.grip, swings, strict=True):
@@ -235,4 +245,4 @@ def render(spec: SequenceSpec, reference_frames: int = 1) -> RenderedSequence:
         if spec.lighting:
             image *= 1.0 + spec.lighting * (swing * ramps)
         frames.append(add_noise(image, spec.noise_grey, rng))
-    return RenderedSequence(spec, mech, references, frames)
+    return RenderedSequence(spec, mech, open_frames, references, frames)

@@ -363,3 +363,27 @@ def test_make_dataset_checks_out_before_any_work(tmp_path, capsys, monkeypatch, 
     assert make_dataset_main([str(make_out(tmp_path))]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("make_dataset: error:") and message in err and "\n" not in err
+
+
+def test_zeroed_on_the_grasp_the_estimator_sees_the_open_gel(dataset_folder, monkeypatch):
+    """A dataset with an ``open`` interval hands its frames to the estimator as the open gel
+    (before the grasp reference); zeroed on the open interval itself it does not."""
+    from controller.tactile import estimator_for_sensor
+    from controller.tactile.estimator import TactileEstimator
+    from evaluation.offline.dataset_fit import estimate_dataset
+
+    dataset = Dataset(dataset_folder)
+    seen = []
+    original = TactileEstimator.set_open_reference
+
+    def spy(self, frames):
+        seen.append(None if frames is None else len(frames))
+        return original(self, frames)
+
+    monkeypatch.setattr(TactileEstimator, "set_open_reference", spy)
+    estimator = estimator_for_sensor("gelsight_mini", "grid_lk")
+    estimate_dataset(dataset, estimator)
+    assert seen == [int(dataset.in_interval(dataset.meta.open).sum())] and seen[0] > 0
+    assert estimator.contact_centre_mm is not None
+    estimate_dataset(dataset, estimator, zero_on="open")
+    assert seen[-1] is None and estimator.contact_centre_mm is None

@@ -446,3 +446,33 @@ def test_a_binary_calibration_file_is_a_one_line_error(folder, tmp_path, capsys)
     calibration.write_bytes(bytes(range(256)))
     code, err = run_main(capsys, folder, "--out", tmp_path / "x.csv", "--calibration", calibration)
     assert code == 2 and err.startswith("estimate: error:") and "\n" not in err
+
+
+def test_open_frames_locate_the_contact_for_grid_lk(tmp_path, capsys, monkeypatch):
+    """--open A:B hands those frames to the estimator as the open gel before the reference
+    (grid_lk then takes its tilt about the grasp); a bad range is a one-line error."""
+    renderer = MarkerImageRenderer(rng=np.random.default_rng(5))
+    ys, xs = np.mgrid[0:240, 0:320].astype(float)
+    k = 2.0 / 30.0 * np.exp(-((xs - 200) ** 2 + (ys - 100) ** 2) / (2 * 30.0**2))
+    grasp = np.stack([k * (xs - 200), k * (ys - 100)], axis=-1)
+    path = tmp_path / "grasp"
+    path.mkdir()
+    for i, frame in enumerate([renderer.render()] * 2 + [renderer.render(grasp)] * 3):
+        cv2.imwrite(str(path / f"f{i}.png"), frame)
+    centres = []
+    original = TactileEstimator.set_reference
+
+    def spy(self, frames):
+        original(self, frames)
+        centres.append(self.contact_centre_mm)
+
+    monkeypatch.setattr(TactileEstimator, "set_reference", spy)
+    out = tmp_path / "out.csv"
+    args = [str(path), "--method", "grid_lk", "--reference", "2:4", "--out", str(out)]
+    assert main([*args, "--open", "0:2"]) == 0
+    assert main(args) == 0
+    assert centres[0] is not None and centres[0][0] > 1.5 and centres[1] is None
+    assert len(read_rows(out)) == 5
+    assert main([*args, "--open", "3:9"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("estimate: error: --open 3:9 is out of range") and "\n" not in err

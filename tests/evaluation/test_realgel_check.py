@@ -221,3 +221,43 @@ def test_a_sequence_does_not_depend_on_the_other_amplitudes_asked_for():
     among = sequence_specs(["gelsight_background"], [0.2, 0.4, 1.0], 16, seed=3)
     assert alone == [spec for spec in among if spec.tilt_px == 0.4]
     assert len({spec.seed for spec in among}) == len(among)
+
+
+def test_every_estimator_sees_the_open_gel_before_the_grasp(monkeypatch):
+    """The open frames are the capture unwarped with the sequence's noise, as many as the
+    configuration's reference frames, handed to the estimator before its reference; the
+    other frames do not change with them."""
+    from controller.tactile.estimator import TactileEstimator
+    from evaluation.realgel.check import run_one
+
+    spec = SequenceSpec("gelsight_markers_a", "x", 0.3, 0.4, 3.0, seed=2, frames=8)
+    sequence = render(spec, 4)
+    assert len(sequence.open_frames) == 4
+    capture = load_texture(spec.texture)
+    for frame in sequence.open_frames:
+        error = frame.astype(float) - capture
+        assert abs(error.mean()) < 0.2 and np.std(error) == pytest.approx(3.0, rel=0.15)
+    assert not np.array_equal(sequence.open_frames[0], sequence.open_frames[1])
+    calls = []
+    original_open = TactileEstimator.set_open_reference
+    original_reference = TactileEstimator.set_reference
+
+    def spy_open(self, frames):
+        calls.append(("open", [f.copy() for f in frames]))
+        return original_open(self, frames)
+
+    def spy_reference(self, frames):
+        calls.append(("reference", len(frames)))
+        return original_reference(self, frames)
+
+    monkeypatch.setattr(TactileEstimator, "set_open_reference", spy_open)
+    monkeypatch.setattr(TactileEstimator, "set_reference", spy_reference)
+    for name in ("grid_lk", "paper"):
+        calls.clear()
+        config = estimator_config(name)
+        run_one(sequence, name, config)
+        assert [kind for kind, _ in calls] == ["open", "reference"]
+        opened = calls[0][1]
+        assert len(opened) == config.reference_frames
+        for a, b in zip(opened, sequence.open_frames, strict=False):
+            np.testing.assert_array_equal(a, b)

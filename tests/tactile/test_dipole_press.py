@@ -223,3 +223,29 @@ def test_degenerate_input_gives_finite_output_silently(make, origin):
 def test_bad_full_midpoint_ratio_raises(ratio):
     with pytest.raises(ValueError, match="full_midpoint_ratio"):
         DipoleMomentCalculator(X_MM, Y_MM, full_midpoint_ratio=ratio)
+
+
+@pytest.mark.parametrize("grid", sorted(GRIDS))
+def test_the_grasp_centroid_rule_is_lipschitz_under_a_growing_press(grid):
+    """With the grasp's support set (an off-centre press), a tilt plus a uniform expansion
+    swept from balanced to one-signed moves p by at most (2 R / N) sum |delta div| per step
+    (p is linear in div, its lever |w (x - c)| at most 2 R), and linearly in the press."""
+    from controller.tactile.dipole import grasp_support
+
+    div_of, x_mm, y_mm = GRIDS[grid]
+    gx, gy = np.meshgrid(x_mm, y_mm)
+    press = np.exp(-((gx - 2.0) ** 2 + (gy + 1.0) ** 2) / 18.0)
+    calculator = DipoleMomentCalculator(x_mm, y_mm, "grasp_centroid")
+    calculator.set_grasp_support(grasp_support(press, x_mm, y_mm))
+    tilt = div_of(*charge_pair("x", 6.0))
+    expansion = div_of(*EXPANSION)
+    n = x_mm.size * y_mm.size
+    bound = 2.0 * np.array([np.abs(x_mm).max(), np.abs(y_mm).max()]) / n
+    scales = np.linspace(0.0, 3.0 * np.abs(tilt).max() / np.abs(expansion).max(), 20001)
+    readings = np.array(
+        [[(m := calculator(tilt + s * expansion)).p_x, m.p_y] for s in scales]
+    )
+    step = np.abs(scales[1] - scales[0]) * np.abs(expansion).sum()
+    assert (np.abs(np.diff(readings, axis=0)) <= bound * step * (1 + 1e-9) + 1e-15).all()
+    second = np.diff(readings, 2, axis=0)  # linear in the press: no curvature
+    assert np.abs(second).max() < 1e-9 * np.abs(readings).max()
