@@ -15,8 +15,9 @@ Tick order:
    estimator if it is new; read the arm, the gripper and the gamepad; arbitrate the gamepad
    (``controller.teleop``);
 3. the watchdog (``controller.safety.Watchdog``) checks the readings; on a trip go to 7;
-4. build the ``Observation`` and call ``machine.step``; a ``rezero_tactile`` command
-   re-zeroes the estimator from the next ``rezero_frames`` frames;
+4. build the ``Observation`` and call ``machine.step``; a ``capture_open_tactile`` command
+   has the estimator take the next ``rezero_frames`` frames as the open gel, a
+   ``rezero_tactile`` command re-zeroes it from the next ``rezero_frames`` frames;
 5. limit the command (``controller.safety.CommandLimiter``) and send it: a twist by
    ``arm.move_velocity(twist, hold_s)``, a pose by ``arm.servo_pose``, neither: a zero twist
    once if a twist was moving the arm; a gripper target only when it differs from the last
@@ -363,6 +364,8 @@ class ControlLoop:
         observation = self._last_observation
         assert observation is not None  # both statuses were read: no error above
         command = self.machine.step(observation)
+        if command.capture_open_tactile:
+            self.estimator.capture_open(self.config.rezero_frames)
         if command.rezero_tactile:
             self.estimator.rezero(self.config.rezero_frames)
         limited = self.limiter.limit(command, observation.arm.tcp, observation.wrench)

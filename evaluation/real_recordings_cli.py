@@ -1,6 +1,6 @@
 """Render real-texture recordings and check estimators on them (issue 12, section 6).
 
-    python scripts/check_real_recordings.py [--estimators default,grid_lk,paper]
+    python scripts/check_real_recordings.py [--estimators default,dis_half,paper]
         [--captures all] [--work out/real_recordings] [--seed 0] [--table FILE]
 
 For each capture of drivers/sim/render/real_gels/, the press-tilt-release program is rendered
@@ -26,7 +26,7 @@ from evaluation.real_recordings import QUIET_MAX, SIGN_FLOOR, SIGN_MIN, check_re
 from evaluation.recording_video import render_recording
 
 PROG = "check_real_recordings"
-DEFAULT_ESTIMATORS = "default,grid_lk,paper"
+DEFAULT_ESTIMATORS = "default,dis_half,paper"
 
 
 def _names(text: str, option: str, known: tuple[str, ...] | None = None) -> list[str]:

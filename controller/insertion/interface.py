@@ -92,13 +92,17 @@ class GripperTarget:
 class Command:
     """One tick's output. At most one of ``twist`` (TCP velocity in B, held for the loop's
     command duration) and ``pose`` (servo target of T in B); neither: hold still.
-    ``gripper``: a new gripper target, or None to leave it. ``rezero_tactile``: the loop
-    re-zeroes the estimator's reference from the next frames (after a grasp or a re-grasp).
+    ``gripper``: a new gripper target, or None to leave it. ``capture_open_tactile``: the
+    loop has the estimator take the next frames as the open gel (fingers open, nothing
+    touching: before a grasp), against which the grasp's contact is measured.
+    ``rezero_tactile``: the loop re-zeroes the estimator's reference from the next frames
+    (after a grasp or a re-grasp).
     """
 
     twist: Twist | None = None
     pose: Pose | None = None
     gripper: GripperTarget | None = None
+    capture_open_tactile: bool = False
     rezero_tactile: bool = False
 
     def __post_init__(self) -> None:

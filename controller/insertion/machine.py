@@ -75,6 +75,7 @@ class _Stage:
     v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
+    frame_t_s: float = math.nan  # GRASP: time of the last tactile estimate counted
 
 
 class InsertionMachine:
@@ -277,11 +278,14 @@ class InsertionMachine:
     # -- phases ----------------------------------------------------------------------------
 
     def _grasp(self, obs: Observation, new: bool) -> Command:
-        """Lift (after a slip), open a little (re-grasp), close, settle, re-zero, baseline."""
+        """Lift (after a slip), open a little (re-grasp), capture the open gel, close, settle,
+        re-zero, baseline."""
         stage, settings = self._stage, self.config.gripper
         if stage.name == "":
-            stage.name = "lift" if self._regrasp else "close"
+            stage.name = "lift" if self._regrasp else "capture"
             stage.since_t_s = obs.t_s
+            if stage.name == "capture":
+                return Command(twist=Twist(), capture_open_tactile=True)
         if stage.name == "lift":
             if obs.arm.tcp.xyz_m[2] >= stage.z0_m + self.config.slip.lift_m:
                 self._next_stage(obs, "open")
@@ -293,6 +297,15 @@ class InsertionMachine:
         if stage.name == "open":
             if obs.t_s - stage.since_t_s >= settings.settle_s and not obs.gripper.moving:
                 self._regrasp = False
+                self._next_stage(obs, "capture")
+                return Command(twist=Twist(), capture_open_tactile=True)
+            return _hold()
+        if stage.name == "capture":
+            # the open gel: the estimator takes the next zeroing_frames frames; wait for one more
+            if obs.wrench is not None and obs.wrench.t_s != stage.frame_t_s:
+                stage.frame_t_s = obs.wrench.t_s
+                stage.count += 1
+            if stage.count > self.config.signals.zeroing_frames:
                 self._next_stage(obs, "close")
             return _hold()
         if stage.name == "close":

@@ -1,6 +1,6 @@
 """The dipole's origin under pushing, scored on the true field (evaluation/realgel/origins.py).
 
-    python scripts/realgel_origins.py [--estimators grid_lk,paper] [--dipole-grids config]
+    python scripts/realgel_origins.py [--estimators default,paper] [--dipole-grids config]
         [--amplitudes 0.4] [--frames 160] [--seed 0]
 
 ``--dipole-grids``: "config" (each configuration's own), or comma-separated "COLSxROWS" /
@@ -34,7 +34,7 @@ def _grids(parser: argparse.ArgumentParser, text: str) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="realgel_origins", description=__doc__.splitlines()[0])
-    parser.add_argument("--estimators", default="grid_lk,paper")
+    parser.add_argument("--estimators", default="default,paper")
     parser.add_argument("--dipole-grids", default="config")
     parser.add_argument("--amplitudes", default="0.4")
     parser.add_argument("--frames", type=int, default=160)

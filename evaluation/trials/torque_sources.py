@@ -10,8 +10,8 @@ in every case; docs/EVALUATION.md compares them on the same seeds):
   thresholds keep their meaning. The estimator still runs on the frames for the flags
   (zeroing, contact). Only evaluation/ builds it, only with the simulated backend.
 
-Each source has the estimator's ``push(frame, t_s)`` and ``rezero(n)``, which is all the
-control loop calls.
+Each source has the estimator's ``push(frame, t_s)``, ``capture_open(n)`` and
+``rezero(n)``, which is all the control loop calls.
 """
 
 from __future__ import annotations
@@ -36,6 +36,9 @@ class BaselineTorques:
     def __init__(self, estimator: TactileEstimator) -> None:
         self.estimator = estimator
 
+    def capture_open(self, n_frames: int | None = None) -> None:
+        self.estimator.capture_open(n_frames)
+
     def rezero(self, n_frames: int | None = None) -> None:
         self.estimator.rezero(n_frames)
 
@@ -55,6 +58,9 @@ class TrueWrench:
         self.estimator = estimator
         self._true = true_wrench_s
         self._zero = np.zeros(6)
+
+    def capture_open(self, n_frames: int | None = None) -> None:
+        self.estimator.capture_open(n_frames)
 
     def rezero(self, n_frames: int | None = None) -> None:
         self.estimator.rezero(n_frames)

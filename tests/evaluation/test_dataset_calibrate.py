@@ -381,7 +381,7 @@ def test_zeroed_on_the_grasp_the_estimator_sees_the_open_gel(dataset_folder, mon
         return original(self, frames)
 
     monkeypatch.setattr(TactileEstimator, "set_open_reference", spy)
-    estimator = estimator_for_sensor("gelsight_mini", "grid_lk")
+    estimator = estimator_for_sensor("gelsight_mini", "default")
     estimate_dataset(dataset, estimator)
     assert seen == [int(dataset.in_interval(dataset.meta.open).sum())] and seen[0] > 0
     assert estimator.contact_centre_mm is not None

@@ -468,7 +468,7 @@ def test_open_frames_locate_the_contact_for_grid_lk(tmp_path, capsys, monkeypatc
 
     monkeypatch.setattr(TactileEstimator, "set_reference", spy)
     out = tmp_path / "out.csv"
-    args = [str(path), "--method", "grid_lk", "--reference", "2:4", "--out", str(out)]
+    args = [str(path), "--method", "default", "--reference", "2:4", "--out", str(out)]
     assert main([*args, "--open", "0:2"]) == 0
     assert main(args) == 0
     assert centres[0] is not None and centres[0][0] > 1.5 and centres[1] is None

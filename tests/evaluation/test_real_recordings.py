@@ -77,7 +77,7 @@ def test_estimate_on_a_folder_of_real_captures_is_finite(tmp_path):
     for name in ("gelsight_markers_a.png", "gelsight_markers_b.png"):
         shutil.copy(REAL_GELS_DIR / name, folder / name)
     out = tmp_path / "out.csv"
-    assert estimate_main([str(folder), "--method", "grid_lk", "--out", str(out)]) == 0
+    assert estimate_main([str(folder), "--method", "default", "--out", str(out)]) == 0
     rows = estimate_rows(out)
     assert len(rows) == 2 and all_finite(rows)
     assert float(rows[1]["tau_x"]) != 0.0  # the second capture is pressed differently
@@ -139,8 +139,8 @@ def test_the_truth_follows_the_program(recordings):
 # --- the checks -----------------------------------------------------------------------------
 
 
-def test_grid_lk_passes_the_checks_on_a_real_texture(recordings):
-    check = check_recording(CAPTURES[0], recordings, "grid_lk")
+def test_the_default_passes_the_checks_on_a_real_texture(recordings):
+    check = check_recording(CAPTURES[0], recordings, "default")
     assert check.finite == 1.0, check
     assert check.quiet_ratio <= 0.05, check
     assert check.sign_agreement >= 0.95 and check.correlation > 0.0, check
@@ -204,11 +204,11 @@ def test_the_tool_writes_its_table(tmp_path, capsys, monkeypatch):
         lambda capture, work, seed: render_recording(capture, work, small_program(capture), seed),
     )
     table = tmp_path / "table.md"
-    args = ["--estimators", "grid_lk", "--captures", CAPTURES[0], "--work", str(tmp_path / "w")]
+    args = ["--estimators", "default", "--captures", CAPTURES[0], "--work", str(tmp_path / "w")]
     assert check_main([*args, "--table", str(table)]) == 0
     text = table.read_text()
-    assert f"| `grid_lk` | {CAPTURES[0]} |" in text and "| yes |" in text
-    assert (tmp_path / "w" / f"{CAPTURES[0]}.grid_lk.csv").is_file()
+    assert f"| `default` | {CAPTURES[0]} |" in text and "| yes |" in text
+    assert (tmp_path / "w" / f"{CAPTURES[0]}.default.csv").is_file()
 
 
 @pytest.mark.parametrize(

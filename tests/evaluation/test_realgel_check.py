@@ -252,7 +252,7 @@ def test_every_estimator_sees_the_open_gel_before_the_grasp(monkeypatch):
 
     monkeypatch.setattr(TactileEstimator, "set_open_reference", spy_open)
     monkeypatch.setattr(TactileEstimator, "set_reference", spy_reference)
-    for name in ("grid_lk", "paper"):
+    for name in ("default", "paper"):
         calls.clear()
         config = estimator_config(name)
         run_one(sequence, name, config)

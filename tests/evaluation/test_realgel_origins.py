@@ -33,7 +33,7 @@ def test_the_support_centroid_of_a_box_is_its_centre_and_zero_for_no_divergence(
 
 def test_about_the_contact_centroid_the_push_does_not_leak_into_the_tilt():
     spec = SequenceSpec("gelsight_markers_a", "y", 0.45, 0.4, 2.0, seed=3, frames=32)
-    config = with_dipole_grid(estimator_config("grid_lk"), "field")
+    config = with_dipole_grid(estimator_config("default"), "field")
     scores = origin_scores(oracle_run(spec, config))
     assert scores["contact"] > 0.99
     assert scores["gel centre"] < scores["contact"] - 0.05
@@ -41,8 +41,8 @@ def test_about_the_contact_centroid_the_push_does_not_leak_into_the_tilt():
 
 
 def test_the_cli_prints_a_row_per_configuration_and_pushing_sequence(capsys):
-    assert origins_cli.main(["--estimators", "grid_lk", "--frames", "8", "--seed", "1"]) == 0
-    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| grid_lk")]
+    assert origins_cli.main(["--estimators", "default", "--frames", "8", "--seed", "1"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| default")]
     assert len(rows) == 2
 
 

@@ -105,5 +105,5 @@ def test_s2t_matrix_default_mapping():
     assert np.linalg.det(r) == pytest.approx(1.0)
 
 
-def test_the_example_file_is_valid_yaml_with_every_section():
-    assert set(yaml.safe_load(EXAMPLE.read_text())) == {"plug", "hole", "machine"}
+def test_the_task_file_has_the_machine_sections():
+    assert {"plug", "hole", "machine"} <= set(yaml.safe_load(EXAMPLE.read_text()))

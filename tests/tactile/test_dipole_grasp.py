@@ -100,7 +100,7 @@ def test_a_support_must_fit_the_grid():
 # -- the estimator's open gel -------------------------------------------------------------------
 
 PROFILE = sensor_profile("gelsight_mini")
-GRID_LK = estimator_config("grid_lk")
+GRID_LK = estimator_config("default")
 PRESS_CENTRE_PX = (200.0, 100.0)  # right of and above the image centre (160, 120)
 
 

@@ -170,7 +170,7 @@ def test_the_dipole_grid_must_divide_the_field_grid(renderer):
         est.set_reference(renderer.render())
 
 
-@pytest.mark.parametrize("method", ["default", "paper", "markers", "grid_lk"])
+@pytest.mark.parametrize("method", ["default", "paper", "markers", "dis_half"])
 def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     """Steady-state pushes allocate no arrays in our code (only OpenCV's outputs and the
     returned estimate)."""

@@ -12,7 +12,7 @@ from drivers.sim.render.marker_images import area_mean_field, smooth_random_fiel
 ROWS, COLS = 12, 16
 BASE = estimator_config("dis_half").flow
 PAPER = estimator_config("paper").flow
-GRID_LK = estimator_config("grid_lk").flow
+GRID_LK = estimator_config("default").flow
 # Tolerances: grid RMSE in px over warps with peak 0.1-3 px (docs/BENCHMARKS.md has the
 # measured errors; these bounds leave about 2x headroom).
 METHODS = {

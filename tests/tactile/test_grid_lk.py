@@ -10,7 +10,7 @@ from controller.tactile.settings import estimator_config
 from drivers.sim.render.marker_images import area_mean_field, smooth_random_field
 
 ROWS, COLS = 12, 16
-GRID_LK = estimator_config("grid_lk").flow
+GRID_LK = estimator_config("default").flow
 
 
 def _flow(config=GRID_LK, reference=None):
