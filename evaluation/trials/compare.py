@@ -1,8 +1,8 @@
 """Controllers compared side by side on the same seeds, across insertion speed settings.
 
     python scripts/compare_trials.py --task usb_c --seeds 0:200 --out out/compare/usb_c
-        [--controllers dipole,fingervision,blind,oracle] [--speeds 0.005,0.01,0.02]
-        [--speed-key machine.insert_speed_m_s] [--workers N] [--executor local|ray]
+        [--controllers dipole,fingervision,blind,oracle] [--speeds 0.002,0.004,0.008]
+        [--speed-key machine.insert.speed_m_s] [--workers N] [--executor local|ray]
         [--ray-address ADDR] [--set KEY=VALUE ...]
 
 Every controller runs every speed setting (``--set SPEED_KEY=value`` added to the trials'
@@ -47,8 +47,8 @@ from evaluation.trials.batch_cli import (
 from evaluation.trials.charts import controller_label, speed_success_chart, time_histogram
 from evaluation.trials.spec import CONTROLLERS, TrialSpec, format_seeds
 
-DEFAULT_SPEED_KEY = "machine.insert_speed_m_s"
-DEFAULT_SPEEDS = (0.005, 0.01, 0.02)
+DEFAULT_SPEED_KEY = "machine.insert.speed_m_s"
+DEFAULT_SPEEDS = (0.002, 0.004, 0.008)
 SPEED_CHART = "speed_success.png"
 TABLE = "comparison.md"
 SUMMARIES = "comparison.json"

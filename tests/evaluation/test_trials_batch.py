@@ -36,7 +36,7 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
     speed = 1.0
     for item in spec.overrides:
         key, _, value = item.partition("=")
-        if key == "machine.insert_speed_m_s":
+        if key == "machine.insert.speed_m_s":
             speed = float(value)
     time_s = 5.0 + 0.5 * spec.seed / speed
     return TrialResult(
@@ -254,7 +254,7 @@ def check_spec(spec: TrialSpec) -> None:
     if spec.task not in ("usb_a", "usb_c"):
         raise ConfigError(f"unknown task configuration {spec.task!r}")
     for item in spec.overrides:
-        if item.partition("=")[0] not in ("machine.insert_speed_m_s", "scene.friction"):
+        if item.partition("=")[0] not in ("machine.insert.speed_m_s", "scene.friction"):
             raise ConfigError(f"override {item!r}: unknown key")
 
 
@@ -350,7 +350,7 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     assert table.count("\n| ") == 1 + 6  # header and one row per cell
     assert "oracle (true wrench: upper bound)" in table and "![success against" in table
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
-    assert summary["overrides"] == ["machine.insert_speed_m_s=0.02"]
+    assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6
     every = json.loads((out / "comparison.json").read_text())
     assert len(every) == 6
@@ -362,7 +362,7 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
 def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
     with pytest.raises(SystemExit) as caught:
         compare_main(["--task", "usb_c", "--seeds", "0:2", "--out", str(tmp_path),
-                      "--set", "machine.insert_speed_m_s=1", "--trial-function", FAKE])
+                      "--set", "machine.insert.speed_m_s=1", "--trial-function", FAKE])
     assert caught.value.code == 2
     assert "is the speed key" in capsys.readouterr().err
 
