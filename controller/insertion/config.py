@@ -58,7 +58,7 @@ class NoiseFloor(Config):
 
     tilt: float = number(1e-9, 1e3, default=0.0002)
     inplane: float = number(1e-9, 1e3, default=0.005)
-    shear: float = number(1e-9, 1e3, default=0.002)
+    shear: float = number(1e-9, 1e3, default=0.0002)
     normal: float = number(1e-9, 1e3, default=0.002)
 
 
@@ -100,12 +100,12 @@ class ApproachSettings(Config):
     estimates. A tip more than
     ``overtravel_m`` below the board surface without contact: limit exceeded."""
 
-    height_m: float = number(0.0, 0.1, default=0.005)
+    height_m: float = number(0.0, 0.1, default=0.003)
     tilt_rad: float = number(-45 * _DEG, 45 * _DEG, default=15 * _DEG)
     tilt_axis: Literal["x", "y"] = "x"
     move_speed_m_s: float = number(1e-4, 0.25, default=0.03)
     rotate_speed_rad_s: float = number(1e-3, 2.0, default=0.5)
-    descend_speed_m_s: float = number(1e-4, 0.05, default=0.003)
+    descend_speed_m_s: float = number(1e-4, 0.05, default=0.002)
     pose_gain_1_s: float = number(0.1, 50.0, default=4.0)
     pose_tol_m: float = number(1e-5, 0.01, default=0.0003)
     angle_tol_rad: float = number(1e-4, 0.2, default=0.5 * _DEG)
@@ -134,6 +134,13 @@ class SearchSettings(Config):
     building up) the average is only learned, with the signals' ``ema_alpha``. Contact lost:
     the signal norm below ``contact_lost_sigma`` for ``contact_lost_frames`` successive
     estimates.
+    Hole found, too: the *load drop*. The TCP's height is held, so when the tip drops into
+    the opening the wrist's z spring relaxes and the axial force (normalised) falls: below
+    (1 - ``hole_drop_ratio``) times its reference, and by at least ``hole_drop_sigma``, for
+    ``hole_frames`` successive estimates (any drag direction). The reference is learned like
+    the resistance's (the first ``settle_s``, weight ``ema_alpha``), then followed with
+    ``reference_alpha`` while the load is not dropping. ``hole_drop_ratio`` 0 turns the rule
+    off.
     ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
     (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
 
@@ -142,10 +149,12 @@ class SearchSettings(Config):
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
     uncertainty_xy_m: float = number(0.0, 0.05, default=0.003)
     uncertainty_yaw_rad: float = number(0.0, 0.5, default=3 * _DEG)
-    press_depth_m: float = number(0.0, 0.01, default=0.001)
+    press_depth_m: float = number(0.0, 0.01, default=0.0003)
     hole_rise_sigma: float = number(0.5, 1e4, default=10.0)
     hole_rise_ratio: float = number(0.0, 100.0, default=1.0)
     hole_frames: int = number(1, 100, default=3)
+    hole_drop_ratio: float = number(0.0, 1.0, default=0.4)
+    hole_drop_sigma: float = number(0.0, 1e4, default=4.0)
     reference_alpha: float = number(0.001, 1.0, default=0.05)
     settle_s: float = number(0.0, 10.0, default=0.5)
     contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
@@ -187,7 +196,7 @@ class InsertSettings(Config):
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
     depth_m: float = number(1e-4, 0.05, default=0.005)
     compliance_scale: float = number(0.0, 1.0, default=0.5)
-    force_budget: float = number(1e-6, 1e4, default=0.2)
+    force_budget: float = number(1e-6, 1e4, default=0.05)
     jam_rise_sigma: float = number(0.5, 1e4, default=15.0)
     jam_frames: int = number(1, 100, default=3)
 
@@ -234,7 +243,7 @@ class Limits(Config):
 
     tilt_torque_limit: float = number(1e-6, 1e4, default=0.05)
     inplane_torque_limit: float = number(1e-6, 1e6, default=2.5)
-    force_limit: float = number(1e-6, 1e4, default=0.5)
+    force_limit: float = number(1e-6, 1e4, default=0.2)
     max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=30 * _DEG)
     max_linear_m_s: float = number(1e-4, 0.5, default=0.05)
     max_angular_rad_s: float = number(1e-3, 3.0, default=0.6)

@@ -116,6 +116,7 @@ class InsertionMachine:
         self._retries = 0
         self._regrasp = False
         self._released = False
+        self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
 
     # -- the Machine protocol ------------------------------------------------------------
 
@@ -374,6 +375,8 @@ class InsertionMachine:
                 return self._fail(obs, FailureReason.CONTACT_LOST)
             elapsed = obs.t_s - stage.entered_t_s
             if stage.detector.update(self.signals, rotation, stage.v_tip, elapsed):
+                if stage.detector.load_reference is not None:
+                    self._preload = max(stage.detector.load_reference, 1.0)
                 self._go(obs, Phase.ALIGN, "hole_found")
                 return _hold()
         v_tip = np.zeros(3)
@@ -386,13 +389,15 @@ class InsertionMachine:
         return self._tip_command(obs, stage.v_tip, self._hold_rotation(rotation))
 
     def _align(self, obs: Observation, new: bool) -> Command:
-        """Turn about the tip to null the torques and upright the plug."""
+        """Turn about the tip to null the torques and upright the plug, holding the tip where
+        ALIGN began, pressing it down toward SEARCH's preload but never below that point (so a
+        tip caught in the opening stays there while the plug turns)."""
         stage, settings = self._stage, self.config.align
-        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        rotation = rotation_of(obs.arm.tcp)
+        edge = self._lowest_edge(obs, rotation)
         if stage.name == "":
             stage.name = "servo"
-            stage.point = tip
-        rotation = rotation_of(obs.arm.tcp)
+            stage.point = edge
         if new:
             aligned = self._torques_within_tolerance() and (
                 tilt_from_down(rotation)[0] <= settings.tilt_tol_rad
@@ -402,8 +407,26 @@ class InsertionMachine:
             self._go(obs, Phase.INSERT, "aligned")
             return _hold()
         w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_rad_s)
-        v_tip = self.config.approach.pose_gain_1_s * (stage.point - tip)
-        return self._tip_command(obs, v_tip, w)
+        v_edge = self.config.approach.pose_gain_1_s * (stage.point - edge)
+        v_edge[2] = max(v_edge[2], -self._press_rate())  # never below where ALIGN began
+        v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
+        return self._command(v_tcp, w)
+
+    def _lowest_edge(self, obs: Observation, rotation: Rotation) -> np.ndarray:
+        """The lowest of the four edge midpoints of the plug's tip face, in B: the edge a
+        tilted plug leads with, and the one caught in the opening (ALIGN turns about it)."""
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        half_w, half_t = 0.5 * self.plug.width_m, 0.5 * self.plug.thickness_m
+        offsets = rotation.apply(
+            [[half_w, 0.0, 0.0], [-half_w, 0.0, 0.0], [0.0, half_t, 0.0], [0.0, -half_t, 0.0]]
+        )
+        return tip + offsets[int(np.argmin(offsets[:, 2]))]
+
+    def _press_rate(self) -> float:
+        """Downward tip speed keeping the axial load at SEARCH's preload: the descent speed
+        times the load's shortfall relative to the preload, within +-1."""
+        shortfall = (self._preload - self.signals.axial_force_n) / self._preload
+        return self.config.approach.descend_speed_m_s * float(np.clip(shortfall, -1.0, 1.0))
 
     def _insert(self, obs: Observation, new: bool) -> Command:
         """Push straight down within the budgets; a jam backs off; the depth is success."""

@@ -100,6 +100,9 @@ class HoleDetector:
         self._learned = [0, 0]
         self._count = 0
         self._drag = np.zeros(3)
+        self._load_ref: float | None = None
+        self._load_samples = 0
+        self._drop_count = 0
 
     def update(
         self,
@@ -111,9 +114,39 @@ class HoleDetector:
         """True when the rule holds after this estimate; ``commanded``: the tip velocity in B
         last commanded, ``elapsed_s``: time since SEARCH began."""
         found = self._judge(signals, rotation, commanded, elapsed_s)
+        found = self._dropped(signals.axial_force_n, elapsed_s) or found
         horizontal = np.array([commanded[0], commanded[1], 0.0])
         self._drag = self._alpha * horizontal + (1.0 - self._alpha) * self._drag
         return found
+
+    @property
+    def load_reference(self) -> float | None:
+        """The axial force's reference (noise units): the preload while dragging."""
+        return self._load_ref
+
+    def _dropped(self, load: float, elapsed_s: float) -> bool:
+        """The load-drop rule (config.SearchSettings): the axial force fallen below
+        (1 - ``hole_drop_ratio``) x its reference, and by ``hole_drop_sigma``."""
+        settings = self._settings
+        if settings.hole_drop_ratio <= 0.0:
+            return False
+        ref = self._load_ref
+        self._load_samples += 1
+        if ref is None or self._load_samples <= settings.hole_frames or (
+            elapsed_s < settings.settle_s
+        ):
+            previous = load if ref is None else ref
+            self._load_ref = self._alpha * load + (1.0 - self._alpha) * previous
+            self._drop_count = 0
+            return False
+        dropping = load <= (1.0 - settings.hole_drop_ratio) * ref and (
+            ref - load >= settings.hole_drop_sigma
+        )
+        self._drop_count = self._drop_count + 1 if dropping else 0
+        if not dropping:
+            slow = settings.reference_alpha
+            self._load_ref = slow * load + (1.0 - slow) * ref
+        return self._drop_count >= settings.hole_frames
 
     def _judge(
         self, signals: TactileSignals, rotation: Rotation, commanded: np.ndarray, elapsed_s: float

@@ -53,7 +53,7 @@ def test_other_sections_of_a_task_file_are_left_to_the_scene():
          "key 'machine.signals.torque_axes': expected each tool axis once"),
         ("machine.signals.torque_axes", ["+x", "+z", "+y"], "right-handed frame"),
         ("machine.insert.force_budget", 0.9,
-         "key 'machine.insert.force_budget': expected at most limits.force_limit (0.5)"),
+         "key 'machine.insert.force_budget': expected at most limits.force_limit (0.2)"),
         ("machine.approach.tilt_rad", 0.6,
          "key 'machine.approach.tilt_rad': expected less than limits.max_tilt_rad"),
         ("machine.search.pitch_m", True, "key 'machine.search.pitch_m': expected a number"),

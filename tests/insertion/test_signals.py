@@ -14,6 +14,7 @@ def zeroing(t_s):
 
 
 def settings(**kw):
+    kw.setdefault("noise_floor", NoiseFloor(shear=0.002))  # the figures below assume it
     return SignalSettings(baseline_frames=4, ema_alpha=1.0, **kw)
 
 
@@ -51,7 +52,9 @@ def test_noise_floor_bounds_the_noise_and_units_follow_the_channel():
 
 
 def test_moving_average_weights_new_samples_by_alpha():
-    signals = TactileSignals(SignalSettings(baseline_frames=2, ema_alpha=0.25))
+    signals = TactileSignals(
+        SignalSettings(baseline_frames=2, ema_alpha=0.25, noise_floor=NoiseFloor(shear=0.002))
+    )
     signals.update(estimate(0.0))
     signals.update(estimate(0.1))
     signals.update(estimate(0.2, shear_y=0.002))  # one noise unit (floor)

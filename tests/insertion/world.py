@@ -17,7 +17,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import HolePose, MachineConfig, PlugGeometry, s2t_matrix
+from controller.insertion.config import (
+    HolePose,
+    MachineConfig,
+    NoiseFloor,
+    PlugGeometry,
+    s2t_matrix,
+)
 from controller.insertion.interface import Command, Observation, Phase, TeleopInput
 from controller.insertion.machine import InsertionMachine
 from controller.insertion.motion import cross
@@ -235,8 +241,20 @@ class ToyWorld:
         return machine.phase
 
 
+def toy_config() -> MachineConfig:
+    """The machine's defaults with the force and shear scales the toy world's units assume
+    (its axial force is ``k_board`` per m, its shear noise well below the shear floor)."""
+    defaults = MachineConfig()
+    return replace(
+        defaults,
+        signals=replace(defaults.signals, noise_floor=NoiseFloor(shear=0.002)),
+        insert=replace(defaults.insert, force_budget=0.2),
+        limits=replace(defaults.limits, force_limit=0.5),
+    )
+
+
 def make_machine(world: ToyWorld, config: MachineConfig | None = None) -> InsertionMachine:
-    return InsertionMachine(config or MachineConfig(), world.plug, world.hole)
+    return InsertionMachine(config or toy_config(), world.plug, world.hole)
 
 
 def path(machine: InsertionMachine) -> list[tuple[str, str, str]]:
