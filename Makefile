@@ -3,8 +3,9 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
+SEEDS  ?= 200
 
-.PHONY: install demo test bench evaluate lint clean
+.PHONY: install demo estimator-demo test bench evaluate trials lint clean
 
 install: $(STAMP)
 
@@ -15,7 +16,11 @@ $(STAMP): pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python scripts/demo.py --out out/demo
+	rm -rf out/demo
+	MPLBACKEND=Agg $(BIN)/python scripts/run_trial.py --task usb_c --seed 0 --out out/demo
+
+estimator-demo: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python scripts/demo.py --out out/estimator-demo
 
 test: $(STAMP)
 	MPLBACKEND=Agg SDL_VIDEODRIVER=dummy $(BIN)/python -m pytest
@@ -25,6 +30,12 @@ bench: $(STAMP)
 
 evaluate: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python scripts/evaluate.py --docs docs --work out/evaluate
+
+trials: $(STAMP)
+	rm -rf out/trials
+	MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task usb_c --seeds 0:$(SEEDS) --workers 2 --out out/trials/usb_c
+	MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task usb_a --seeds 0:$(SEEDS) --workers 2 --out out/trials/usb_a
+	$(BIN)/python scripts/publish_trials.py out/trials --docs docs
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
