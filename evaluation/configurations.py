@@ -1,25 +1,29 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
-paper's, the default (the sensor profiles' ``estimator``: grid Lucas-Kanade), one-knob
-variants of the default (colour, warm start, smoothness, the dipole's grid), and the DIS
-family around ``dis_half`` (the default until session 6: flow preset, image scale, grey or
-per-channel, patch stride, variational refinement, divergence of the raw field or of its
-NHHD part, the dipole's grid, temporal filter) and cheaper Farneback settings. The grid stride
-is varied through the dipole's grid: with square blocks pooling is exact
-(tests/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole exactly.
-``PAPER`` and ``DEFAULT`` are the labels of the paper's and the default configuration."""
+paper's, the Mini's default (its profile's ``estimator``: grid Lucas-Kanade on the
+luminance), the per-channel ``default`` (the DIGIT's) and one-knob variants of it (warm
+start, iterations, smoothness, the dipole's grid), and the DIS family around ``dis_half``
+(the default until session 6: flow preset, image scale, grey or per-channel, patch stride,
+variational refinement, divergence of the raw field or of its NHHD part, the dipole's grid,
+temporal filter) and cheaper Farneback settings. The grid stride is varied through the
+dipole's grid: with square blocks pooling is exact (tests/tactile/test_estimator.py), so a
+flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and ``DEFAULT`` are the labels of
+the paper's and the Mini's default configuration."""
 
 from __future__ import annotations
 
 from dataclasses import replace
 
 from controller.tactile.settings import DipoleGrid, EstimatorConfig, estimator_config
+from drivers.tactile.profile import sensor_profile
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
-DEFAULT = "**default** (grid LK per-channel, 16x12, dipole on 4x4 curl-free)"
+DEFAULT = "**default** (the Mini's default_grey: grid LK grey, 16x12, grasp-centred dipole)"
+PER_CHANNEL = "default (grid LK per-channel: the DIGIT's, and a Mini without markers)"
 DIS_HALF = "dis_half (DIS tuned, gray, half resolution)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
+    mini = estimator_config(sensor_profile("gelsight_mini").estimator)
     default = estimator_config("default")
     paper = estimator_config("paper")
     dis_half = estimator_config("dis_half")
@@ -36,7 +40,8 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
     )
     configs = [
         (PAPER, paper),
-        (DEFAULT, default),
+        (DEFAULT, mini),
+        (PER_CHANNEL, default),
         (DIS_HALF, dis_half),
         ("markers", estimator_config("markers")),
     ]
@@ -60,7 +65,6 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
     ]
     refined = replace(plain_dis, preset="ultrafast", variational_refinement_iterations=5)
     return configs + [
-        ("default, grey", replace(default, flow=replace(lk, color="gray"))),
         ("default, cold start", replace(default, flow=replace(lk, warm_start=False))),
         ("default, one Gauss-Newton step", grid_lk(iterations=1)),
         ("default, smoothness 0.1", grid_lk(smoothness=0.1)),

@@ -249,7 +249,8 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         "Per sensor and object: a plate or peg squeezed at 15 N between the live gel and a",
         "passive one; alternating single-axis torque pulses of 20, 40 and 60 N*mm applied (each",
         "gel carries half); F/T at 62.5 Hz, tactile frames at about 19 Hz with jittered",
-        "timestamps; each sensor profile's estimator (`default` for both). Realistic images;",
+        "timestamps; each sensor profile's estimator (`default_grey` for the Mini, `default`",
+        "for the DIGIT). Realistic images;",
         "the rows whose object carries `real:` ran on that real capture, calibrated on its own.",
         "Slope is c (N*m per raw unit), fitted through zero.",
         "",
@@ -280,7 +281,7 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         )
     speedup = paper.latency_ms / default.latency_ms
     lines += [
-        f"- default against the paper's configuration: {speedup:.1f}x faster "
+        f"- the Mini's default against the paper's configuration: {speedup:.1f}x faster "
         f"({default.latency_ms:.2f} against {paper.latency_ms:.2f} ms; target >= 15x: "
         f"{'met' if speedup >= 15 else 'missed'}), tilt RMSE {default.rmse_nmm:.3f} against "
         f"{paper.rmse_nmm:.3f} N*mm over the Mini's four datasets (target: no worse: "
@@ -295,8 +296,10 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         "and the round peg on realistic images, and the plate on the real capture",
         "`gelsight_markers_a`. The pegs are the closer stand-ins for a USB stick. A point is on",
         "the front when no other point is both faster and more accurate.",
-        f"The default is {'on' if on_front else 'NOT on'} the Pareto front. Why this default:",
-        "docs/BENCHMARKS.md, 'Targets and the choice of default' (robustness in section 3).",
+        f"The Mini's default is {'on' if on_front else 'NOT on'} the Pareto front. The",
+        "per-channel `default` (the DIGIT's) costs more here, on the Mini's marker gel, and",
+        "earns it on markerless gels: on the real captures under an independent elastic model",
+        "the grey variant loses the tilt on markerless textures (docs/REALGEL_CHECK.md).",
         "",
         "![pareto](figures/pareto.png)",
         "",
