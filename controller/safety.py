@@ -54,6 +54,7 @@ from controller.teleop import lost_in_control
 from drivers.base import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
 from drivers.config import Config, number
 from drivers.errors import DeviceTimeoutError
+from drivers.task_geometry import WorkspaceBox
 
 _DOWN_B = np.array([0.0, 0.0, -1.0])
 _TILT_SAMPLES = 8  # points along the twist's horizon where the tilt is checked
@@ -61,7 +62,7 @@ _ROUNDING = 1e-12
 
 
 @dataclass(frozen=True)
-class LimitsConfig(Config):
+class LimitsConfig(WorkspaceBox, Config):
     """The task YAML's ``limits:`` section (see the module doc): the workspace box of the TCP
     in B (m), speeds, the tilt from the downward vertical (rad) and the tactile budget."""
 
@@ -80,22 +81,6 @@ class LimitsConfig(Config):
     max_normal: float | None = number(0.0, 1e6, default=None)
     over_budget: Literal["lift_only", "stop"] = "lift_only"
 
-    def __post_init__(self) -> None:
-        for axis in "xyz":
-            low, high = f"{axis}_min_m", f"{axis}_max_m"
-            if not getattr(self, low) < getattr(self, high):
-                raise ValueError(
-                    f"key '{high}': expected a number greater than {low} "
-                    f"({getattr(self, low)!r}), got {getattr(self, high)!r}"
-                )
-
-    @property
-    def box_min_m(self) -> np.ndarray:
-        return np.array([self.x_min_m, self.y_min_m, self.z_min_m])
-
-    @property
-    def box_max_m(self) -> np.ndarray:
-        return np.array([self.x_max_m, self.y_max_m, self.z_max_m])
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ from scipy.spatial.transform import Rotation
 
 from drivers.base import Pose, Twist
 from drivers.config import Config, number
+from drivers.task_geometry import WorkspaceBox
 
 _DOWN_B = np.array([0.0, 0.0, -1.0])
 _ROUNDING_RAD = 1e-12  # tilts this close to the limit count as within (float round-off)
@@ -47,7 +48,7 @@ _TWIST_TILT_SAMPLES = 8  # points along the velocity horizon at which the tilt i
 
 
 @dataclass(frozen=True)
-class SafetyEnvelope(Config):
+class SafetyEnvelope(WorkspaceBox, Config):
     """Limits on the TCP: a box in B (m), speeds, the step per servo command, the tilt."""
 
     x_min_m: float = number(-2.0, 2.0)
@@ -62,22 +63,6 @@ class SafetyEnvelope(Config):
     max_step_rad: float = number(1e-6, 0.5)
     max_tilt_rad: float = number(0.0, math.pi / 2)
 
-    def __post_init__(self) -> None:
-        for axis in "xyz":
-            low, high = f"{axis}_min_m", f"{axis}_max_m"
-            if not getattr(self, low) < getattr(self, high):
-                raise ValueError(
-                    f"key '{high}': expected a number greater than {low} "
-                    f"({getattr(self, low)!r}), got {getattr(self, high)!r}"
-                )
-
-    @property
-    def box_min_m(self) -> np.ndarray:
-        return np.array([self.x_min_m, self.y_min_m, self.z_min_m])
-
-    @property
-    def box_max_m(self) -> np.ndarray:
-        return np.array([self.x_max_m, self.y_max_m, self.z_max_m])
 
 
 def require_finite(name: str, values: Iterable[float]) -> None:
