@@ -170,7 +170,13 @@ class AlignSettings(Config):
     term ``upright_gain_1_s`` x (tilt of T z from straight down). Gains ``gain_tau_*`` in
     rad/s per noise unit; tolerances ``tol_tau_*_sigma`` in noise units. Aligned: every
     torque within its tolerance and the tilt within ``tilt_tol_rad`` for ``frames``
-    successive estimates."""
+    successive estimates.
+
+    The pivot (the tip face's lowest edge, the heel) is moved backward, against the tilt's
+    lean, at ``wall_seek_m_s`` for at most ``wall_seek_max_m``: uprighting about the heel
+    puts the plug's body on the lean's side of it, so the heel must sit against the
+    opening's wall behind it for the plug to come upright inside the opening (the wall
+    stops the heel; the compliant wrist takes up the rest)."""
 
     gain_tau_x: float = number(0.0, 10.0, default=0.004)
     gain_tau_y: float = number(0.0, 10.0, default=0.004)
@@ -182,16 +188,34 @@ class AlignSettings(Config):
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
+    wall_seek_m_s: float = number(0.0, 0.02, default=0.001)
+    wall_seek_max_m: float = number(0.0, 0.01, default=0.0015)
 
 
 @dataclass(frozen=True)
 class InsertSettings(Config):
-    """INSERT: move the tip straight down (B's -z) at ``speed_m_s``, keeping the ALIGN torque
-    servo at ``compliance_scale`` of its gains. The axial force (the estimated force along T
-    z, estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
+    """INSERT, in two stages.
+
+    *Press*: move the tip down (B's -z) at ``speed_m_s`` times the axial load's shortfall
+    below ``press_load_ratio`` x SEARCH's load reference (within +-1), so a plug standing on
+    the opening's rim is pressed with a bounded force instead of compressing the wrist. Once
+    that load is reached (the *stall height*: the TCP's height then), the TCP sweeps the
+    plug's yaw about its tip axis, a triangle wave between +-``yaw_sweep_rad`` about the
+    opening's nominal yaw at ``yaw_rate_rad_s`` (the opening's yaw is uncertain and the
+    USB-C clearances leave about 1 deg). The TCP ``engage_m`` below the stall height (the
+    load gave way: the plug entered the opening) begins the push; ``sweeps`` whole sweeps
+    without engaging: the plug is not over the opening (BACKOFF, then APPROACH and SEARCH
+    again where the pattern left off).
+
+    *Push*: the tip straight down at ``speed_m_s``, the yaw held, ALIGN's torque servo at
+    ``compliance_scale`` of its gains. The axial force (the estimated force along T z,
+    estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
     torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
-    INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF). Success: the tip
-    ``depth_m`` below the board surface."""
+    INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF, then ALIGN).
+
+    Success (either stage): the tip ``depth_m`` below the board surface, by the arm's TCP,
+    with the axial load below the press load (so a compressed wrist is not taken for
+    depth)."""
 
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
     depth_m: float = number(1e-4, 0.05, default=0.005)
@@ -199,11 +223,17 @@ class InsertSettings(Config):
     force_budget: float = number(1e-6, 1e4, default=0.05)
     jam_rise_sigma: float = number(0.5, 1e4, default=15.0)
     jam_frames: int = number(1, 100, default=3)
+    press_load_ratio: float = number(0.1, 100.0, default=1.0)
+    engage_m: float = number(1e-5, 0.01, default=0.0008)
+    yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
+    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.15)
+    sweeps: int = number(1, 20, default=1)
 
 
 @dataclass(frozen=True)
 class BackoffSettings(Config):
-    """BACKOFF: lift the tip ``distance_m`` at ``speed_m_s``, then ALIGN again. More than
+    """BACKOFF: lift the tip ``distance_m`` at ``speed_m_s``, then ALIGN again (after a jam)
+    or APPROACH and SEARCH again (after a press that never engaged). More than
     ``max_retries`` back-offs and re-grasps in one run: too many retries."""
 
     distance_m: float = number(1e-5, 0.02, default=0.001)

@@ -72,8 +72,10 @@ def _insertion_edges() -> tuple[Edge, ...]:
         Edge(Phase.SEARCH, Phase.ALIGN, "hole_found"),
         Edge(Phase.ALIGN, Phase.INSERT, "aligned"),
         Edge(Phase.INSERT, Phase.BACKOFF, "jam"),
+        Edge(Phase.INSERT, Phase.BACKOFF, "not_engaged"),
         Edge(Phase.INSERT, Phase.RELEASE, "depth_reached"),
         Edge(Phase.BACKOFF, Phase.ALIGN, "backed_off"),
+        Edge(Phase.BACKOFF, Phase.APPROACH, "search_again"),
         Edge(Phase.RELEASE, Phase.RETRACT, "released"),
         Edge(Phase.RETRACT, Phase.DONE, "retracted"),
     ]

@@ -70,12 +70,17 @@ class _Stage:
     since_t_s: float = 0.0  # when ``name`` began, or a condition started to hold
     count: int = 0  # successive new estimates satisfying the phase's rule (SEARCH: no contact)
     z0_m: float = 0.0  # the TCP's height on entry
-    s_m: float = 0.0  # SEARCH: path length travelled
     detector: HoleDetector | None = None  # SEARCH: the hole-found rule
-    v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command
+    v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command;
+    # ALIGN: the heel's backward direction
+    s_m: float = 0.0  # ALIGN: how far the heel has been moved back
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
     point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
     frame_t_s: float = math.nan  # GRASP: time of the last tactile estimate counted
+    stall_z_m: float = math.nan  # INSERT: the TCP's height when the press load was reached
+    yaw_sign: float = 1.0  # INSERT: the yaw sweep's present direction
+    reversals: int = 0  # INSERT: the yaw sweep's turns so far
+    start_yaw_rad: float = 0.0  # INSERT: the yaw (from the nominal) when the sweep began
 
 
 class InsertionMachine:
@@ -117,6 +122,8 @@ class InsertionMachine:
         self._regrasp = False
         self._released = False
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
+        self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
+        self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
 
     # -- the Machine protocol ------------------------------------------------------------
 
@@ -330,14 +337,18 @@ class InsertionMachine:
         height there, so the plug never sweeps over the board), then descend until contact."""
         stage, settings = self._stage, self.config.approach
         rotation = rotation_of(obs.arm.tcp)
-        target_tip = self._hole_xyz + np.array([0.0, 0.0, settings.height_m])
+        resume = self._planar(self._pattern.offset(self._search_s_m))
+        target_tip = self._hole_xyz + resume + np.array([0.0, 0.0, settings.height_m])
         if stage.name == "":
             target_tcp = target_tip - self._approach_rot.apply([0.0, 0.0, self.plug.length_m])
             error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
             turn = rotation_error(rotation, self._approach_rot)
             tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
             if tip_z < target_tip[2] - settings.pose_tol_m:
-                error[:2] = 0.0
+                # the tip straight up to its height first, not turning (it may be in the
+                # opening)
+                error = np.array([0.0, 0.0, target_tip[2] - tip_z + settings.pose_tol_m])
+                turn = np.zeros(3)
             if np.linalg.norm(error) <= settings.pose_tol_m and (
                 np.linalg.norm(turn) <= settings.angle_tol_rad
             ):
@@ -360,9 +371,9 @@ class InsertionMachine:
         stage, settings = self._stage, self.config.search
         if stage.detector is None:
             stage.detector = HoleDetector(settings, self.config.signals.ema_alpha)
-        stage.s_m += settings.speed_m_s * min(self._tick_s, _MAX_DT_S)
-        offset = self._planar(self._pattern.offset(stage.s_m))
-        ahead = self._planar(self._pattern.offset(stage.s_m + 1e-4)) - offset
+        self._search_s_m += settings.speed_m_s * min(self._tick_s, _MAX_DT_S)
+        offset = self._planar(self._pattern.offset(self._search_s_m))
+        ahead = self._planar(self._pattern.offset(self._search_s_m + 1e-4)) - offset
         tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
         gain = self.config.approach.pose_gain_1_s
@@ -398,6 +409,14 @@ class InsertionMachine:
         if stage.name == "":
             stage.name = "servo"
             stage.point = edge
+            lean = rotation.apply([0.0, 0.0, 1.0])
+            lean[2] = 0.0
+            norm = float(np.linalg.norm(lean))
+            stage.v_tip = -lean / norm if norm > 1e-9 else np.zeros(3)
+        if stage.s_m < settings.wall_seek_max_m:
+            step = settings.wall_seek_m_s * min(self._tick_s, _MAX_DT_S)
+            stage.s_m += step
+            stage.point = stage.point + step * stage.v_tip
         if new:
             aligned = self._torques_within_tolerance() and (
                 tilt_from_down(rotation)[0] <= settings.tilt_tol_rad
@@ -429,12 +448,20 @@ class InsertionMachine:
         return self.config.approach.descend_speed_m_s * float(np.clip(shortfall, -1.0, 1.0))
 
     def _insert(self, obs: Observation, new: bool) -> Command:
-        """Push straight down within the budgets; a jam backs off; the depth is success."""
+        """Press with a bounded load, sweeping the yaw until the plug engages; then push
+        straight down within the budgets; a jam backs off; the depth is success (see
+        config.InsertSettings)."""
         stage, settings = self._stage, self.config.insert
+        if stage.name == "":
+            self._next_stage(obs, "press")
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
-        if tip[2] <= self.hole.z_m - settings.depth_m:
+        target_load = settings.press_load_ratio * self._preload
+        unloaded = self.signals.axial_force_n < target_load
+        if tip[2] <= self.hole.z_m - settings.depth_m and unloaded:
             self._go(obs, Phase.RELEASE, "depth_reached")
             return _hold()
+        if stage.name == "press":
+            return self._press(obs, target_load)
         if new:
             torque = self.signals.torque_t
             tilt = float(math.hypot(torque[0], torque[1]))
@@ -445,23 +472,70 @@ class InsertionMachine:
             )
             stage.count = stage.count + 1 if jammed else 0
         if stage.count >= settings.jam_frames:
-            if self._retries >= self.config.backoff.max_retries:
-                return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
-            self._retries += 1
-            self._go(obs, Phase.BACKOFF, "jam")
-            return _hold()
+            return self._back_off(obs, "jam")
         rotation = rotation_of(obs.arm.tcp)
         w = clamp_norm(
             self._align_rate(rotation, settings.compliance_scale),
             self.config.align.max_angular_rad_s,
         )
+        w[2] = 0.0  # the yaw found while pressing is held
         return self._tip_command(obs, np.array([0.0, 0.0, -settings.speed_m_s]), w)
 
+    def _press(self, obs: Observation, target_load: float) -> Command:
+        """INSERT's press stage: descend toward the press load; at the stall height sweep
+        the yaw; engaged: the push stage; the sweeps done: back off and search again."""
+        stage, settings = self._stage, self.config.insert
+        z_tcp = float(obs.arm.tcp.xyz_m[2])
+        rotation = rotation_of(obs.arm.tcp)
+        yaw = _yaw_of(rotation) - self.hole.yaw_rad
+        if math.isnan(stage.stall_z_m) and not (
+            self.signals.axial_force_n < 0.8 * target_load
+        ):
+            stage.stall_z_m = z_tcp
+            stage.start_yaw_rad = yaw
+        reference = stage.z0_m if math.isnan(stage.stall_z_m) else stage.stall_z_m
+        gave_way = not math.isnan(stage.stall_z_m) and (
+            self.signals.axial_force_n < 0.5 * target_load
+        )
+        if z_tcp <= reference - settings.engage_m or gave_way:
+            self._next_stage(obs, "push")
+            return _hold()
+        w = np.zeros(3)
+        if not math.isnan(stage.stall_z_m) and settings.yaw_sweep_rad > 0.0:
+            if stage.yaw_sign * yaw >= settings.yaw_sweep_rad:
+                stage.yaw_sign = -stage.yaw_sign
+                stage.reversals += 1
+            back_at_start = stage.reversals >= 2 * settings.sweeps and (
+                stage.yaw_sign * (yaw - stage.start_yaw_rad) >= 0.0
+            )
+            if back_at_start:
+                return self._back_off(obs, "not_engaged")
+            w[2] = stage.yaw_sign * settings.yaw_rate_rad_s
+        w[:2] = clamp_norm(self._align_rate(rotation, settings.compliance_scale),
+                           self.config.align.max_angular_rad_s)[:2]
+        shortfall = (target_load - self.signals.axial_force_n) / target_load
+        v_tip = np.array([0.0, 0.0, -settings.speed_m_s * float(np.clip(shortfall, -1.0, 1.0))])
+        return self._tip_command(obs, v_tip, w)
+
+    def _back_off(self, obs: Observation, guard: str) -> Command:
+        """BACKOFF after a jam (then ALIGN) or a press that never engaged (then APPROACH and
+        SEARCH again); FAILED when the retries are used up."""
+        if self._retries >= self.config.backoff.max_retries:
+            return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
+        self._retries += 1
+        self._search_again = guard == "not_engaged"
+        self._go(obs, Phase.BACKOFF, guard)
+        return _hold()
+
     def _backoff(self, obs: Observation, new: bool) -> Command:
-        """Lift the tip straight up by the back-off distance, then ALIGN again."""
+        """Lift the tip straight up by the back-off distance, then ALIGN again (after a jam)
+        or APPROACH and SEARCH again (after a press that never engaged)."""
         settings = self.config.backoff
         if obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.distance_m:
-            self._go(obs, Phase.ALIGN, "backed_off")
+            if self._search_again:
+                self._go(obs, Phase.APPROACH, "search_again")
+            else:
+                self._go(obs, Phase.ALIGN, "backed_off")
             return _hold()
         return self._tcp_twist(np.array([0.0, 0.0, settings.speed_m_s]))
 
@@ -561,6 +635,12 @@ class InsertionMachine:
 def _hold() -> Command:
     """Hold still: a zero twist."""
     return Command(twist=Twist())
+
+
+def _yaw_of(rotation: Rotation) -> float:
+    """The heading (rad) of T x in B's x-y plane."""
+    x_t = rotation.apply([1.0, 0.0, 0.0])
+    return math.atan2(float(x_t[1]), float(x_t[0]))
 
 
 def _has_fault(obs: Observation) -> bool:

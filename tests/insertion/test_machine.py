@@ -106,6 +106,44 @@ def test_a_jam_backs_off_and_realigns_then_succeeds():
     assert machine.retries == 1
 
 
+def test_a_plug_on_the_rim_sweeps_its_yaw_then_searches_again_and_succeeds():
+    world = ToyWorld(rim_blocks=1)
+    cfg = toy_config()
+    machine = make_machine(world, cfg)
+    yaws = []
+    while machine.phase is not Phase.DONE and world.t_s < 60.0:
+        world.step(machine)
+        if machine.phase is Phase.INSERT:
+            x_t = world.rotation.apply([1.0, 0.0, 0.0])
+            yaws.append(np.arctan2(x_t[1], x_t[0]) - world.hole.yaw_rad)
+    assert machine.phase is Phase.DONE
+    assert path(machine)[3:9] == [
+        ("ALIGN", "INSERT", "aligned"),
+        ("INSERT", "BACKOFF", "not_engaged"),
+        ("BACKOFF", "APPROACH", "search_again"),
+        ("APPROACH", "SEARCH", "surface_contact"),
+        ("SEARCH", "ALIGN", "hole_found"),
+        ("ALIGN", "INSERT", "aligned"),
+    ]
+    sweep = cfg.insert.yaw_sweep_rad
+    assert max(yaws) >= sweep - 0.01 and min(yaws) <= -sweep + 0.01  # both ways, whole
+    assert max(np.abs(yaws)) <= sweep + 0.02
+    assert machine.retries == 1
+
+
+def test_align_moves_the_heel_back_against_the_lean():
+    world = ToyWorld()
+    cfg = toy_config()
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.ALIGN)
+    lean = world.rotation.apply([0.0, 0.0, 1.0])[:2]
+    start = machine._lowest_edge(world.observe(), world.rotation)
+    world.run_until(machine, Phase.INSERT)
+    moved = machine._lowest_edge(world.observe(), world.rotation) - start
+    assert np.dot(moved[:2], lean) < 0.0  # backward, against the lean
+    assert np.linalg.norm(moved[:2]) <= cfg.align.wall_seek_max_m + 3e-4
+
+
 def test_the_force_budget_counts_as_a_jam():
     world = ToyWorld(depth_limit_m=0.002)  # the opening is too shallow for the depth
     cfg = config(backoff=replace(BackoffSettings(), max_retries=1))

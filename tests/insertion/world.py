@@ -75,6 +75,7 @@ class ToyWorld:
     jam_depth_m: float | None = None
     jams: int = 0  # how many times the jam appears (one per INSERT)
     jam_torque: float = 0.03
+    rim_blocks: int = 0  # how many times an upright plug stands on the opening's rim
     noise: float = 0.0003
     frame_every: int = 2  # ticks per new tactile estimate
     zeroing_frames: int = 3
@@ -101,6 +102,7 @@ class ToyWorld:
         self.zeroing_left = 0
         self.caught = False
         self.jammed_in_this_insert = False
+        self.on_rim = False
         self.v_tip = np.zeros(3)
         self.last_estimate = estimate(0.0)
         self.commands: list[Command] = []
@@ -156,6 +158,16 @@ class ToyWorld:
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        upright = float(np.dot(z_t, [0.0, 0.0, -1.0])) > math.cos(math.radians(2.0))
+        if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (
+            tip[2] < surface
+        ):
+            self.on_rim = True  # the upright plug stands on the rim: the board holds it
+            in_region = False
+            self.caught = False
+        elif self.on_rim and tip[2] > surface + 0.0005:
+            self.on_rim = False
+            self.rim_blocks -= 1
         if self.board and tip[2] < surface:
             if in_region:
                 self.caught = True
