@@ -42,7 +42,7 @@ class GripperSettings(Config):
     first opens by ``regrasp_gap_m`` beyond the current width, then closes again."""
 
     close_width_m: float = number(0.0, 0.05, default=0.0)
-    close_speed_m_s: float = number(0.001, 0.2, default=0.02)
+    close_speed_m_s: float = number(0.001, 0.2, default=0.05)
     close_force_n: float = number(1.0, 200.0, default=40.0)
     open_width_m: float = number(0.001, 0.05, default=0.02)
     open_speed_m_s: float = number(0.001, 0.2, default=0.05)
@@ -103,7 +103,7 @@ class ApproachSettings(Config):
     height_m: float = number(0.0, 0.1, default=0.003)
     tilt_rad: float = number(-45 * _DEG, 45 * _DEG, default=15 * _DEG)
     tilt_axis: Literal["x", "y"] = "x"
-    move_speed_m_s: float = number(1e-4, 0.25, default=0.03)
+    move_speed_m_s: float = number(1e-4, 0.25, default=0.045)
     rotate_speed_rad_s: float = number(1e-3, 2.0, default=0.5)
     descend_speed_m_s: float = number(1e-4, 0.05, default=0.002)
     pose_gain_1_s: float = number(0.1, 50.0, default=4.0)
@@ -226,7 +226,7 @@ class InsertSettings(Config):
     press_load_ratio: float = number(0.1, 100.0, default=1.0)
     engage_m: float = number(1e-5, 0.01, default=0.0008)
     yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
-    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.15)
+    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
     sweeps: int = number(1, 20, default=1)
 
 
