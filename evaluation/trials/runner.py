@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Sequence
 from contextlib import ExitStack
 from dataclasses import dataclass
 from pathlib import Path
@@ -27,6 +28,7 @@ from drivers.clock import MonotonicClock
 from drivers.config import ConfigError
 from drivers.registry import load_device, load_device_config
 from drivers.sim.scenes.insertion import SimDevices, build_insertion_sim
+from drivers.sim.twins.gamepad import PadEvent
 from evaluation.trials.record import TrialRecorder
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
@@ -76,8 +78,11 @@ def run(
     backend: str = "sim",
     realtime: bool = False,
     out_dir: Path | None = None,
+    pad_script: Sequence[PadEvent] = (),
 ) -> TrialOutcome:
-    """Run one trial of ``task`` with ``controller`` on ``backend`` (see the module doc)."""
+    """Run one trial of ``task`` with ``controller`` on ``backend`` (see the module doc).
+    ``pad_script``: in simulation, events the simulated gamepad plays from the trial's
+    start (a scripted operator; the task's devices must name a gamepad)."""
     if backend == "real":
         if controller == "oracle":
             raise ConfigError("controller 'oracle' reads the simulator's truth: sim only")
@@ -85,6 +90,10 @@ def run(
     config = task.config
     devices = _sim_device_configs(config)
     sim = build_insertion_sim(config.scene, config.plug, config.hole, devices, seed, realtime)
+    if pad_script:
+        if sim.gamepad is None:
+            raise ConfigError("pad_script: the task's devices name no gamepad")
+        sim.gamepad.play(pad_script)
     estimator = estimator_for_sensor(devices.tactile.model, config.estimator)
     source = _torque_source(controller, estimator, sim)
     machine = _machine(config, controller)
@@ -130,9 +139,12 @@ def _torque_source(controller: str, estimator, sim) -> Any:
 
 def _run_loop(task: Task, machine, source, sim, clock, recorder) -> LoopResult:
     config = task.config
-    with sim.arm, sim.gripper, sim.tactile:
+    with ExitStack() as stack:
+        for device in (sim.arm, sim.gripper, sim.tactile, sim.gamepad):
+            if device is not None:
+                stack.enter_context(device)
         sim.gripper.activate()
-        devices = Devices(sim.arm, sim.gripper, sim.tactile, None)
+        devices = Devices(sim.arm, sim.gripper, sim.tactile, sim.gamepad)
         loop = ControlLoop(
             machine,
             devices,

@@ -1,0 +1,126 @@
+"""Whole simulated trials: one per task succeeds on a fixed seed; an operator takes over and
+hands back through the scripted gamepad; a driver fault mid-insertion and SIGTERM end in a
+safe stop."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from controller.insertion import Phase
+from drivers.sim.twins.gamepad import PadEvent
+from evaluation.trials import runner
+from evaluation.trials.task import load_task
+
+ROOT = Path(__file__).resolve().parents[2]
+PERIOD_S = 0.01  # the tasks' loop.rate_hz is 100
+
+
+@pytest.mark.parametrize(("task", "seed"), [("usb_c", 9), ("usb_a", 0)])
+def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
+    outcome = runner.run(load_task(task), "dipole", seed)
+    assert outcome.result.success, outcome.transitions
+    assert outcome.result.max_true_force_n < outcome.result.force_limit_n
+    assert outcome.transitions[-1].target is Phase.DONE
+
+
+def _stop_spy(monkeypatch):
+    """Patch the runner's scene builder so the built scene's arm notes each ``stop()`` time
+    (scene clock); returns (the built scenes, the stop times)."""
+    built, stops = [], []
+    build = runner.build_insertion_sim
+
+    def spying_build(*args, **kwargs):
+        sim = build(*args, **kwargs)
+        arm_stop = sim.arm.stop
+
+        def stop():
+            stops.append(sim.clock.now())
+            arm_stop()
+
+        sim.arm.stop = stop
+        built.append(sim)
+        return sim
+
+    monkeypatch.setattr(runner, "build_insertion_sim", spying_build)
+    return built, stops
+
+
+def test_a_driver_fault_mid_insertion_stops_safely_within_one_period(monkeypatch):
+    built, stops = _stop_spy(monkeypatch)
+    injected = []
+    make_machine = runner._machine
+
+    class FaultingMachine:
+        """The task's machine; the arm faults on the first tick of INSERT."""
+
+        def __init__(self, inner):
+            self._inner = inner
+
+        def __getattr__(self, name):
+            return getattr(self._inner, name)
+
+        def step(self, observation):
+            command = self._inner.step(observation)
+            if self._inner.phase is Phase.INSERT and not injected:
+                built[0].arm.inject_fault(21, "simulated joint overcurrent")
+                injected.append(built[0].clock.now())
+            return command
+
+    monkeypatch.setattr(runner, "_machine", lambda *a: FaultingMachine(make_machine(*a)))
+    outcome = runner.run(load_task("usb_c"), "dipole", 9)
+    assert injected, "the trial never reached INSERT"
+    assert outcome.loop.reason == "fault" and "code 21" in outcome.loop.message
+    assert not outcome.result.success
+    assert len(stops) == 1 and 0.0 <= stops[0] - injected[0] <= PERIOD_S + 1e-9
+    assert outcome.transitions[-1].reason == "device_fault"
+
+
+def test_an_operator_takes_over_and_hands_back_through_the_gamepad():
+    task = load_task("usb_c")
+    script = [
+        PadEvent(2.0, axes={"vz": 0.5}),  # during GRASP: the stick up takes over
+        PadEvent(3.0, axes={"vz": 0.0}),
+        PadEvent(3.5, buttons={"hand_back": True}),
+        PadEvent(3.6, buttons={"hand_back": False}),
+    ]
+    outcome = runner.run(task, "dipole", 9, pad_script=script)
+    reasons = [(t.source, t.target, t.reason) for t in outcome.transitions]
+    takeover = next(t for t in outcome.transitions if t.reason == "operator_takeover")
+    back = next(t for t in outcome.transitions if t.reason == "hand_back")
+    assert takeover.source is Phase.GRASP and 2.0 <= takeover.t_s <= 2.0 + 2 * PERIOD_S
+    assert 3.5 <= back.t_s <= 3.5 + 2 * PERIOD_S
+    assert back.target is Phase.GRASP  # no tactile baseline yet: grasp again
+    assert outcome.result.success, reasons
+    truth = outcome.truth
+    during = (truth["t_s"] > 2.1) & (truth["t_s"] < 3.0)
+    rise = np.diff(truth["tip_xyz_b"][during, 2])
+    assert rise.sum() > 0.005  # the operator lifted the plug (0.5 of 0.02 m/s for ~0.9 s)
+
+
+def test_sigterm_during_a_trial_stops_safely_and_keeps_the_record(tmp_path):
+    out = tmp_path / "trial"
+    env = dict(os.environ, MPLBACKEND="Agg")
+    process = subprocess.Popen(
+        [sys.executable, str(ROOT / "scripts" / "run_trial.py"), "--task", "usb_c",
+         "--seed", "9", "--out", str(out), "--realtime"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
+    )  # fmt: skip
+    deadline = time.monotonic() + 60.0
+    while not (out / "ticks.jsonl").exists() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    time.sleep(1.0)
+    process.send_signal(signal.SIGTERM)
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 143, stderr
+    summary = json.loads((out / "trial.json").read_text())
+    assert summary["loop"]["reason"] == "signal"
+    assert not summary["result"]["success"]
+    ticks = (out / "ticks.jsonl").read_text().splitlines()
+    assert ticks and all(json.loads(line) for line in ticks)  # every line whole
