@@ -1,15 +1,16 @@
 """The no-contact gate: is the zeroed field's divergence more than camera noise?
 
 Zeroed on the open gel, the field before contact is camera noise alone, and so is the tilt
-the dipole reads from it. On a markerless gel that noise is not small: with 2 grey levels
-on smooth LED shading the best linear estimate of the tilt moves by 2-8% of a 0.5 px tilt's
-peak (docs/REAL_RECORDINGS.md), whatever the flow or the dipole does. What tells a contact
-from noise is not the tilt's size but whether the field differs from noise at all.
+the dipole reads from it. On a markerless gel that noise is not small: with 2 grey levels on
+smooth LED shading the tilt moved by 4-17% of a 0.5 px tilt's peak (seeds 0-5,
+docs/REAL_RECORDINGS.md), near the images' information limit for any linear estimate
+(docs/ARCHITECTURE.md, "Quiet before contact"). What tells a contact from noise is not the
+tilt's size but whether the field differs from noise at all.
 
 The divergence ``d`` (k grid values) the dipole sees is linear in the field, so under noise
 alone it is Gaussian with zero mean and the covariance ``C = M Sigma M^T`` (``Sigma`` the
-field's, from the flow: ``GridLKFlow.covariance``; ``M`` the linear map from the field to
-``d``). Its squared Mahalanobis distance ``chi2 = d^T C^+ d`` is then chi-square with
+field's, from the flow: ``GridLKFlow.noise_covariance``; ``M`` the linear map from the field
+to ``d``). Its squared Mahalanobis distance ``chi2 = d^T C^+ d`` is then chi-square with
 r = rank(C) degrees of freedom: the likelihood-ratio statistic of "the field is noise"
 against "it is not". The gate is
 

@@ -231,8 +231,8 @@ class EstimatorConfig(Config):
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
     ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
     ``noise_gate``: without the grasp's contact, the tilt is zero until the field's
-    divergence differs from camera noise (``NoiseGateConfig``; needs ``grid_lk``, whose
-    noise it propagates; null: no gate).
+    divergence differs from camera noise (``NoiseGateConfig``; with ``grid_lk``, whose noise
+    it propagates; other flows form no gate, as with null).
     """
 
     flow: FlowConfig
@@ -247,13 +247,6 @@ class EstimatorConfig(Config):
     contact_threshold_mm: float = number(0, 10)
     slip: SlipConfig
     noise_gate: NoiseGateConfig | None
-
-    def __post_init__(self) -> None:
-        if self.noise_gate is not None and self.flow.method != "grid_lk":
-            raise ValueError(
-                f"key 'noise_gate': needs flow method 'grid_lk' (it propagates that flow's "
-                f"noise), got method '{self.flow.method}'; set noise_gate: null"
-            )
 
 
 def estimator_config(name_or_path: str) -> EstimatorConfig:

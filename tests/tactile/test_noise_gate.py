@@ -11,8 +11,7 @@ from scipy.stats import chi2
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.grid_lk import GridLKFlow
 from controller.tactile.noise_gate import NoiseGate
-from controller.tactile.settings import EstimatorConfig, estimator_config
-from drivers.config import ConfigError
+from controller.tactile.settings import estimator_config
 from drivers.tactile.profile import sensor_profile
 
 PROFILE = sensor_profile("gelsight_mini")
@@ -141,6 +140,8 @@ def test_with_the_grasps_contact_there_is_no_gate(renderer):
     assert est._noise_gate is not None
 
 
-def test_the_gate_needs_grid_lk():
-    with pytest.raises((ConfigError, ValueError), match="noise_gate"):
-        EstimatorConfig(**{**vars(estimator_config("paper")), "noise_gate": DEFAULT.noise_gate})
+def test_other_flows_form_no_gate(renderer):
+    config = replace(DEFAULT, flow=replace(DEFAULT.flow, method="dis"))
+    est = TactileEstimator(config, PROFILE)
+    est.set_reference(renderer.render())
+    assert est._noise_gate is None
