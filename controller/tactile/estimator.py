@@ -279,6 +279,8 @@ class TactileEstimator:
         if self._divergence_map_cache is None or self._divergence_map_cache[0] != key:
             self._divergence_map_cache = (key, self._divergence_map())
         covariance = grid_flow.noise_covariance(settings.noise_grey, self._divergence_map_cache[1])
+        if not float(np.abs(covariance).max()) > 0.0:  # a featureless image: the field is 0
+            return None
         return NoiseGate(covariance, settings.false_alarm)
 
     def _divergence_map(self) -> np.ndarray:

@@ -145,3 +145,11 @@ def test_other_flows_form_no_gate(renderer):
     est = TactileEstimator(config, PROFILE)
     est.set_reference(renderer.render())
     assert est._noise_gate is None
+
+
+def test_a_featureless_reference_forms_no_gate():
+    est = TactileEstimator(DEFAULT, PROFILE)
+    est.set_reference(np.full((240, 320, 3), 128, np.uint8))
+    assert est._noise_gate is None
+    estimate = est.push(np.full((240, 320, 3), 128, np.uint8), 0.0)
+    assert (estimate.tau_x, estimate.tau_y) == (0.0, 0.0)
