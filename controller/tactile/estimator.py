@@ -49,7 +49,9 @@ from controller.tactile.calibration import Calibration
 from controller.tactile.dipole import DipoleMomentCalculator, GraspSupport, grasp_support
 from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
+from controller.tactile.grid_lk import GridLKFlow
 from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
+from controller.tactile.noise_gate import NoiseGate
 from controller.tactile.settings import (
     EstimatorConfig,
     dipole_grid_mismatch,
@@ -113,6 +115,8 @@ class TactileEstimator:
         self._open_count = 0
         self._awaiting_rezero = False
         self._contact_centre: tuple[float, float] | None = None
+        self._noise_gate: NoiseGate | None = None
+        self._divergence_map_cache: tuple[object, np.ndarray] | None = None
 
     # -- reference ---------------------------------------------------------------------------
 
@@ -236,6 +240,7 @@ class TactileEstimator:
         support = self._grasp_support(reference)
         self._grasp_dipole.set_grasp_support(support)
         self._contact_centre = None if support is None else support.centre_mm
+        self._noise_gate = None if support is not None else self._make_noise_gate(grid_flow)
         self._grid_flow = grid_flow
         self._rezero_policy.reset()
         self._last_slip = None
@@ -263,6 +268,44 @@ class TactileEstimator:
         self._v.fill(0.0)
         self._filtered = False
         return support
+
+    def _make_noise_gate(self, grid_flow: GridFlow) -> NoiseGate | None:
+        """The no-contact gate (controller/tactile/noise_gate.py) of the fallback dipole's
+        divergence, from ``grid_flow``'s noise (None: no ``noise_gate`` configured)."""
+        settings = self.config.noise_gate
+        if settings is None or not isinstance(grid_flow, GridLKFlow):
+            return None
+        key = (self._u.shape, tuple(self.x_mm), tuple(self.y_mm))
+        if self._divergence_map_cache is None or self._divergence_map_cache[0] != key:
+            self._divergence_map_cache = (key, self._divergence_map())
+        covariance = grid_flow.noise_covariance(settings.noise_grey, self._divergence_map_cache[1])
+        if not float(np.abs(covariance).max()) > 0.0:  # a featureless image: the field is 0
+            return None
+        return NoiseGate(covariance, settings.false_alarm)
+
+    def _divergence_map(self) -> np.ndarray:
+        """The linear map (k, 2 n) from the field in px (n cells, row-major, x before y) to
+        the fallback dipole's divergence (k values), probed column by column (computed once
+        per grid: the map depends on the grid and the configuration only)."""
+        rows, cols = self._u.shape
+        basis = np.zeros(2 * rows * cols)
+        columns = []
+        for index in range(basis.size):
+            basis[index] = 1.0
+            self._grid_px[...] = basis.reshape(rows, cols, 2)
+            self._filtered = False
+            self._update_field()
+            decomposition = (
+                self._nhhd.decompose(self._u, self._v) if self._dipole_block == (1, 1) else None
+            )
+            div = self._tilt_divergence(decomposition)
+            columns.append(div.ravel().copy())
+            basis[index] = 0.0
+        self._grid_px.fill(0.0)
+        self._u.fill(0.0)
+        self._v.fill(0.0)
+        self._filtered = False
+        return np.column_stack(columns)
 
     def _allocate(self, height: int, width: int, rows: int, cols: int) -> None:
         x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
@@ -314,10 +357,11 @@ class TactileEstimator:
             origin = "centroid_midpoint"
         return DipoleMomentCalculator(x_mm, y_mm, origin, config.dipole_full_midpoint_ratio)
 
-    def _tilt_divergence(self, decomposition: NHHDResult) -> np.ndarray:
+    def _tilt_divergence(self, decomposition: NHHDResult | None) -> np.ndarray:
         """The divergence the dipole sees: of the raw field or of its curl-free part, on the
         field's grid, or on ``dipole_grid`` (the field block-averaged, then decomposed on
-        that coarser grid)."""
+        that coarser grid; ``decomposition``, the field's, is needed only on the field's
+        grid)."""
         block = self._dipole_block
         raw = self.config.divergence_of == "raw"
         if block == (1, 1):
@@ -449,7 +493,12 @@ class TactileEstimator:
         if self._grasp_dipole.support is not None:
             dipole = self._grasp_dipole(self._field_divergence(decomposition))
         else:
-            dipole = self._dipole(self._tilt_divergence(decomposition))
+            div = self._tilt_divergence(decomposition)
+            if self._noise_gate is not None:
+                gate = self._noise_gate(div)
+                if gate < 1.0:  # not in place: the buffer may be the decomposition's
+                    div = div * gate
+            dipole = self._dipole(div)
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)

@@ -27,6 +27,13 @@ eliminated in closed form (the gradient and the residual are centred on their ce
 so a drifting LED does not read as motion; it costs the information in each cell's mean
 gradient. Images are blurred by ``blur_sigma_px`` first (less noise, a wider linear range).
 
+``noise_covariance(noise_grey, operator)``: the covariance of a linear function of the
+estimate under white camera noise, propagated
+through the normal equations (docs/ARCHITECTURE.md, "Quiet before contact"): with noise of
+variance s^2 in both images, each cell's ``b`` has covariance 2 s^2 G_k / N_k (N_k pixels; the
+blur leaves the sum of the noise's autocorrelation at s^2), so the field's is
+``2 s^2 (G + lambda L)^-1 diag(G_k / N_k) (G + lambda L)^-1``.
+
 ``warm_start`` starts each frame from the previous frame's field instead of zero: the steps
 then refine a nearly converged estimate (the tilt changes little between frames), which
 matters for motions of several px, where one linearisation about zero falls short.
@@ -54,6 +61,9 @@ _RIDGE = 1e-6
 # each Gauss-Newton step then overshoots.
 _DERIVATIVE = np.array([1.0, -8.0, 0.0, 8.0, -1.0], np.float32) / 12.0
 _IDENTITY = np.array([1.0], np.float32)
+# OpenCV's BGR -> grey weights: the luminance's noise variance is their squared sum times a
+# channel's.
+_GREY_NOISE_GAIN = 0.114**2 + 0.587**2 + 0.299**2
 
 
 def grid_laplacian(rows: int, cols: int) -> sparse.csr_matrix:
@@ -169,6 +179,7 @@ class GridLKFlow:
                     self._term,
                 )
                 blocks[:, i, j] = blocks[:, j, i] = self._term
+        self._data_blocks = blocks.copy()
         weight = max(float(np.trace(blocks, axis1=1, axis2=2).mean()) / 2.0, 1e-12)
         blocks[:, 0, 0] += _RIDGE * weight
         blocks[:, 1, 1] += _RIDGE * weight
@@ -179,6 +190,21 @@ class GridLKFlow:
         )
         self._solve = factorized(matrix.tocsc())
         self._has_previous = False
+
+    def noise_covariance(self, noise_grey: float, operator: np.ndarray) -> np.ndarray:
+        """Covariance (k, k) of ``operator @ field`` under white camera noise of
+        ``noise_grey`` grey levels (standard deviation per channel) in the reference and the
+        current image (module docstring). ``operator`` (k, 2 n) acts on the field this flow
+        returns (px of the working image; cells in row-major order, x before y). Needs a
+        reference; k solves with the factorised normal matrix."""
+        variance = noise_grey**2 * (_GREY_NOISE_GAIN if self._gray else 1.0)
+        variance *= self.config.scale**2  # resizing to the flow resolution averages pixels
+        pixels = self.flow_shape[0] * self.flow_shape[1] / (self.rows * self.cols)
+        # The field in working px is theta / scale; the matrix is symmetric.
+        rows = np.asarray(operator, float) / self.config.scale
+        solved = np.stack([self._solve(row) for row in rows]).reshape(len(rows), -1, 2)
+        data = np.einsum("knj,nij,lni->kl", solved, self._data_blocks, solved)
+        return (2.0 * variance / pixels) * data
 
     def _warp_back(self, current: np.ndarray) -> np.ndarray:
         """``current`` sampled at x + u(x), u the estimate interpolated bilinearly between

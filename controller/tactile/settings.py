@@ -195,6 +195,17 @@ class DipoleGrid(Config):
 
 
 @dataclass(frozen=True)
+class NoiseGateConfig(Config):
+    """The no-contact gate of the dipole without the grasp's contact
+    (controller/tactile/noise_gate.py): ``noise_grey``, the camera's pixel noise (standard
+    deviation per channel, grey levels); ``false_alarm``, the share of noise-only frames on
+    which the gate starts to open."""
+
+    noise_grey: float = number(0.01, 50.0)
+    false_alarm: float = number(1e-12, 0.5)
+
+
+@dataclass(frozen=True)
 class EstimatorConfig(Config):
     """The whole frame-to-wrench pipeline.
 
@@ -219,6 +230,9 @@ class EstimatorConfig(Config):
     ``reference_frames``: frames averaged into the reference by ``rezero()``.
     ``contact_threshold_mm``: mean displacement magnitude above which ``contact`` is set.
     ``slip``: the slip detector and the re-zero policy (``SlipConfig``).
+    ``noise_gate``: without the grasp's contact, the tilt is zero until the field's
+    divergence differs from camera noise (``NoiseGateConfig``; with ``grid_lk``, whose noise
+    it propagates; other flows form no gate, as with null).
     """
 
     flow: FlowConfig
@@ -232,6 +246,7 @@ class EstimatorConfig(Config):
     reference_frames: int = number(1, 1000)
     contact_threshold_mm: float = number(0, 10)
     slip: SlipConfig
+    noise_gate: NoiseGateConfig | None
 
 
 def estimator_config(name_or_path: str) -> EstimatorConfig:
