@@ -1,6 +1,7 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
-paper's, the Mini's default (its profile's ``estimator``: grid Lucas-Kanade on the
-luminance), the per-channel ``default`` (the DIGIT's) and one-knob variants of it (warm
+paper's, the sensors' ``default`` (the Mini's profile's ``estimator``: grid Lucas-Kanade per
+colour channel; the DIGIT's too), ``default_grey`` (on the luminance) and one-knob variants
+of ``default`` (warm
 start, iterations, smoothness, the dipole's grid), and the DIS family around ``dis_half``
 (the default until session 6: flow preset, image scale, grey or per-channel, patch stride,
 variational refinement, divergence of the raw field or of its NHHD part, the dipole's grid,
@@ -17,14 +18,13 @@ from controller.tactile.settings import DipoleGrid, EstimatorConfig, estimator_c
 from drivers.tactile.profile import sensor_profile
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
-DEFAULT = "**default** (the Mini's default_grey: grid LK grey, 16x12, grasp-centred dipole)"
-PER_CHANNEL = "default (grid LK per-channel: the DIGIT's, and a Mini without markers)"
+DEFAULT = "**default** (both sensors': grid LK per channel, 16x12, grasp-centred dipole)"
+GREY = "default_grey (grid LK on the luminance: faster, for marker gels)"
 DIS_HALF = "dis_half (DIS tuned, gray, half resolution)"
 
 
 def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
-    mini = estimator_config(sensor_profile("gelsight_mini").estimator)
-    default = estimator_config("default")
+    default = estimator_config(sensor_profile("gelsight_mini").estimator)
     paper = estimator_config("paper")
     dis_half = estimator_config("dis_half")
     fl = dis_half.flow
@@ -40,8 +40,8 @@ def estimator_variants(quick: bool) -> list[tuple[str, EstimatorConfig]]:
     )
     configs = [
         (PAPER, paper),
-        (DEFAULT, mini),
-        (PER_CHANNEL, default),
+        (DEFAULT, default),
+        (GREY, estimator_config("default_grey")),
         (DIS_HALF, dis_half),
         ("markers", estimator_config("markers")),
     ]

@@ -97,7 +97,7 @@ def test_unknown_config_name_lists_the_known_ones():
 
 def test_each_sensor_names_its_estimator_and_markers_need_a_marker_gel(tmp_path):
     mini, digit = sensor_profile("gelsight_mini"), sensor_profile("digit")
-    assert (sensor_estimator(mini)[0], sensor_estimator(digit)[0]) == ("default_grey", "default")
+    assert (sensor_estimator(mini)[0], sensor_estimator(digit)[0]) == ("default", "default")
     assert sensor_estimator(mini, "paper") == ("paper", estimator_config("paper"))
     with pytest.raises(ConfigError, match="sensor 'digit' has none"):
         sensor_estimator(digit, "markers")

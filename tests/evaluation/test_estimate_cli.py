@@ -371,7 +371,7 @@ def test_sensor_errors_list_only_sensor_profiles(folder, tmp_path, capsys, senso
 # --- calibration fitted for something else ----------------------------------------------------
 
 
-def write_calibration(path, sensor="gelsight_mini", method="default_grey", digest=True, fmt=None):
+def write_calibration(path, sensor="gelsight_mini", method="default", digest=True, fmt=None):
     config = sensor_estimator(sensor_profile("gelsight_mini"), method)[1]
     fit = {"tau_x": AxisFit(0.004, 0.0, 0.001, 0.99, 100)}
     text = Calibration(sensor, method, fit, estimator_sha256(config) if digest else None)
@@ -388,7 +388,7 @@ def write_calibration(path, sensor="gelsight_mini", method="default_grey", diges
     "kwargs,args,message",
     [
         ({"sensor": "digit"}, [], "fitted for sensor 'digit', not 'gelsight_mini'"),
-        ({}, ["--method", "paper"], "fitted for the estimator configuration 'default_grey'"),
+        ({}, ["--method", "paper"], "fitted for the estimator configuration 'default'"),
         ({"method": "paper"}, [], "fitted for the estimator configuration 'paper'"),
         ({"digest": False, "fmt": "v1"}, [], "does not record which estimator"),
     ],

@@ -112,10 +112,11 @@ def test_sigterm_during_a_trial_stops_safely_and_keeps_the_record(tmp_path):
          "--seed", "9", "--out", str(out), "--realtime"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path,
     )  # fmt: skip
-    deadline = time.monotonic() + 60.0
-    while not (out / "ticks.jsonl").exists() and time.monotonic() < deadline:
+    ticks_file, deadline = out / "ticks.jsonl", time.monotonic() + 120.0
+    while time.monotonic() < deadline:  # the loop has run (its handlers are installed)
+        if ticks_file.exists() and ticks_file.read_text().count("\n") >= 50:
+            break
         time.sleep(0.1)
-    time.sleep(1.0)
     process.send_signal(signal.SIGTERM)
     stdout, stderr = process.communicate(timeout=60)
     assert process.returncode == 143, stderr
