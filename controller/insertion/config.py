@@ -133,7 +133,10 @@ class SearchSettings(Config):
     the signals, so their lags match). For the first ``settle_s`` of SEARCH (the preload
     building up) the average is only learned, with the signals' ``ema_alpha``. Contact lost:
     the signal norm below ``contact_lost_sigma`` for ``contact_lost_frames`` successive
-    estimates.
+    estimates: the tip then probes straight down at the approach's descent speed; contact
+    again with the tip ``in_hole_depth_m`` below the surface is the hole found (the plug fell
+    into the opening); contact above that resumes the search; no contact down to the
+    approach's ``overtravel_m``: contact lost.
     Hole found, too: the *load drop*. The TCP's height is held, so when the tip drops into
     the opening the wrist's z spring relaxes and the axial force (normalised) falls: below
     (1 - ``hole_drop_ratio``) times its reference, and by at least ``hole_drop_sigma``, for

@@ -378,12 +378,15 @@ class InsertionMachine:
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
         gain = self.config.approach.pose_gain_1_s
         rotation = rotation_of(obs.arm.tcp)
+        if stage.name == "probe":
+            return self._probe(obs, new)
         if new:
             stage.count = stage.count + 1 if (
                 self.signals.magnitude < settings.contact_lost_sigma
             ) else 0
             if stage.count >= settings.contact_lost_frames:
-                return self._fail(obs, FailureReason.CONTACT_LOST)
+                self._next_stage(obs, "probe")
+                return _hold()
             elapsed = obs.t_s - stage.entered_t_s
             if stage.detector.update(self.signals, rotation, stage.v_tip, elapsed):
                 if stage.detector.load_reference is not None:
@@ -398,6 +401,27 @@ class InsertionMachine:
         v_tip[2] = gain * (stage.z0_m - settings.press_depth_m - obs.arm.tcp.xyz_m[2])
         stage.v_tip = clamp_norm(v_tip, self.config.approach.move_speed_m_s)
         return self._tip_command(obs, stage.v_tip, self._hold_rotation(rotation))
+
+    def _probe(self, obs: Observation, new: bool) -> Command:
+        """SEARCH after losing contact: the tip straight down until contact again (in the
+        opening: ALIGN; on the surface: drag on) or past the overtravel (contact lost)."""
+        stage, approach = self._stage, self.config.approach
+        tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
+        if new:
+            contact = self.signals.magnitude >= approach.contact_sigma
+            stage.count = stage.count + 1 if contact else 0
+        if stage.count >= approach.contact_frames:
+            if tip_z <= self.hole.z_m - self.config.search.in_hole_depth_m:
+                self._go(obs, Phase.ALIGN, "hole_found")
+            else:
+                self._next_stage(obs, "")
+                stage.z0_m = float(obs.arm.tcp.xyz_m[2])
+            return _hold()
+        if tip_z < self.hole.z_m - approach.overtravel_m:
+            return self._fail(obs, FailureReason.CONTACT_LOST)
+        rotation = rotation_of(obs.arm.tcp)
+        v_tip = np.array([0.0, 0.0, -approach.descend_speed_m_s])
+        return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
     def _align(self, obs: Observation, new: bool) -> Command:
         """Turn about the tip to null the torques and upright the plug, holding the tip where

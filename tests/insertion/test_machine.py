@@ -225,6 +225,38 @@ def test_limit_exceeded_on_the_tilt_torque_limit():
     assert path(machine)[-1][0] in ("INSERT", "BACKOFF", "ALIGN")
 
 
+def test_losing_contact_in_search_probes_down_and_finds_the_opening_below():
+    world = ToyWorld(hole_offset_m=(0.02, 0.0))
+    cfg = config(search=replace(SearchSettings(), hole_drop_ratio=0.0))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.SEARCH)
+    for _ in range(60):
+        world.step(machine)
+    world.floor_drop_m = 0.002  # the tip fell into a deep opening: support 2 mm lower
+    assert world.run_until(machine, Phase.ALIGN) is Phase.ALIGN
+    assert path(machine)[-1] == ("SEARCH", "ALIGN", "hole_found")
+    assert world.tip[2] < world.hole.z_m - cfg.search.in_hole_depth_m
+
+
+def test_losing_contact_then_touching_the_surface_again_drags_on():
+    world = ToyWorld(hole_offset_m=(0.02, 0.0))
+    # the toy's rigid tip sinks into its board by about 0.5 mm while probing: count contact
+    # down to 2 mm as the surface
+    search = replace(SearchSettings(), hole_drop_ratio=0.0, in_hole_depth_m=0.002)
+    cfg = config(search=search, timeouts=replace(Timeouts(), search_s=6.0))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.SEARCH)
+    world.board = False  # contact lost ...
+    while machine.phase is Phase.SEARCH and machine._stage.name != "probe":
+        world.step(machine)
+    world.board = True  # ... and found again on the surface while probing down
+    while machine.phase is Phase.SEARCH and machine._stage.name == "probe":
+        world.step(machine)
+    assert machine.phase is Phase.SEARCH and machine._stage.name == ""
+    world.run_until(machine, Phase.FAILED)
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")  # it searched on
+
+
 def test_contact_lost_during_search():
     world = ToyWorld(hole_offset_m=(0.02, 0.0))
     # the load-drop rule would read the vanished board as the opening

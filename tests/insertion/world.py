@@ -75,6 +75,7 @@ class ToyWorld:
     jam_depth_m: float | None = None
     jams: int = 0  # how many times the jam appears (one per INSERT)
     jam_torque: float = 0.03
+    floor_drop_m: float = 0.0  # the supporting surface this far below the board's
     rim_blocks: int = 0  # how many times an upright plug stands on the opening's rim
     noise: float = 0.0003
     frame_every: int = 2  # ticks per new tactile estimate
@@ -152,7 +153,7 @@ class ToyWorld:
         force_t = np.zeros(3)
         torque_b = np.zeros(3)
         normal = 0.0
-        surface = self.hole.z_m
+        surface = self.hole.z_m - self.floor_drop_m
         tip = self.tip
         z_t = self.rotation.apply([0.0, 0.0, 1.0])
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
