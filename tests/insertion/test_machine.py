@@ -84,11 +84,13 @@ def test_approach_from_below_rises_before_moving_sideways():
     machine = make_machine(world)
     world.run_until(machine, Phase.APPROACH)
     world.p = world.p + np.array([0.01, 0.0, -0.037])  # tip 3 mm above the board, 10 mm off
-    start = world.p.copy()
+    start, rotation = world.p.copy(), world.rotation
     target_z = world.hole.z_m + MachineConfig().approach.height_m
     while world.tip[2] < target_z - 0.0005:
         world.step(machine)
         assert abs(world.p[0] - start[0]) < 1e-3  # no sideways travel while low
+        # ... and no turning (the plug may be in the opening)
+        assert (world.rotation * rotation.inv()).magnitude() < 1e-9
     assert world.run_until(machine, Phase.DONE) is Phase.DONE
 
 
