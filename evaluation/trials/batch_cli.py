@@ -68,6 +68,19 @@ def _override(text: str) -> str:
     return text
 
 
+def add_override_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """``--set KEY=VALUE`` (repeatable, into ``overrides``), each checked as it is parsed."""
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        metavar="KEY=VALUE",
+        type=_override,
+        action="append",
+        default=[],
+        help=help_text,
+    )
+
+
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """The arguments every batch tool shares: task, seeds, executor, overrides."""
     parser.add_argument("--task", required=True, help="task configuration name or YAML path")
@@ -86,14 +99,8 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="Ray cluster to join (with --executor ray; default: start a local instance)",
     )
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        metavar="KEY=VALUE",
-        type=_override,
-        action="append",
-        default=[],
-        help="override a task/scene configuration key by dotted path (repeatable)",
+    add_override_argument(
+        parser, "override a task/scene configuration key by dotted path (repeatable)"
     )
     parser.add_argument("--out", type=Path, required=True, help="output folder")
     parser.add_argument("--trial-function", default=TRIAL_FUNCTION, help=argparse.SUPPRESS)

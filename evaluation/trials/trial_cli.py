@@ -20,7 +20,7 @@ from pathlib import Path
 
 from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
 from evaluation.outputs import check_output_folder
-from evaluation.trials.batch_cli import _override
+from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.runner import TrialOutcome, run
 from evaluation.trials.spec import MAX_SEED
 from evaluation.trials.task import load_task
@@ -36,14 +36,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--seed", type=integer(0, MAX_SEED), default=0)
     parser.add_argument("--controller", choices=TRIAL_CONTROLLERS, default="dipole")
     parser.add_argument("--realtime", action="store_true", help="pace to the wall clock")
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        metavar="KEY=VALUE",
-        type=_override,
-        action="append",
-        default=[],
-        help="override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)",
+    add_override_argument(
+        parser, "override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)"
     )
     parser.add_argument("--out", type=Path, required=True, help="output folder (new or empty)")
     return parser
