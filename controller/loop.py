@@ -450,11 +450,14 @@ class ControlLoop:
     # -- signals ---------------------------------------------------------------------------
 
     def _install_signal_handlers(self) -> dict[int, Any]:
+        """Catch SIGINT and SIGTERM for the run, except a signal the process ignores (a
+        batch's worker leaves SIGINT to its parent, as nohup leaves SIGHUP)."""
         if threading.current_thread() is not threading.main_thread():
             return {}
         previous = {}
         for signum in (signal.SIGINT, signal.SIGTERM):
-            previous[signum] = signal.signal(signum, self._on_signal)
+            if signal.getsignal(signum) is not signal.SIG_IGN:
+                previous[signum] = signal.signal(signum, self._on_signal)
         return previous
 
     def _on_signal(self, signum: int, frame: FrameType | None) -> None:

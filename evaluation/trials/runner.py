@@ -29,6 +29,7 @@ from drivers.config import ConfigError
 from drivers.registry import load_device, load_device_config
 from drivers.sim.scenes.insertion import SimDevices, build_insertion_sim
 from drivers.sim.twins.gamepad import PadEvent
+from evaluation.cli import Terminated
 from evaluation.trials.record import TrialRecorder
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
@@ -56,9 +57,14 @@ def check_spec(spec: TrialSpec) -> None:
 
 
 def run_trial(spec: TrialSpec) -> TrialResult:
-    """The batch's trial function: one simulated trial, as fast as possible."""
+    """The batch's trial function: one simulated trial, as fast as possible. A signal that
+    stopped the trial's loop (after its safe stop) stops the batch too, as KeyboardInterrupt
+    (SIGINT) or Terminated (SIGTERM): an interrupted trial is not a failed one."""
     task = load_task(spec.task, spec.overrides)
-    return run(task, spec.controller, spec.seed, out_dir=spec.out_dir).result
+    outcome = run(task, spec.controller, spec.seed, out_dir=spec.out_dir)
+    if outcome.loop.reason == "signal":
+        raise KeyboardInterrupt if outcome.loop.message == "SIGINT" else Terminated()
+    return outcome.result
 
 
 def _sim_device_configs(config: TaskConfig) -> SimDevices:

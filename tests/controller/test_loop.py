@@ -230,6 +230,19 @@ def test_a_signal_stops_safely_within_one_period_and_restores_handlers(devices, 
     assert signal.getsignal(signum) is before
 
 
+def test_an_ignored_sigint_stays_ignored(devices, clock):
+    before = signal.signal(signal.SIGINT, signal.SIG_IGN)  # as in a batch's worker
+    try:
+        seen = []
+        machine = ScriptedMachine(
+            lambda obs, k: seen.append(signal.getsignal(signal.SIGINT)) or Command(twist=Twist())
+        )
+        make_loop(machine, devices, clock).run(max_duration_s=0.05)
+        assert seen and all(handler is signal.SIG_IGN for handler in seen)
+    finally:
+        signal.signal(signal.SIGINT, before)
+
+
 def test_outside_the_main_thread_no_handler_is_installed(devices, clock):
     seen = []
     machine = ScriptedMachine(done_after=3)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import types
 
 import numpy as np
 import pytest
@@ -10,7 +11,9 @@ import pytest
 from controller.loop import ControlLoop
 from drivers.config import ConfigError
 from drivers.sim.scenes.insertion import TruthLog
+from evaluation.cli import Terminated
 from evaluation.trials import runner
+from evaluation.trials.spec import TrialSpec
 from evaluation.trials.task import load_task
 from evaluation.trials.trial_cli import main
 
@@ -106,3 +109,14 @@ def test_a_short_trial_writes_its_record(tmp_path):
     assert np.isfinite(truth["depth_m"]).all() and (out / "summary.png").stat().st_size > 10000
     code = main(["--task", "usb_c", "--out", str(out)])  # never over an earlier record
     assert code == 2
+
+
+@pytest.mark.parametrize(
+    ("name", "raised"), [("SIGINT", KeyboardInterrupt), ("SIGTERM", Terminated)]
+)
+def test_a_signal_that_stopped_a_batch_trial_stops_the_batch(monkeypatch, name, raised):
+    loop = types.SimpleNamespace(reason="signal", message=name)
+    outcome = types.SimpleNamespace(loop=loop, result="never recorded")
+    monkeypatch.setattr(runner, "run", lambda *args, **kwargs: outcome)
+    with pytest.raises(raised):
+        runner.run_trial(TrialSpec("usb_c", "dipole", 0))
