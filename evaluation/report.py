@@ -38,18 +38,21 @@ def _object(result: CaseResult) -> str:
 
 def pareto_table(points: list[ParetoPoint]) -> list[str]:
     on_front = {p.label for p in front(points)}
+    on_any_front = {p.label for p in front(points, eligible_only=False)}
     datasets = list(points[0].rmse_by_dataset)
     lines = [
         "| configuration | median ms | p90 ms | tilt RMSE (N*mm) | "
         + " | ".join(f"RMSE {name}" for name in datasets)
-        + " | worst R^2 | on the front |",
-        "|---|---|---|---|" + "---|" * len(datasets) + "---|---|",
+        + " | worst R^2 | worst real-gel R^2 | on the front | on the front of all |",
+        "|---|---|---|---|" + "---|" * len(datasets) + "---|---|---|---|",
     ]
     for p in sorted(points, key=lambda p: p.latency_ms):
         per_dataset = " | ".join(f"{p.rmse_by_dataset[name]:.3f}" for name in datasets)
         lines.append(
             f"| {p.label} | {p.latency_ms:.2f} | {p.p90_ms:.2f} | **{p.rmse_nmm:.3f}** | "
-            f"{per_dataset} | {p.r2:.4f} | {'yes' if p.label in on_front else ''} |"
+            f"{per_dataset} | {p.r2:.4f} | {p.realgel_r2:.3f} | "
+            f"{'yes' if p.label in on_front else ''} | "
+            f"{'yes' if p.label in on_any_front else ''} |"
         )
     return lines
 
