@@ -52,7 +52,10 @@ class ParetoPoint:
     ``r2``: the worst axis's R^2 over the datasets. A configuration that cannot run on a
     dataset (``markers`` on a markerless gel) scores an infinite RMSE there (and so in the
     mean) and an R^2 of -inf. ``realgel_r2``: the worst held-out tilt R^2 over the real-gel
-    check's sequences (``realgel_specs``), -inf if it cannot run on one of them."""
+    check's sequences (``realgel_specs``), -inf if it cannot run on one of them.
+    ``slip_recall``: the slip detector's worse recall (incipient or gross) on the slip
+    sequences (evaluation/slip_eval.py), measured for the eligible configurations only
+    (None for the others)."""
 
     label: str
     latency_ms: float
@@ -61,6 +64,7 @@ class ParetoPoint:
     r2: float
     rmse_by_dataset: dict[str, float]
     realgel_r2: float
+    slip_recall: float | None = None
 
     @property
     def eligible(self) -> bool:
@@ -144,22 +148,36 @@ def worst_realgel_r2(rows: list[Row], label: str) -> float:
     return -math.inf if any(math.isnan(r) for r in scores) else min(scores)
 
 
-def beating(points: list[ParetoPoint], p: ParetoPoint) -> list[ParetoPoint]:
-    """The points at least as fast and as accurate as ``p`` and better on one of the two."""
+def _objectives(p: ParetoPoint, with_slip: bool) -> tuple[float, ...]:
+    """What ``beating`` minimises: latency, RMSE and, ``with_slip``, the slip recall's
+    shortfall."""
+    slip = () if not with_slip else (-(p.slip_recall if p.slip_recall is not None else 0.0),)
+    return (p.latency_ms, p.rmse_nmm, *slip)
+
+
+def beating(
+    points: list[ParetoPoint], p: ParetoPoint, with_slip: bool = True
+) -> list[ParetoPoint]:
+    """The points at least as good as ``p`` on every objective (latency, tilt RMSE and,
+    ``with_slip``, slip recall) and better on one."""
+    mine = _objectives(p, with_slip)
+    scored = [(q, _objectives(q, with_slip)) for q in points]
     return [
         q
-        for q in points
-        if q.latency_ms <= p.latency_ms
-        and q.rmse_nmm <= p.rmse_nmm
-        and (q.latency_ms < p.latency_ms or q.rmse_nmm < p.rmse_nmm)
+        for q, theirs in scored
+        if theirs != mine and all(a <= b for a, b in zip(theirs, mine, strict=True))
     ]
 
 
 def front(points: list[ParetoPoint], eligible_only: bool = True) -> list[ParetoPoint]:
-    """The points no other point beats on both latency and RMSE (sorted by latency), among
-    the configurations meeting the real-gel target (all of them if not ``eligible_only``)."""
+    """The points nothing beats (sorted by latency). ``eligible_only``: among the
+    configurations meeting the real-gel target, on latency, tilt RMSE and slip recall;
+    otherwise among all, on latency and tilt RMSE only (slip is measured for the eligible)."""
     points = [p for p in points if p.eligible or not eligible_only]
-    return sorted((p for p in points if not beating(points, p)), key=lambda p: p.latency_ms)
+    return sorted(
+        (p for p in points if not beating(points, p, with_slip=eligible_only)),
+        key=lambda p: p.latency_ms,
+    )
 
 
 def pareto_chart(points: list[ParetoPoint], path: Path, title: str) -> None:
@@ -185,13 +203,14 @@ def pareto_chart(points: list[ParetoPoint], path: Path, title: str) -> None:
             xytext=(4, 3),
             textcoords="offset points",
         )
-    line = front(points)
+    line = [p for p in front(points) if not beating(front(points), p, with_slip=False)]
     ax.plot(
         [p.latency_ms for p in line],
         [p.rmse_nmm for p in line],
         "b--",
         lw=0.8,
-        label=f"Pareto front of the configurations with real-gel R^2 >= {REALGEL_TARGET_R2}",
+        label=f"speed-accuracy front of the configurations with real-gel R^2 >= "
+        f"{REALGEL_TARGET_R2} (blue: on the front with slip recall)",
     )
     ax.scatter([], [], marker="x", color="tab:gray", label="misses the real-gel target")
     ax.set_xscale("log")

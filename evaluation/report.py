@@ -43,14 +43,15 @@ def pareto_table(points: list[ParetoPoint]) -> list[str]:
     lines = [
         "| configuration | median ms | p90 ms | tilt RMSE (N*mm) | "
         + " | ".join(f"RMSE {name}" for name in datasets)
-        + " | worst R^2 | worst real-gel R^2 | on the front | on the front of all |",
-        "|---|---|---|---|" + "---|" * len(datasets) + "---|---|---|---|",
+        + " | worst R^2 | worst real-gel R^2 | slip recall | on the front | on the front of all |",
+        "|---|---|---|---|" + "---|" * len(datasets) + "---|---|---|---|---|",
     ]
     for p in sorted(points, key=lambda p: p.latency_ms):
         per_dataset = " | ".join(f"{p.rmse_by_dataset[name]:.3f}" for name in datasets)
         lines.append(
             f"| {p.label} | {p.latency_ms:.2f} | {p.p90_ms:.2f} | **{p.rmse_nmm:.3f}** | "
             f"{per_dataset} | {p.r2:.4f} | {p.realgel_r2:.3f} | "
+            f"{'-' if p.slip_recall is None else f'{p.slip_recall:.2f}'} | "
             f"{'yes' if p.label in on_front else ''} | "
             f"{'yes' if p.label in on_any_front else ''} |"
         )

@@ -36,10 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.tactile import TactileEstimator, estimator_for_sensor
+from controller.tactile import EstimatorConfig, TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
+from drivers.tactile.profile import sensor_profile
 from evaluation.rendering import Appearance, make_renderer
 from evaluation.sim_setup import gel_model
 
@@ -260,16 +261,21 @@ class GripRuns:
 def run_grip(
     grip_n: float,
     seed: int,
-    method: str | None = None,
+    method: str | tuple[str, EstimatorConfig] | None = None,
     noise_grey: float = 1.0,
     objects: tuple[str, ...] = OBJECTS,
     quick: bool = False,
     appearance: Appearance = None,
 ) -> GripRuns:
     """Run every sequence of every object at one grip force (one worker's job), rendered
-    with ``appearance`` (None: the sensor's nominal, realistic one). ``quick``: only the
-    first positive and the first negative sequence of each object (a smoke test)."""
-    estimator = estimator_for_sensor(SENSOR, method)
+    with ``appearance`` (None: the sensor's nominal, realistic one). ``method``: a name or
+    YAML path (None: the sensor's own), or a (label, configuration) pair. ``quick``: only
+    the first positive and the first negative sequence of each object (a smoke test)."""
+    if isinstance(method, tuple):
+        label, config = method
+        estimator = TactileEstimator(config, sensor_profile(SENSOR), config_name=label)
+    else:
+        estimator = estimator_for_sensor(SENSOR, method)
     renderer = make_renderer(SENSOR, ImageEffects(noise_grey=noise_grey), seed, appearance)
     groups = []
     for shape in objects:
@@ -326,6 +332,12 @@ def evaluate(
         for k, grip in enumerate(grips_n)
     ]
     return report(runs, seed, noise_grey)
+
+
+def worst_recall(summary: dict) -> float:
+    """The lower of the incipient and gross recalls of a ``_summary`` (NaN counts as 0)."""
+    recalls = [summary[kind]["recall"] for kind in ("incipient", "gross")]
+    return float(min(0.0 if np.isnan(r) else r for r in recalls))
 
 
 def _sequence_row(grip: float, sequence: Sequence, frames) -> dict:

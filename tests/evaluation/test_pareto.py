@@ -8,8 +8,10 @@ from evaluation.pareto import REALGEL_TARGET_R2, ParetoPoint, beating, front, wo
 from evaluation.realgel.check import Row
 
 
-def point(label: str, ms: float, rmse: float, realgel_r2: float = 0.99) -> ParetoPoint:
-    return ParetoPoint(label, ms, ms, rmse, 0.99, {"d": rmse}, realgel_r2)
+def point(
+    label: str, ms: float, rmse: float, realgel_r2: float = 0.99, slip: float = 0.8
+) -> ParetoPoint:
+    return ParetoPoint(label, ms, ms, rmse, 0.99, {"d": rmse}, realgel_r2, slip)
 
 
 def row(estimator: str, r2: float) -> Row:
@@ -39,3 +41,14 @@ def test_worst_real_gel_r2_is_the_minimum_and_minus_inf_where_a_configuration_ca
     assert worst_realgel_r2(rows, "b") == -math.inf
     with pytest.raises(ValueError, match="no real-gel rows"):
         worst_realgel_r2(rows, "c")
+
+
+def test_slip_recall_keeps_a_configuration_on_the_eligible_front_but_not_on_the_front_of_all():
+    better_slip = point("better slip", 1.5, 0.45, slip=0.85)
+    better_tilt = point("better tilt", 1.4, 0.42, slip=0.71)
+    assert [p.label for p in front([better_slip, better_tilt])] == ["better tilt", "better slip"]
+    assert [p.label for p in front([better_slip, better_tilt], eligible_only=False)] == [
+        "better tilt"
+    ]
+    assert beating([better_slip, better_tilt], better_slip) == []
+    assert beating([better_slip, better_tilt], better_slip, with_slip=False) == [better_tilt]
