@@ -53,7 +53,8 @@ EXIT_CODES = {"SIGINT": EXIT_SIGINT, "SIGTERM": EXIT_SIGTERM}
 SpecCheck = Callable[[TrialSpec], None]
 
 
-def _seeds(text: str) -> range:
+def seeds_type(text: str) -> range:
+    """argparse type: seeds A:B (B excluded), checked as they are parsed."""
     try:
         return parse_seeds(text)
     except SpecError as exc:
@@ -85,7 +86,7 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
     """The arguments every batch tool shares: task, seeds, executor, overrides."""
     parser.add_argument("--task", required=True, help="task configuration name or YAML path")
     parser.add_argument(
-        "--seeds", type=_seeds, required=True, help="A:B, the seeds A up to B (B excluded)"
+        "--seeds", type=seeds_type, required=True, help="A:B, the seeds A up to B (B excluded)"
     )
     parser.add_argument(
         "--workers",

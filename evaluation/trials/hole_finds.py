@@ -1,0 +1,100 @@
+"""Where the plug's tip really was each time SEARCH declared the hole found, and what the
+press that followed did: the diagnosis of false hole finds (``scripts/hole_finds.py``).
+
+The controller never sees this: it is read from the simulator's truth after the trial. The
+tip is the centre of the plug's tip face, in the opening's frame O (origin at the true
+opening's centre on the board surface, u along its width, v across it, z up). A tilted plug
+resting on the surface holds its tip centre at the *resting height* (half the leading face's
+extent times the sine of the tilt); a tip at least ``DROP_M`` below that has dropped into
+the opening.
+"""
+
+from __future__ import annotations
+
+import math
+import tempfile
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from controller.insertion import Phase
+from evaluation.trials.runner import run
+from evaluation.trials.task import Task
+
+DROP_M = 1e-4  # a tip this far below its resting height is in the opening (m)
+
+
+@dataclass(frozen=True)
+class HoleFind:
+    """One ``hole_found``: ``t_s`` simulated time; ``tip_o_m`` the true tip centre in O (m);
+    ``in_opening`` the tip dropped at least ``DROP_M`` below its resting height; ``outcome``
+    what ended the attempt: ``inserted``, ``not_engaged``, ``jam``, or the failure or other
+    guard that ended it."""
+
+    seed: int
+    t_s: float
+    tip_o_m: tuple[float, float, float]
+    in_opening: bool
+    outcome: str
+
+
+def resting_height_m(task: Task) -> float:
+    """The tip centre's height (m) above the surface when the tilted plug rests on it: half
+    the extent of the face across the tilt axis times the sine of the tilt."""
+    plug, approach = task.config.plug, task.config.machine.approach
+    across = plug.thickness_m if approach.tilt_axis == "x" else plug.width_m
+    return 0.5 * across * math.sin(abs(approach.tilt_rad))
+
+
+def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
+    """Run one simulated trial of ``task`` with the dipole controller; its success and each
+    of its hole finds."""
+    with tempfile.TemporaryDirectory() as folder:
+        outcome = run(task, "dipole", seed, out_dir=Path(folder) / "trial")
+        truth = dict(np.load(Path(folder) / "trial" / "truth.npz"))
+    opening = np.array([truth["hole_x_m"], truth["hole_y_m"], truth["hole_z_m"]], dtype=float)
+    to_o = Rotation.from_euler("z", float(truth["hole_yaw_rad"])).inv()
+    resting = resting_height_m(task)
+    transitions = outcome.transitions
+    finds = []
+    for i, tr in enumerate(transitions):
+        if tr.reason != "hole_found":
+            continue
+        k = min(int(np.searchsorted(truth["t_s"], tr.t_s)), len(truth["t_s"]) - 1)
+        tip = to_o.apply(truth["tip_xyz_b"][k] - opening)
+        finds.append(
+            HoleFind(
+                seed,
+                tr.t_s,
+                tuple(float(x) for x in tip),
+                bool(tip[2] <= resting - DROP_M),
+                _attempt_outcome(transitions[i + 1:]),
+            )
+        )
+    return outcome.result.success, finds
+
+
+def _attempt_outcome(later) -> str:
+    """What ended the attempt begun by a hole find: the first of a release (inserted), a
+    back-off, a failure or another phase's start."""
+    for tr in later:
+        if tr.target is Phase.RELEASE:
+            return "inserted"
+        if tr.target in (Phase.BACKOFF, Phase.FAILED, Phase.GRASP, Phase.TELEOP, Phase.ESTOP):
+            return tr.reason
+    return "run ended"
+
+
+def summary_lines(finds: list[HoleFind]) -> list[str]:
+    """Counts of hole finds by where the tip was and how the attempt ended."""
+    lines = []
+    for where, flag in (("in the opening", True), ("on the surface", False)):
+        group = [f for f in finds if f.in_opening is flag]
+        counts: dict[str, int] = {}
+        for f in group:
+            counts[f.outcome] = counts.get(f.outcome, 0) + 1
+        detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items(), key=lambda x: -x[1]))
+        lines.append(f"{where}: {len(group)}" + (f" ({detail})" if detail else ""))
+    return lines

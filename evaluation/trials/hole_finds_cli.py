@@ -1,0 +1,71 @@
+"""``scripts/hole_finds.py``: where the tip really was at each hole find, and how the press
+that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
+
+    hole_finds.py --task usb_c|usb_a|PATH.yaml --seeds A:B [--workers N] [--set KEY=VALUE ...]
+
+Prints one line per hole find (seed, time, the true tip centre in the opening's frame in
+mm, in the opening or on the surface, the attempt's end) and the counts. Writes nothing.
+Bad arguments, an unknown task or key: one line and exit code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import ExitStack
+from functools import partial
+from multiprocessing import get_context
+
+from evaluation.cli import ignore_interrupts_in_worker, integer, run_tool
+from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
+from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds
+from evaluation.trials.task import load_task
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="hole_finds", description=__doc__.splitlines()[0])
+    parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
+    parser.add_argument("--seeds", type=seeds_type, required=True, help="A:B (B excluded)")
+    parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1)
+    add_override_argument(parser, "override a task key by dotted path (repeatable)")
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return run_tool("hole_finds", lambda: _run(args))
+
+
+def _one(task_name: str, overrides: tuple[str, ...], seed: int):
+    return trial_hole_finds(load_task(task_name, overrides), seed)
+
+
+def _run(args: argparse.Namespace) -> int:
+    load_task(args.task, args.overrides)  # a bad task or key: one line, before any trial
+    job = partial(_one, args.task, tuple(args.overrides))
+    with ExitStack() as stack:
+        if args.workers == 1:
+            results = map(job, args.seeds)
+        else:
+            pool = stack.enter_context(ProcessPoolExecutor(
+                args.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
+            ))
+            results = pool.map(job, args.seeds)
+        _report(results, len(args.seeds))
+    return 0
+
+
+def _report(results, trials: int) -> None:
+    finds: list[HoleFind] = []
+    successes = 0
+    print("seed  t (s)  tip u / v / z (mm)       where           attempt ended")
+    for success, trial in results:
+        successes += success
+        for f in trial:
+            u, v, z = (1e3 * x for x in f.tip_o_m)
+            where = "in the opening" if f.in_opening else "on the surface"
+            print(f"{f.seed:4d} {f.t_s:6.2f}  {u:6.2f} {v:6.2f} {z:6.2f}   {where}  {f.outcome}")
+        finds.extend(trial)
+    print(f"trials inserted: {successes} / {trials}; hole finds: {len(finds)}")
+    for line in summary_lines(finds):
+        print(line)

@@ -1,0 +1,83 @@
+"""The hole-find diagnosis: the true tip at each hole find and the attempt's end."""
+
+import math
+
+import numpy as np
+import pytest
+
+from controller.insertion import Phase, Transition
+from evaluation.trials.hole_finds import (
+    DROP_M,
+    HoleFind,
+    _attempt_outcome,
+    resting_height_m,
+    summary_lines,
+    trial_hole_finds,
+)
+from evaluation.trials.hole_finds_cli import main
+from evaluation.trials.task import load_task
+
+
+def test_the_resting_height_is_half_the_leading_face_times_the_sine_of_the_tilt():
+    task = load_task("usb_c")
+    assert resting_height_m(task) == pytest.approx(0.5 * 0.0024 * math.sin(0.2618))
+    tilted_about_y = load_task("usb_c", ["machine.approach.tilt_axis=y"])
+    assert resting_height_m(tilted_about_y) == pytest.approx(0.5 * 0.00825 * math.sin(0.2618))
+
+
+def test_the_attempt_ends_at_the_first_release_back_off_or_failure():
+    def tr(source, target, reason):
+        return Transition(0.0, source, target, reason)
+
+    aligned = tr(Phase.ALIGN, Phase.INSERT, "aligned")
+    assert _attempt_outcome([aligned, tr(Phase.INSERT, Phase.RELEASE, "depth_reached")]) == (
+        "inserted"
+    )
+    assert _attempt_outcome([aligned, tr(Phase.INSERT, Phase.BACKOFF, "not_engaged")]) == (
+        "not_engaged"
+    )
+    assert _attempt_outcome([aligned, tr(Phase.INSERT, Phase.FAILED, "timeout")]) == "timeout"
+    assert _attempt_outcome([aligned]) == "run ended"
+
+
+def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
+    task = load_task("usb_c")
+    success, finds = trial_hole_finds(task, 0)
+    assert success and finds
+    assert finds[-1].in_opening and finds[-1].outcome == "inserted"
+    resting = resting_height_m(task)
+    for f in finds:
+        assert f.in_opening == (f.tip_o_m[2] <= resting - DROP_M)
+        assert np.all(np.isfinite(f.tip_o_m))
+    assert [f.t_s for f in finds] == sorted(f.t_s for f in finds)
+
+
+def test_the_summary_counts_finds_by_place_and_end():
+    finds = [
+        HoleFind(0, 1.0, (0.0, 0.0, -1e-4), True, "inserted"),
+        HoleFind(0, 2.0, (0.0, 0.0, 3e-4), False, "not_engaged"),
+        HoleFind(1, 1.0, (0.0, 0.0, 3e-4), False, "not_engaged"),
+    ]
+    assert summary_lines(finds) == [
+        "in the opening: 1 (inserted 1)",
+        "on the surface: 2 (not_engaged 2)",
+    ]
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--task", "usb_c", "--seeds", "3:1"], "--seeds"),
+        (["--task", "nope", "--seeds", "0:1"], "nope"),
+        (["--task", "usb_c", "--seeds", "0:1", "--set", "machine.search.pitch_m=-1"],
+         "machine.search.pitch_m"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):
+    try:
+        code = main(argv)
+    except SystemExit as exc:
+        code = exc.code
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert message in err[-1] and err[-1].startswith("hole_finds: error:")
