@@ -3,7 +3,10 @@ press that followed did: the diagnosis of false hole finds (``scripts/hole_finds
 
 The controller never sees this: it is read from the simulator's truth after the trial. The
 tip is the centre of the plug's tip face, in the opening's frame O (origin at the true
-opening's centre on the board surface, u along its width, v across it, z up). A tilted plug
+opening's centre on the board surface, u along its width, v across it, z up). The *pivot
+error* is the horizontal distance between that true tip and the tip the machine assumes
+(the arm's TCP plus the plug's length along T z), which the compliant wrist separates; the
+machine turns about the assumed one. A tilted plug
 resting on the surface holds its tip centre at the *resting height* (half the leading face's
 extent times the sine of the tilt); a tip at least ``DROP_M`` below that has dropped into
 the opening.
@@ -11,6 +14,7 @@ the opening.
 
 from __future__ import annotations
 
+import json
 import math
 import tempfile
 from dataclasses import dataclass
@@ -20,6 +24,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from controller.insertion import Phase
+from controller.insertion.motion import tip_position
+from drivers.base import Pose
 from evaluation.trials.runner import run
 from evaluation.trials.task import Task
 
@@ -31,13 +37,15 @@ class HoleFind:
     """One ``hole_found``: ``t_s`` simulated time; ``tip_o_m`` the true tip centre in O (m);
     ``in_opening`` the tip dropped at least ``DROP_M`` below its resting height; ``outcome``
     what ended the attempt: ``inserted``, ``not_engaged``, ``jam``, or the failure or other
-    guard that ended it."""
+    guard that ended it; ``pivot_error_m`` the pivot error (m) at the find and when the
+    attempt's ALIGN ended (NaN if it did not)."""
 
     seed: int
     t_s: float
     tip_o_m: tuple[float, float, float]
     in_opening: bool
     outcome: str
+    pivot_error_m: tuple[float, float]
 
 
 def resting_height_m(task: Task) -> float:
@@ -54,6 +62,17 @@ def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
     with tempfile.TemporaryDirectory() as folder:
         outcome = run(task, "dipole", seed, out_dir=Path(folder) / "trial")
         truth = dict(np.load(Path(folder) / "trial" / "truth.npz"))
+        with (Path(folder) / "trial" / "ticks.jsonl").open() as ticks:
+            poses = [json.loads(line) for line in ticks]
+    tick_t = np.array([p["t_s"] for p in poses])
+
+    def pivot_error(t_s: float) -> float:
+        tick = poses[min(int(np.searchsorted(tick_t, t_s)), len(poses) - 1)]
+        pose = Pose(tuple(tick["tcp_xyz_m"]), tuple(tick["tcp_rpy_rad"]))
+        assumed = tip_position(pose, task.config.plug.length_m)
+        k = min(int(np.searchsorted(truth["t_s"], tick["t_s"])), len(truth["t_s"]) - 1)
+        return float(np.linalg.norm((truth["tip_xyz_b"][k] - assumed)[:2]))
+
     opening = np.array([truth["hole_x_m"], truth["hole_y_m"], truth["hole_z_m"]], dtype=float)
     to_o = Rotation.from_euler("z", float(truth["hole_yaw_rad"])).inv()
     resting = resting_height_m(task)
@@ -64,6 +83,7 @@ def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
             continue
         k = min(int(np.searchsorted(truth["t_s"], tr.t_s)), len(truth["t_s"]) - 1)
         tip = to_o.apply(truth["tip_xyz_b"][k] - opening)
+        aligned = _aligned_t_s(transitions[i + 1:])
         finds.append(
             HoleFind(
                 seed,
@@ -71,9 +91,15 @@ def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
                 tuple(float(x) for x in tip),
                 bool(tip[2] <= resting - DROP_M),
                 _attempt_outcome(transitions[i + 1:]),
+                (pivot_error(tr.t_s), math.nan if aligned is None else pivot_error(aligned)),
             )
         )
     return outcome.result.success, finds
+
+
+def _aligned_t_s(later) -> float | None:
+    """When the ALIGN begun by a hole find ended aligned (its next transition), or None."""
+    return later[0].t_s if later and later[0].reason == "aligned" else None
 
 
 def _attempt_outcome(later) -> str:
@@ -88,7 +114,8 @@ def _attempt_outcome(later) -> str:
 
 
 def summary_lines(finds: list[HoleFind]) -> list[str]:
-    """Counts of hole finds by where the tip was and how the attempt ended."""
+    """Counts of hole finds by where the tip was and how the attempt ended; the pivot
+    errors' median and range."""
     lines = []
     for where, flag in (("in the opening", True), ("on the surface", False)):
         group = [f for f in finds if f.in_opening is flag]
@@ -97,4 +124,12 @@ def summary_lines(finds: list[HoleFind]) -> list[str]:
             counts[f.outcome] = counts.get(f.outcome, 0) + 1
         detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items(), key=lambda x: -x[1]))
         lines.append(f"{where}: {len(group)}" + (f" ({detail})" if detail else ""))
+    for when, column in (("at the finds", 0), ("when ALIGN ended", 1)):
+        errors = np.array([f.pivot_error_m[column] for f in finds], dtype=float)
+        errors = 1e3 * errors[np.isfinite(errors)]
+        if errors.size:
+            lines.append(
+                f"pivot error {when} ({errors.size}): median {np.median(errors):.2f} mm, "
+                f"{errors.min():.2f}-{errors.max():.2f} mm"
+            )
     return lines

@@ -49,18 +49,22 @@ def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
     for f in finds:
         assert f.in_opening == (f.tip_o_m[2] <= resting - DROP_M)
         assert np.all(np.isfinite(f.tip_o_m))
+        # every find of this trial was aligned; the wrist keeps the true tip within 5 mm
+        assert all(0.0 <= e < 5e-3 for e in f.pivot_error_m)
     assert [f.t_s for f in finds] == sorted(f.t_s for f in finds)
 
 
 def test_the_summary_counts_finds_by_place_and_end():
     finds = [
-        HoleFind(0, 1.0, (0.0, 0.0, -1e-4), True, "inserted"),
-        HoleFind(0, 2.0, (0.0, 0.0, 3e-4), False, "not_engaged"),
-        HoleFind(1, 1.0, (0.0, 0.0, 3e-4), False, "not_engaged"),
+        HoleFind(0, 1.0, (0.0, 0.0, -1e-4), True, "inserted", (1e-3, 2e-3)),
+        HoleFind(0, 2.0, (0.0, 0.0, 3e-4), False, "not_engaged", (2e-3, math.nan)),
+        HoleFind(1, 1.0, (0.0, 0.0, 3e-4), False, "not_engaged", (3e-3, 4e-3)),
     ]
     assert summary_lines(finds) == [
         "in the opening: 1 (inserted 1)",
         "on the surface: 2 (not_engaged 2)",
+        "pivot error at the finds (3): median 2.00 mm, 1.00-3.00 mm",
+        "pivot error when ALIGN ended (2): median 3.00 mm, 2.00-4.00 mm",
     ]
 
 
