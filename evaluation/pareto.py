@@ -70,7 +70,12 @@ class ParetoPoint:
     @property
     def eligible(self) -> bool:
         """Whether the configuration meets the accuracy target on the real-gel check."""
-        return self.realgel_r2 >= REALGEL_TARGET_R2
+        return meets_realgel_target(self.realgel_r2)
+
+
+def meets_realgel_target(realgel_r2: float) -> bool:
+    """A worst real-gel R^2 at or above ``REALGEL_TARGET_R2``: eligible for the front."""
+    return realgel_r2 >= REALGEL_TARGET_R2
 
 
 @dataclass(frozen=True)
@@ -188,12 +193,13 @@ def pareto_chart(points: list[ParetoPoint], path: Path, title: str) -> None:
     shown = [p for p in points if math.isfinite(p.rmse_nmm)]  # the table lists the rest
     best = min(p.rmse_nmm for p in shown)
     close = [p for p in shown if p.rmse_nmm <= 1.5 * best]
+    on_front = front(points)
     fig, (overview, zoom) = plt.subplots(1, 2, figsize=(14, 6))
-    _scatter(overview, shown, front(points), labelled=[p for p in shown if p not in close])
-    _scatter(zoom, close, front(points), labelled=close)
+    _scatter(overview, shown, on_front, labelled=[p for p in shown if p not in close])
+    _scatter(zoom, close, on_front, labelled=close)
     overview.axhspan(0.0, 1.5 * best, color="tab:blue", alpha=0.06, label="zoomed on the right")
     overview.set_yscale("log")
-    line = [p for p in front(points) if not beating(front(points), p, with_slip=False)]
+    line = [p for p in on_front if not beating(on_front, p, with_slip=False)]
     zoom.plot([p.latency_ms for p in line], [p.rmse_nmm for p in line], "b--", lw=0.8)
     overview.set_xscale("log")
     for axis in (overview.xaxis, overview.yaxis):

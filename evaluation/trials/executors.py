@@ -116,7 +116,7 @@ class LocalExecutor:
         if kind is None:
             pool.shutdown(wait=True)
             return
-        _terminate(pool)
+        terminate_pool(pool)
 
     def run(
         self, function: TrialFunction, specs: Iterable[TrialSpec]
@@ -146,7 +146,7 @@ class LocalExecutor:
                 future.cancel()
 
 
-def _terminate(pool: ProcessPoolExecutor) -> None:
+def terminate_pool(pool: ProcessPoolExecutor) -> None:
     """Cancel the pool's queued trials and stop its worker processes now (their running
     trials are abandoned). Python 3.14 has ``terminate_workers``; before it, the processes
     are only reachable as ``_processes``, which ``shutdown`` clears: taken first."""

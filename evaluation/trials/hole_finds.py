@@ -26,7 +26,7 @@ from scipy.spatial.transform import Rotation
 from controller.insertion import Phase
 from controller.insertion.motion import tip_position
 from drivers.base import Pose
-from evaluation.trials.runner import run
+from evaluation.trials.runner import raise_if_interrupted, run
 from evaluation.trials.task import Task
 
 DROP_M = 1e-4  # a tip this far below its resting height is in the opening (m)
@@ -58,20 +58,22 @@ def resting_height_m(task: Task) -> float:
 
 def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
     """Run one simulated trial of ``task`` with the dipole controller; its success and each
-    of its hole finds."""
+    of its hole finds. A signal that stopped the trial stops the caller too
+    (``raise_if_interrupted``)."""
     with tempfile.TemporaryDirectory() as folder:
         outcome = run(task, "dipole", seed, out_dir=Path(folder) / "trial")
+        raise_if_interrupted(outcome)
         truth = dict(np.load(Path(folder) / "trial" / "truth.npz"))
-        with (Path(folder) / "trial" / "ticks.jsonl").open() as ticks:
-            poses = [json.loads(line) for line in ticks]
-    tick_t = np.array([p["t_s"] for p in poses])
+        with (Path(folder) / "trial" / "ticks.jsonl").open() as lines:
+            ticks = [json.loads(line) for line in lines]
+    tick_t = np.array([tick["t_s"] for tick in ticks])
+    length_m = task.config.plug.length_m
 
     def pivot_error(t_s: float) -> float:
-        tick = poses[min(int(np.searchsorted(tick_t, t_s)), len(poses) - 1)]
-        pose = Pose(tuple(tick["tcp_xyz_m"]), tuple(tick["tcp_rpy_rad"]))
-        assumed = tip_position(pose, task.config.plug.length_m)
-        k = min(int(np.searchsorted(truth["t_s"], tick["t_s"])), len(truth["t_s"]) - 1)
-        return float(np.linalg.norm((truth["tip_xyz_b"][k] - assumed)[:2]))
+        tick = ticks[_index_at(tick_t, t_s)]
+        assumed = tip_position(Pose(tuple(tick["tcp_xyz_m"]), tuple(tick["tcp_rpy_rad"])), length_m)
+        true_tip = truth["tip_xyz_b"][_index_at(truth["t_s"], tick["t_s"])]
+        return float(np.linalg.norm((true_tip - assumed)[:2]))
 
     opening = np.array([truth["hole_x_m"], truth["hole_y_m"], truth["hole_z_m"]], dtype=float)
     to_o = Rotation.from_euler("z", float(truth["hole_yaw_rad"])).inv()
@@ -81,20 +83,26 @@ def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
     for i, tr in enumerate(transitions):
         if tr.reason != "hole_found":
             continue
-        k = min(int(np.searchsorted(truth["t_s"], tr.t_s)), len(truth["t_s"]) - 1)
-        tip = to_o.apply(truth["tip_xyz_b"][k] - opening)
-        aligned = _aligned_t_s(transitions[i + 1:])
+        tip = to_o.apply(truth["tip_xyz_b"][_index_at(truth["t_s"], tr.t_s)] - opening)
+        later = transitions[i + 1 :]
+        aligned = _aligned_t_s(later)
         finds.append(
             HoleFind(
                 seed,
                 tr.t_s,
                 tuple(float(x) for x in tip),
                 bool(tip[2] <= resting - DROP_M),
-                _attempt_outcome(transitions[i + 1:]),
+                _attempt_outcome(later),
                 (pivot_error(tr.t_s), math.nan if aligned is None else pivot_error(aligned)),
             )
         )
     return outcome.result.success, finds
+
+
+def _index_at(times: np.ndarray, t_s: float) -> int:
+    """The index of the first of the ascending ``times`` at or after ``t_s`` (the last if
+    none)."""
+    return min(int(np.searchsorted(times, t_s)), len(times) - 1)
 
 
 def _aligned_t_s(later) -> float | None:

@@ -5,7 +5,7 @@ that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
 
 Prints one line per hole find (seed, time, the true tip centre in the opening's frame in
 mm, in the opening or on the surface, the pivot error at the find and when ALIGN ended, the
-attempt's end) and the counts. Writes nothing.
+attempt's end) and the counts. Writes nothing; Ctrl-C stops the trials at once.
 Bad arguments, an unknown task or key: one line and exit code 2.
 """
 
@@ -13,12 +13,13 @@ from __future__ import annotations
 
 import argparse
 from concurrent.futures import ProcessPoolExecutor
-from contextlib import ExitStack
 from functools import partial
 from multiprocessing import get_context
 
 from evaluation.cli import ignore_interrupts_in_worker, integer, run_tool
+from evaluation.machine import one_thread_env
 from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
+from evaluation.trials.executors import terminate_pool
 from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds
 from evaluation.trials.task import load_task
 
@@ -44,15 +45,19 @@ def _one(task_name: str, overrides: tuple[str, ...], seed: int):
 def _run(args: argparse.Namespace) -> int:
     load_task(args.task, args.overrides)  # a bad task or key: one line, before any trial
     job = partial(_one, args.task, tuple(args.overrides))
-    with ExitStack() as stack:
-        if args.workers == 1:
-            results = map(job, args.seeds)
-        else:
-            pool = stack.enter_context(ProcessPoolExecutor(
-                args.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
-            ))
-            results = pool.map(job, args.seeds)
-        _report(results, len(args.seeds))
+    if args.workers == 1:
+        _report(map(job, args.seeds), len(args.seeds))
+        return 0
+    one_thread_env()
+    pool = ProcessPoolExecutor(
+        args.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
+    )
+    try:
+        _report(pool.map(job, args.seeds), len(args.seeds))
+    except BaseException:  # Ctrl-C, SIGTERM, a failed trial: stop the queued trials now
+        terminate_pool(pool)
+        raise
+    pool.shutdown()
     return 0
 
 

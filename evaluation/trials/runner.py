@@ -62,9 +62,15 @@ def run_trial(spec: TrialSpec) -> TrialResult:
     (SIGINT) or Terminated (SIGTERM): an interrupted trial is not a failed one."""
     task = load_task(spec.task, spec.overrides)
     outcome = run(task, spec.controller, spec.seed, out_dir=spec.out_dir)
+    raise_if_interrupted(outcome)
+    return outcome.result
+
+
+def raise_if_interrupted(outcome: TrialOutcome) -> None:
+    """KeyboardInterrupt (SIGINT) or Terminated (SIGTERM) if a signal stopped the trial's
+    loop (after its safe stop), so a tool running several trials stops with it."""
     if outcome.loop.reason == "signal":
         raise KeyboardInterrupt if outcome.loop.message == "SIGINT" else Terminated()
-    return outcome.result
 
 
 def _sim_device_configs(config: TaskConfig) -> SimDevices:

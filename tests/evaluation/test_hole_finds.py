@@ -1,6 +1,9 @@
 """The hole-find diagnosis: the true tip at each hole find and the attempt's end."""
 
 import math
+import os
+import signal
+import threading
 
 import numpy as np
 import pytest
@@ -85,3 +88,15 @@ def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert message in err[-1] and err[-1].startswith("hole_finds: error:")
+
+
+def test_a_signal_that_stops_the_trial_stops_the_caller():
+    """Ctrl-C during a trial: its loop stops safely, then the tool stops too (it does not
+    go on to the next seed with a half-run trial)."""
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            trial_hole_finds(load_task("usb_c"), 1)
+    finally:
+        timer.cancel()
