@@ -168,7 +168,8 @@ class LoopStats:
     """Timing of a run, s. ``period_*``: between consecutive tick starts; ``lateness_*``:
     tick start minus its deadline (the period error of a deadline-paced loop); ``work_*``:
     tick start to end. ``overruns``: ticks that ended after the next deadline;
-    ``skipped``: deadlines skipped because of them."""
+    ``skipped``: deadlines skipped because of them. ``first_tick_s``: the first tick's start
+    on the loop's clock (when the machine began; NaN without ticks)."""
 
     ticks: int
     overruns: int
@@ -182,6 +183,7 @@ class LoopStats:
     work_p50_s: float
     work_p99_s: float
     work_max_s: float
+    first_tick_s: float = math.nan
 
     @classmethod
     def of(
@@ -204,7 +206,10 @@ class LoopStats:
             p50, p99 = np.percentile(values, [50, 99])
             return (float(p50), float(p99), float(values.max()))
 
-        return cls(len(starts_s), overruns, skipped, *pct(periods), *pct(lateness), *pct(work))
+        first = float(starts[0]) if starts.size else math.nan
+        return cls(
+            len(starts_s), overruns, skipped, *pct(periods), *pct(lateness), *pct(work), first
+        )
 
 
 @dataclass(frozen=True)

@@ -132,7 +132,15 @@ class BlindMachine:
 
     def _grasp(self, obs: Observation) -> Command:
         g = self.config.gripper
-        if self._stage == "":
+        if self._stage == "":  # fast to just above the plug, then close slowly
+            self._stage = "preclose"
+            preclose_m = self.plug.thickness_m + g.preclose_gap_m
+            if obs.gripper.width_m > preclose_m:
+                target = GripperTarget(preclose_m, g.preclose_speed_m_s, g.close_force_n)
+                return Command(twist=Twist(), gripper=target)
+        if self._stage == "preclose":
+            if obs.gripper.moving:
+                return Command(twist=Twist())
             self._stage, self._since_t_s = "settle", obs.t_s
             return Command(
                 twist=Twist(),

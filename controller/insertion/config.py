@@ -37,9 +37,12 @@ _DEG = math.pi / 180.0
 class GripperSettings(Config):
     """Grasp and release. The close command targets ``close_width_m`` (below the plug's
     thickness, so the fingers stop on it) at ``close_speed_m_s`` with ``close_force_n``; the
-    grasp has settled once the gripper reports holding, not moving, for ``settle_s``. Release
-    opens to ``open_width_m`` at ``open_speed_m_s``. A re-grasp (slip policy ``regrasp``)
-    first opens by ``regrasp_gap_m`` beyond the current width, then closes again."""
+    grasp has settled once the gripper reports holding, not moving, for ``settle_s``. Before
+    closing, the fingers travel at ``preclose_speed_m_s`` to the plug's thickness plus
+    ``preclose_gap_m`` (while the open gel is captured; nothing touches yet), so only that
+    gap is closed slowly. Release opens to ``open_width_m`` at ``open_speed_m_s``. A re-grasp
+    (slip policy ``regrasp``) first opens by ``regrasp_gap_m`` beyond the current width, then
+    closes again."""
 
     close_width_m: float = number(0.0, 0.05, default=0.0)
     close_speed_m_s: float = number(0.001, 0.2, default=0.05)
@@ -48,6 +51,8 @@ class GripperSettings(Config):
     open_speed_m_s: float = number(0.001, 0.2, default=0.05)
     settle_s: float = number(0.0, 5.0, default=0.3)
     regrasp_gap_m: float = number(0.0, 0.01, default=0.0005)
+    preclose_speed_m_s: float = number(0.001, 0.2, default=0.15)
+    preclose_gap_m: float = number(0.0, 0.05, default=0.002)
 
 
 @dataclass(frozen=True)

@@ -286,14 +286,15 @@ class InsertionMachine:
     # -- phases ----------------------------------------------------------------------------
 
     def _grasp(self, obs: Observation, new: bool) -> Command:
-        """Lift (after a slip), open a little (re-grasp), capture the open gel, close, settle,
-        re-zero, baseline."""
+        """Lift (after a slip), open a little (re-grasp), capture the open gel while the
+        fingers travel fast to just above the plug's thickness, close, settle, re-zero,
+        baseline."""
         stage, settings = self._stage, self.config.gripper
         if stage.name == "":
             stage.name = "lift" if self._regrasp else "capture"
             stage.since_t_s = obs.t_s
             if stage.name == "capture":
-                return Command(twist=Twist(), capture_open_tactile=True)
+                return self._capture_open(obs)
         if stage.name == "lift":
             if obs.arm.tcp.xyz_m[2] >= stage.z0_m + self.config.slip.lift_m:
                 self._next_stage(obs, "open")
@@ -306,14 +307,15 @@ class InsertionMachine:
             if obs.t_s - stage.since_t_s >= settings.settle_s and not obs.gripper.moving:
                 self._regrasp = False
                 self._next_stage(obs, "capture")
-                return Command(twist=Twist(), capture_open_tactile=True)
+                return self._capture_open(obs)
             return _hold()
         if stage.name == "capture":
-            # the open gel: the estimator takes the next zeroing_frames frames; wait for one more
+            # the open gel: the estimator takes the next zeroing_frames frames; wait for one
+            # more, and for the fingers' fast travel to end
             if obs.wrench is not None and obs.wrench.t_s != stage.frame_t_s:
                 stage.frame_t_s = obs.wrench.t_s
                 stage.count += 1
-            if stage.count > self.config.signals.zeroing_frames:
+            if stage.count > self.config.signals.zeroing_frames and not obs.gripper.moving:
                 self._next_stage(obs, "close")
             return _hold()
         if stage.name == "close":
@@ -646,6 +648,15 @@ class InsertionMachine:
     def _command(self, v: np.ndarray, w: np.ndarray) -> Command:
         limits = self.config.limits
         return Command(twist=bounded_twist(v, w, limits.max_linear_m_s, limits.max_angular_rad_s))
+
+    def _capture_open(self, obs: Observation) -> Command:
+        """Capture the open gel; the fingers (if wider) travel fast to just above the plug."""
+        g = self.config.gripper
+        preclose_m = self.plug.thickness_m + g.preclose_gap_m
+        gripper = None
+        if obs.gripper.width_m > preclose_m:
+            gripper = GripperTarget(preclose_m, g.preclose_speed_m_s, g.close_force_n)
+        return Command(twist=Twist(), gripper=gripper, capture_open_tactile=True)
 
     def _close_target(self) -> GripperTarget:
         g = self.config.gripper

@@ -118,8 +118,9 @@ def comparison_markdown(
         "",
         f"Seeds {seeds} (B excluded), the same for every controller and speed; the speed "
         f"setting is `{speed_key}`. Success rates with their 95% Wilson interval; times are "
-        "simulated seconds over the successful trials; forces are the simulator's true "
-        "contact force. Regenerate with:",
+        "simulated seconds from the controller's start (after the gripper's activation) to "
+        "the depth, over the successful trials; forces are the simulator's true contact "
+        "force. Regenerate with:",
         "",
         f"    {command}",
         "",

@@ -14,7 +14,8 @@ class TrialResult:
     (dipole, fingervision, blind, oracle); ``seed``: the scene's seed; ``success``: the plug
     reached the depth and the machine ended in DONE; ``failure_reason``: the FAILED
     transition's reason (None on success); ``time_to_insert_s``: simulated time from the
-    start to reaching the depth (None when it never did); ``duration_s``: simulated time of
+    controller's first tick (the devices' start-up, such as the gripper's activation, comes
+    before it) to reaching the depth (None when it never did); ``duration_s``: simulated time of
     the whole run; ``max_true_force_n``: the largest true contact force between plug and
     board or receptacle (ground truth, N); ``force_limit_n``: the task's limit on it;
     ``wall_time_s``: the wall-clock time the trial took.

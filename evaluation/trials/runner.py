@@ -176,7 +176,8 @@ def _result(task, controller, seed, machine, loop_result, truth, wall_s) -> Tria
     t = truth["t_s"]
     required = config.machine.insert.depth_m
     reached = np.flatnonzero(depth >= required)
-    time_to_insert = float(t[reached[0]]) if reached.size else None
+    started = loop_result.stats.first_tick_s  # after the devices' start-up (activation)
+    time_to_insert = float(t[reached[0]] - started) if reached.size else None
     done = machine.phase is Phase.DONE
     success = done and reached.size > 0
     failure = None

@@ -37,7 +37,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     """The batch summary of ``results`` (see docs: keys and meanings), with the keyword
     ``context`` (task, controller, seeds, overrides, executor, workers, ...) merged in first.
 
-    Times are simulated seconds over the successful trials; ``max_true_force_n`` is over
+    Times are simulated seconds from the controller's start to the depth
+    (``TrialResult.time_to_insert_s``), over the successful trials; ``max_true_force_n`` is over
     every trial; a trial is over force when its ``max_true_force_n`` exceeds its own
     ``force_limit_n``; ``sim_speed_x_realtime`` is the simulated time over the wall time of
     the trials that ran to an outcome (error trials have no simulated time).

@@ -86,7 +86,12 @@ def timeline(outcome: TrialOutcome) -> str:
     verdict = "INSERTED" if result.success else f"FAILED ({result.failure_reason})"
     lines.append(
         f"outcome: {verdict} in {result.duration_s:.2f} s"
-        + (f", depth reached at {result.time_to_insert_s:.2f} s" if result.success else "")
+        + (
+            f", depth reached {result.time_to_insert_s:.2f} s after the controller started "
+            f"(at {outcome.loop.stats.first_tick_s:.2f} s)"
+            if result.success
+            else ""
+        )
         + (
             f"; max true wrist force {result.max_true_force_n:.2f} N "
             f"(limit {result.force_limit_n:g} N)"

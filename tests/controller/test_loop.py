@@ -129,7 +129,9 @@ def test_stats_percentiles():
     assert stats.period_p50_s == pytest.approx(np.percentile([0.01, 0.011, 0.009, 0.01], 50))
     assert stats.lateness_max_s == pytest.approx(0.001)
     assert stats.work_max_s == pytest.approx(0.005)
+    assert stats.first_tick_s == starts[0]
     assert math.isnan(LoopStats.of([], [], [], 0, 0).period_p99_s)
+    assert math.isnan(LoopStats.of([], [], [], 0, 0).first_tick_s)
 
 
 def test_a_frozen_tactile_stream_trips_the_watchdog_and_stops_the_arm(devices, clock):

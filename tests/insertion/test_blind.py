@@ -51,6 +51,18 @@ def test_it_pushes_at_every_pattern_point_then_releases_and_retracts():
     assert not world.gripper_holding  # released at the end
 
 
+def test_its_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
+    world = ToyWorld()
+    machine = BlindMachine(SMALL, world.plug, world.hole)
+    world.run_until(machine, Phase.APPROACH)
+    targets = [c.gripper for c in world.commands if c.gripper is not None]
+    g = SMALL.gripper
+    assert [(t.width_m, t.speed_m_s) for t in targets] == [
+        (pytest.approx(world.plug.thickness_m + g.preclose_gap_m), g.preclose_speed_m_s),
+        (g.close_width_m, g.close_speed_m_s),
+    ]
+
+
 def test_it_fails_on_the_timeout_and_on_a_device_fault():
     world = ToyWorld()
     machine = BlindMachine(replace(SMALL, timeout_s=2.0), world.plug, world.hole)

@@ -48,7 +48,10 @@ def test_happy_path_reaches_done_through_every_phase(pattern, offset):
     assert times == sorted(times)
     assert world.rezero_count == 1
     grippers = [c.gripper for c in world.commands if c.gripper is not None]
-    assert [g.width_m for g in grippers] == [0.0, MachineConfig().gripper.open_width_m]
+    preclose_m = world.plug.thickness_m + MachineConfig().gripper.preclose_gap_m
+    assert [g.width_m for g in grippers] == pytest.approx(
+        [preclose_m, 0.0, MachineConfig().gripper.open_width_m]
+    )
 
 
 def test_commands_are_bounded_twists_and_hold_still_while_grasping():
@@ -77,6 +80,33 @@ def test_grasp_settles_then_rezeroes_then_measures_the_baseline():
     frames_after = (approach_tick - rezero_tick) / world.frame_every
     assert frames_after >= world.zeroing_frames + cfg.signals.baseline_frames - 1
     assert world.rezero_count == 1
+
+
+def test_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
+    world = ToyWorld()
+    cfg = toy_config()
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.APPROACH)
+    first = world.commands[0]
+    assert first.capture_open_tactile
+    assert first.gripper.width_m == pytest.approx(
+        world.plug.thickness_m + cfg.gripper.preclose_gap_m
+    )
+    assert first.gripper.speed_m_s == cfg.gripper.preclose_speed_m_s
+    close_tick, close = next(
+        (i, c) for i, c in enumerate(world.commands) if c.gripper is not None and i > 0
+    )
+    assert close.gripper.width_m == cfg.gripper.close_width_m
+    assert close.gripper.speed_m_s == cfg.gripper.close_speed_m_s
+    assert close_tick * 0.01 >= 0.15 - 1e-9  # not before the fast travel has ended
+
+
+def test_a_gripper_already_near_the_plug_is_not_sent_a_pre_close():
+    world = ToyWorld()
+    world.gripper_width = world.plug.thickness_m + 0.0005
+    machine = make_machine(world, toy_config())
+    world.run_until(machine, Phase.APPROACH)
+    assert world.commands[0].capture_open_tactile and world.commands[0].gripper is None
 
 
 def test_approach_from_below_rises_before_moving_sideways():
@@ -317,8 +347,9 @@ def test_slip_with_the_regrasp_policy_regrasps_rezeroes_and_succeeds():
     assert machine.retries == 1
     assert world.rezero_count == 2
     widths = [c.gripper.width_m for c in world.commands if c.gripper is not None]
-    assert widths[1] == pytest.approx(world.plug.thickness_m + 0.0005)  # opened a little
-    assert widths[2] == 0.0  # and closed again
+    # widths[0:2]: the first grasp's pre-close and close
+    assert widths[2] == pytest.approx(world.plug.thickness_m + 0.0005)  # opened a little
+    assert widths[3] == 0.0  # and closed again (no pre-close: already near the plug)
     assert max(c.twist.linear_m_s[2] for c in world.commands) > 0  # lifted first
     assert lifted_from < world.hole.z_m + 0.02
 
