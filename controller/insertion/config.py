@@ -192,7 +192,7 @@ class AlignSettings(Config):
     tol_tau_x_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
-    upright_gain_1_s: float = number(0.0, 20.0, default=1.5)
+    upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
@@ -246,7 +246,7 @@ class BackoffSettings(Config):
 
     distance_m: float = number(1e-5, 0.02, default=0.001)
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
-    max_retries: int = number(0, 100, default=5)
+    max_retries: int = number(0, 100, default=10)
 
 
 @dataclass(frozen=True)
@@ -300,7 +300,7 @@ class Timeouts(Config):
     backoff_s: float = number(0.1, 600.0, default=3.0)
     release_s: float = number(0.1, 600.0, default=3.0)
     retract_s: float = number(0.1, 600.0, default=5.0)
-    total_s: float = number(1.0, 3600.0, default=60.0)
+    total_s: float = number(1.0, 3600.0, default=90.0)
 
 
 @dataclass(frozen=True)
