@@ -80,7 +80,7 @@ from evaluation.sweeps import (
     sweep_chart,
     tilt_amplitude_nm,
 )
-from evaluation.trials.publish import PAGE
+from evaluation.trials.publish import trials_section
 
 CASES = (
     CalibrationCase("gelsight_mini", "plate"),
@@ -449,17 +449,3 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         *trials_section(args.docs),
     ]
     return "\n".join(lines) + "\n"
-
-
-def trials_section(docs: Path) -> list[str]:
-    """Section 5: the insertion trials of ``make trials`` (docs/TRIALS.md, included as it
-    is, its headings one level down), or a line saying how to make them."""
-    page = docs / PAGE
-    lines = ["## 5. Insertion trials", ""]
-    if not page.is_file():
-        return lines + ["Not run yet: `make trials` writes docs/TRIALS.md, included here."]
-    body = page.read_text().split("\n", 1)[1]  # without its title
-    return lines + [
-        "From docs/TRIALS.md (`make trials`, a separate run; included as it was then):",
-        *("#" + line if line.startswith("## ") else line for line in body.splitlines()),
-    ]

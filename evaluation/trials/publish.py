@@ -2,9 +2,11 @@
 
 It copies each task's comparison (``OUT/<task>/comparison.md`` and its charts, written by
 ``scripts/compare_trials.py``) into ``DOCS/trials/<task>/`` and writes ``DOCS/TRIALS.md``:
-the tasks' sections one after another, image paths made relative to DOCS. ``make evaluate``
-includes that page as the last section of docs/EVALUATION.md. Everything is staged and
-moved into place only when complete (evaluation/outputs.py).
+the tasks' sections one after another, image paths made relative to DOCS. The page is the
+last section of DOCS/EVALUATION.md: ``make evaluate`` includes it, and publishing replaces
+that section of an existing report (atomically), so the report always shows the latest
+trials. Everything is staged and moved into place only when complete
+(evaluation/outputs.py).
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ import shutil
 from pathlib import Path
 
 from evaluation.cli import ToolError, run_tool
-from evaluation.outputs import staged_folder
+from evaluation.outputs import staged_folder, write_text
 from evaluation.trials.compare import TABLE
 
 PAGE = "TRIALS.md"
+REPORT = "EVALUATION.md"
+SECTION = "## 5. Insertion trials"
 
 
 def publish(out: Path, docs: Path) -> Path:
@@ -46,7 +50,37 @@ def publish(out: Path, docs: Path) -> Path:
             text = re.sub(r"\]\(([^)/]+\.png)\)", rf"](trials/{task}/\1)", text)
             sections += [text.rstrip("\n"), ""]
         (staging / PAGE).write_text("\n".join(sections))
+    refresh_report(docs)
     return docs / PAGE
+
+
+def trials_section(docs: Path) -> list[str]:
+    """The report's section on the insertion trials: DOCS/TRIALS.md included as it is, its
+    headings one level down, or a line saying how to make it."""
+    page = docs / PAGE
+    lines = [SECTION, ""]
+    if not page.is_file():
+        return lines + ["Not run yet: `make trials` writes docs/TRIALS.md, included here."]
+    body = page.read_text().split("\n", 1)[1]  # without its title
+    return lines + [
+        "From docs/TRIALS.md (`make trials`, a separate run, which also refreshes this "
+        "section):",
+        *("#" + line if line.startswith("## ") else line for line in body.splitlines()),
+    ]
+
+
+def refresh_report(docs: Path) -> bool:
+    """Replace the trials section (the last) of DOCS/EVALUATION.md with ``trials_section``;
+    False (nothing written) when there is no report or no such section in it."""
+    report = docs / REPORT
+    if not report.is_file():
+        return False
+    text = report.read_text()
+    at = text.find("\n" + SECTION + "\n")
+    if at < 0:
+        return False
+    write_text(report, text[: at + 1] + "\n".join(trials_section(docs)) + "\n")
+    return True
 
 
 def main(argv: list[str] | None = None) -> int:
