@@ -45,7 +45,7 @@ def test_the_attempt_ends_at_the_first_release_back_off_or_failure():
 
 def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
     task = load_task("usb_c")
-    success, finds = trial_hole_finds(task, 0)
+    success, finds = trial_hole_finds(task, 10)  # one find, in the opening
     assert success and finds
     assert finds[-1].in_opening and finds[-1].outcome == "inserted"
     resting = resting_height_m(task)
