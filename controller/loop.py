@@ -183,7 +183,7 @@ class LoopStats:
     work_p50_s: float
     work_p99_s: float
     work_max_s: float
-    first_tick_s: float = math.nan
+    first_tick_s: float
 
     @classmethod
     def of(

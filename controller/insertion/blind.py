@@ -134,9 +134,8 @@ class BlindMachine:
         g = self.config.gripper
         if self._stage == "":  # fast to just above the plug, then close slowly
             self._stage = "preclose"
-            preclose_m = self.plug.thickness_m + g.preclose_gap_m
-            if obs.gripper.width_m > preclose_m:
-                target = GripperTarget(preclose_m, g.preclose_speed_m_s, g.close_force_n)
+            target = g.preclose_target(self.plug.thickness_m, obs.gripper.width_m)
+            if target is not None:
                 return Command(twist=Twist(), gripper=target)
         if self._stage == "preclose":
             if obs.gripper.moving:

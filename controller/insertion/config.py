@@ -25,6 +25,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from controller.insertion.interface import GripperTarget
 from drivers.config import Config, ConfigError, build, number
 from drivers.task_geometry import HolePose, PlugGeometry
 
@@ -53,6 +54,14 @@ class GripperSettings(Config):
     regrasp_gap_m: float = number(0.0, 0.01, default=0.0005)
     preclose_speed_m_s: float = number(0.001, 0.2, default=0.15)
     preclose_gap_m: float = number(0.0, 0.05, default=0.002)
+
+    def preclose_target(self, plug_thickness_m: float, width_m: float) -> GripperTarget | None:
+        """The fast travel to ``plug_thickness_m`` plus ``preclose_gap_m`` (m), or None when
+        the fingers, ``width_m`` apart, are no wider than that already."""
+        preclose_m = plug_thickness_m + self.preclose_gap_m
+        if width_m <= preclose_m:
+            return None
+        return GripperTarget(preclose_m, self.preclose_speed_m_s, self.close_force_n)
 
 
 @dataclass(frozen=True)

@@ -651,11 +651,7 @@ class InsertionMachine:
 
     def _capture_open(self, obs: Observation) -> Command:
         """Capture the open gel; the fingers (if wider) travel fast to just above the plug."""
-        g = self.config.gripper
-        preclose_m = self.plug.thickness_m + g.preclose_gap_m
-        gripper = None
-        if obs.gripper.width_m > preclose_m:
-            gripper = GripperTarget(preclose_m, g.preclose_speed_m_s, g.close_force_n)
+        gripper = self.config.gripper.preclose_target(self.plug.thickness_m, obs.gripper.width_m)
         return Command(twist=Twist(), gripper=gripper, capture_open_tactile=True)
 
     def _close_target(self) -> GripperTarget:

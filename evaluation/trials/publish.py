@@ -69,18 +69,16 @@ def trials_section(docs: Path) -> list[str]:
     ]
 
 
-def refresh_report(docs: Path) -> bool:
+def refresh_report(docs: Path) -> None:
     """Replace the trials section (the last) of DOCS/EVALUATION.md with ``trials_section``;
-    False (nothing written) when there is no report or no such section in it."""
+    nothing is written when there is no report or no such section in it."""
     report = docs / REPORT
     if not report.is_file():
-        return False
+        return
     text = report.read_text()
     at = text.find("\n" + SECTION + "\n")
-    if at < 0:
-        return False
-    write_text(report, text[: at + 1] + "\n".join(trials_section(docs)) + "\n")
-    return True
+    if at >= 0:
+        write_text(report, text[: at + 1] + "\n".join(trials_section(docs)) + "\n")
 
 
 def main(argv: list[str] | None = None) -> int:
