@@ -17,7 +17,7 @@ import shutil
 from pathlib import Path
 
 from evaluation.cli import ToolError, run_tool
-from evaluation.outputs import staged_folder, write_text
+from evaluation.outputs import check_output_folder, staged_folder, write_text
 from evaluation.trials.compare import TABLE
 
 PAGE = "TRIALS.md"
@@ -30,6 +30,7 @@ def publish(out: Path, docs: Path) -> Path:
     tasks = sorted(p.parent.name for p in out.glob(f"*/{TABLE}"))
     if not tasks:
         raise ToolError(f"'{out}': no <task>/{TABLE} in it; run scripts/compare_trials.py first")
+    check_output_folder(docs, inputs=[out], option="--docs")
     sections = [
         "# Insertion trials",
         "",

@@ -51,3 +51,13 @@ def test_publish_leaves_a_report_without_the_section_and_creates_none(tmp_path):
 def test_publish_without_comparisons_is_a_tool_error(tmp_path):
     with pytest.raises(ToolError, match="no <task>/comparison.md"):
         publish(tmp_path, tmp_path / "docs")
+
+
+@pytest.mark.parametrize("where", ["the comparisons", "a file"])
+def test_publish_refuses_docs_that_are_its_input_or_a_file(tmp_path, where):
+    out = tmp_path / "out"
+    _comparison(out, "usb_c")
+    docs = out if where == "the comparisons" else out / "usb_c" / "comparison.md"
+    with pytest.raises(ToolError, match="^--docs '"):
+        publish(out, docs)
+    assert not (out / "TRIALS.md").exists()
