@@ -5,7 +5,7 @@ Pacing. Tick ``k`` is due at ``start + k * period`` on the clock (``period = 1 /
 the loop sleeps until the deadline, never a fixed time, so a slow tick does not shift the
 ticks after it. A tick that ends after the next deadline is an **overrun**; the deadlines it
 missed are skipped (the next tick is the first deadline still ahead), keeping the grid. The
-same loop runs in real time (``drivers.clock.MonotonicClock``) or as fast as possible
+same loop runs in real time (``core.clock.MonotonicClock``) or as fast as possible
 (``ManualClock``, whose ``sleep`` advances it at once); only the clock differs.
 
 Tick order:
@@ -63,7 +63,9 @@ from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.wrench import WrenchEstimate
 from controller.teleop import TeleopArbiter, TeleopConfig
-from drivers.base import (
+from core.clock import Clock
+from core.config import Config, number
+from core.devices import (
     Arm,
     ArmStatus,
     Gamepad,
@@ -74,9 +76,7 @@ from drivers.base import (
     TactileSensor,
     Twist,
 )
-from drivers.clock import Clock
-from drivers.config import Config, number
-from drivers.errors import DeviceError
+from core.errors import DeviceError
 
 log = logging.getLogger(__name__)
 
@@ -129,7 +129,7 @@ class LoopConfig(Config):
 
 @dataclass(frozen=True)
 class Devices:
-    """The loop's devices, connected by the caller (``drivers.base`` Protocols)."""
+    """The loop's devices, connected by the caller (``core.devices`` Protocols)."""
 
     arm: Arm
     gripper: Gripper

@@ -51,10 +51,10 @@ from scipy.spatial.transform import Rotation, Slerp
 from controller.insertion.interface import Command, TeleopInput
 from controller.tactile.wrench import WrenchEstimate
 from controller.teleop import lost_in_control
-from drivers.base import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
-from drivers.config import Config, number
-from drivers.errors import DeviceTimeoutError
-from drivers.task_geometry import WorkspaceBox
+from core.config import Config, number
+from core.devices import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
+from core.errors import DeviceTimeoutError
+from core.task_geometry import WorkspaceBox
 
 _DOWN_B = np.array([0.0, 0.0, -1.0])
 _TILT_SAMPLES = 8  # points along the twist's horizon where the tilt is checked

@@ -34,8 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.insertion.interface import TeleopInput
-from drivers.base import GamepadState, Twist
-from drivers.config import Config, number
+from core.config import Config, number
+from core.devices import GamepadState, Twist
 
 LINEAR_ACTIONS = ("vx", "vy", "vz")
 ANGULAR_ACTIONS = ("wx", "wy", "wz")

@@ -33,11 +33,11 @@ from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager, nullcontext
 from typing import Any, NoReturn
 
+from core.config import CONFIG_ROOT, ConfigError
+from core.devices import Arm, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
+from core.errors import DeviceError, DeviceFaultError, DeviceNotConnectedError
 from drivers import registry
 from drivers.arm import xarm_codes, xarm_sdk
-from drivers.base import Arm, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
-from drivers.config import CONFIG_ROOT, ConfigError
-from drivers.errors import DeviceError, DeviceFaultError, DeviceNotConnectedError
 
 DEFAULT_CONFIGS = (
     CONFIG_ROOT / "robot" / "xarm6.yaml",

@@ -41,9 +41,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drivers.base import Arm, Device, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
-from drivers.clock import Clock
-from drivers.config import ConfigError, build, load_yaml
+from core.clock import Clock
+from core.config import ConfigError, build, load_yaml
+from core.devices import Arm, Device, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
 
 BACKENDS = ("sim", "real")
 DEFAULT_BACKEND = "sim"
@@ -123,7 +123,7 @@ PROTOCOLS: Mapping[str, type] = {
     "gamepad": Gamepad,
     "force_torque": ForceTorqueSensor,
 }
-"""kind -> the ``drivers.base`` Protocol its devices implement."""
+"""kind -> the ``core.devices`` Protocol its devices implement."""
 
 _KIND_OF_TYPE = {type_name: kind for kind, types in DRIVERS.items() for type_name in types}
 

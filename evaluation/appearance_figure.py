@@ -23,10 +23,10 @@ import cv2  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from core.sensor_profile import sensor_profile  # noqa: E402
 from drivers.sim.render.gel_renderer import GelRenderer  # noqa: E402
 from drivers.sim.render.real_texture import fit_to_size, load_capture  # noqa: E402
 from drivers.sim.scenes.synthetic_sequence import phase_patterns  # noqa: E402
-from drivers.tactile.profile import sensor_profile  # noqa: E402
 from evaluation.appearance import AppearanceStats, format_table, measure, summarise  # noqa: E402
 from evaluation.appearance_fit import capture_stats  # noqa: E402
 

@@ -25,7 +25,7 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-from drivers.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT, ConfigError
 
 EXIT_ERROR = 2
 EXIT_SIGINT = 128 + signal.SIGINT  # 130

@@ -15,7 +15,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from controller.tactile.settings import DipoleGrid, EstimatorConfig, estimator_config
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 
 PAPER = "**paper** (Farneback per-channel w32, 12x9)"
 DEFAULT = "**default** (both sensors': grid LK per channel, 16x12, grasp-centred dipole)"

@@ -27,7 +27,7 @@ import numpy as np
 from matplotlib.ticker import ScalarFormatter
 
 from controller.tactile import EstimatorConfig, TactileEstimator
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import (
     estimate_frames,

@@ -31,7 +31,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.tactile import estimator_for_sensor
-from drivers.config import ConfigError
+from core.config import ConfigError
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.scenes.press_roll import (
@@ -40,7 +41,6 @@ from drivers.sim.scenes.press_roll import (
     press_roll_program,
     press_roll_states,
 )
-from drivers.tactile.profile import sensor_profile
 from evaluation.rendering import make_renderer
 from evaluation.sim_setup import gel_profile
 

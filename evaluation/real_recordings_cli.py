@@ -18,8 +18,8 @@ import argparse
 from pathlib import Path
 
 from controller.tactile import estimator_for_sensor
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.real_texture import real_gel_names
-from drivers.tactile.profile import sensor_profile
 from evaluation.cli import ToolError, run_tool
 from evaluation.outputs import atomic_text, check_output_file
 from evaluation.real_recordings import QUIET_MAX, SIGN_FLOOR, SIGN_MIN, check_recording, table

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.realistic import RealisticLook
-from drivers.tactile.profile import sensor_profile
 
 NOMINAL_EFFECTS = ImageEffects(noise_grey=2.0)
 NOMINAL_APPEARANCE = {"gelsight_mini": "realistic", "digit": "realistic_digit"}

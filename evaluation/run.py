@@ -37,7 +37,7 @@ from multiprocessing import get_context
 from pathlib import Path
 
 from controller.tactile import estimator_for_sensor
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation import slip_eval, slip_false_alarms
 from evaluation.calibration_runs import (
     CalibrationCase,

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from drivers.config import load_config, resolve_config_path
+from core.config import load_config, resolve_config_path
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import SHAPES, gel_profile
 from drivers.sim.scenes.jig import JigConfig

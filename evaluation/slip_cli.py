@@ -17,9 +17,9 @@ import time
 from pathlib import Path
 
 from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError
+from core.config import ConfigError
+from core.sensor_profile import sensor_profile
 from drivers.sim.gel.profile import SHAPES
-from drivers.tactile.profile import sensor_profile
 from evaluation.cli import (
     SEED,
     distinct,

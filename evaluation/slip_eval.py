@@ -37,10 +37,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.tactile import EstimatorConfig, TactileEstimator, estimator_for_sensor
+from core.sensor_profile import sensor_profile
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
-from drivers.tactile.profile import sensor_profile
 from evaluation.rendering import Appearance, make_renderer
 from evaluation.sim_setup import gel_model
 

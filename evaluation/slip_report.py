@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from evaluation.slip_eval import INCIPIENT_SLIP_FRACTION, SENSOR, precision_recall
 
 

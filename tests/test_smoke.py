@@ -1,4 +1,4 @@
-from drivers.errors import DeviceError, DeviceTimeoutError
+from core.errors import DeviceError, DeviceTimeoutError
 
 
 def test_error_names_device_and_code():

@@ -37,9 +37,9 @@ from controller.insertion.interface import (
 )
 from controller.insertion.motion import bounded_twist, clamp_norm, rotation_error, rotation_of
 from controller.insertion.search import SearchPattern
-from drivers.base import Twist
-from drivers.config import Config, number
-from drivers.task_geometry import HolePose, PlugGeometry
+from core.config import Config, number
+from core.devices import Twist
+from core.task_geometry import HolePose, PlugGeometry
 
 
 @dataclass(frozen=True)

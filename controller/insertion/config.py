@@ -26,8 +26,8 @@ from typing import Any, Literal
 import numpy as np
 
 from controller.insertion.interface import GripperTarget
-from drivers.config import Config, ConfigError, build, number
-from drivers.task_geometry import HolePose, PlugGeometry
+from core.config import Config, ConfigError, build, number
+from core.task_geometry import HolePose, PlugGeometry
 
 SignedAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}

@@ -13,7 +13,7 @@ from enum import Enum
 from typing import Protocol
 
 from controller.tactile.wrench import WrenchEstimate
-from drivers.base import ArmStatus, GripperStatus, Pose, Twist
+from core.devices import ArmStatus, GripperStatus, Pose, Twist
 
 
 class Phase(Enum):

@@ -45,7 +45,7 @@ from controller.insertion.motion import (
 )
 from controller.insertion.search import HoleDetector, SearchPattern
 from controller.insertion.signals import TactileSignals
-from drivers.base import Twist
+from core.devices import Twist
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
 _MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only

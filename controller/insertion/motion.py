@@ -9,7 +9,7 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drivers.base import Pose, Twist
+from core.devices import Pose, Twist
 
 DOWN_B = np.array([0.0, 0.0, -1.0])
 

@@ -14,7 +14,7 @@ A calibration file records what it was fitted for: the sensor profile's name and
 estimator configuration's name and fingerprint (``estimator_sha256``). ``mismatch`` says
 why a calibration does not fit another sensor or configuration; the tools refuse to apply
 it then (``scripts/estimate.py --force`` overrides). Files load through the configuration
-loader (``drivers.config``) into these frozen dataclasses.
+loader (``core.config``) into these frozen dataclasses.
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ import numpy as np
 import yaml
 
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from drivers.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, load_yaml, number
 
 FORMAT = "tactile-insertion/calibration/v2"
 FORMAT_V1 = "tactile-insertion/calibration/v1"

@@ -60,7 +60,7 @@ from controller.tactile.settings import (
 )
 from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
-from drivers.tactile.profile import SensorProfile, sensor_profile
+from core.sensor_profile import SensorProfile, sensor_profile
 
 _ASPECT_TOLERANCE = 0.02
 MAX_REFERENCE_FRAMES = 10_000

@@ -1,6 +1,6 @@
 """Estimator configuration (``configs/estimators/*.yaml``), as frozen validated dataclasses.
 
-Declared and checked as every configuration is (drivers/config.py); every key is required in
+Declared and checked as every configuration is (core/config.py); every key is required in
 a file, and ``null`` means "the library's default" where a field allows it.
 """
 
@@ -9,8 +9,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from drivers.config import Config, ConfigError, load_config, number, resolve_config_path
-from drivers.tactile.profile import SensorProfile
+from core.config import Config, ConfigError, load_config, number, resolve_config_path
+from core.sensor_profile import SensorProfile
 
 FlowMethod = Literal["dis", "farneback", "markers", "grid_lk"]
 

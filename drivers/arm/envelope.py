@@ -38,9 +38,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from drivers.base import Pose, Twist
-from drivers.config import Config, number
-from drivers.task_geometry import WorkspaceBox
+from core.config import Config, number
+from core.devices import Pose, Twist
+from core.task_geometry import WorkspaceBox
 
 _DOWN_B = np.array([0.0, 0.0, -1.0])
 _ROUNDING_RAD = 1e-12  # tilts this close to the limit count as within (float round-off)

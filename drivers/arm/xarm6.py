@@ -1,4 +1,4 @@
-"""UFACTORY xArm6 driver (implements ``drivers.base.Arm``) over xarm-python-sdk's ``XArmAPI``.
+"""UFACTORY xArm6 driver (implements ``core.devices.Arm``) over xarm-python-sdk's ``XArmAPI``.
 
 Units. Our side is SI in the base frame B (m, rad, m/s, rad/s). The SDK speaks mm and,
 for angles, degrees or radians depending on ``is_radian``. ``from_config`` builds
@@ -47,6 +47,15 @@ from typing import Any
 
 import numpy as np
 
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.errors import (
+    DeviceError,
+    DeviceFaultError,
+    DeviceNotConnectedError,
+    DeviceTimeoutError,
+)
 from drivers.arm import xarm_codes, xarm_sdk
 from drivers.arm.envelope import (
     SafetyEnvelope,
@@ -55,15 +64,6 @@ from drivers.arm.envelope import (
     require_finite,
     rotation_from_rpy,
     timed_servo_target,
-)
-from drivers.base import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import (
-    DeviceError,
-    DeviceFaultError,
-    DeviceNotConnectedError,
-    DeviceTimeoutError,
 )
 
 _LOG = logging.getLogger(__name__)

@@ -11,15 +11,15 @@ Four code spaces, never to be mixed up:
   title and what to do.
 * **Mode and state codes**: what ``set_mode``/``set_state`` take and ``XArmAPI.mode``/
   ``XArmAPI.state`` report (the SDK's docstrings of those properties). The driver maps them
-  to ``drivers.base.ArmMode``/``ArmState`` here; no raw mode or state code leaves
+  to ``core.devices.ArmMode``/``ArmState`` here; no raw mode or state code leaves
   ``drivers.arm``. Note that the *command* ``set_state(0)`` ("ready to move") is answered
   by the *reported* state 2 ("sleeping": armed, at rest).
 """
 
 from __future__ import annotations
 
+from core.devices import ArmMode, ArmState
 from drivers.arm.xarm_sdk import import_sdk
-from drivers.base import ArmMode, ArmState
 
 API_CODE_MEANINGS: dict[int, str] = {
     -12: "running a Blockly app failed",

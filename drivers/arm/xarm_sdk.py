@@ -39,7 +39,7 @@ import weakref
 from contextlib import redirect_stdout
 from typing import Any
 
-from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
+from core.errors import DeviceNotConnectedError, DeviceTimeoutError
 
 CONTROL_PORT = 502  # XCONF.SocketConf.TCP_CONTROL_PORT: the only port the SDK connects to
 

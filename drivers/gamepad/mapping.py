@@ -1,7 +1,7 @@
 """Gamepad mapping: named actions -> SDL game-controller axes and buttons, and axis shaping.
 
 This module needs no SDL: it holds the configuration (``GamepadConfig``, loaded from YAML
-like every device config: ``drivers.registry`` and ``drivers.config.build``), and the
+like every device config: ``drivers.registry`` and ``core.config.build``), and the
 pure function that turns a raw controller axis into an action value.
 
 Names are SDL's game-controller names (``SDL_GameControllerGetStringForAxis/Button``), the
@@ -30,7 +30,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-from drivers.config import Config, number
+from core.config import Config, number
 
 AxisName = Literal["leftx", "lefty", "rightx", "righty", "lefttrigger", "righttrigger"]
 ButtonName = Literal[

@@ -33,9 +33,9 @@ os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout 
 import pygame  # noqa: E402
 from pygame._sdl2 import controller as sdl_controller  # noqa: E402
 
-from drivers.base import ContextManagedDevice, GamepadState  # noqa: E402
-from drivers.clock import Clock, MonotonicClock  # noqa: E402
-from drivers.errors import DeviceNotConnectedError  # noqa: E402
+from core.clock import Clock, MonotonicClock  # noqa: E402
+from core.devices import ContextManagedDevice, GamepadState  # noqa: E402
+from core.errors import DeviceNotConnectedError  # noqa: E402
 from drivers.gamepad.mapping import GamepadConfig, axis_value  # noqa: E402
 
 AXIS_IDS = {

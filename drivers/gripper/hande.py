@@ -1,6 +1,6 @@
 """Robotiq Hand-E parallel gripper over Modbus RTU (USB-RS485 adapter or the xArm tool port).
 
-Implements ``drivers.base.Gripper``. Units at this boundary: finger opening in m (0 = closed),
+Implements ``core.devices.Gripper``. Units at this boundary: finger opening in m (0 = closed),
 speed in m/s, force in N; the gripper's 0-255 register counts never leave this module.
 
 Behaviour worth knowing:
@@ -26,10 +26,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
-from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ContextManagedDevice, GripperObject, GripperStatus
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.transport import RegisterTransport, XArmToolTransport
 

@@ -75,7 +75,7 @@ class RawStatus:
     gACT: int  # 1 = activated (echo of rACT)
     gGTO: int  # 1 = going to the requested position (echo of rGTO)
     gSTA: int  # 0 reset, 1 activating, 3 activated
-    gOBJ: int  # object detection, see drivers.base.GripperObject; ignore when gGTO == 0
+    gOBJ: int  # object detection, see core.devices.GripperObject; ignore when gGTO == 0
     gFLT: int  # gripper fault code, 0 = none
     kFLT: int  # controller fault nibble, 0 = none
     gPR: int  # echo of the requested position, counts

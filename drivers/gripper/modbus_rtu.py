@@ -23,7 +23,7 @@ from typing import Any
 from pymodbus.client import ModbusSerialClient
 from pymodbus.exceptions import ConnectionException, ModbusException, ModbusIOException
 
-from drivers.errors import (
+from core.errors import (
     DeviceError,
     DeviceFaultError,
     DeviceNotConnectedError,

@@ -18,7 +18,7 @@ import struct
 from collections.abc import Sequence
 from typing import Any, Protocol
 
-from drivers.errors import (
+from core.errors import (
     DeviceError,
     DeviceFaultError,
     DeviceNotConnectedError,

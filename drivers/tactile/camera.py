@@ -44,10 +44,10 @@ from typing import Literal, Protocol
 import cv2
 import numpy as np
 
-from drivers.base import ContextManagedDevice, TactileFrame
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ContextManagedDevice, TactileFrame
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.tactile.decode import FrameProcessor, JpegDownscale, cropped_size
 from drivers.tactile.device_lookup import find_capture_node
 
@@ -269,7 +269,7 @@ class _Grabber:
 
 
 class TactileCamera(ContextManagedDevice):
-    """A GelSight Mini or DIGIT camera (implements ``drivers.base.TactileSensor``).
+    """A GelSight Mini or DIGIT camera (implements ``core.devices.TactileSensor``).
 
     ``capture_factory`` opens a capture on a device node; ``from_config`` uses ``open_v4l2``,
     tests pass captures on video files. ``clock`` stamps the frames and measures their age

@@ -11,7 +11,7 @@ from __future__ import annotations
 import fnmatch
 import os
 
-from drivers.errors import DeviceNotConnectedError
+from core.errors import DeviceNotConnectedError
 
 CAPTURE_SUFFIX = "-index0"
 

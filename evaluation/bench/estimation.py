@@ -24,8 +24,8 @@ import numpy as np
 
 from controller.tactile import EstimatorConfig, TactileEstimator
 from controller.tactile.flow import DenseGridFlow
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
-from drivers.tactile.profile import sensor_profile
 from evaluation.cli import integer, run_tool
 from evaluation.configurations import estimator_variants
 from evaluation.machine import describe_machine

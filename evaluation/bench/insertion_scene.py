@@ -28,8 +28,8 @@ import mujoco
 import numpy as np
 
 from controller.tactile import estimator_for_sensor
-from drivers.base import Pose
-from drivers.config import CONFIG_ROOT
+from core.config import CONFIG_ROOT
+from core.devices import Pose
 from drivers.sim.scenes.insertion import (
     InsertionSim,
     build_insertion_sim,

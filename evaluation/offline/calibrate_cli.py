@@ -23,8 +23,8 @@ import numpy as np
 
 from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
-from drivers.config import ConfigError
-from drivers.tactile.profile import sensor_profile
+from core.config import ConfigError
+from core.sensor_profile import sensor_profile
 from evaluation.cli import ToolError, resolved_config_path, run_tool
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset

@@ -27,7 +27,7 @@ the destination (``.NAME.XXXXXXXX.partial``) and renames it into place on ``clos
 folder, and a killed process leaves only that hidden folder, without ``meta.yaml``.
 
 Reading is strict: ``Dataset`` loads ``meta.yaml`` through the configuration loader
-(``drivers.config``) and refuses a folder whose files disagree with each other or with the
+(``core.config``) and refuses a folder whose files disagree with each other or with the
 meta: frame numbers not 0..n-1, times not finite and increasing, a video whose frame count
 differs from ``tactile.csv``, intervals or segments outside the recorded frames and F/T
 readings, a segment without frames. Errors are ConfigErrors naming the file.
@@ -47,7 +47,7 @@ import cv2
 import numpy as np
 import yaml
 
-from drivers.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, load_yaml, number
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 from evaluation.outputs import discard_folder, partial_folder, publish_folder
 

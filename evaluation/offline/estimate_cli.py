@@ -53,7 +53,7 @@ from tqdm import tqdm
 
 from controller.tactile import Calibration, EstimatorConfig, WrenchEstimate, estimator_for_sensor
 from controller.tactile.wrench import VALUE_FIELDS
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from evaluation.cli import (
     ToolError,
     resolved_config_path,

@@ -17,8 +17,8 @@ import argparse
 import time
 from pathlib import Path
 
+from core.sensor_profile import sensor_profile
 from drivers.sim.gel.profile import SHAPES
-from drivers.tactile.profile import sensor_profile
 from evaluation.cli import (
     SEED,
     ToolError,

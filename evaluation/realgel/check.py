@@ -21,7 +21,7 @@ import numpy as np
 
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import EstimatorConfig, field_grid
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import SIZE_HW, TEXTURES

@@ -27,7 +27,7 @@ import time
 from pathlib import Path
 
 from controller.tactile.settings import estimator_config
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation.machine import cpu_model, git_revision
 from evaluation.realgel.check import Entry, run_check, sequence_specs
 from evaluation.realgel.report import rows_table, summary_table

@@ -29,7 +29,7 @@ import numpy as np
 
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import DipoleGrid, EstimatorConfig, field_grid
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from evaluation.realgel.check import TruthGridFlow
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import Mechanics, SequenceSpec, mechanics

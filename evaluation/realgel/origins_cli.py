@@ -13,7 +13,7 @@ import argparse
 import sys
 
 from controller.tactile.settings import dipole_grid_mismatch, estimator_config, field_grid
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation.machine import git_revision
 from evaluation.realgel.check import sequence_specs
 from evaluation.realgel.cli import _numbers

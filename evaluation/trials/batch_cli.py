@@ -32,7 +32,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from drivers.config import ConfigError, parse_override
+from core.config import ConfigError, parse_override
 from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, one_line, run_tool
 from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor

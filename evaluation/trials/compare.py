@@ -31,7 +31,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from drivers.config import ConfigError, parse_override
+from core.config import ConfigError, parse_override
 from evaluation.cli import distinct, number_list, run_tool
 from evaluation.outputs import check_output_folder, write_text
 from evaluation.trials.batch import Batch, check_batch_folder, run_batches

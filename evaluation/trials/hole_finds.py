@@ -25,7 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion import Phase
 from controller.insertion.motion import tip_position
-from drivers.base import Pose
+from core.devices import Pose
 from evaluation.trials.runner import raise_if_interrupted, run
 from evaluation.trials.task import Task
 

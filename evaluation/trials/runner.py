@@ -24,8 +24,8 @@ from controller.insertion import InsertionMachine, Machine, Phase
 from controller.insertion.blind import BlindMachine
 from controller.loop import ControlLoop, Devices, LoopResult
 from controller.tactile import estimator_for_sensor
-from drivers.clock import MonotonicClock
-from drivers.config import ConfigError
+from core.clock import MonotonicClock
+from core.config import ConfigError
 from drivers.registry import load_device, load_device_config
 from drivers.sim.scenes.insertion import SimDevices, build_insertion_sim
 from drivers.sim.twins.gamepad import PadEvent

@@ -34,7 +34,7 @@ class TrialSpec:
     """One trial: ``task`` (a task configuration name, e.g. usb_c, or a YAML path),
     ``controller`` (one of ``CONTROLLERS``), ``seed`` (the scene's seed), ``overrides``
     (``"KEY=VALUE"`` strings applied in order to the task configuration by dotted path, see
-    ``drivers.config.apply_overrides``) and ``out_dir`` (where the trial writes its own
+    ``core.config.apply_overrides``) and ``out_dir`` (where the trial writes its own
     record and charts; None: it writes nothing)."""
 
     task: str

@@ -14,7 +14,7 @@ from controller.insertion.blind import BlindConfig
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
-from drivers.config import (
+from core.config import (
     CONFIG_ROOT,
     Config,
     ConfigError,
@@ -24,8 +24,8 @@ from drivers.config import (
     number,
     resolve_config_path,
 )
+from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.scenes.insertion import InsertionSceneConfig
-from drivers.task_geometry import HolePose, PlugGeometry
 
 TASKS = ("usb_a", "usb_c")
 

@@ -17,9 +17,9 @@ from controller.insertion.interface import (
 )
 from controller.loop import Devices
 from controller.tactile.wrench import WrenchEstimate
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT as CONFIGS
 from drivers import registry
-from drivers.clock import ManualClock
-from drivers.config import CONFIG_ROOT as CONFIGS
 
 START_S = 5.0
 

@@ -8,7 +8,7 @@ import yaml
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
-from drivers.config import ConfigError, build
+from core.config import ConfigError, build
 
 TASK_SECTIONS = """
 loop:

@@ -20,8 +20,8 @@ from controller.loop import ControlLoop, LoopConfig, LoopStats
 from controller.safety import LimitsConfig
 from controller.tactile import estimator_for_sensor
 from controller.tactile.wrench import WrenchEstimate
-from drivers.base import ArmState, Pose, Twist
-from drivers.clock import MonotonicClock
+from core.clock import MonotonicClock
+from core.devices import ArmState, Pose, Twist
 from drivers.sim.twins.gamepad import PadEvent
 from tests.controller.conftest import ScriptedEstimator, ScriptedMachine, sim_devices
 

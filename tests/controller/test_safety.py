@@ -22,8 +22,8 @@ from controller.safety import (
     tilt_rad,
 )
 from controller.tactile.wrench import WrenchEstimate
-from drivers.base import ArmMode, ArmState, ArmStatus, Pose, Twist
-from drivers.errors import DeviceFaultError, DeviceTimeoutError
+from core.devices import ArmMode, ArmState, ArmStatus, Pose, Twist
+from core.errors import DeviceFaultError, DeviceTimeoutError
 
 LIMITS = LimitsConfig(max_linear_speed_m_s=0.05, max_angular_speed_rad_s=0.5, max_tilt_rad=0.3)
 PERIOD, HOLD = 0.01, 0.05

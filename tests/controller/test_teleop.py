@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from controller.teleop import TeleopArbiter, TeleopConfig, lost_in_control
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT as CONFIGS
+from core.devices import GamepadState
 from drivers import registry
-from drivers.base import GamepadState
-from drivers.clock import ManualClock
-from drivers.config import CONFIG_ROOT as CONFIGS
 from drivers.sim.twins.gamepad import PadEvent
 
 CONFIG = TeleopConfig(max_linear_speed_m_s=0.02, max_angular_speed_rad_s=0.2)

@@ -20,9 +20,9 @@ import numpy as np
 import pytest
 import yaml
 
-from drivers.base import TactileFrame, TactileSensor
-from drivers.clock import ManualClock
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.clock import ManualClock
+from core.devices import TactileFrame, TactileSensor
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.registry import load_device, load_device_config
 from drivers.tactile import TactileCamera, TactileCameraConfig
 from drivers.tactile.decode import (

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drivers.errors import DeviceNotConnectedError
+from core.errors import DeviceNotConnectedError
 from drivers.tactile import TactileCamera
 from tests.drivers.test_camera import (
     DIGIT_ID,

@@ -10,9 +10,9 @@ from typing import Literal
 import pytest
 import yaml
 
-import drivers.config as config_module
+import core.config as config_module
 from controller.tactile.settings import EstimatorConfig, estimator_config, sensor_estimator
-from drivers.config import (
+from core.config import (
     Config,
     ConfigError,
     apply_overrides,
@@ -21,10 +21,10 @@ from drivers.config import (
     load_yaml,
     number,
 )
+from core.sensor_profile import SensorProfile, sensor_profile
 from drivers.gripper.hande import HandEConfig
 from drivers.registry import load_device_config
 from drivers.sim.scenes.jig import JigConfig
-from drivers.tactile.profile import SensorProfile, sensor_profile
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 

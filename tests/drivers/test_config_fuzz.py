@@ -9,11 +9,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from controller.tactile.settings import estimator_config
-from drivers.config import CONFIG_ROOT, ConfigError, load_config
+from core.config import CONFIG_ROOT, ConfigError, load_config
+from core.sensor_profile import sensor_profile
 from drivers.sim.gel.profile import gel_profile
 from drivers.sim.twins.arm import SimArmConfig
 from drivers.sim.twins.gripper import SimGripperConfig
-from drivers.tactile.profile import sensor_profile
 
 
 def _device_keys(relative: str) -> dict:

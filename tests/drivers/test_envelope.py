@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from core.devices import Pose, Twist
 from drivers.arm.envelope import (
     SafetyEnvelope,
     clamp_pose,
@@ -22,7 +23,6 @@ from drivers.arm.envelope import (
     servo_target,
     tilt_rad,
 )
-from drivers.base import Pose, Twist
 
 TOL = 1e-9
 ENV = SafetyEnvelope(

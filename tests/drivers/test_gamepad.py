@@ -14,9 +14,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from pygame._sdl2 import controller as sdl_controller
 
-from drivers.clock import ManualClock
-from drivers.config import ConfigError, build
-from drivers.errors import DeviceNotConnectedError
+from core.clock import ManualClock
+from core.config import ConfigError, build
+from core.errors import DeviceNotConnectedError
 from drivers.gamepad import AxisBinding, GamepadConfig, axis_value
 from drivers.gamepad.mapping import AXIS_NAMES, BUTTON_NAMES
 from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, PygameGamepad, init_sdl

@@ -9,9 +9,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from drivers.base import Gripper, GripperObject
-from drivers.clock import ManualClock
-from drivers.errors import (
+from core.clock import ManualClock
+from core.devices import Gripper, GripperObject
+from core.errors import (
     DeviceFaultError,
     DeviceNotConnectedError,
     DeviceTimeoutError,

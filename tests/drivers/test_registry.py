@@ -11,11 +11,11 @@ import textwrap
 import pytest
 import yaml
 
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT as CONFIGS
+from core.config import ConfigError
 from drivers import registry
 from drivers.arm import XArm6, XArm6Config
-from drivers.clock import ManualClock
-from drivers.config import CONFIG_ROOT as CONFIGS
-from drivers.config import ConfigError
 from drivers.gamepad import GamepadConfig
 from drivers.gamepad.pad import PygameGamepad
 from drivers.gripper import HandE, HandEConfig
@@ -179,7 +179,7 @@ SIM_ONLY = textwrap.dedent(
     sys.meta_path.insert(0, Absent())
 
     from drivers import registry
-    from drivers.clock import ManualClock
+    from core.clock import ManualClock
 
     READS = {
         "arm": lambda d: d.read_status(),
@@ -269,12 +269,12 @@ def test_drivers_never_import_controller():
 
 def test_controller_imports_only_the_driver_interfaces():
     allowed = {
-        "drivers.base",
-        "drivers.errors",
-        "drivers.config",
-        "drivers.clock",
-        "drivers.tactile.profile",  # sensor geometry: a driver-level fact, not a driver
-        "drivers.task_geometry",  # the task's plug and hole, shared with the scene
+        "core.devices",
+        "core.errors",
+        "core.config",
+        "core.clock",
+        "core.sensor_profile",  # sensor geometry: a driver-level fact, not a driver
+        "core.task_geometry",  # the task's plug and hole, shared with the scene
     }
     imported = _imports("controller")
     assert not [(p, m) for p, m in imported if m.startswith("drivers") and m not in allowed]

@@ -7,16 +7,13 @@ very image the profile describes, agrees with it key by key.
 
 from __future__ import annotations
 
-import subprocess
-import sys
-
 import pytest
 import yaml
 
-from drivers.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT, ConfigError
+from core.sensor_profile import sensor_names, sensor_profile
 from drivers.registry import load_device_config
 from drivers.sim.gel.profile import GEOMETRY_KEYS, gel_profile
-from drivers.tactile.profile import sensor_names, sensor_profile
 
 SENSORS = CONFIG_ROOT / "sensors"
 
@@ -102,15 +99,3 @@ def test_the_sensor_list_names_only_profiles():
     assert "_camera" not in str(info.value) and "_gel" not in str(info.value)
     with pytest.raises(ConfigError, match="unknown sensor configuration 'digit_gel'"):
         sensor_profile("digit_gel")
-
-
-def test_reading_a_profile_loads_no_camera_driver():
-    code = (
-        "import sys, controller.tactile.estimator, controller.tactile.settings;"
-        "from drivers.tactile.profile import sensor_profile; sensor_profile('digit');"
-        "print(sorted(m for m in sys.modules if m.startswith('drivers')))"
-    )
-    loaded = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True
-    ).stdout
-    assert "drivers.tactile.profile" in loaded and "drivers.tactile.camera" not in loaded

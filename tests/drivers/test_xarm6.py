@@ -20,12 +20,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT
+from core.devices import Arm, ArmMode, ArmState, Pose, Twist
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.arm import SafetyEnvelope, TcpConfig, XArm6, XArm6Config
 from drivers.arm.envelope import rotation_from_rpy, tilt_rad
-from drivers.base import Arm, ArmMode, ArmState, Pose, Twist
-from drivers.clock import ManualClock
-from drivers.config import CONFIG_ROOT
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.registry import load_device, load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
 

@@ -16,8 +16,8 @@ from hypothesis import strategies as st
 
 from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256
 from controller.tactile.settings import sensor_estimator
+from core.sensor_profile import sensor_profile
 from drivers.sim.scenes.jig import Experiment
-from drivers.tactile.profile import sensor_profile
 from evaluation.jig_dataset import write_jig_dataset
 from evaluation.offline.calibrate_cli import main as calibrate_main
 from evaluation.offline.estimate_cli import main as estimate_main

@@ -14,10 +14,10 @@ import yaml
 
 from controller.tactile.calibration import Calibration
 from controller.tactile.settings import sensor_estimator
-from drivers.config import ConfigError
+from core.config import ConfigError
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.jig import Experiment
-from drivers.tactile.profile import sensor_profile
 from evaluation.jig_dataset import write_jig_dataset
 from evaluation.offline.calibrate_cli import main as calibrate_main
 from evaluation.offline.dataset import META, Dataset, DatasetMeta, DatasetWriter

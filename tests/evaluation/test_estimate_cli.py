@@ -16,9 +16,9 @@ import pytest
 from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import sensor_estimator
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
-from drivers.tactile.profile import sensor_profile
 from evaluation.offline.estimate_cli import CSV_COLUMNS, main
 from tests.video_faults import corrupt_frame, truncate_inside_frame, write_mjpg
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from controller.loop import ControlLoop
-from drivers.config import ConfigError
+from core.config import ConfigError
 from drivers.sim.scenes.insertion import TruthLog
 from evaluation.cli import Terminated
 from evaluation.trials import runner

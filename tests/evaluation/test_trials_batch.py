@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation.cli import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
 from evaluation.trials.batch_cli import TRIAL_FUNCTION

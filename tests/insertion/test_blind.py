@@ -12,7 +12,7 @@ from controller.insertion.blind import BLIND, BlindConfig, BlindMachine
 from controller.insertion.config import GripperSettings
 from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation.trials.task import load_task
 from tests.insertion.world import ToyWorld
 

@@ -13,7 +13,7 @@ from controller.insertion.config import (
     machine_setup_from_task,
     s2t_matrix,
 )
-from drivers.config import CONFIG_ROOT, ConfigError, load_yaml
+from core.config import CONFIG_ROOT, ConfigError, load_yaml
 
 EXAMPLE = CONFIG_ROOT / "tasks" / "usb_c.yaml"
 

@@ -14,7 +14,7 @@ from controller.insertion.motion import (
     tip_position,
 )
 from controller.insertion.search import SearchPattern
-from drivers.base import Pose
+from core.devices import Pose
 
 
 def test_pivot_twist_keeps_the_tip_still_to_first_order():

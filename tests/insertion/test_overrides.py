@@ -8,7 +8,7 @@ import pytest
 
 from controller.insertion.config import MachineConfig, Timeouts
 from controller.insertion.interface import Phase, TeleopInput
-from drivers.base import Twist
+from core.devices import Twist
 from tests.insertion.world import ToyWorld, make_machine, path
 
 OPERATOR = TeleopInput(connected=True, in_control=True, twist=Twist((0.0, 0.0, 0.01)))

@@ -28,7 +28,7 @@ from controller.insertion.interface import Command, Observation, Phase, TeleopIn
 from controller.insertion.machine import InsertionMachine
 from controller.insertion.motion import cross
 from controller.tactile.wrench import WrenchEstimate
-from drivers.base import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
+from core.devices import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
 
 DT_S = 0.01
 

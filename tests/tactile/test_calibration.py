@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
-from drivers.config import ConfigError
+from core.config import ConfigError
 from evaluation.outputs import write_text
 
 

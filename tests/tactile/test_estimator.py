@@ -8,9 +8,9 @@ import pytest
 from controller.tactile import Calibration, TactileEstimator, estimator_config, estimator_for_sensor
 from controller.tactile.calibration import AxisFit
 from controller.tactile.settings import DipoleGrid
-from drivers.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT, ConfigError
+from core.sensor_profile import sensor_profile
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
-from drivers.tactile.profile import sensor_profile
 
 PROFILE = sensor_profile("gelsight_mini")
 CONFIG = estimator_config("dis_half")  # cold start: a frame pushed twice gives one answer

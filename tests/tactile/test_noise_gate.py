@@ -12,7 +12,7 @@ from controller.tactile.estimator import TactileEstimator
 from controller.tactile.grid_lk import GridLKFlow
 from controller.tactile.noise_gate import NoiseGate
 from controller.tactile.settings import estimator_config
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 
 PROFILE = sensor_profile("gelsight_mini")
 DEFAULT = estimator_config("default")

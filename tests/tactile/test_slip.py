@@ -21,7 +21,7 @@ from controller.tactile.slip import (
     SlipStatus,
     next_rezero_state,
 )
-from drivers.tactile.profile import sensor_profile
+from core.sensor_profile import sensor_profile
 from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_pair
 
 CONFIG = estimator_config("default")

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from drivers.config import CONFIG_ROOT, Config, ConfigError, build, load_yaml, number, show
-from drivers.tactile.profile import FOLDER, sensor_names, sensor_profile
+from core.config import CONFIG_ROOT, Config, ConfigError, build, load_yaml, number, show
+from core.sensor_profile import FOLDER, sensor_names, sensor_profile
 
 GEL_SUFFIX = "_gel"
 GEOMETRY_KEYS = ("width_px", "height_px", "mm_per_px")

@@ -9,7 +9,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from drivers.config import Config, number
+from core.config import Config, number
 
 
 @dataclass(frozen=True)

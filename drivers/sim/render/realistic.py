@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from drivers.config import Config, number
+from core.config import Config, number
 
 REFERENCE_WIDTH_PX = 320
 """The image width at which a look's lengths are given, px."""

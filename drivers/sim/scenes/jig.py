@@ -27,7 +27,7 @@ from typing import Literal
 
 import numpy as np
 
-from drivers.config import Config, check_number, number
+from core.config import Config, check_number, number
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 
 _AXIS_COLUMN = {"x": 3, "y": 4, "z": 5}  # torque columns of a (fx, fy, fz, tx, ty, tz) row

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.config import Config, number
+from core.config import Config, number
 from drivers.sim.gel.footprint import Footprint
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.gel.profile import GelProfile, ObjectShape

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.config import Config, number
+from core.config import Config, number
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 
 PHASES = ("open", "press", "tilt_x", "tilt_y", "release")

@@ -1,4 +1,4 @@
-"""Simulated twin of the xArm6 (implements ``drivers.base.Arm``): a TCP that tracks commands.
+"""Simulated twin of the xArm6 (implements ``core.devices.Arm``): a TCP that tracks commands.
 
 What is modelled. The TCP (frame T) as a rigid body moving in the base frame B with a linear
 velocity and an angular velocity, each limited in magnitude (the envelope's
@@ -21,7 +21,7 @@ before the faces of the box and the tilt limit (``drivers.sim.twins.tcp_motion``
 overshoot of a clamped target leaves the envelope.
 
 Time. The state is integrated in fixed steps of ``1 / control_rate_hz`` up to the injected
-clock's ``now()`` at the start of every call (see ``drivers.clock``). ``move_to`` with
+clock's ``now()`` at the start of every call (see ``core.clock``). ``move_to`` with
 ``wait=True`` sleeps on the clock until the goal is reached, or raises DeviceTimeoutError
 (code 100, as the SDK's wait) after ``move_timeout_s``. ``ArmState.t_s`` is the time of the
 last integration step.
@@ -39,6 +39,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.arm.envelope import (
     clamp_pose,
     clamp_twist,
@@ -49,10 +53,6 @@ from drivers.arm.envelope import (
 )
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
-from drivers.base import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
 
 ARRIVED_M = 1e-6  # a position goal counts as reached within this distance ...

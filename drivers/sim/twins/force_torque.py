@@ -1,8 +1,8 @@
-"""Simulated six-axis force/torque sensor (implements ``drivers.base.ForceTorqueSensor``).
+"""Simulated six-axis force/torque sensor (implements ``core.devices.ForceTorqueSensor``).
 
 The calibration jig's ground truth. No real force/torque driver exists yet, so this twin is
 the only backend of its registry type. Each ``read()`` returns the wrench that the **wrench
-source** gives for the clock's ``now()`` (``drivers.clock``), plus independent Gaussian
+source** gives for the clock's ``now()`` (``core.clock``), plus independent Gaussian
 noise per component (``force_noise_n``, ``torque_noise_nm``) drawn from the injected ``rng``
 in call order, in the configured ``frame``.
 
@@ -19,10 +19,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.base import ContextManagedDevice, Vector3, WrenchSample
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import DeviceNotConnectedError
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ContextManagedDevice, Vector3, WrenchSample
+from core.errors import DeviceNotConnectedError
 
 WrenchSource = Callable[[float], tuple[Sequence[float], Sequence[float]]]
 """Gives (force in N, torque in N*m), three components each, at a time in s."""

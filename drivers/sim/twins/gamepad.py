@@ -1,7 +1,7 @@
-"""Simulated twin of the SDL gamepad (implements ``drivers.base.Gamepad``): scripted input.
+"""Simulated twin of the SDL gamepad (implements ``core.devices.Gamepad``): scripted input.
 
 A script is a timeline of ``PadEvent``s. Each event, at ``t_s`` seconds after ``play()``
-on the injected clock (``drivers.clock``), sets some actions (by the action names of
+on the injected clock (``core.clock``), sets some actions (by the action names of
 the ``GamepadConfig`` mapping: axis values in [-1, 1] after the dead zone, buttons pressed
 or not) and may unplug (``attached=False``) or plug in (``attached=True``) the pad.
 ``play()`` starts from neutral input (axes 0, buttons released); actions an event does not
@@ -22,10 +22,10 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-from drivers.base import ContextManagedDevice, GamepadState
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config
-from drivers.errors import DeviceNotConnectedError
+from core.clock import Clock, MonotonicClock
+from core.config import Config
+from core.devices import ContextManagedDevice, GamepadState
+from core.errors import DeviceNotConnectedError
 from drivers.gamepad.mapping import GamepadConfig
 
 

@@ -1,4 +1,4 @@
-"""Simulated twin of the Robotiq Hand-E (implements ``drivers.base.Gripper``).
+"""Simulated twin of the Robotiq Hand-E (implements ``core.devices.Gripper``).
 
 It behaves as ``drivers.gripper.hande.HandE`` reads the real gripper:
 
@@ -20,7 +20,7 @@ It behaves as ``drivers.gripper.hande.HandE`` reads the real gripper:
 * ``set_responding(False)`` makes the gripper silent (wrong baud rate, cut cable): every
   call raises the DeviceTimeoutError the real driver raises after its retries.
 
-Time is the injected clock's (``drivers.clock``); motion is computed in closed form.
+Time is the injected clock's (``core.clock``); motion is computed in closed form.
 """
 
 from __future__ import annotations
@@ -29,10 +29,10 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from drivers.base import ContextManagedDevice, GripperObject, GripperStatus
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, check_number, number
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.clock import Clock, MonotonicClock
+from core.config import Config, check_number, number
+from core.devices import ContextManagedDevice, GripperObject, GripperStatus
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.gripper.hande import HandEConfig
 

@@ -1,7 +1,7 @@
-"""Simulated twin of a GelSight Mini / DIGIT camera (implements ``drivers.base.TactileSensor``).
+"""Simulated twin of a GelSight Mini / DIGIT camera (implements ``core.devices.TactileSensor``).
 
 Frames. The twin "captures" frame ``k`` at ``t_k = t_connect + k / frame_rate_hz`` on the
-injected clock (``drivers.clock``). A frame is the marker gel of
+injected clock (``core.clock``). A frame is the marker gel of
 ``drivers.sim.render.gel_renderer.GelRenderer`` at the configured output size, warped by the
 forward displacement field that the **field source** gives for ``t_k`` (px, (h, w, 2) at any
 grid resolution with the image's aspect, e.g. the output size or a coarse physics grid; see
@@ -31,14 +31,14 @@ from typing import Any
 
 import numpy as np
 
-from drivers.base import ContextManagedDevice, TactileFrame
-from drivers.clock import Clock, MonotonicClock
-from drivers.config import Config, number
-from drivers.errors import DeviceNotConnectedError, DeviceTimeoutError
+from core.clock import Clock, MonotonicClock
+from core.config import Config, number
+from core.devices import ContextManagedDevice, TactileFrame
+from core.errors import DeviceNotConnectedError, DeviceTimeoutError
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.tactile.camera import TactileCameraConfig
-from drivers.tactile.profile import sensor_profile
 
 FieldSource = Callable[[float], np.ndarray | None]
 """Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""

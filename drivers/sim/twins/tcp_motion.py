@@ -38,6 +38,7 @@ from collections.abc import Iterable
 
 from scipy.spatial.transform import Rotation
 
+from core.devices import Pose
 from drivers.arm.envelope import (
     SafetyEnvelope,
     clamp_tilt,
@@ -45,7 +46,6 @@ from drivers.arm.envelope import (
     rpy_near,
     tilt_rad,
 )
-from drivers.base import Pose
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # x, y, z, w

@@ -16,6 +16,7 @@ from scipy.spatial import cKDTree
 
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import estimator_config
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.appearance import appearance_names
 from drivers.sim.render.field_grid import GridUpsampler
 from drivers.sim.render.gel_analysis import find_markers, masked_blur
@@ -35,7 +36,6 @@ from drivers.sim.render.real_texture import (
     real_gel_names,
 )
 from drivers.sim.render.realistic import REALISTIC
-from drivers.tactile.profile import sensor_profile
 from tests.drivers.sim.effects import ALL
 
 HW = (240, 320)

@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from drivers.config import ConfigError
+from core.config import ConfigError
 from drivers.sim.gel.contact import TOLERANCE
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.gel.profile import SHAPES, GelProfile, ObjectShape, gel_profile

@@ -16,6 +16,7 @@ from scipy.ndimage import map_coordinates
 
 from controller.tactile import estimator_config, estimator_for_sensor
 from controller.tactile.flow import make_grid_flow
+from core.sensor_profile import sensor_profile
 from drivers.sim.render.field_grid import GridUpsampler
 from drivers.sim.render.field_inverse import MARGIN_PX, BackwardMapper
 from drivers.sim.render.gel_renderer import GelRenderer
@@ -25,7 +26,6 @@ from drivers.sim.render.marker_images import (
     area_mean_field,
     smooth_random_field,
 )
-from drivers.tactile.profile import sensor_profile
 from tests.drivers.sim.effects import ALL
 
 HW = (240, 320)

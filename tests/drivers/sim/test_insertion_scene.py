@@ -13,9 +13,9 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
+from core.config import CONFIG_ROOT, ConfigError
+from core.devices import Pose
 from drivers.arm.envelope import rotation_from_rpy
-from drivers.base import Pose
-from drivers.config import CONFIG_ROOT, ConfigError
 from drivers.sim.scenes.insertion import (
     HolePose,
     InsertionSceneConfig,

@@ -14,12 +14,13 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT as CONFIGS
+from core.devices import ArmMode, ArmState, GripperObject, Pose, Twist
+from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.sensor_profile import sensor_profile
 from drivers import registry
 from drivers.arm.envelope import clamp_pose, rotation_from_rpy, tilt_rad
-from drivers.base import ArmMode, ArmState, GripperObject, Pose, Twist
-from drivers.clock import ManualClock
-from drivers.config import CONFIG_ROOT as CONFIGS
-from drivers.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
 from drivers.registry import load_device_config
 from drivers.sim.render.gel_renderer import GelRenderer
@@ -28,7 +29,6 @@ from drivers.sim.twins.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.twins.gamepad import PadEvent, SimGamepad
 from drivers.sim.twins.gripper import SimGripper
 from drivers.sim.twins.tactile import SimTactileSensor
-from drivers.tactile.profile import sensor_profile
 
 ARM = load_device_config(CONFIGS / "robot" / "xarm6.yaml").config
 GRIPPER = load_device_config(CONFIGS / "gripper" / "hande.yaml").config

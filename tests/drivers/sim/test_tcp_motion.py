@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
+from core.devices import Pose
 from drivers.arm.envelope import SafetyEnvelope, tilt_rad
-from drivers.base import Pose
 from drivers.sim.twins.tcp_motion import TcpMotion
 
 ENV = SafetyEnvelope(0.1, 0.5, -0.3, 0.3, 0.0, 0.4, 0.2, 1.0, 0.01, 0.05, 0.35)

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.clock import ManualClock, MonotonicClock
-from drivers.config import CONFIG_ROOT
+from core.clock import ManualClock, MonotonicClock
+from core.config import CONFIG_ROOT
 from drivers.registry import load_device_config
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import ObjectShape, gel_profile

@@ -1,6 +1,6 @@
 """The scene's clock: the clock the control loop and the twins sleep on moves the world.
 
-``SceneClock(base)`` is a ``drivers.clock.Clock``: ``now()`` is the base clock's;
+``SceneClock(base)`` is a ``core.clock.Clock``: ``now()`` is the base clock's;
 ``sleep(s)`` first brings the world (``attach``) up to the present, then sleeps the base
 clock until ``s`` after the call (``ManualClock``: at once, as fast as possible;
 ``MonotonicClock``: in real time, the physics' cost taken out of the wait). Whatever reads
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from drivers.clock import Clock
+from core.clock import Clock
 
 
 class SceneClock:

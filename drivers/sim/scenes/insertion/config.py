@@ -16,7 +16,7 @@ Task YAML layout (``configs/tasks/usb_c.yaml``; other sections belong to other r
     scene:                # InsertionSceneConfig (this module); load_scene_section(path)
       ...
 
-Units are SI. Every number is range-checked (drivers/config.py); a bad value is a one-line
+Units are SI. Every number is range-checked (core/config.py); a bad value is a one-line
 ConfigError naming the file and the dotted key.
 """
 
@@ -26,9 +26,9 @@ import math
 from dataclasses import dataclass
 from pathlib import Path
 
-from drivers.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, load_yaml, number
+from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.render.appearance import appearance_names
-from drivers.task_geometry import HolePose, PlugGeometry
 
 SCENE_SECTION = "scene"
 

@@ -1,7 +1,7 @@
 """Frames of the insertion scene and the conversions between them.
 
 * B: the arm's base, z up. T: the tool (TCP at the plug's grasp point), ``Pose`` is T2B
-  with the xArm's roll/pitch/yaw (``drivers.base.Pose``); the tool axis z_T points from
+  with the xArm's roll/pitch/yaw (``core.devices.Pose``); the tool axis z_T points from
   the gripper toward the plug's tip (down when the tool points down, rpy = (pi, 0, yaw)).
 * The plug's width runs along x_T, its thickness along y_T: the fingers close along y_T,
   and the sensing finger (its gel) sits on the +y_T side of the plug.
@@ -20,7 +20,7 @@ import math
 
 import numpy as np
 
-from drivers.base import Pose
+from core.devices import Pose
 
 S_IN_T = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
 """S2T rotation: its columns are x_S, y_S, z_S in T."""

@@ -23,7 +23,7 @@ import math
 import mujoco
 import numpy as np
 
-from drivers.base import Pose
+from core.devices import Pose
 from drivers.sim.scenes.insertion.config import HolePose, InsertionSceneConfig, PlugGeometry
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml

@@ -17,8 +17,8 @@ the plug placed there.
 
 from __future__ import annotations
 
-from drivers.base import Pose
-from drivers.errors import DeviceError
+from core.devices import Pose
+from core.errors import DeviceError
 from drivers.sim.scenes.insertion.physics import InsertionPhysics
 from drivers.sim.twins.arm import SimArm
 from drivers.sim.twins.gripper import SimGripper

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from drivers.config import Config, number
+from core.config import Config, number
 
 
 @dataclass(frozen=True)

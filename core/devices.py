@@ -13,7 +13,7 @@ simulated twins accept and ignore it so one call builds either backend.
 
 Units are SI everywhere (m, rad, N, N*m, s). Frames (see docs/ARCHITECTURE.md):
 ``B`` the arm base, ``T`` the tool (TCP at the stick's grasp point), ``S`` the tactile
-sensor. Timestamps ``t_s`` are seconds on the device's injected ``Clock`` (``drivers.clock``,
+sensor. Timestamps ``t_s`` are seconds on the device's injected ``Clock`` (``core.clock``,
 re-exported here; ``MonotonicClock``, i.e. ``time.monotonic()``, unless one is given).
 """
 
@@ -27,7 +27,7 @@ from typing import Any, Protocol, Self, runtime_checkable
 
 import numpy as np
 
-from drivers.clock import Clock, ManualClock, MonotonicClock
+from core.clock import Clock, ManualClock, MonotonicClock
 
 __all__ = [
     "Arm", "ArmMode", "ArmState", "ArmStatus", "Clock", "ContextManagedDevice", "Device",

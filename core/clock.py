@@ -1,5 +1,5 @@
 """The one time source of the device layer: every real driver and every twin reads time from
-an injected ``Clock`` and never from ``time`` directly (``drivers.base`` re-exports it).
+an injected ``Clock`` and never from ``time`` directly (``core.devices`` re-exports it).
 
 * ``now()`` -- seconds on a monotonic scale; samples are stamped with it (``t_s``), and
   ages, step budgets and polling deadlines are measured on it;

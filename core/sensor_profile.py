@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from drivers.config import CONFIG_ROOT, Config, ConfigError, load_config, number
+from core.config import CONFIG_ROOT, Config, ConfigError, load_config, number
 
 FOLDER = "sensors"
 COMPANION_SUFFIXES = ("_camera", "_gel")

@@ -1,7 +1,7 @@
 """Configuration: YAML files loaded into frozen dataclasses that validate themselves.
 
-One mechanism serves the controller, the drivers and evaluation (it lives in ``drivers`` so
-that every layer may import it). A configuration class derives from ``Config`` and declares
+One mechanism serves the controller, the drivers and evaluation (it lives in ``core``, below
+every layer). A configuration class derives from ``Config`` and declares
 each key once, on its dataclass field:
 
 * ``float``/``int`` annotations with ``number(low, high)`` -- a finite number (an integer
@@ -32,6 +32,7 @@ import copy
 import copyreg
 import dataclasses
 import functools
+import importlib.resources
 import math
 import numbers
 import types
@@ -44,7 +45,9 @@ import yaml
 
 T = TypeVar("T")
 
-CONFIG_ROOT = Path(__file__).resolve().parent.parent / "configs"
+CONFIG_ROOT = Path(str(importlib.resources.files("configs")))
+"""The shipped configurations: the ``configs`` package's folder (package data, found through
+``importlib.resources`` in a checkout and in an installed wheel alike)."""
 _RANGE = "range"
 _SHOWN_CHARS = 80  # longest value repr quoted in a message
 

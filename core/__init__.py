@@ -1,0 +1,16 @@
+"""The shared core below ``controller`` and ``drivers``: what both read and neither owns.
+
+* ``config``: YAML -> frozen, self-validating dataclasses, overrides, the configs/ lookup;
+* ``clock``: the injected clocks (monotonic, manual);
+* ``errors``: the typed device error tree;
+* ``devices``: the device Protocols (Arm, Gripper, TactileSensor, Gamepad, ...) and the
+  status types they exchange (``Pose`` is T2B, ``Twist``, ``ArmStatus``, ...);
+* ``task_geometry``: the plug and hole of a task;
+* ``sensor_profile``: a visuotactile sensor's image geometry;
+* ``spatial``: rotations and tilts with their frames in the names;
+* ``envelope``: the workspace box and the rate limits, one geometry for the arm driver's
+  envelope and the controller's limiter.
+
+Import rule: ``core`` imports only the standard library, NumPy, SciPy and PyYAML; it never
+imports ``controller``, ``drivers`` or ``evaluation`` (tests/test_layers.py).
+"""
