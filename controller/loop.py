@@ -58,6 +58,7 @@ from controller.insertion.interface import (
     Observation,
     Phase,
     TeleopInput,
+    Transition,
 )
 from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
 from controller.tactile.estimator import TactileEstimator
@@ -66,14 +67,11 @@ from controller.teleop import TeleopArbiter, TeleopConfig
 from core.clock import Clock
 from core.config import Config, number
 from core.devices import (
-    Arm,
     ArmStatus,
-    Gamepad,
+    Devices,
     GamepadState,
-    Gripper,
     GripperStatus,
     TactileFrame,
-    TactileSensor,
     Twist,
 )
 from core.errors import DeviceError
@@ -128,16 +126,6 @@ class LoopConfig(Config):
 
 
 @dataclass(frozen=True)
-class Devices:
-    """The loop's devices, connected by the caller (``core.devices`` Protocols)."""
-
-    arm: Arm
-    gripper: Gripper
-    tactile: TactileSensor
-    gamepad: Gamepad | None = None
-
-
-@dataclass(frozen=True)
 class TickTiming:
     """One tick on the clock (s): its index ``k``, its ``deadline_s``, when it started and
     ended, and whether it ``overran`` (ended after the next deadline)."""
@@ -153,7 +141,8 @@ class TickTiming:
 class TickRecord:
     """What the observer gets each tick. ``command``: the command as sent (after the limits;
     None when nothing was sent, on a fault tick); ``limited``: the limits that changed it;
-    ``phase``: the machine's phase after its step; ``fault``: the watchdog's trip message."""
+    ``phase``: the machine's phase after its step; ``fault``: the watchdog's trip message;
+    ``transitions``: the machine's phase changes made since the previous record, in order."""
 
     observation: Observation
     command: Command | None
@@ -161,6 +150,7 @@ class TickRecord:
     phase: Phase
     timing: TickTiming
     fault: str | None = None
+    transitions: tuple[Transition, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -277,6 +267,7 @@ class ControlLoop:
         self._ends: list[float] = []
         self._overruns = 0
         self._skipped = 0
+        self._transitions_seen = 0
 
     # -- running -------------------------------------------------------------------------
 
@@ -442,7 +433,11 @@ class ControlLoop:
         end = self.clock.now()
         overran = end > deadline + self.config.period_s + _EPS_S
         timing = TickTiming(k, deadline, start, end, overran)
-        self.observer(TickRecord(observation, command, limited, self.machine.phase, timing, fault))
+        made = self.machine.transitions[self._transitions_seen :]
+        self._transitions_seen += len(made)
+        self.observer(
+            TickRecord(observation, command, limited, self.machine.phase, timing, fault, made)
+        )
 
     def _stop_once(self) -> None:
         if self._stopped:

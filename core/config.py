@@ -294,6 +294,52 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
     return data
 
 
+BASE_KEY = "extends"
+"""The key by which a file builds on a base file (``load_yaml_extending``)."""
+
+
+def load_yaml_extending(path: Path | str) -> dict[str, Any]:
+    """The top-level mapping of the YAML file at ``path``, laid over its base file.
+
+    A file whose top level has ``extends: BASE.yaml`` (a path relative to the file's folder,
+    or absolute) holds only what differs from BASE: the base is loaded (itself possibly
+    extending another), then the file's keys are laid over it, mapping into mapping key by
+    key, any other value (a number, a string, a list) replacing the base's whole. The
+    ``extends`` key itself is dropped. ConfigError naming the file and the key for a missing
+    base, a base that is not a path, or a cycle; every other check is the caller's ``build``
+    on the merged mapping, as for a single file."""
+    return _load_extending(Path(path), ())
+
+
+def _load_extending(path: Path, chain: tuple[Path, ...]) -> dict[str, Any]:
+    data = load_yaml(path)
+    if BASE_KEY not in data:
+        return data
+    base_name = data.pop(BASE_KEY)
+    if not isinstance(base_name, str) or not base_name.endswith((".yaml", ".yml")):
+        raise ConfigError(
+            f"{path}: key '{BASE_KEY}': expected the path of a base .yaml file, "
+            f"got {show(base_name)}"
+        )
+    base_path = (path.parent / base_name).resolve()
+    if base_path in chain or base_path == path.resolve():
+        raise ConfigError(f"{path}: key '{BASE_KEY}': {base_name} extends this file (a cycle)")
+    if not base_path.is_file():
+        raise ConfigError(f"{path}: key '{BASE_KEY}': no such base file {base_path}")
+    return _laid_over(_load_extending(base_path, (*chain, path.resolve())), data)
+
+
+def _laid_over(base: dict[str, Any], top: Mapping[str, Any]) -> dict[str, Any]:
+    merged = dict(base)
+    for key, value in top.items():
+        below = merged.get(key)
+        if isinstance(value, dict) and isinstance(below, dict):
+            merged[key] = _laid_over(below, value)
+        else:
+            merged[key] = value
+    return merged
+
+
 def _yaml_message(path: Path, exc: yaml.MarkedYAMLError) -> str:
     mark = exc.problem_mark or exc.context_mark
     where = f" line {mark.line + 1}, column {mark.column + 1}:" if mark is not None else ""

@@ -30,7 +30,7 @@ import numpy as np
 from core.clock import Clock, ManualClock, MonotonicClock
 
 __all__ = [
-    "Arm", "ArmMode", "ArmState", "ArmStatus", "Clock", "ContextManagedDevice", "Device",
+    "Arm", "ArmMode", "ArmState", "ArmStatus", "Clock", "ContextManagedDevice", "Device", "Devices",
     "ForceTorqueSensor", "Gamepad", "GamepadState", "Gripper", "GripperObject", "GripperStatus",
     "ManualClock", "MonotonicClock", "Pose", "TactileFrame", "TactileSensor", "Twist",
     "Vector3", "WrenchSample",
@@ -295,3 +295,19 @@ class ForceTorqueSensor(Device, Protocol):
     """A 6-axis force/torque sensor (calibration jig ground truth)."""
 
     def read(self) -> WrenchSample: ...
+
+
+@dataclass(frozen=True)
+class Devices:
+    """The devices one run drives, each behind its Protocol (the caller connects them):
+    the control loop's inputs and outputs. ``gamepad`` is None when the task names none."""
+
+    arm: Arm
+    gripper: Gripper
+    tactile: TactileSensor
+    gamepad: Gamepad | None = None
+
+    def each(self) -> tuple[Device, ...]:
+        """The devices present, arm first (the order they are connected in)."""
+        present = (self.arm, self.gripper, self.tactile, self.gamepad)
+        return tuple(device for device in present if device is not None)

@@ -27,6 +27,12 @@ a script that checks every file before touching any device loads them all first,
 calls ``DeviceSpec.build``. Transport keywords (``api=``, ``arm=``, ``capture_factory=``)
 go to the driver's ``from_config``; the twins accept and ignore them.
 
+A run's whole device set (``build_device_set``): with ``backend: real`` each device file's
+real driver on one ``MonotonicClock``; with ``backend: sim`` the simulated world
+(``drivers.sim.scenes.insertion``) with its twins behind the same Protocols, on the world's
+own clock. Either way the caller gets ``Devices`` and a clock; the simulated ``world``
+(its truth, for scoring) is an opaque handle the controller never reads.
+
 Lazy imports. The table below names modules, and a driver's module is imported only when
 that backend is built (or its config class is asked for): ``backend: sim`` needs only the
 base dependencies, and pygame, pymodbus and the xArm SDK (the ``hw`` extra) load only with
@@ -41,9 +47,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from core.clock import Clock
+from core.clock import Clock, MonotonicClock
 from core.config import ConfigError, build, load_yaml
-from core.devices import Arm, Device, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
+from core.devices import (
+    Arm,
+    Device,
+    Devices,
+    ForceTorqueSensor,
+    Gamepad,
+    Gripper,
+    TactileSensor,
+)
 
 BACKENDS = ("sim", "real")
 DEFAULT_BACKEND = "sim"
@@ -124,6 +138,16 @@ PROTOCOLS: Mapping[str, type] = {
     "force_torque": ForceTorqueSensor,
 }
 """kind -> the ``core.devices`` Protocol its devices implement."""
+
+RUN_DEVICE_KINDS = ("arm", "gripper", "tactile", "gamepad")
+"""The kinds a run drives (``Devices``' fields); the gamepad is optional."""
+
+SIM_WORLD = Driver(
+    "drivers.sim.scenes.insertion.builder:build_world",
+    "drivers.sim.scenes.insertion.config:InsertionSceneConfig",
+)
+"""The simulated insertion world (``backend: sim``) and the config dataclass of a task's
+``scene:`` section."""
 
 _KIND_OF_TYPE = {type_name: kind for kind, types in DRIVERS.items() for type_name in types}
 
@@ -249,3 +273,58 @@ def _driver(kind: str, type_name: str, backend: str) -> Driver:
 def _load(reference: str) -> type:
     module, name = reference.split(":")
     return getattr(importlib.import_module(module), name)
+
+
+@dataclass(frozen=True)
+class WorldSpec:
+    """What the simulated world needs beyond the device files: the task's ``scene:``
+    configuration (``scene_config``), the plug (``core.task_geometry.PlugGeometry``), the
+    nominal hole in B (``HolePose``), the scene's ``seed`` and whether the world's clock
+    follows the wall clock (``realtime``; else as fast as possible)."""
+
+    scene: Any
+    plug: Any
+    hole: Any
+    seed: int
+    realtime: bool = False
+
+
+@dataclass(frozen=True)
+class DeviceSet:
+    """A run's devices, built and not connected: the ``devices`` the loop drives, the
+    ``clock`` they share, and, in simulation only, the ``world`` behind them (its truth is
+    for scoring and recording; the controller never reads it). ``world`` is None on the
+    real backend."""
+
+    devices: Devices
+    clock: Clock
+    world: Any = None
+
+
+def scene_config(raw: Mapping[str, Any], source: str) -> Any:
+    """A task's ``scene:`` mapping checked into the simulator's config dataclass
+    (ConfigError naming ``source`` and the key); imports the simulator's config."""
+    return build(SIM_WORLD.config_class, raw, source, prefix="scene.")
+
+
+def build_device_set(
+    files: Mapping[str, Path], backend: str, world: WorldSpec | None = None
+) -> DeviceSet:
+    """The devices of ``files`` (kind -> device YAML, for the kinds of
+    ``RUN_DEVICE_KINDS``; a missing gamepad is none) on ``backend``: each real driver on one
+    ``MonotonicClock``, or the simulated world described by ``world`` with the files' twins
+    (see the module doc). ConfigError for a bad file; ValueError for a sim without a world."""
+    specs = {
+        kind: load_device_config(path, backend=backend, kind=kind)
+        for kind, path in files.items()
+    }
+    if backend == "real":
+        clock = MonotonicClock()
+        built = {kind: spec.build(clock) for kind, spec in specs.items()}
+        return DeviceSet(Devices(**built), clock)
+    if world is None:
+        raise ValueError("backend 'sim': the simulated world needs a WorldSpec")
+    build_world = _load(SIM_WORLD.device)
+    configs = {kind: spec.config for kind, spec in specs.items()}
+    sim = build_world(world, configs)
+    return DeviceSet(Devices(sim.arm, sim.gripper, sim.tactile, sim.gamepad), sim.clock, sim)

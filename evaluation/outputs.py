@@ -10,7 +10,8 @@ this module:
   ``/dev/full``, nor a read-only file; its folder must exist or be creatable, and be
   writable (probed by creating a temporary file, which also catches read-only file
   systems).
-* ``atomic_file`` / ``atomic_text`` / ``write_text`` write to a hidden temporary file in the
+* ``atomic_file`` / ``atomic_text`` / ``write_text`` (``core.atomic_files``, shared with the
+  product's recorders) write to a hidden temporary file in the
   destination folder (``.NAME.XXXXXXXX.partial.EXT``), flush it to disk, then
   ``os.replace`` it over the destination. An error or an interruption removes the temporary
   file: the destination is either the previous result or the complete new one.
@@ -25,15 +26,19 @@ the destination, never a truncated file under the destination's name.
 from __future__ import annotations
 
 import os
-import secrets
 import shutil
 import tempfile
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import TextIO
 
+from core.atomic_files import atomic_file, atomic_text, fsync_file, hidden_sibling, write_text
 from evaluation.cli import ToolError
+
+__all__ = [
+    "atomic_file", "atomic_text", "check_output_file", "check_output_folder",
+    "partial_folder", "publish_folder", "staged_folder", "write_text",
+]  # fmt: skip
 
 PathLike = Path | str
 
@@ -120,54 +125,11 @@ def check_output_folder(
     return path
 
 
-def _hidden_sibling(path: Path, kind: str) -> Path:
-    return path.parent / f".{path.name}.{secrets.token_hex(4)}.{kind}{path.suffix}"
-
-
-def _fsync(path: Path) -> None:
-    fd = os.open(path, os.O_RDONLY)
-    try:
-        os.fsync(fd)
-    finally:
-        os.close(fd)
-
-
-@contextmanager
-def atomic_file(path: PathLike) -> Iterator[Path]:
-    """Yield a temporary path beside ``path`` (same folder, same suffix, so libraries that
-    pick a format from the suffix still work); when the block succeeds, flush it to disk and
-    rename it over ``path``; on any exception or interruption, remove it."""
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    temporary = _hidden_sibling(path, "partial")
-    os.close(os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
-    try:
-        yield temporary
-        _fsync(temporary)
-        os.replace(temporary, path)
-    except BaseException:
-        temporary.unlink(missing_ok=True)
-        raise
-
-
-@contextmanager
-def atomic_text(path: PathLike, newline: str | None = None) -> Iterator[TextIO]:
-    """A text file handle whose content replaces ``path`` only when the block succeeds."""
-    with atomic_file(path) as temporary, open(temporary, "w", newline=newline) as handle:
-        yield handle
-
-
-def write_text(path: PathLike, text: str) -> None:
-    """Replace ``path`` with ``text``, atomically."""
-    with atomic_text(path) as handle:
-        handle.write(text)
-
-
 def partial_folder(path: PathLike) -> Path:
     """Create a hidden folder beside ``path`` in which to build it (``publish_folder``)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    partial = _hidden_sibling(path, "partial")
+    partial = hidden_sibling(path, "partial")
     partial.mkdir()
     return partial
 
@@ -182,7 +144,7 @@ def publish_folder(partial: Path, path: PathLike, replace: bool) -> None:
         return
     if not replace:
         raise FileExistsError(17, "already exists; not replaced", str(path))
-    old = _hidden_sibling(path, "old")
+    old = hidden_sibling(path, "old")
     os.rename(path, old)
     os.rename(partial, path)
     shutil.rmtree(old, ignore_errors=True)
@@ -205,7 +167,7 @@ def staged_folder(root: PathLike) -> Iterator[Path]:
         for source in sorted(p for p in staging.rglob("*") if p.is_file()):
             target = root / source.relative_to(staging)
             target.parent.mkdir(parents=True, exist_ok=True)
-            _fsync(source)
+            fsync_file(source)
             os.replace(source, target)
     finally:
         shutil.rmtree(staging, ignore_errors=True)

@@ -1,16 +1,10 @@
 """The insertion state machine: Observation in, Command out, no I/O (see interface.py).
 
-``InsertionMachine(config, plug, hole)`` is the machine; ``machine_setup_from_task(data,
-source)`` reads its ``plug:``, ``hole:`` and ``machine:`` sections from a task file's mapping.
+``InsertionMachine(config, plug, hole)`` is the machine; its ``machine:`` section, with the
+task's ``plug:`` and ``hole:``, is read by the task file's schema (controller/run/task.py).
 """
 
-from controller.insertion.config import (
-    HolePose,
-    MachineConfig,
-    MachineSetup,
-    PlugGeometry,
-    machine_setup_from_task,
-)
+from controller.insertion.config import MachineConfig
 from controller.insertion.definition import INSERTION, Definition, DefinitionError, Edge
 from controller.insertion.interface import (
     Command,
@@ -23,10 +17,10 @@ from controller.insertion.interface import (
     Transition,
 )
 from controller.insertion.machine import InsertionMachine
+from core.task_geometry import HolePose, PlugGeometry
 
 __all__ = [
     "INSERTION", "Command", "Definition", "DefinitionError", "Edge", "FailureReason",
     "GripperTarget", "HolePose", "InsertionMachine", "Machine", "MachineConfig",
-    "MachineSetup", "Observation", "Phase", "PlugGeometry", "TeleopInput", "Transition",
-    "machine_setup_from_task",
+    "Observation", "Phase", "PlugGeometry", "TeleopInput", "Transition",
 ]  # fmt: skip

@@ -8,7 +8,7 @@ compliant wrist absorbs the push where the tip meets the board), dwells, and ris
 ``hover_m`` before the next point. After the last point it releases and retracts.
 
 It never knows whether a push went in: it has no sensing but the arm's own (commanded) pose.
-A trial scores it as every controller (evaluation/trials/runner.py): DONE and the tip
+A trial scores it as every controller (evaluation/trials/trial.py): DONE and the tip
 reached the depth at some time, which credits a push that went in even though the machine
 then moved on; so its success rate is an optimistic bound on position-only search.
 

@@ -19,15 +19,13 @@ is (docs/ARCHITECTURE.md, "Insertion state machine").
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
 from controller.insertion.interface import GripperTarget
-from core.config import Config, ConfigError, build, number
-from core.task_geometry import HolePose, PlugGeometry
+from core.config import Config, number
 
 SignedAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
@@ -344,25 +342,6 @@ class MachineConfig(Config):
                 f"key 'search.contact_lost_sigma': expected below approach.contact_sigma "
                 f"({self.approach.contact_sigma}), got {self.search.contact_lost_sigma}"
             )
-
-
-@dataclass(frozen=True)
-class MachineSetup(Config):
-    """What the machine needs from a task file: its ``plug:``, ``hole:`` and ``machine:``."""
-
-    plug: PlugGeometry
-    hole: HolePose
-    machine: MachineConfig
-
-
-def machine_setup_from_task(data: Mapping[str, Any], source: str) -> MachineSetup:
-    """The ``plug:``, ``hole:`` and ``machine:`` sections of a task file's mapping ``data``
-    (other sections, e.g. ``scene:``, are the scene's); ConfigError naming ``source`` and the
-    key otherwise."""
-    missing = [key for key in ("plug", "hole", "machine") if key not in data]
-    if missing:
-        raise ConfigError(f"{source}: missing key '{missing[0]}'")
-    return build(MachineSetup, {k: data[k] for k in ("plug", "hole", "machine")}, source)
 
 
 def s2t_matrix(axes: tuple[str, str, str]) -> np.ndarray:

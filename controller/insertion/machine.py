@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import HolePose, MachineConfig, PlugGeometry
+from controller.insertion.config import MachineConfig
 from controller.insertion.definition import (
     AUTONOMOUS,
     IN_CONTACT,
@@ -46,6 +46,7 @@ from controller.insertion.motion import (
 from controller.insertion.search import HoleDetector, SearchPattern
 from controller.insertion.signals import TactileSignals
 from core.devices import Twist
+from core.task_geometry import HolePose, PlugGeometry
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
 _MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only

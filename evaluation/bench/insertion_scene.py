@@ -27,15 +27,11 @@ import cv2
 import mujoco
 import numpy as np
 
+from controller.run import load_task
 from controller.tactile import estimator_for_sensor
-from core.config import CONFIG_ROOT
 from core.devices import Pose
-from drivers.sim.scenes.insertion import (
-    InsertionSim,
-    build_insertion_sim,
-    default_devices,
-    load_scene_section,
-)
+from drivers.registry import WorldSpec, build_device_set
+from drivers.sim.scenes.insertion import InsertionSim
 from evaluation.cli import integer, run_tool
 from evaluation.machine import describe_machine
 
@@ -110,10 +106,10 @@ class RunResult:
 
 def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
     """One scripted insertion (see the module docstring), timed from the first command."""
-    section = load_scene_section(CONFIG_ROOT / "tasks" / f"{task}.yaml")
-    devices = default_devices()
-    sim = build_insertion_sim(section.scene, section.plug, section.hole, devices, seed)
-    estimator = estimator_for_sensor(devices.tactile.model) if estimate else None
+    loaded = load_task(task)
+    world = WorldSpec(loaded.scene, loaded.config.plug, loaded.config.hole, seed)
+    sim = build_device_set(loaded.device_files, "sim", world).world
+    estimator = estimator_for_sensor(loaded.tactile_model("sim")) if estimate else None
     clock, arm, gripper, tactile = sim.clock, sim.arm, sim.gripper, sim.tactile
     for device in (arm, gripper, tactile):
         device.connect()
@@ -128,9 +124,9 @@ def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
     if estimator is not None:
         estimator.rezero(1)
     previous = arm.read_status().tcp
-    receptacle = section.scene.receptacle
+    receptacle = loaded.scene.receptacle
     for waypoint in script(receptacle.width_m / 2, receptacle.depth_m):
-        goal = tcp_for_tip(sim, section.plug.length_m, waypoint)
+        goal = tcp_for_tip(sim, loaded.config.plug.length_m, waypoint)
         ticks = max(1, round(waypoint.duration_s * RATE_HZ))
         for k in range(1, ticks + 1):
             share = k / ticks

@@ -20,11 +20,11 @@ import argparse
 import numpy as np
 
 from controller.insertion.interface import Command, Observation, Phase, Transition
-from controller.loop import ControlLoop, Devices, LoopConfig, TickRecord
+from controller.loop import ControlLoop, LoopConfig, TickRecord
 from controller.tactile import estimator_for_sensor
 from core.clock import MonotonicClock
 from core.config import CONFIG_ROOT
-from core.devices import Twist
+from core.devices import Devices, Twist
 from drivers import registry
 from evaluation.cli import integer, number, run_tool
 from evaluation.machine import describe_machine

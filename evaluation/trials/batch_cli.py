@@ -36,8 +36,8 @@ from core.config import ConfigError, parse_override
 from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, one_line, run_tool
 from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor
+from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import (
-    CONTROLLERS,
     SpecError,
     TrialFunction,
     TrialSpec,
@@ -46,7 +46,7 @@ from evaluation.trials.spec import (
 )
 
 # The real trial (scene + controller). The integrator plugs it in here, and only here.
-TRIAL_FUNCTION = "evaluation.trials.runner:run_trial"
+TRIAL_FUNCTION = "evaluation.trials.trial:run_trial"
 MAX_WORKERS = 1024
 EXIT_CODES = {"SIGINT": EXIT_SIGINT, "SIGTERM": EXIT_SIGTERM}
 
@@ -180,7 +180,7 @@ def build_parser() -> argparse.ArgumentParser:
         prog="run_trials", description="Run a batch of simulated insertion trials."
     )
     add_run_arguments(parser)
-    parser.add_argument("--controller", choices=CONTROLLERS, default="dipole")
+    parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
     parser.add_argument(
         "--records",
         action="store_true",

@@ -45,7 +45,8 @@ from evaluation.trials.batch_cli import (
     make_executor,
 )
 from evaluation.trials.charts import controller_label, speed_success_chart, time_histogram
-from evaluation.trials.spec import CONTROLLERS, TrialSpec, format_seeds
+from evaluation.trials.oracle import TRIAL_CONTROLLERS
+from evaluation.trials.spec import TrialSpec, format_seeds
 
 DEFAULT_SPEED_KEY = "machine.insert.speed_m_s"
 DEFAULT_SPEEDS = (0.002, 0.004, 0.008)
@@ -187,9 +188,9 @@ def write_comparison(
 def _controllers(text: str) -> tuple[str, ...]:
     names = tuple(part.strip() for part in text.split(","))
     for name in names:
-        if name not in CONTROLLERS:
+        if name not in TRIAL_CONTROLLERS:
             raise argparse.ArgumentTypeError(
-                f"expected comma-separated controllers among {', '.join(CONTROLLERS)}, "
+                f"expected comma-separated controllers among {', '.join(TRIAL_CONTROLLERS)}, "
                 f"got {name!r}"
             )
     return names
@@ -214,8 +215,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--controllers",
         type=_controllers,
-        default=CONTROLLERS,
-        help=f"comma-separated (default {','.join(CONTROLLERS)})",
+        default=tuple(TRIAL_CONTROLLERS),
+        help=f"comma-separated (default {','.join(TRIAL_CONTROLLERS)})",
     )
     parser.add_argument("--speed-key", type=_speed_key, default=DEFAULT_SPEED_KEY)
     parser.add_argument(

@@ -25,9 +25,9 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion import Phase
 from controller.insertion.motion import tip_position
+from controller.run.task import Task
 from core.devices import Pose
-from evaluation.trials.runner import raise_if_interrupted, run
-from evaluation.trials.task import Task
+from evaluation.trials.trial import raise_if_interrupted, run
 
 DROP_M = 1e-4  # a tip this far below its resting height is in the opening (m)
 

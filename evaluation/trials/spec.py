@@ -19,9 +19,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from evaluation.cli import ToolError
+from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 
-CONTROLLERS = ("dipole", "fingervision", "blind", "oracle")
 MAX_SEED = 2**32 - 1
 
 
@@ -32,7 +32,7 @@ class SpecError(ToolError, ValueError):
 @dataclass(frozen=True)
 class TrialSpec:
     """One trial: ``task`` (a task configuration name, e.g. usb_c, or a YAML path),
-    ``controller`` (one of ``CONTROLLERS``), ``seed`` (the scene's seed), ``overrides``
+    ``controller`` (a name of ``TRIAL_CONTROLLERS``), ``seed`` (the scene's seed), ``overrides``
     (``"KEY=VALUE"`` strings applied in order to the task configuration by dotted path, see
     ``core.config.apply_overrides``) and ``out_dir`` (where the trial writes its own
     record and charts; None: it writes nothing)."""
@@ -44,9 +44,9 @@ class TrialSpec:
     out_dir: Path | None = None
 
     def __post_init__(self) -> None:
-        if self.controller not in CONTROLLERS:
+        if self.controller not in TRIAL_CONTROLLERS:
             raise SpecError(
-                f"controller {self.controller!r}: expected one of {', '.join(CONTROLLERS)}"
+                f"controller {self.controller!r}: expected one of {', '.join(TRIAL_CONTROLLERS)}"
             )
         if not 0 <= self.seed <= MAX_SEED:
             raise SpecError(f"seed {self.seed}: expected a whole number in [0, {MAX_SEED}]")

@@ -4,7 +4,7 @@
                  [--controller dipole|fingervision|oracle|blind] [--realtime] [--set KEY=VALUE ...]
 
 It prints the phase timeline and the outcome, and writes into DIR the trial's record
-(evaluation/trials/record.py: ticks.jsonl, transitions.jsonl, truth.npz, trial.json) and
+(controller/run/record.py: ticks.jsonl, transitions.jsonl, truth.npz, trial.json) and
 ``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
@@ -18,15 +18,14 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.run.task import load_task
 from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
 from evaluation.outputs import check_output_folder
 from evaluation.trials.batch_cli import add_override_argument
-from evaluation.trials.runner import TrialOutcome, run
+from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED
-from evaluation.trials.task import load_task
+from evaluation.trials.trial import TrialOutcome, run
 from evaluation.trials.trial_chart import trial_chart
-
-TRIAL_CONTROLLERS = ("dipole", "fingervision", "oracle", "blind")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -34,7 +33,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--seed", type=integer(0, MAX_SEED), default=0)
-    parser.add_argument("--controller", choices=TRIAL_CONTROLLERS, default="dipole")
+    parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
     parser.add_argument("--realtime", action="store_true", help="pace to the wall clock")
     add_override_argument(
         parser, "override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)"

@@ -15,10 +15,10 @@ from controller.insertion.interface import (
     Phase,
     Transition,
 )
-from controller.loop import Devices
 from controller.tactile.wrench import WrenchEstimate
 from core.clock import ManualClock
 from core.config import CONFIG_ROOT as CONFIGS
+from core.devices import Devices
 from drivers import registry
 
 START_S = 5.0

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import ast
 import dataclasses
 import subprocess
 import sys
@@ -247,39 +246,3 @@ def test_a_real_backend_needs_its_library():
     )
     assert result.returncode == 1
     assert "No module named 'xarm' (blocked)" in result.stderr
-
-
-# ------------------------------------------------------------------------------- layering
-
-
-def _imports(package: str) -> set[tuple[str, str]]:
-    found = set()
-    for path in (REPO / package).rglob("*.py"):
-        for node in ast.walk(ast.parse(path.read_text())):
-            if isinstance(node, ast.Import):
-                found |= {(str(path), alias.name) for alias in node.names}
-            elif isinstance(node, ast.ImportFrom) and node.module:
-                found.add((str(path), node.module))
-    return found
-
-
-def test_drivers_never_import_controller():
-    assert not [(p, m) for p, m in _imports("drivers") if m.split(".")[0] == "controller"]
-
-
-def test_controller_imports_only_the_driver_interfaces():
-    allowed = {
-        "core.devices",
-        "core.errors",
-        "core.config",
-        "core.clock",
-        "core.sensor_profile",  # sensor geometry: a driver-level fact, not a driver
-        "core.task_geometry",  # the task's plug and hole, shared with the scene
-    }
-    imported = _imports("controller")
-    assert not [(p, m) for p, m in imported if m.startswith("drivers") and m not in allowed]
-
-
-def test_runtime_layers_never_import_evaluation_or_tests():
-    imported = _imports("controller") | _imports("drivers")
-    assert not [(p, m) for p, m in imported if m.split(".")[0] in ("evaluation", "tests")]

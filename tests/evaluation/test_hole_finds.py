@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from controller.insertion import Phase, Transition
+from controller.run.task import load_task
 from evaluation.trials.hole_finds import (
     DROP_M,
     HoleFind,
@@ -18,7 +19,6 @@ from evaluation.trials.hole_finds import (
     trial_hole_finds,
 )
 from evaluation.trials.hole_finds_cli import main
-from evaluation.trials.task import load_task
 
 
 def test_the_resting_height_is_half_the_leading_face_times_the_sine_of_the_tilt():

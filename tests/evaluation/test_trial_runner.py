@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 
 from controller.loop import ControlLoop
+from controller.run.task import load_task
 from core.config import ConfigError
 from drivers.sim.scenes.insertion import TruthLog
 from evaluation.cli import Terminated
-from evaluation.trials import runner
+from evaluation.trials import trial
 from evaluation.trials.spec import TrialSpec
-from evaluation.trials.task import load_task
 from evaluation.trials.trial_cli import main
 
 SHORT = ("machine.timeouts.total_s=6.0",)  # grasp and the start of the approach only
@@ -24,7 +24,7 @@ def test_both_task_files_load_whole():
     for name in ("usb_a", "usb_c"):
         task = load_task(name)
         assert task.config.task == name
-        assert task.config.plug.width_m < task.config.scene.receptacle.width_m
+        assert task.config.plug.width_m < task.scene.receptacle.width_m
 
 
 @pytest.mark.parametrize(
@@ -61,7 +61,7 @@ def test_the_oracle_is_refused_on_the_robot(tmp_path, capsys):
               "--out", str(tmp_path / "o")])  # fmt: skip
     assert exit_info.value.code == 2 and "sim only" in capsys.readouterr().err
     with pytest.raises(ConfigError, match="sim only"):
-        runner.run(load_task("usb_c"), "oracle", 0, backend="real")
+        trial.run(load_task("usb_c"), "oracle", 0, backend="real")
 
 
 def test_the_controller_never_reads_the_truth(monkeypatch, tmp_path):
@@ -87,10 +87,10 @@ def test_the_controller_never_reads_the_truth(monkeypatch, tmp_path):
 
     monkeypatch.setattr(ControlLoop, "run", run_and_mark)
     monkeypatch.setattr(TruthLog, "arrays", spy("arrays", TruthLog.arrays))
-    outcome = runner.run(load_task("usb_c", SHORT), "dipole", 3, out_dir=tmp_path / "d")
+    outcome = trial.run(load_task("usb_c", SHORT), "dipole", 3, out_dir=tmp_path / "d")
     assert outcome.truth is not None and len(outcome.truth["t_s"]) > 100
     assert reads == []
-    runner.run(load_task("usb_c", SHORT), "oracle", 3)
+    trial.run(load_task("usb_c", SHORT), "oracle", 3)
     assert reads  # the oracle does read it: the spy works
 
 
@@ -117,6 +117,6 @@ def test_a_short_trial_writes_its_record(tmp_path):
 def test_a_signal_that_stopped_a_batch_trial_stops_the_batch(monkeypatch, name, raised):
     loop = types.SimpleNamespace(reason="signal", message=name)
     outcome = types.SimpleNamespace(loop=loop, result="never recorded")
-    monkeypatch.setattr(runner, "run", lambda *args, **kwargs: outcome)
+    monkeypatch.setattr(trial, "run", lambda *args, **kwargs: outcome)
     with pytest.raises(raised):
-        runner.run_trial(TrialSpec("usb_c", "dipole", 0))
+        trial.run_trial(TrialSpec("usb_c", "dipole", 0))

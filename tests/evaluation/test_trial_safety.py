@@ -14,9 +14,10 @@ import numpy as np
 import pytest
 
 from controller.insertion import Phase
+from controller.run import CONTROLLERS, Controller, run_task
+from controller.run.task import load_task
 from drivers.sim.twins.gamepad import PadEvent
-from evaluation.trials import runner
-from evaluation.trials.task import load_task
+from evaluation.trials import trial
 
 ROOT = Path(__file__).resolve().parents[2]
 PERIOD_S = 0.01  # the tasks' loop.rate_hz is 100
@@ -24,7 +25,7 @@ PERIOD_S = 0.01  # the tasks' loop.rate_hz is 100
 
 @pytest.mark.parametrize(("task", "seed"), [("usb_c", 9), ("usb_a", 0)])
 def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
-    outcome = runner.run(load_task(task), "dipole", seed)
+    outcome = trial.run(load_task(task), "dipole", seed)
     assert outcome.result.success, outcome.transitions
     # time to insert counts from the controller's first tick, after the devices' start-up
     required = load_task(task).config.machine.insert.depth_m
@@ -36,32 +37,20 @@ def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
     assert outcome.transitions[-1].target is Phase.DONE
 
 
-def _stop_spy(monkeypatch):
-    """Patch the runner's scene builder so the built scene's arm notes each ``stop()`` time
-    (scene clock); returns (the built scenes, the stop times)."""
-    built, stops = [], []
-    build = runner.build_insertion_sim
+def test_a_driver_fault_mid_insertion_stops_safely_within_one_period():
+    built, stops, injected = [], [], []
 
-    def spying_build(*args, **kwargs):
-        sim = build(*args, **kwargs)
-        arm_stop = sim.arm.stop
+    def spy_on_stops(device_set):
+        """The built arm notes each ``stop()`` time (on the scene's clock)."""
+        arm = device_set.devices.arm
+        arm_stop = arm.stop
 
         def stop():
-            stops.append(sim.clock.now())
+            stops.append(device_set.clock.now())
             arm_stop()
 
-        sim.arm.stop = stop
-        built.append(sim)
-        return sim
-
-    monkeypatch.setattr(runner, "build_insertion_sim", spying_build)
-    return built, stops
-
-
-def test_a_driver_fault_mid_insertion_stops_safely_within_one_period(monkeypatch):
-    built, stops = _stop_spy(monkeypatch)
-    injected = []
-    make_machine = runner._machine
+        arm.stop = stop
+        built.append(device_set)
 
     class FaultingMachine:
         """The task's machine; the arm faults on the first tick of INSERT."""
@@ -75,15 +64,19 @@ def test_a_driver_fault_mid_insertion_stops_safely_within_one_period(monkeypatch
         def step(self, observation):
             command = self._inner.step(observation)
             if self._inner.phase is Phase.INSERT and not injected:
-                built[0].arm.inject_fault(21, "simulated joint overcurrent")
+                built[0].devices.arm.inject_fault(21, "simulated joint overcurrent")
                 injected.append(built[0].clock.now())
             return command
 
-    monkeypatch.setattr(runner, "_machine", lambda *a: FaultingMachine(make_machine(*a)))
-    outcome = runner.run(load_task("usb_c"), "dipole", 9)
-    assert injected, "the trial never reached INSERT"
+    dipole = CONTROLLERS["dipole"]
+    faulting = Controller(lambda config: FaultingMachine(dipole.machine(config)),
+                          dipole.wrench_source)  # fmt: skip
+    outcome = run_task(
+        load_task("usb_c"), "faulting", 9, controllers={"faulting": faulting}, prepare=spy_on_stops
+    )
+    assert injected, "the run never reached INSERT"
     assert outcome.loop.reason == "fault" and "code 21" in outcome.loop.message
-    assert not outcome.result.success
+    assert outcome.machine.phase is Phase.FAILED
     assert len(stops) == 1 and 0.0 <= stops[0] - injected[0] <= PERIOD_S + 1e-9
     assert outcome.transitions[-1].reason == "device_fault"
 
@@ -96,7 +89,7 @@ def test_an_operator_takes_over_and_hands_back_through_the_gamepad():
         PadEvent(3.5, buttons={"hand_back": True}),
         PadEvent(3.6, buttons={"hand_back": False}),
     ]
-    outcome = runner.run(task, "dipole", 9, pad_script=script)
+    outcome = trial.run(task, "dipole", 9, pad_script=script)
     reasons = [(t.source, t.target, t.reason) for t in outcome.transitions]
     takeover = next(t for t in outcome.transitions if t.reason == "operator_takeover")
     back = next(t for t in outcome.transitions if t.reason == "hand_back")

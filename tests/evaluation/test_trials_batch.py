@@ -324,7 +324,7 @@ def test_records_give_each_trial_its_own_folder(tmp_path):
 
 
 def test_default_trial_function_is_the_real_runner():
-    assert TRIAL_FUNCTION == "evaluation.trials.runner:run_trial"
+    assert TRIAL_FUNCTION == "evaluation.trials.trial:run_trial"
 
 
 def test_ray_missing_is_a_one_line_error(monkeypatch):

@@ -12,8 +12,8 @@ from controller.insertion.blind import BLIND, BlindConfig, BlindMachine
 from controller.insertion.config import GripperSettings
 from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
+from controller.run.task import load_task
 from core.config import ConfigError
-from evaluation.trials.task import load_task
 from tests.insertion.world import ToyWorld
 
 SMALL = BlindConfig(GripperSettings(), pitch_m=0.001, half_width_m=0.001, step_m=0.001,

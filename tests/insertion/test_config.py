@@ -10,9 +10,9 @@ from controller.insertion.config import (
     ApproachSettings,
     MachineConfig,
     SignalSettings,
-    machine_setup_from_task,
     s2t_matrix,
 )
+from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError, load_yaml
 
 EXAMPLE = CONFIG_ROOT / "tasks" / "usb_c.yaml"
@@ -22,20 +22,22 @@ def example() -> dict:
     return load_yaml(EXAMPLE)
 
 
+def load_edited(data: dict, folder) -> object:
+    """The task config of ``data`` written as a task file in ``folder`` (real backend: the
+    scene is not read)."""
+    path = folder / "task.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return load_task(str(path), backend="real").config
+
+
 def test_the_example_loads_and_matches_the_code_defaults():
-    setup = machine_setup_from_task(example(), str(EXAMPLE))
-    machine = setup.machine
+    machine = load_task(str(EXAMPLE)).config.machine
     defaults = MachineConfig()
     for part in dataclasses.fields(MachineConfig):
         mine, theirs = getattr(machine, part.name), getattr(defaults, part.name)
         for key in dataclasses.fields(type(mine)):
             a, b = getattr(mine, key.name), getattr(theirs, key.name)
             assert a == pytest.approx(b, rel=1e-3) if isinstance(a, float) else a == b, key.name
-
-
-def test_other_sections_of_a_task_file_are_left_to_the_scene():
-    data = {**example(), "scene": {"friction": 0.5}}
-    assert machine_setup_from_task(data, "t.yaml").hole.x_m == 0.4
 
 
 @pytest.mark.parametrize(
@@ -59,7 +61,7 @@ def test_other_sections_of_a_task_file_are_left_to_the_scene():
         ("machine.search.pitch_m", True, "key 'machine.search.pitch_m': expected a number"),
     ],
 )
-def test_bad_values_give_one_line_naming_the_file_and_key(where, value, expected):
+def test_bad_values_give_one_line_naming_the_file_and_key(where, value, expected, tmp_path):
     data = example()
     *parents, key = where.split(".")
     node = data
@@ -67,23 +69,25 @@ def test_bad_values_give_one_line_naming_the_file_and_key(where, value, expected
         node = node[name]
     node[key] = value
     with pytest.raises(ConfigError) as error:
-        machine_setup_from_task(data, "configs/tasks/usb_c.yaml")
+        load_edited(data, tmp_path)
     message = str(error.value)
-    assert message.startswith("configs/tasks/usb_c.yaml: ")
+    assert message.startswith(f"{tmp_path / 'task.yaml'}: ")
     assert expected in message and "\n" not in message
 
 
-def test_unknown_and_missing_keys():
+def test_unknown_and_missing_keys(tmp_path):
     data = example()
     data["machine"]["search"]["spiral_turns"] = 3
     with pytest.raises(ConfigError, match="unknown key 'machine.search.spiral_turns'"):
-        machine_setup_from_task(data, "t.yaml")
+        load_edited(data, tmp_path)
     data = example()
     del data["machine"]["timeouts"]["total_s"]
     with pytest.raises(ConfigError, match="missing key 'machine.timeouts.total_s'"):
-        machine_setup_from_task(data, "t.yaml")
-    with pytest.raises(ConfigError, match="t.yaml: missing key 'hole'"):
-        machine_setup_from_task({"plug": {}, "machine": {}}, "t.yaml")
+        load_edited(data, tmp_path)
+    data = example()
+    del data["hole"]
+    with pytest.raises(ConfigError, match="task.yaml: missing key 'hole'"):
+        load_edited(data, tmp_path)
 
 
 def test_cross_field_rules_apply_in_code_too():

@@ -4,7 +4,7 @@ from dataclasses import replace
 
 import pytest
 
-from controller.insertion.config import HolePose, MachineConfig, PlugGeometry
+from controller.insertion.config import MachineConfig
 from controller.insertion.definition import (
     INSERTION,
     DefinitionError,
@@ -13,6 +13,7 @@ from controller.insertion.definition import (
 )
 from controller.insertion.interface import Phase
 from controller.insertion.machine import InsertionMachine
+from core.task_geometry import HolePose, PlugGeometry
 from tests.insertion.world import ToyWorld
 
 

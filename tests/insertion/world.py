@@ -17,18 +17,13 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import (
-    HolePose,
-    MachineConfig,
-    NoiseFloor,
-    PlugGeometry,
-    s2t_matrix,
-)
+from controller.insertion.config import MachineConfig, NoiseFloor, s2t_matrix
 from controller.insertion.interface import Command, Observation, Phase, TeleopInput
 from controller.insertion.machine import InsertionMachine
 from controller.insertion.motion import cross
 from controller.tactile.wrench import WrenchEstimate
 from core.devices import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
+from core.task_geometry import HolePose, PlugGeometry
 
 DT_S = 0.01
 

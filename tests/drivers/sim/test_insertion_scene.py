@@ -13,18 +13,19 @@ import pytest
 import yaml
 from scipy.spatial.transform import Rotation
 
+from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError
 from core.devices import Pose
+from core.task_geometry import HolePose, PlugGeometry
 from drivers.arm.envelope import rotation_from_rpy
+from drivers.registry import load_device_config
 from drivers.sim.scenes.insertion import (
-    HolePose,
     InsertionSceneConfig,
+    SimDevices,
     build_insertion_sim,
-    default_devices,
     draw_hole,
-    load_scene_section,
 )
-from drivers.sim.scenes.insertion.config import PlugGeometry, check_fits
+from drivers.sim.scenes.insertion.config import check_fits
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
@@ -36,8 +37,26 @@ TASKS = ("usb_c", "usb_a")
 HOLE = HolePose(0.40, 0.01, 0.0, 0.04)
 
 
-def task(name: str):
-    return load_scene_section(CONFIG_ROOT / "tasks" / f"{name}.yaml")
+@dataclasses.dataclass(frozen=True)
+class Section:
+    """A task's scene, plug and nominal hole."""
+
+    scene: InsertionSceneConfig
+    plug: PlugGeometry
+    hole: HolePose
+
+
+def task(name: str) -> Section:
+    loaded = load_task(name)
+    return Section(loaded.scene, loaded.config.plug, loaded.config.hole)
+
+
+def default_devices() -> SimDevices:
+    """The twins' configurations of the USB-C task's device files."""
+    files = load_task("usb_c").device_files
+    return SimDevices(
+        **{kind: load_device_config(path, "sim", kind).config for kind, path in files.items()}
+    )
 
 
 def tilted_pose(hole: HolePose, length_m: float, tip_h: tuple[float, float, float], rotvec_t):
@@ -276,14 +295,9 @@ def _write_task(tmp_path: Path, edit) -> Path:
 def test_a_bad_scene_section_is_a_one_line_config_error(tmp_path, edit, expected):
     path = _write_task(tmp_path, edit)
     with pytest.raises(ConfigError) as info:
-        load_scene_section(path)
+        load_task(str(path))
     message = str(info.value)
     assert "\n" not in message and str(path) in message and expected in message
-
-
-def test_other_sections_of_the_task_file_are_left_to_their_readers(tmp_path):
-    path = _write_task(tmp_path, lambda d: d.update(loop={"rate_hz": 100}))
-    assert load_scene_section(path).plug == task("usb_c").plug
 
 
 def test_a_plug_that_does_not_fit_is_refused():

@@ -11,25 +11,17 @@ twins), ``coupling`` (grasp wrench -> gel model -> camera field), ``clock``
 """
 
 from drivers.sim.scenes.insertion.builder import (
-    DEVICE_FILES,
     InsertionSim,
     SimDevices,
     build_insertion_sim,
-    default_devices,
+    build_world,
     draw_hole,
 )
 from drivers.sim.scenes.insertion.clock import SceneClock
-from drivers.sim.scenes.insertion.config import (
-    HolePose,
-    InsertionSceneConfig,
-    PlugGeometry,
-    SceneSection,
-    load_scene_section,
-)
+from drivers.sim.scenes.insertion.config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TruthLog
 
 __all__ = [
-    "DEVICE_FILES", "HolePose", "InsertionSceneConfig", "InsertionSim", "PlugGeometry",
-    "SceneClock", "SceneSection", "SimDevices", "TruthLog", "build_insertion_sim",
-    "default_devices", "draw_hole", "load_scene_section",
+    "InsertionSceneConfig", "InsertionSim", "SceneClock", "SimDevices", "TruthLog",
+    "build_insertion_sim", "build_world", "draw_hole",
 ]  # fmt: skip

@@ -22,23 +22,18 @@ and the camera's private references. The truth is ``InsertionSim.truth`` (``Trut
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from core.clock import ManualClock, MonotonicClock
-from core.config import CONFIG_ROOT
-from drivers.registry import load_device_config
+from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import ObjectShape, gel_profile
 from drivers.sim.scenes.insertion.clock import SceneClock
-from drivers.sim.scenes.insertion.config import (
-    HolePose,
-    HoleUncertainty,
-    InsertionSceneConfig,
-    PlugGeometry,
-    check_fits,
-)
+from drivers.sim.scenes.insertion.config import HoleUncertainty, InsertionSceneConfig, check_fits
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import upright_pose
 from drivers.sim.scenes.insertion.physics import InsertionPhysics
@@ -51,14 +46,6 @@ from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
 
 FLOOR_SPARE_M = 0.002  # how far below full insertion the TCP may still go, m
 
-DEVICE_FILES = {
-    "arm": CONFIG_ROOT / "robot" / "xarm6.yaml",
-    "gripper": CONFIG_ROOT / "gripper" / "hande.yaml",
-    "tactile": CONFIG_ROOT / "sensors" / "gelsight_mini_camera.yaml",
-    "gamepad": CONFIG_ROOT / "gamepad" / "xbox.yaml",
-}
-
-
 @dataclass(frozen=True)
 class SimDevices:
     """The twins' configurations (``backend: sim``)."""
@@ -67,15 +54,6 @@ class SimDevices:
     gripper: SimGripperConfig
     tactile: SimTactileConfig
     gamepad: SimGamepadConfig | None = None
-
-
-def default_devices() -> SimDevices:
-    """The product's device files (``DEVICE_FILES``) read with ``backend: sim``."""
-    configs = {
-        kind: load_device_config(path, backend="sim", kind=kind).config
-        for kind, path in DEVICE_FILES.items()
-    }
-    return SimDevices(**configs)
 
 
 @dataclass
@@ -167,3 +145,11 @@ def build_insertion_sim(
     )
     gamepad = None if devices.gamepad is None else SimGamepad(devices.gamepad, clock)
     return InsertionSim(clock, arm, gripper, tactile, gamepad, truth, world)
+
+
+def build_world(spec: Any, configs: Mapping[str, Any]) -> InsertionSim:
+    """The registry's entry (``drivers.registry.build_device_set``): the scene of ``spec``
+    (a ``registry.WorldSpec``) with the twins of ``configs`` (kind -> the device file's
+    ``backend: sim`` configuration)."""
+    devices = SimDevices(**configs)
+    return build_insertion_sim(spec.scene, spec.plug, spec.hole, devices, spec.seed, spec.realtime)

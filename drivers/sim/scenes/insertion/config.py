@@ -13,7 +13,7 @@ Task YAML layout (``configs/tasks/usb_c.yaml``; other sections belong to other r
       y_m: 0.0
       z_m: 0.0
       yaw_rad: 0.0        # the opening's width along B's x turned by yaw about B's z
-    scene:                # InsertionSceneConfig (this module); load_scene_section(path)
+    scene:                # InsertionSceneConfig (this module; read by controller.run.task)
       ...
 
 Units are SI. Every number is range-checked (core/config.py); a bad value is a one-line
@@ -24,13 +24,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from pathlib import Path
 
-from core.config import Config, ConfigError, build, load_yaml, number
-from core.task_geometry import HolePose, PlugGeometry
+from core.config import Config, number
+from core.task_geometry import PlugGeometry
 from drivers.sim.render.appearance import appearance_names
-
-SCENE_SECTION = "scene"
 
 
 @dataclass(frozen=True)
@@ -168,29 +165,6 @@ class InsertionSceneConfig(Config):
                 f"key 'contact.solref': expected a time constant of at least twice "
                 f"timestep_s ({2.0 * self.timestep_s}), got {self.contact.solref[0]!r}"
             )
-
-
-@dataclass(frozen=True)
-class SceneSection:
-    """What ``load_scene_section`` reads from a task YAML."""
-
-    scene: InsertionSceneConfig
-    plug: PlugGeometry
-    hole: HolePose
-
-
-def load_scene_section(path: Path | str) -> SceneSection:
-    """The ``scene:``, ``plug:`` and ``hole:`` sections of the task YAML at ``path``, each
-    checked (other top-level sections are left to their readers); ConfigError naming the
-    file and key otherwise."""
-    data = load_yaml(path)
-    source = str(path)
-    parts = {}
-    for key, cls in (("scene", InsertionSceneConfig), ("plug", PlugGeometry), ("hole", HolePose)):
-        if key not in data:
-            raise ConfigError(f"{source}: missing key '{key}'")
-        parts[key] = build(cls, data[key], source, prefix=f"{key}.")
-    return SceneSection(**parts)
 
 
 def check_fits(scene: InsertionSceneConfig, plug: PlugGeometry) -> None:

@@ -31,7 +31,8 @@ from __future__ import annotations
 
 import math
 
-from drivers.sim.scenes.insertion.config import HolePose, InsertionSceneConfig, PlugGeometry
+from core.task_geometry import HolePose, PlugGeometry
+from drivers.sim.scenes.insertion.config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.frames import S_IN_T_QUAT_WXYZ
 
 PLUG_ABOVE_GRASP_M = 0.005  # the plug's box reaches this far above the grasp point, m

@@ -24,7 +24,8 @@ import mujoco
 import numpy as np
 
 from core.devices import Pose
-from drivers.sim.scenes.insertion.config import HolePose, InsertionSceneConfig, PlugGeometry
+from core.task_geometry import HolePose, PlugGeometry
+from drivers.sim.scenes.insertion.config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.truth import TruthLog

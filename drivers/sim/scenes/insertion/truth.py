@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from drivers.sim.scenes.insertion.config import HolePose
+from core.task_geometry import HolePose
 
 COLUMNS = {
     "t_s": 1,

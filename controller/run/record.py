@@ -1,12 +1,12 @@
-"""A trial's minimal record (until the episode format of the episode issue): written as the
-run goes, so a crash loses at most the last second.
+"""A run's minimal record (until the episode format of the episode issue), a loop observer:
+written as the run goes, so a crash loses at most the last second.
 
 ``DIR/ticks.jsonl``: one JSON object per control tick (time, phase, the estimate the machine
 saw, the command as sent, the TCP pose, the gripper width, the limits that acted, a fault),
 flushed every ``FLUSH_TICKS`` ticks and at the end; ``DIR/transitions.jsonl``: every phase
-change with its reason, flushed at once. At the end ``DIR/truth.npz`` (the simulator's ground
-truth, which the controller never saw) and ``DIR/trial.json`` (task, resolved configuration,
-seed, controller, outcome) are written atomically.
+change with its reason, flushed at once. At the end ``DIR/trial.json`` (task, resolved
+configuration, seed, controller, outcome) is written atomically; in simulation the trial
+tools add ``DIR/truth.npz`` (the simulator's ground truth, which the controller never saw).
 """
 
 from __future__ import annotations
@@ -16,12 +16,10 @@ import math
 from pathlib import Path
 from typing import IO, Any
 
-import numpy as np
-
-from controller.insertion import Machine, Transition
+from controller.insertion import Transition
 from controller.loop import TickRecord
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.outputs import atomic_text
+from core.atomic_files import atomic_text
 
 FLUSH_TICKS = 100
 
@@ -30,15 +28,13 @@ def _finite(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
-class TrialRecorder:
-    """The loop's observer: streams ticks, and ``machine``'s transitions as they happen,
+class RunRecorder:
+    """The loop's observer: streams ticks, and the machine's transitions as they happen,
     into ``folder``."""
 
-    def __init__(self, folder: Path, machine: Machine) -> None:
+    def __init__(self, folder: Path) -> None:
         folder.mkdir(parents=True, exist_ok=True)
         self.folder = folder
-        self.machine = machine
-        self._seen = 0
         self._ticks: IO[str] = (folder / "ticks.jsonl").open("w")
         self._transitions: IO[str] = (folder / "transitions.jsonl").open("w")
         self._count = 0
@@ -68,10 +64,8 @@ class TrialRecorder:
         self._count += 1
         if self._count % FLUSH_TICKS == 0:
             self._ticks.flush()
-        transitions = self.machine.transitions
-        for transition in transitions[self._seen :]:
+        for transition in tick.transitions:
             self._write_transition(transition)
-        self._seen = len(transitions)
 
     def _write_transition(self, transition: Transition) -> None:
         self._transitions.write(
@@ -93,13 +87,7 @@ class TrialRecorder:
                 stream.flush()
                 stream.close()
 
-    def write_truth(self, truth: dict[str, np.ndarray], hole: dict[str, float]) -> None:
-        """The ground truth arrays and the true hole pose, atomically."""
-        staging = self.folder / "truth.npz.partial"
-        with staging.open("wb") as handle:
-            np.savez_compressed(handle, **truth, **{f"hole_{k}": v for k, v in hole.items()})
-        staging.replace(self.folder / "truth.npz")
-
     def write_summary(self, summary: dict[str, Any]) -> None:
+        """``trial.json``: the run's ``summary``, atomically."""
         with atomic_text(self.folder / "trial.json") as handle:
             json.dump(summary, handle, indent=2, default=str)

@@ -1,26 +1,22 @@
-"""What drives the insertion machine's torques, per controller of a trial (the same machine
-in every case; docs/EVALUATION.md compares them on the same seeds):
+"""The ``oracle`` controller, for comparisons in simulation only (never the product): the
+insertion machine driven by the simulator's TRUE wrench.
 
-* ``dipole``: the estimator as it is (dipole tilt, NHHD in-plane torque): the product;
-* ``fingervision``: the same estimates with tau_x, tau_y, tau_z replaced by the FingerVision
-  baseline's (``fv_tau_*``), i.e. the baseline driving the same machine;
-* ``oracle``: the simulator's TRUE wrench (an upper bound, never the product): tau_x, tau_y,
-  tau_z, shear and normal replaced by the gel's true wrench on the plug in S, converted to
-  the estimator's raw units with the nominal calibration slopes below, so the machine's
-  thresholds keep their meaning. The estimator still runs on the frames for the flags
-  (zeroing, contact). Only evaluation/ builds it, only with the simulated backend.
-
-Each source has the estimator's ``push(frame, t_s)``, ``capture_open(n)`` and
-``rezero(n)``, which is all the control loop calls.
+``TrueWrench`` replaces tau_x, tau_y, tau_z, shear and normal of each estimate by the gel's
+true wrench on the plug in S, converted to the estimator's raw units with the nominal
+calibration slopes below, so the machine's thresholds keep their meaning. The estimator
+still runs on the frames for the flags (zeroing, contact). ``TRIAL_CONTROLLERS`` is the
+product's table (``controller.run.CONTROLLERS``) with this entry added.
 """
 
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
+from typing import Any
 
 import numpy as np
 
+from controller.run import CONTROLLERS, Controller
 from controller.tactile import TactileEstimator, WrenchEstimate
 
 # Nominal slopes of the GelSight Mini's default estimator, N*m (or N) per raw unit
@@ -28,23 +24,6 @@ from controller.tactile import TactileEstimator, WrenchEstimate
 ORACLE_TILT_NM_PER_RAW = 1.8
 ORACLE_TWIST_NM_PER_RAW = 0.03
 ORACLE_FORCE_N_PER_RAW = 100.0
-
-
-class BaselineTorques:
-    """The estimator with its torques replaced by the FingerVision baseline's."""
-
-    def __init__(self, estimator: TactileEstimator) -> None:
-        self.estimator = estimator
-
-    def capture_open(self, n_frames: int | None = None) -> None:
-        self.estimator.capture_open(n_frames)
-
-    def rezero(self, n_frames: int | None = None) -> None:
-        self.estimator.rezero(n_frames)
-
-    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        e = self.estimator.push(frame, t_s)
-        return dataclasses.replace(e, tau_x=e.fv_tau_x, tau_y=e.fv_tau_y, tau_z=e.fv_tau_z)
 
 
 class TrueWrench:
@@ -81,3 +60,20 @@ class TrueWrench:
             shear_y=fy / ORACLE_FORCE_N_PER_RAW,
             normal=fz / ORACLE_FORCE_N_PER_RAW,
         )
+
+
+def _true_wrench_source(estimator: TactileEstimator, world: Any) -> TrueWrench:
+    """``TrueWrench`` reading the newest true gel wrench of the simulated ``world``."""
+
+    def newest_true_wrench() -> np.ndarray:
+        world.sync()
+        rows = world.truth.arrays()["gel_wrench_s"]
+        return rows[-1] if len(rows) else np.zeros(6)
+
+    return TrueWrench(estimator, newest_true_wrench)
+
+
+ORACLE = Controller(CONTROLLERS["dipole"].machine, _true_wrench_source, sim_only=True)
+
+TRIAL_CONTROLLERS: Mapping[str, Controller] = {**CONTROLLERS, "oracle": ORACLE}
+"""The controllers the trial tools compare: the product's and the oracle."""

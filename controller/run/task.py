@@ -1,0 +1,130 @@
+"""The task file (configs/tasks/NAME.yaml): the one schema of a run's configuration.
+
+A task file holds the controller's sections (``machine:``, ``blind:``, ``loop:``,
+``limits:``, ``teleop:``), the task's geometry (``plug:``, the nominal ``hole:``), the device
+files (``devices:``), the estimator and the simulated scene (``scene:``). A task file may build
+on a base file (``extends: base/usb.yaml``, ``core.config.load_yaml_extending``), holding only
+what differs: configs/tasks/usb_a.yaml and usb_c.yaml share configs/tasks/base/usb.yaml.
+``--set KEY=VALUE`` overrides are applied to the merged mapping before it is checked, so an
+override is checked exactly as the file is, and a run records the merged, overridden mapping.
+
+``scene:`` belongs to the simulator: it is checked (through ``drivers.registry``, which
+imports the simulator's config) only when the task is loaded for ``backend: sim``, so a real
+run never loads the simulator.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from controller.insertion import MachineConfig
+from controller.insertion.blind import BlindConfig
+from controller.loop import LoopConfig
+from controller.safety import LimitsConfig
+from controller.teleop import TeleopConfig
+from core.config import (
+    CONFIG_ROOT,
+    Config,
+    ConfigError,
+    apply_overrides,
+    build,
+    load_yaml_extending,
+    number,
+    resolve_config_path,
+)
+from core.task_geometry import HolePose, PlugGeometry
+from drivers import registry
+
+SCENE_KEY = "scene"
+BACKENDS = registry.BACKENDS
+
+
+@dataclass(frozen=True)
+class DeviceFiles(Config):
+    """``devices:``: each device's YAML, relative to configs/ (or absolute)."""
+
+    arm: str
+    gripper: str
+    tactile: str
+    gamepad: str | None = None
+
+    def paths(self) -> dict[str, Path]:
+        """Device kind -> its YAML path, for the kinds named (the gamepad is optional)."""
+        paths = {}
+        for kind in registry.RUN_DEVICE_KINDS:
+            name = getattr(self, kind)
+            if name is not None:
+                path = Path(name)
+                paths[kind] = path if path.is_absolute() else CONFIG_ROOT / path
+        return paths
+
+
+@dataclass(frozen=True)
+class TaskConfig(Config):
+    """A task file but its ``scene:`` (see the module doc). ``force_limit_n``: the largest
+    true force (N) the compliant wrist may pass to the plug; a simulated trial over it counts
+    against the controller (judged on the simulator's truth, never seen by the controller).
+    ``estimator``: the estimator configuration (None: the tactile sensor's own)."""
+
+    task: str
+    estimator: str | None
+    force_limit_n: float = number(0.1, 1000.0)
+    devices: DeviceFiles
+    plug: PlugGeometry
+    hole: HolePose
+    machine: MachineConfig
+    blind: BlindConfig
+    loop: LoopConfig
+    limits: LimitsConfig
+    teleop: TeleopConfig
+
+
+@dataclass(frozen=True)
+class Task:
+    """A loaded task: its ``config``, the simulator's checked ``scene`` configuration (None
+    when loaded for the real backend), the file it came from, the overrides applied and the
+    resolved raw mapping (what a run records)."""
+
+    config: TaskConfig
+    scene: Any
+    path: Path
+    overrides: tuple[str, ...]
+    raw: Mapping[str, Any]
+
+    @property
+    def device_files(self) -> dict[str, Path]:
+        """Device kind -> its YAML path (``devices:``)."""
+        return self.config.devices.paths()
+
+    def tactile_model(self, backend: str) -> str:
+        """The tactile sensor's model (its profile's name), from its device file."""
+        tactile = registry.load_device_config(self.device_files["tactile"], backend, "tactile")
+        return tactile.config.model
+
+
+def task_path(name_or_path: str) -> Path:
+    """configs/tasks/NAME.yaml for a task name, or the YAML path given."""
+    return resolve_config_path(name_or_path, "tasks")
+
+
+def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "sim") -> Task:
+    """The task ``name_or_path`` with ``overrides`` (``KEY=VALUE``, dotted keys) applied,
+    checked for ``backend`` (``sim`` also checks ``scene:``); ConfigError (one line, naming
+    the file and the key) for anything wrong."""
+    if backend not in BACKENDS:
+        raise ConfigError(f"backend {backend!r}: expected one of {', '.join(BACKENDS)}")
+    path = task_path(name_or_path)
+    source = str(path)
+    raw = apply_overrides(load_yaml_extending(path), overrides, source)
+    if SCENE_KEY not in raw:
+        raise ConfigError(f"{source}: missing key '{SCENE_KEY}'")
+    sections = {key: value for key, value in raw.items() if key != SCENE_KEY}
+    config = build(TaskConfig, sections, source)
+    for kind, device in config.devices.paths().items():
+        if not device.is_file():
+            raise ConfigError(f"{source}: key 'devices.{kind}': no such file {device}")
+    scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
+    return Task(config, scene, path, tuple(overrides), raw)

@@ -1,0 +1,80 @@
+"""The product as a user installs it: the wheel built, installed into a fresh venv with its
+dependencies, and its console scripts run from a folder outside the checkout (the configs
+are package data, found through importlib.resources, not through the source tree).
+
+Slow (it installs the dependencies into a new venv); ``.ci/run`` runs it.
+"""
+
+from __future__ import annotations
+
+import csv
+import subprocess
+import sys
+import venv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+REAL_GEL = ROOT / "drivers" / "sim" / "render" / "real_gels" / "gelsight_markers_a.png"
+
+pytestmark = pytest.mark.slow
+
+
+def run(command: list[str], cwd: Path, timeout_s: float = 900.0) -> subprocess.CompletedProcess:
+    done = subprocess.run(command, cwd=cwd, capture_output=True, text=True, timeout=timeout_s)
+    assert done.returncode == 0, f"{command}: exit {done.returncode}\n{done.stderr[-3000:]}"
+    return done
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory) -> Path:
+    """The bin/ folder of a fresh venv holding the wheel and its dependencies."""
+    work = tmp_path_factory.mktemp("wheel")
+    run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "-q", "-w",
+         str(work / "dist")], cwd=work)  # fmt: skip
+    (wheel,) = (work / "dist").glob("tactile_insertion-*.whl")
+    venv.create(work / "venv", with_pip=True)
+    bin_dir = work / "venv" / "bin"
+    run([str(bin_dir / "python"), "-m", "pip", "install", "-q", str(wheel)], cwd=work)
+    return bin_dir
+
+
+def test_the_installed_package_is_not_the_checkout(installed, tmp_path):
+    code = "import controller, configs; print(controller.__file__); print(configs.__file__)"
+    out = run([str(installed / "python"), "-c", code], cwd=tmp_path).stdout
+    assert str(ROOT) not in out and str(installed.parent) in out
+
+
+def test_a_one_seed_trial_runs_from_outside_the_checkout(installed, tmp_path):
+    out = tmp_path / "trial"
+    done = run([str(installed / "tactile-run-trial"), "--task", "usb_c", "--seed", "0",
+                "--out", str(out)], cwd=tmp_path)  # fmt: skip
+    assert "outcome: INSERTED" in done.stdout
+    assert (out / "trial.json").is_file() and (out / "ticks.jsonl").stat().st_size > 0
+
+
+def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path):
+    import cv2
+
+    frames = tmp_path / "frames"
+    frames.mkdir()
+    image = cv2.imread(str(REAL_GEL))
+    for k in range(6):  # the gel, then shifted by up to 2 px: a field to estimate
+        cv2.imwrite(str(frames / f"{k:03d}.png"), np.roll(image, k // 3, axis=1))
+    out = tmp_path / "estimates.csv"
+    run([str(installed / "tactile-estimate"), str(frames), "--reference", "0",
+         "--out", str(out)], cwd=tmp_path)  # fmt: skip
+    rows = list(csv.DictReader(line for line in out.open() if not line.startswith("#")))
+    assert len(rows) == 6 and {"tau_x", "tau_y", "tau_z"} <= set(rows[0])
+
+
+def test_every_console_script_answers_help(installed, tmp_path):
+    scripts = [
+        "tactile-run-trial", "tactile-run-trials", "tactile-compare-trials",
+        "tactile-estimate", "tactile-calibrate", "tactile-check-hardware",
+    ]  # fmt: skip
+    for name in scripts:
+        done = run([str(installed / name), "--help"], cwd=tmp_path, timeout_s=120.0)
+        assert "usage:" in done.stdout, name
