@@ -66,7 +66,8 @@ def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path)
     out = tmp_path / "estimates.csv"
     run([str(installed / "tactile-estimate"), str(frames), "--reference", "0",
          "--out", str(out)], cwd=tmp_path)  # fmt: skip
-    rows = list(csv.DictReader(line for line in out.open() if not line.startswith("#")))
+    with out.open() as handle:
+        rows = list(csv.DictReader(line for line in handle if not line.startswith("#")))
     assert len(rows) == 6 and {"tau_x", "tau_y", "tau_z"} <= set(rows[0])
 
 
