@@ -144,7 +144,7 @@ RUN_DEVICE_KINDS = ("arm", "gripper", "tactile", "gamepad")
 
 SIM_WORLD = Driver(
     "drivers.sim.scenes.insertion.builder:build_world",
-    "drivers.sim.scenes.insertion.config:InsertionSceneConfig",
+    "drivers.sim.scenes.insertion.scene_config:InsertionSceneConfig",
 )
 """The simulated insertion world (``backend: sim``) and the config dataclass of a task's
 ``scene:`` section."""

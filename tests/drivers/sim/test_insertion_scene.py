@@ -25,11 +25,11 @@ from drivers.sim.scenes.insertion import (
     build_insertion_sim,
     draw_hole,
 )
-from drivers.sim.scenes.insertion.config import check_fits
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.physics import InsertionPhysics, UnstablePhysicsError
+from drivers.sim.scenes.insertion.scene_config import check_fits
 from drivers.sim.scenes.insertion.truth import TruthLog
 from drivers.sim.scenes.insertion.world import InsertionWorld
 
@@ -327,7 +327,7 @@ class _RecordingClock:
 
 
 def test_the_scene_clock_syncs_the_world_to_the_present_then_sleeps_the_rest():
-    from drivers.sim.scenes.insertion.clock import SceneClock
+    from drivers.sim.scenes.insertion.scene_clock import SceneClock
 
     base = _RecordingClock()
     clock = SceneClock(base)

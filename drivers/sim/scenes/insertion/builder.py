@@ -32,11 +32,15 @@ from core.clock import ManualClock, MonotonicClock
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import ObjectShape, gel_profile
-from drivers.sim.scenes.insertion.clock import SceneClock
-from drivers.sim.scenes.insertion.config import HoleUncertainty, InsertionSceneConfig, check_fits
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import upright_pose
 from drivers.sim.scenes.insertion.physics import InsertionPhysics
+from drivers.sim.scenes.insertion.scene_clock import SceneClock
+from drivers.sim.scenes.insertion.scene_config import (
+    HoleUncertainty,
+    InsertionSceneConfig,
+    check_fits,
+)
 from drivers.sim.scenes.insertion.truth import TruthLog
 from drivers.sim.scenes.insertion.world import InsertionWorld
 from drivers.sim.twins.arm import SimArm, SimArmConfig

@@ -32,8 +32,8 @@ from __future__ import annotations
 import math
 
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.sim.scenes.insertion.config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.frames import S_IN_T_QUAT_WXYZ
+from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 
 PLUG_ABOVE_GRASP_M = 0.005  # the plug's box reaches this far above the grasp point, m
 _GRIPPER_SIZE_M = (0.08, 0.05, 0.12)  # the gripper body's inertia box, m

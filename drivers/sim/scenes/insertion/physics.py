@@ -25,9 +25,9 @@ import numpy as np
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.sim.scenes.insertion.config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
+from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TruthLog
 
 RING_S = 1.0  # how far back the grasp's wrench is kept, s
