@@ -12,8 +12,8 @@ Tick order:
 
 1. wait for the deadline; stop if a signal arrived or ``max_duration_s`` has passed;
 2. read the newest tactile frame (``read_latest(tactile_max_age_s)``) and push it into the
-   estimator if it is new; read the arm, the gripper and the gamepad; arbitrate the gamepad
-   (``controller.teleop``);
+   estimator (a ``WrenchSource``) if it is new; read the arm, the gripper and the gamepad;
+   arbitrate the gamepad (``controller.teleop``);
 3. the watchdog (``controller.safety.Watchdog``) checks the readings; on a trip go to 7;
 4. build the ``Observation`` and call ``machine.step``; a ``capture_open_tactile`` command
    has the estimator take the next ``rezero_frames`` frames as the open gel, a
@@ -61,8 +61,8 @@ from controller.insertion.interface import (
     Transition,
 )
 from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
-from controller.tactile.estimator import TactileEstimator
 from controller.tactile.wrench import WrenchEstimate
+from controller.tactile.wrench_source import WrenchSource
 from controller.teleop import TeleopArbiter, TeleopConfig
 from core.clock import Clock
 from core.config import Config, number
@@ -221,14 +221,15 @@ Observer = Callable[[TickRecord], None]
 
 class ControlLoop:
     """Runs ``machine`` on ``devices`` (see the module doc). ``estimator`` turns tactile
-    frames into estimates; ``observer`` (optional) gets a ``TickRecord`` every tick (the
-    episode recorder hooks here). Use each loop for one ``run``."""
+    frames into estimates (a ``controller.tactile.WrenchSource``: the ``TactileEstimator``,
+    or an evaluation's stand-in that wraps it); ``observer`` (optional) gets a ``TickRecord``
+    every tick (the episode recorder hooks here). Use each loop for one ``run``."""
 
     def __init__(
         self,
         machine: Machine,
         devices: Devices,
-        estimator: TactileEstimator,
+        estimator: WrenchSource,
         clock: Clock,
         config: LoopConfig | None = None,
         limits: LimitsConfig | None = None,

@@ -14,6 +14,9 @@ With the open gel seen first, ``grasp_centroid`` configurations (``grid_lk``) ta
 about the contact's centre, which a swinging grip pressure does not disturb
 (``est.contact_centre_mm``); without it they use the centroid-midpoint rule. Offline:
 ``est.set_open_reference(frames)`` and ``est.set_reference(frames)``.
+
+The control loop takes any ``WrenchSource`` (``push``, ``capture_open``, ``rezero``); the
+estimator is one.
 """
 
 from controller.tactile.calibration import Calibration
@@ -22,6 +25,7 @@ from controller.tactile.field import VectorField
 from controller.tactile.settings import EstimatorConfig, estimator_config
 from controller.tactile.slip import RezeroState, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
+from controller.tactile.wrench_source import WrenchSource
 
 __all__ = [
     "Calibration",
@@ -31,6 +35,7 @@ __all__ = [
     "TactileEstimator",
     "VectorField",
     "WrenchEstimate",
+    "WrenchSource",
     "estimator_config",
     "estimator_for_sensor",
 ]

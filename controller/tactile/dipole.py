@@ -44,6 +44,7 @@ every point (no information about tilt; p is then zero), never NaN.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Literal
 
@@ -53,6 +54,9 @@ from controller.tactile.field import require_finite
 
 DipoleOrigin = Literal["centroid_midpoint", "sensor_centre", "grasp_centroid"]
 DIPOLE_ORIGINS = ("centroid_midpoint", "sensor_centre", "grasp_centroid")
+# An origin chosen by the caller (an experiment's candidate): (div, x, y) -> (o_x, o_y), with
+# the divergence and the cell centres flattened (k,), x and y and the origin in mm, frame S.
+OriginRule = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[float, float]]
 
 # The weak / strong mass ratio from which on the paper's midpoint is used unchanged (the
 # estimator configurations' ``dipole_full_midpoint_ratio``; docs/ARCHITECTURE.md says why).
@@ -70,7 +74,8 @@ class DipoleMoment:
 
     ``midpoint_weight``: the share w of the centroid midpoint in that origin (1: the paper's
     midpoint; 0: the gel centre, when one sign of divergence is absent or with the
-    ``sensor_centre`` origin, or the grasp's contact centre with ``grasp_centroid``).
+    ``sensor_centre`` origin, the grasp's contact centre with ``grasp_centroid``, or an
+    ``OriginRule``'s origin).
     ``degenerate``: the divergence was zero everywhere (p is then zero)."""
 
     p_x: float
@@ -131,6 +136,8 @@ class DipoleMomentCalculator:
     """Computes the dipole moment on a fixed grid without allocating per call.
 
     ``x_mm`` (cols,) and ``y_mm`` (rows,) are the grid's cell centres in frame S;
+    ``origin``: one of the rules of the module docstring, or an ``OriginRule`` (then
+    p = (1/N) sum_i (x_i - o) div_i about the origin o it gives for each divergence);
     ``full_midpoint_ratio`` in (0, 1]: see the module docstring.
     """
 
@@ -138,10 +145,10 @@ class DipoleMomentCalculator:
         self,
         x_mm: np.ndarray,
         y_mm: np.ndarray,
-        origin: DipoleOrigin = "centroid_midpoint",
+        origin: DipoleOrigin | OriginRule = "centroid_midpoint",
         full_midpoint_ratio: float = FULL_MIDPOINT_RATIO,
     ) -> None:
-        if origin not in DIPOLE_ORIGINS:
+        if not callable(origin) and origin not in DIPOLE_ORIGINS:
             raise ValueError(
                 f"dipole origin must be one of {', '.join(DIPOLE_ORIGINS)}, got {origin!r}"
             )
@@ -193,6 +200,13 @@ class DipoleMomentCalculator:
         moment_y = float(self._y @ flat)
         degenerate = mass_pos + mass_neg == 0.0
 
+        if callable(self.origin):
+            o_x, o_y = self.origin(flat, self._x, self._y)
+            np.subtract(self._x, o_x, out=self._lever_x)
+            np.subtract(self._y, o_y, out=self._lever_y)
+            p_x = float(self._lever_x @ flat) / n
+            p_y = float(self._lever_y @ flat) / n
+            return DipoleMoment(p_x, p_y, o_x, o_y, 0.0, degenerate)
         support = self.support if self.origin == "grasp_centroid" else None
         if support is not None:
             p_x = float(self._lever_x @ flat) / n

@@ -37,28 +37,29 @@ must (its flow outputs) and the returned estimate.
 from __future__ import annotations
 
 import numbers
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 
-from controller.tactile.baseline import FingerVisionTorque
 from controller.tactile.calibration import Calibration
-from controller.tactile.dipole import DipoleMomentCalculator, GraspSupport, grasp_support
-from controller.tactile.field import VectorField, block_mean, divergence, grid_axes_mm
+from controller.tactile.dipole import OriginRule
+from controller.tactile.field import VectorField, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
+from controller.tactile.frame_capture import FrameCapture, MeanImage
 from controller.tactile.grid_lk import GridLKFlow
-from controller.tactile.nhhd import NHHD, CurlFreePart, NHHDResult
+from controller.tactile.grid_pipeline import GridPipeline
 from controller.tactile.noise_gate import NoiseGate
 from controller.tactile.settings import (
     EstimatorConfig,
+    FlowConfig,
     dipole_grid_mismatch,
     field_grid,
     sensor_estimator,
 )
-from controller.tactile.slip import RezeroPolicy, RezeroState, SlipDetector, SlipStatus
+from controller.tactile.slip import RezeroPolicy, RezeroState, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
 from core.sensor_profile import SensorProfile, sensor_profile
 
@@ -67,6 +68,10 @@ MAX_REFERENCE_FRAMES = 10_000
 # Flow passes from the open gel to the grasp (each warm-started from the last): the grasp
 # moves the gel by several px, more than one linearisation of grid_lk covers.
 GRASP_FLOW_PASSES = 4
+
+# Builds the flow from the reference to each pushed frame: (flow configuration, working
+# image (H, W), grid rows, grid cols) -> GridFlow (px). The product's is ``make_grid_flow``.
+GridFlowFactory = Callable[[FlowConfig, tuple[int, int], int, int], GridFlow]
 
 
 def estimator_for_sensor(
@@ -85,9 +90,19 @@ def estimator_for_sensor(
 
 
 class TactileEstimator:
-    """Frame-to-wrench pipeline for one sensor (see module docstring). ``config_name``: the
-    configuration's name or YAML path, for reports (``estimator_for_sensor`` sets it; None for
-    a configuration built in code)."""
+    """Frame-to-wrench pipeline for one sensor (see module docstring); a ``WrenchSource``.
+    ``config_name``: the configuration's name or YAML path, for reports
+    (``estimator_for_sensor`` sets it; None for a configuration built in code).
+
+    Hooks for experiments (the defaults are the product's):
+
+    * ``flow``: builds the flow from the reference to each pushed frame (``GridFlowFactory``;
+      e.g. the true field of a rendered sequence). The grasp's own field (the open gel
+      against the reference) is always measured with the configuration's flow.
+    * ``origin``: the tilt dipole's moment origin from the divergence it sees
+      (``dipole.OriginRule``, mm in frame S), replacing the configuration's
+      ``dipole_origin``; with it the grasp's support is not measured
+      (``contact_centre_mm`` stays None)."""
 
     def __init__(
         self,
@@ -95,27 +110,23 @@ class TactileEstimator:
         profile: SensorProfile,
         calibration: Calibration | None = None,
         config_name: str | None = None,
+        *,
+        flow: GridFlowFactory = make_grid_flow,
+        origin: OriginRule | None = None,
     ) -> None:
         self.config = config
         self.profile = profile
         self.calibration = calibration
         self.config_name = config_name
-        self._frame_shape: tuple[int, ...] | None = None
-        self._zeroing_left = 0
-        self._reference_sum: np.ndarray | None = None
-        self._zeroing_count = 0
+        self._make_flow = flow
+        self._origin = origin
+        self._open = FrameCapture()  # the open gel
+        self._reference = FrameCapture()
+        self._awaiting_rezero = False  # after capture_open, until rezero
         self._grid_flow: GridFlow | None = None
-        self._slip: SlipDetector | None = None
-        self._last_slip: SlipStatus | None = None
+        self._pipeline: GridPipeline | None = None
         self._rezero_policy = RezeroPolicy(config.slip.rezero)
-        self._open_image: np.ndarray | None = None
-        self._open_shape: tuple[int, ...] | None = None
-        self._open_left = 0
-        self._open_sum: np.ndarray | None = None
-        self._open_count = 0
-        self._awaiting_rezero = False
-        self._contact_centre: tuple[float, float] | None = None
-        self._noise_gate: NoiseGate | None = None
+        self._last_slip: SlipStatus | None = None
         self._divergence_map_cache: tuple[object, np.ndarray] | None = None
 
     # -- reference ---------------------------------------------------------------------------
@@ -123,7 +134,7 @@ class TactileEstimator:
     @property
     def is_zeroed(self) -> bool:
         """True once a reference exists and is not being re-captured."""
-        return self._grid_flow is not None and self._zeroing_left == 0
+        return self._grid_flow is not None and not self._reference.active
 
     def rezero(self, n_frames: int | None = None) -> None:
         """Capture a new reference from the next ``n_frames`` pushed frames (default: the
@@ -132,11 +143,9 @@ class TactileEstimator:
         Raises ValueError, leaving the estimator as it was, unless ``n_frames`` is a whole
         number in [1, MAX_REFERENCE_FRAMES] (a bool, a float or NaN is refused)."""
         n = self._frame_count("rezero", n_frames)
-        self._open_left = 0
+        self._open.stop()
         self._awaiting_rezero = False
-        self._zeroing_left = n
-        self._zeroing_count = 0
-        self._reference_sum = None
+        self._reference.start(n)
         self._rezero_policy.reset()
 
     def capture_open(self, n_frames: int | None = None) -> None:
@@ -146,12 +155,9 @@ class TactileEstimator:
         returns zero estimates flagged ``zeroing`` (it does not zero by itself on the
         closing gripper). Raises ValueError as ``rezero`` does."""
         n = self._frame_count("capture_open", n_frames)
-        self._open_left = n
-        self._open_count = 0
-        self._open_sum = None
-        self._zeroing_left = 0
-        self._grid_flow = None
-        self._contact_centre = None
+        self._open.start(n)
+        self._reference.stop()
+        self._grid_flow = self._pipeline = None
         self._awaiting_rezero = True
 
     def set_open_reference(self, frames: np.ndarray | Sequence[np.ndarray] | None) -> None:
@@ -160,18 +166,16 @@ class TactileEstimator:
         reference must then have the open frames' size. On a ValueError (as
         ``set_reference``) the estimator is left as it was."""
         if frames is None:
-            self._open_image = self._open_shape = None
+            self._open.result = None
             return
-        mean, shape = self._mean_image(frames, "open")
-        self._open_image = np.clip(np.rint(mean), 0, 255).astype(np.uint8)
-        self._open_shape = shape
-        self._open_left = 0
+        self._open.set(self._mean_image(frames, "open"))
 
     @property
     def contact_centre_mm(self) -> tuple[float, float] | None:
         """The contact's centre (x, y) in mm, frame S, measured from the grasp against the
         open gel when the reference was set; None without an open gel or contact."""
-        return self._contact_centre
+        support = None if self._pipeline is None else self._pipeline.grasp_dipole.support
+        return None if support is None else support.centre_mm
 
     def _frame_count(self, what: str, n_frames: int | None) -> int:
         n = self.config.reference_frames if n_frames is None else n_frames
@@ -192,17 +196,14 @@ class TactileEstimator:
         Every frame is checked before anything changes: on a ValueError (no frame, a frame
         that is not an image, frames of different sizes, or of another size than the open
         gel's) the estimator is left as it was."""
-        mean, shape = self._mean_image(frames, "reference")
-        self._install_reference(mean, shape)
-        self._frame_shape = shape
-        self._zeroing_left = 0
-        self._open_left = 0
+        mean = self._mean_image(frames, "reference")
+        self._install_reference(mean)
+        self._reference.set(mean)
+        self._open.stop()
         self._awaiting_rezero = False
 
-    def _mean_image(
-        self, frames: np.ndarray | Sequence[np.ndarray], what: str
-    ) -> tuple[np.ndarray, tuple[int, ...]]:
-        """The mean working image of ``frames`` (float32) and their (rows, cols)."""
+    def _mean_image(self, frames: np.ndarray | Sequence[np.ndarray], what: str) -> MeanImage:
+        """The mean working image of ``frames`` and their (rows, cols)."""
         stack = [frames] if isinstance(frames, np.ndarray) and frames.ndim <= 3 else list(frames)
         if not stack:
             raise ValueError(f"the {what} needs at least one frame")
@@ -215,171 +216,61 @@ class TactileEstimator:
                 raise ValueError(f"{what} frame {index}: {exc}") from None
             shape = frame.shape[:2]
             total = image.astype(np.float32) if total is None else total + image
-        return total / len(stack), shape
+        return MeanImage.of_sum(total, len(stack), shape)
 
-    def _install_reference(self, mean_image: np.ndarray, shape: tuple[int, ...]) -> None:
-        """Build the flow on the reference first, then replace the buffers: a ValueError
-        leaves the estimator as it was. ``shape``: the frames' (rows, cols)."""
-        if self._open_image is not None and self._open_shape != shape:
+    def _install_reference(self, reference: MeanImage) -> None:
+        """Build the flow and the pipeline on the reference first, then replace them: a
+        ValueError leaves the estimator as it was."""
+        open_gel = self._open.result
+        shape = reference.frame_shape
+        if open_gel is not None and open_gel.frame_shape != shape:
             raise ValueError(
                 f"frame of {shape[1]} x {shape[0]} px does not match the open gel's frames "
-                f"({self._open_shape[1]} x {self._open_shape[0]} px)"
+                f"({open_gel.frame_shape[1]} x {open_gel.frame_shape[0]} px)"
             )
-        # Round half to even: the mean of 2 integer frames ends in .5 half the time, and
-        # rounding those up would brighten the reference by 0.25 grey levels, which dense
-        # flow on a smooth gel reads as motion.
-        reference = np.clip(np.rint(mean_image), 0, 255).astype(np.uint8)
-        height, width = reference.shape[:2]
+        image = reference.image
+        height, width = image.shape[:2]
         rows, cols = field_grid(self.config, height, width)
         mismatch = dipole_grid_mismatch(self.config, rows, cols)
         if mismatch:
             raise ValueError(mismatch)
-        grid_flow = make_grid_flow(self.config.flow, (height, width), rows, cols)
-        grid_flow.set_reference(reference)
-        self._allocate(height, width, rows, cols)
-        support = self._grasp_support(reference)
-        self._grasp_dipole.set_grasp_support(support)
-        self._contact_centre = None if support is None else support.centre_mm
-        self._noise_gate = None if support is not None else self._make_noise_gate(grid_flow)
+        grid_flow = self._make_flow(self.config.flow, (height, width), rows, cols)
+        grid_flow.set_reference(image)
+        x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
+        pipeline = GridPipeline(self.config, self.profile.mm_per_px, x_mm, y_mm, self._origin)
+        support = None
+        if open_gel is not None and self._measures_grasp:
+            flow_config = replace(self.config.flow, warm_start=True)
+            grasp_flow = make_grid_flow(flow_config, (height, width), rows, cols)
+            grasp_flow.set_reference(open_gel.image)
+            support = pipeline.grasp_support(grasp_flow, image, GRASP_FLOW_PASSES)
+        pipeline.grasp_dipole.set_grasp_support(support)
+        if support is None:
+            pipeline.noise_gate = self._noise_gate(grid_flow, pipeline)
         self._grid_flow = grid_flow
+        self._pipeline = pipeline
         self._rezero_policy.reset()
         self._last_slip = None
 
-    def _grasp_support(self, reference: np.ndarray) -> GraspSupport | None:
-        """The contact's support from the grasp's field (``reference`` against the open gel)
-        on the field's grid, or None (no open gel, no contact, no ``grasp_centroid``)."""
-        if self._open_image is None or self.config.dipole_origin != "grasp_centroid":
-            return None
-        rows, cols = self._u.shape
-        flow_config = replace(self.config.flow, warm_start=True)
-        flow = make_grid_flow(flow_config, reference.shape[:2], rows, cols)
-        flow.set_reference(self._open_image)
-        for _ in range(GRASP_FLOW_PASSES):
-            flow.measure(reference, self._grid_px)
-        self._update_field()
-        np.hypot(self._u, self._v, out=self._magnitude)
-        if float(self._magnitude.max()) > self.config.contact_threshold_mm:
-            div = self._field_divergence(self._nhhd.decompose(self._u, self._v))
-            support = grasp_support(div, self.x_mm, self.y_mm)
-        else:
-            support = None
-        self._grid_px.fill(0.0)
-        self._u.fill(0.0)
-        self._v.fill(0.0)
-        self._filtered = False
-        return support
+    @property
+    def _measures_grasp(self) -> bool:
+        """Whether the tilt is taken about the grasp's support (``grasp_centroid``, no
+        ``origin`` hook)."""
+        return self._origin is None and self.config.dipole_origin == "grasp_centroid"
 
-    def _make_noise_gate(self, grid_flow: GridFlow) -> NoiseGate | None:
+    def _noise_gate(self, grid_flow: GridFlow, pipeline: GridPipeline) -> NoiseGate | None:
         """The no-contact gate (controller/tactile/noise_gate.py) of the fallback dipole's
         divergence, from ``grid_flow``'s noise (None: no ``noise_gate`` configured)."""
         settings = self.config.noise_gate
         if settings is None or not isinstance(grid_flow, GridLKFlow):
             return None
-        key = (self._u.shape, tuple(self.x_mm), tuple(self.y_mm))
+        key = (pipeline.grid_px.shape[:2], tuple(pipeline.x_mm), tuple(pipeline.y_mm))
         if self._divergence_map_cache is None or self._divergence_map_cache[0] != key:
-            self._divergence_map_cache = (key, self._divergence_map())
+            self._divergence_map_cache = (key, pipeline.divergence_map())
         covariance = grid_flow.noise_covariance(settings.noise_grey, self._divergence_map_cache[1])
         if not float(np.abs(covariance).max()) > 0.0:  # a featureless image: the field is 0
             return None
         return NoiseGate(covariance, settings.false_alarm)
-
-    def _divergence_map(self) -> np.ndarray:
-        """The linear map (k, 2 n) from the field in px (n cells, row-major, x before y) to
-        the fallback dipole's divergence (k values), probed column by column (computed once
-        per grid: the map depends on the grid and the configuration only)."""
-        rows, cols = self._u.shape
-        basis = np.zeros(2 * rows * cols)
-        columns = []
-        for index in range(basis.size):
-            basis[index] = 1.0
-            self._grid_px[...] = basis.reshape(rows, cols, 2)
-            self._filtered = False
-            self._update_field()
-            decomposition = (
-                self._nhhd.decompose(self._u, self._v) if self._dipole_block == (1, 1) else None
-            )
-            div = self._tilt_divergence(decomposition)
-            columns.append(div.ravel().copy())
-            basis[index] = 0.0
-        self._grid_px.fill(0.0)
-        self._u.fill(0.0)
-        self._v.fill(0.0)
-        self._filtered = False
-        return np.column_stack(columns)
-
-    def _allocate(self, height: int, width: int, rows: int, cols: int) -> None:
-        x_mm, y_mm = grid_axes_mm(width, height, cols, rows, self.profile.mm_per_px)
-        self.x_mm, self.y_mm = x_mm, y_mm
-        self._grid_px = np.zeros((rows, cols, 2))
-        self._u = np.zeros((rows, cols))
-        self._v = np.zeros((rows, cols))
-        self._div = np.empty((rows, cols))
-        self._work = np.empty((rows, cols))
-        self._magnitude = np.empty((rows, cols))
-        self._filtered = False
-        self._nhhd = NHHD(x_mm, y_mm, self.config.tau_z_about)
-        self._allocate_dipole(x_mm, y_mm)
-        self._baseline = FingerVisionTorque(x_mm, y_mm)
-        # A view on the field buffers, which every push updates in place.
-        self._field_view = VectorField(x_mm, y_mm, self._u, self._v)
-        slip = self.config.slip
-        self._slip = SlipDetector(slip, x_mm, y_mm) if slip.enabled else None
-
-    def _allocate_dipole(self, x_mm: np.ndarray, y_mm: np.ndarray) -> None:
-        """The dipole's grid: the field's, or ``dipole_grid`` (blocks of the field's cells);
-        with ``grasp_centroid`` that is the fallback's, the grasp's dipole is on the field's
-        grid (its support set when a reference is)."""
-        self._grasp_dipole = DipoleMomentCalculator(x_mm, y_mm, "grasp_centroid")
-        grid = self.config.dipole_grid
-        rows, cols = y_mm.size, x_mm.size
-        if grid is None:
-            self._dipole_block = (1, 1)
-            self._dipole = self._dipole_calculator(x_mm, y_mm)
-            return
-        mismatch = dipole_grid_mismatch(self.config, rows, cols)
-        if mismatch:
-            raise ValueError(mismatch)
-        self._dipole_block = (rows // grid.rows, cols // grid.cols)
-        x_coarse = x_mm.reshape(grid.cols, -1).mean(axis=1)
-        y_coarse = y_mm.reshape(grid.rows, -1).mean(axis=1)
-        self._dipole = self._dipole_calculator(x_coarse, y_coarse)
-        coarse = (grid.rows, grid.cols)
-        self._pooled = (np.empty(coarse), np.empty(coarse))
-        self._coarse_div = np.empty(coarse)
-        self._coarse_work = np.empty(coarse)
-        self._coarse_curl_free = CurlFreePart(x_coarse, y_coarse)
-
-    def _dipole_calculator(self, x_mm: np.ndarray, y_mm: np.ndarray) -> DipoleMomentCalculator:
-        """The dipole on the grid ``x_mm`` x ``y_mm`` with the configuration's origin rule."""
-        config = self.config
-        origin = config.dipole_origin
-        if origin == "grasp_centroid":  # its fallback; the grasp's dipole is _grasp_dipole
-            origin = "centroid_midpoint"
-        return DipoleMomentCalculator(x_mm, y_mm, origin, config.dipole_full_midpoint_ratio)
-
-    def _tilt_divergence(self, decomposition: NHHDResult | None) -> np.ndarray:
-        """The divergence the dipole sees: of the raw field or of its curl-free part, on the
-        field's grid, or on ``dipole_grid`` (the field block-averaged, then decomposed on
-        that coarser grid; ``decomposition``, the field's, is needed only on the field's
-        grid)."""
-        block = self._dipole_block
-        raw = self.config.divergence_of == "raw"
-        if block == (1, 1):
-            return self._field_divergence(decomposition)
-        u = block_mean(self._u, block, self._pooled[0])
-        v = block_mean(self._v, block, self._pooled[1])
-        if not raw:
-            u, v = self._coarse_curl_free(u, v)
-        dx, dy = block[1] * self._nhhd.dx, block[0] * self._nhhd.dy
-        return divergence(u, v, dx, dy, self._coarse_div, self._coarse_work)
-
-    def _field_divergence(self, decomposition: NHHDResult) -> np.ndarray:
-        """The divergence of the raw field or of its curl-free part on the field's grid."""
-        if self.config.divergence_of == "raw":
-            return decomposition.div
-        dx, dy = self._nhhd.dx, self._nhhd.dy
-        d_u, d_v = decomposition.d_u, decomposition.d_v
-        return divergence(d_u, d_v, dx, dy, self._div, self._work)
 
     # -- frames ------------------------------------------------------------------------------
 
@@ -424,123 +315,46 @@ class TactileEstimator:
 
     def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
         """Estimate the wrench from one frame captured at ``t_s`` seconds."""
-        if self._open_left > 0:
-            return self._capture_open(frame, t_s)
-        if self._grid_flow is None and self._zeroing_left == 0:
+        if self._open.active:
+            self._open.add(self._working_image(frame, self._open.frame_shape), frame.shape[:2])
+            return self._zeroing(t_s)
+        if self._grid_flow is None and not self._reference.active:
             if self._awaiting_rezero:  # after capture_open: the caller calls rezero()
-                return WrenchEstimate.zero(
-                    t_s, zeroing=True, calibrated=self.calibration is not None
-                )
+                return self._zeroing(t_s)
             self.rezero()
-        if self._zeroing_left > 0:
-            return self._capture_reference(frame, t_s)
-        image = self._working_image(frame, self._frame_shape)
-        self._grid_flow.measure(image, self._grid_px)
-        self._update_field()
-        return self._estimate(t_s)
-
-    def _capture_open(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        first = self._open_count == 0
-        image = self._working_image(frame, None if first else self._open_shape)
-        total = image.astype(np.float32)
-        if self._open_sum is not None:
-            total += self._open_sum
-        if first:
-            self._open_shape = frame.shape[:2]
-        if self._open_left == 1:
-            self._open_image = np.clip(np.rint(total / (self._open_count + 1)), 0, 255).astype(
-                np.uint8
-            )
-            total = None
-        self._open_sum = total
-        self._open_count += 1
-        self._open_left -= 1
-        return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
-
-    def _capture_reference(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        first = self._zeroing_count == 0
-        image = self._working_image(frame, None if first else self._frame_shape)
-        total = image.astype(np.float32)
-        if self._reference_sum is not None:
-            total += self._reference_sum
-        if self._zeroing_left == 1:
-            shape = frame.shape[:2] if first else self._frame_shape
-            self._install_reference(total / (self._zeroing_count + 1), shape)
-            total = None
-        if first:
-            self._frame_shape = frame.shape[:2]
-        self._reference_sum = total
-        self._zeroing_count += 1
-        self._zeroing_left -= 1
-        return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
-
-    def _update_field(self) -> None:
-        """Grid px -> mm in S, then the temporal EMA (alpha = weight of the newest field)."""
-        scale = self.profile.mm_per_px
-        alpha = self.config.ema_alpha
-        if alpha >= 1.0 or not self._filtered:
-            np.multiply(self._grid_px[..., 0], scale, out=self._u)
-            np.multiply(self._grid_px[..., 1], scale, out=self._v)
-            self._filtered = True
-            return
-        for component, target in ((0, self._u), (1, self._v)):
-            target *= 1.0 - alpha
-            np.multiply(self._grid_px[..., component], alpha * scale, out=self._work)
-            target += self._work
-
-    def _estimate(self, t_s: float) -> WrenchEstimate:
-        decomposition = self._nhhd.decompose(self._u, self._v)
-        if self._grasp_dipole.support is not None:
-            dipole = self._grasp_dipole(self._field_divergence(decomposition))
-        else:
-            div = self._tilt_divergence(decomposition)
-            if self._noise_gate is not None:
-                gate = self._noise_gate(div)
-                if gate < 1.0:  # not in place: the buffer may be the decomposition's
-                    div = div * gate
-            dipole = self._dipole(div)
-        tau_x, tau_y = dipole.tilt_torque_raw
-        fv_x, fv_y, fv_z = self._baseline(self._u, self._v)
-        np.hypot(self._u, self._v, out=self._magnitude)
-        contact = float(self._magnitude.mean()) > self.config.contact_threshold_mm
-        slip = gross = recommended = False
-        if self._slip is not None:
-            status = self._slip.update(self._field_view, decomposition, t_s)
-            self._last_slip = status
-            slip, gross = status.incipient, status.gross
-            recommended = self._rezero_policy.update(status, t_s)
-        estimate = WrenchEstimate(
-            t_s=t_s,
-            tau_x=tau_x,
-            tau_y=tau_y,
-            # The field follows the contact; the gel's wrench on the object opposes it.
-            tau_z=-decomposition.tau_z,
-            shear_x=-decomposition.shear_x,
-            shear_y=-decomposition.shear_y,
-            normal=decomposition.normal,
-            fv_tau_x=fv_x,
-            fv_tau_y=fv_y,
-            fv_tau_z=fv_z,
-            contact=contact,
-            degenerate=dipole.degenerate,
-            slip_suspected=slip,
-            slip_gross=gross,
-            rezero_recommended=recommended,
-            zeroing=False,
-            calibrated=False,
-        )
-        if recommended and self.config.slip.rezero.auto:
+        if self._reference.active:
+            image = self._working_image(frame, self._reference.frame_shape)
+            self._reference.add(image, frame.shape[:2], self._install_reference)
+            return self._zeroing(t_s)
+        image = self._working_image(frame, self._reference.result.frame_shape)
+        pipeline = self._pipeline
+        self._grid_flow.measure(image, pipeline.grid_px)
+        pipeline.update_field()
+        estimate, slip = pipeline.estimate(t_s, self._rezero_policy)
+        if slip is not None:
+            self._last_slip = slip
+        if estimate.rezero_recommended and self.config.slip.rezero.auto:
             self.rezero()
         return self.calibration.apply(estimate) if self.calibration else estimate
+
+    def _zeroing(self, t_s: float) -> WrenchEstimate:
+        """The zero estimate of a frame taken into a capture."""
+        return WrenchEstimate.zero(t_s, zeroing=True, calibrated=self.calibration is not None)
 
     # -- inspection --------------------------------------------------------------------------
 
     @property
     def field(self) -> VectorField:
         """A copy of the latest (filtered) displacement field, mm in frame S."""
-        if self._grid_flow is None:
+        if self._pipeline is None:
             raise RuntimeError("no field yet: the estimator has no reference")
-        return VectorField(self.x_mm, self.y_mm, self._u.copy(), self._v.copy())
+        return self._pipeline.field
+
+    @property
+    def noise_gated(self) -> bool:
+        """True when the tilt passes the no-contact gate (``noise_gate``: a reference without
+        the grasp's contact, measured by ``grid_lk`` on a textured image)."""
+        return self._pipeline is not None and self._pipeline.noise_gate is not None
 
     @property
     def last_slip_status(self) -> SlipStatus | None:

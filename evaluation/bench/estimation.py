@@ -23,7 +23,8 @@ import cv2
 import numpy as np
 
 from controller.tactile import EstimatorConfig, TactileEstimator
-from controller.tactile.flow import DenseGridFlow
+from controller.tactile.flow import DenseGridFlow, GridFlow, make_grid_flow
+from controller.tactile.grid_pipeline import GridPipeline
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
 from evaluation.cli import integer, run_tool
@@ -84,10 +85,18 @@ def stats(samples: list[float]) -> tuple[float, float]:
 
 def bench(config: EstimatorConfig, reference: np.ndarray, cases: list[Case], repeats: int) -> dict:
     profile = sensor_profile("gelsight_mini")
-    est = TactileEstimator(config, profile)
+    flows: list[GridFlow] = []
+
+    def keep_flow(*args) -> GridFlow:
+        flows.append(make_grid_flow(*args))
+        return flows[-1]
+
+    est = TactileEstimator(config, profile, flow=keep_flow)
     est.set_reference(reference)
-    flow = est._grid_flow  # the stages are timed one by one below
-    rows, cols = est.field.shape
+    flow = flows[-1]  # the estimator's own; the stages are timed one by one below
+    field = est.field
+    rows, cols = field.shape
+    stages = GridPipeline(config, profile.mm_per_px, field.x_mm, field.y_mm)
     grid = np.empty((rows, cols, 2))
     u, v = np.empty((rows, cols)), np.empty((rows, cols))
     times: dict[str, list[float]] = {
@@ -109,11 +118,11 @@ def bench(config: EstimatorConfig, reference: np.ndarray, cases: list[Case], rep
                 times["flow"].append(timed(flow.measure, case.image, grid))
             np.multiply(grid[..., 0], profile.mm_per_px, out=u)
             np.multiply(grid[..., 1], profile.mm_per_px, out=v)
-            times["nhhd"].append(timed(est._nhhd.decompose, u, v))
-            decomposition = est._nhhd.decompose(u, v)
-            times["div"].append(timed(est._tilt_divergence, decomposition))
-            times["dipole"].append(timed(est._dipole, est._tilt_divergence(decomposition)))
-            times["baseline"].append(timed(est._baseline, u, v))
+            times["nhhd"].append(timed(stages.nhhd.decompose, u, v))
+            decomposition = stages.nhhd.decompose(u, v)
+            times["div"].append(timed(stages.divergence, u, v, decomposition))
+            times["dipole"].append(timed(stages.dipole, stages.divergence(u, v, decomposition)))
+            times["baseline"].append(timed(stages.baseline, u, v))
             times["push"].append(timed(est.push, case.image, float(i)))
     return {
         "grid": f"{cols}x{rows}",

@@ -19,12 +19,13 @@ from dataclasses import asdict, dataclass, replace
 import cv2
 import numpy as np
 
-from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import EstimatorConfig, field_grid
+from controller.tactile.estimator import GridFlowFactory, TactileEstimator
+from controller.tactile.flow import make_grid_flow
+from controller.tactile.settings import EstimatorConfig
 from core.sensor_profile import sensor_profile
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
-from evaluation.realgel.textures import SIZE_HW, TEXTURES
+from evaluation.realgel.textures import TEXTURES
 
 PUSH_RANGE = (0.3, 0.5)
 NOISE_RANGE_GREY = (2.0, 4.0)
@@ -104,7 +105,8 @@ def sequence_specs(
 
 class TruthGridFlow:
     """A GridFlow that returns a sequence's true displacement, area-averaged over the cells:
-    the "oracle" row (the configuration's pipeline after the flow, on a perfect flow)."""
+    the "oracle" row (the configuration's pipeline after the flow, on a perfect flow).
+    ``sequence``: anything with the sequence's ``mechanics``."""
 
     def __init__(self, sequence: RenderedSequence, rows: int, cols: int) -> None:
         self._sequence = sequence
@@ -119,6 +121,16 @@ class TruthGridFlow:
         self._index += 1
         out[:] = cv2.resize(field, self._size, interpolation=cv2.INTER_AREA)
         return out
+
+
+def truth_flow(sequence: RenderedSequence) -> GridFlowFactory:
+    """The estimator's ``flow`` hook that measures ``sequence``'s true field (TruthGridFlow)
+    on whatever grid the configuration has."""
+
+    def build(config, shape_hw, rows, cols) -> TruthGridFlow:
+        return TruthGridFlow(sequence, rows, cols)
+
+    return build
 
 
 def _not_run(common: dict, note: str) -> Row:
@@ -159,17 +171,15 @@ def run_one(
     elif config.flow.method == "markers" and not texture.markers:
         return _not_run(common, "no markers")
     profile = sensor_profile(texture.sensor)
-    estimator = TactileEstimator(config, profile)
+    # On the oracle row everything after the flow is the configuration's.
+    flow = truth_flow(sequence) if oracle else make_grid_flow
+    estimator = TactileEstimator(config, profile, flow=flow)
     fps = profile.fps_hz
     try:
         estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
         estimator.set_reference(sequence.references[: config.reference_frames])
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])
-    if oracle:
-        rows, cols = field_grid(config, *SIZE_HW)
-        # The estimator's own flow is swapped for the truth; everything after it is unchanged.
-        estimator._grid_flow = TruthGridFlow(sequence, rows, cols)
     axis = 0 if spec.axis == "x" else 1
     n = len(sequence.frames)
     tilt = np.empty(n)

@@ -8,29 +8,30 @@ p = b I + a A (c - o) / N with c the contact's area centroid: the push leaks in 
 
 For each pushing sequence of the check (sequences.py; tilt about x and y, the push 30-50%)
 and each estimator configuration, the configuration's pipeline after the flow runs on the
-true field (check.TruthGridFlow; the texture does not matter), and the divergence it hands
-the dipole is recorded. The tilt is then taken about each candidate origin and scored like
-the check (held-out R^2 on the sequence's axis):
+true field (its ``flow`` hook: check.truth_flow; the texture does not matter), once per
+candidate origin of the dipole moment (its ``origin`` hook), and the tilt is scored like the
+check (held-out R^2 on the sequence's axis):
 
 - ``configured``: the configuration's own rule (its ``dipole_origin``);
 - ``gel centre``: o = 0;
-- ``support K``: the centroid of the soft support s_i = smoothstep(|div_i| / (K max |div|)),
-  a rule an estimator could use (it knows only div);
 - ``contact``: the contact's true area centroid, which only the check knows (the ideal);
-- ``contact +D``: that centroid moved by D mm along the pressure gradient (the tolerance).
+- ``contact +D``: that centroid moved by D mm along the pressure gradient (the tolerance);
+- ``support K``: the centroid of the soft support s_i = smoothstep(|div_i| / (K max |div|)),
+  a rule an estimator could use (it knows only div).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
 
+from controller.tactile.dipole import OriginRule
 from controller.tactile.estimator import TactileEstimator
-from controller.tactile.settings import DipoleGrid, EstimatorConfig, field_grid
+from controller.tactile.settings import DipoleGrid, EstimatorConfig
 from core.sensor_profile import sensor_profile
-from evaluation.realgel.check import TruthGridFlow
+from evaluation.realgel.check import truth_flow
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import Mechanics, SequenceSpec, mechanics
 from evaluation.realgel.textures import SIZE_HW
@@ -38,24 +39,6 @@ from evaluation.realgel.textures import SIZE_HW
 SENSOR = "gelsight_mini"  # sets only the mm per px; the field is the truth
 SUPPORT_FRACTIONS = (0.1, 0.3)
 TOLERANCES_MM = (0.1, 0.2, 0.5)
-
-Origin = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[float, float]]
-
-
-@dataclass(frozen=True)
-class OracleRun:
-    """One sequence through one configuration on the true field: the dipole's divergence per
-    frame ``div`` (frames, rows, cols), its grid ``x``/``y`` (flattened, mm, frame S), the
-    configuration's own tilt ``configured`` (frames, 2), the truth (frames, 2), the contact's
-    area centroid ``centroid`` (mm, frame S) and the axis index of the tilt (0: x)."""
-
-    div: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    configured: np.ndarray
-    truth: np.ndarray
-    centroid: tuple[float, float]
-    axis: int
 
 
 def contact_centroid_mm(mech: Mechanics, mm_per_px: float) -> tuple[float, float]:
@@ -69,37 +52,23 @@ def contact_centroid_mm(mech: Mechanics, mm_per_px: float) -> tuple[float, float
     return cx * mm_per_px, cy * mm_per_px
 
 
-def oracle_run(spec: SequenceSpec, config: EstimatorConfig) -> OracleRun:
-    """Run ``config``'s pipeline on ``spec``'s true field, recording the dipole's input."""
+def oracle_tilts(
+    spec: SequenceSpec, mech: Mechanics, config: EstimatorConfig, origin: OriginRule | None
+) -> np.ndarray:
+    """The tilt (tau_x, tau_y) per frame (frames, 2) of ``config``'s pipeline on the true
+    field ``mech`` of ``spec``, about ``origin`` (None: the configuration's own rule)."""
     config = replace(config, flow=replace(config.flow, method="dis"))
-    estimator = TactileEstimator(config, sensor_profile(SENSOR))
+    flow = truth_flow(_MechanicsOnly(mech))
+    estimator = TactileEstimator(config, sensor_profile(SENSOR), flow=flow, origin=origin)
     height, width = SIZE_HW
-    # Any textured image builds the (unused) flow; the truth replaces it below.
+    # Any textured image: the truth replaces the flow on it.
     reference = np.random.default_rng(0).integers(0, 256, (height, width, 3), dtype=np.uint8)
     estimator.set_reference([reference])
-    mech = mechanics(spec)
-    estimator._grid_flow = TruthGridFlow(_MechanicsOnly(mech), *field_grid(config, height, width))
-    dipole = estimator._dipole
-    recorded = []
-
-    def record(div: np.ndarray):
-        recorded.append(div.copy())
-        return dipole(div)
-
-    estimator._dipole = record
-    configured = np.empty((spec.frames, 2))
+    tilts = np.empty((spec.frames, 2))
     for i in range(spec.frames):
         estimate = estimator.push(reference, (i + 1) / 25.0)
-        configured[i] = estimate.tau_x, estimate.tau_y
-    return OracleRun(
-        np.array(recorded),
-        dipole._x.copy(),
-        dipole._y.copy(),
-        configured,
-        mech.truth,
-        contact_centroid_mm(mech, estimator.profile.mm_per_px),
-        0 if spec.axis == "x" else 1,
-    )
+        tilts[i] = estimate.tau_x, estimate.tau_y
+    return tilts
 
 
 @dataclass(frozen=True)
@@ -109,7 +78,13 @@ class _MechanicsOnly:
     mechanics: Mechanics
 
 
-def support_centroid(fraction: float) -> Origin:
+def fixed_origin(point_mm: tuple[float, float]) -> OriginRule:
+    """The origin ``point_mm`` (x, y), mm in frame S, whatever the divergence."""
+    o_x, o_y = float(point_mm[0]), float(point_mm[1])
+    return lambda div, x, y: (o_x, o_y)
+
+
+def support_centroid(fraction: float) -> OriginRule:
     """The centroid of s_i = smoothstep(|div_i| / (fraction max |div|)) (0 for div = 0)."""
 
     def origin(div: np.ndarray, x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
@@ -124,37 +99,34 @@ def support_centroid(fraction: float) -> Origin:
     return origin
 
 
-def origin_scores(run: OracleRun) -> dict[str, float]:
-    """Held-out R^2 of the tilt on the run's axis for every candidate origin (module
-    docstring)."""
-    truth = run.truth[:, run.axis]
-    scores = {"configured": held_out_fit(run.configured[:, run.axis], truth).r2}
-    centroid = np.asarray(run.centroid)
-    gradient_axis = 1 - run.axis  # a tilt about x is a pressure gradient along y
-    fixed = {"gel centre": np.zeros(2), "contact": centroid}
+def candidate_origins(spec: SequenceSpec, mech: Mechanics) -> dict[str, OriginRule | None]:
+    """Every candidate origin of the module docstring, by name (None: ``configured``)."""
+    centroid = contact_centroid_mm(mech, sensor_profile(SENSOR).mm_per_px)
+    gradient_axis = 0 if spec.axis == "y" else 1  # a tilt about x is a pressure gradient along y
+    candidates: dict[str, OriginRule | None] = {
+        "configured": None,
+        "gel centre": fixed_origin((0.0, 0.0)),
+        "contact": fixed_origin(centroid),
+    }
     for shift in TOLERANCES_MM:
-        moved = centroid.copy()
+        moved = list(centroid)
         moved[gradient_axis] += shift
-        fixed[f"contact +{shift:g} mm"] = moved
-    rules: dict[str, Origin] = {f"support {k:g}": support_centroid(k) for k in SUPPORT_FRACTIONS}
-    div = run.div.reshape(len(run.div), -1)
-    n = div.shape[1]
-    for name, point in fixed.items():
-        p = np.stack([(run.x - point[0]) @ div.T, (run.y - point[1]) @ div.T], axis=1) / n
-        scores[name] = _score(p, run.axis, truth)
-    for name, rule in rules.items():
-        p = np.empty((len(div), 2))
-        for i, d in enumerate(div):
-            ox, oy = rule(d, run.x, run.y)
-            p[i] = (run.x - ox) @ d / n, (run.y - oy) @ d / n
-        scores[name] = _score(p, run.axis, truth)
-    return scores
+        candidates[f"contact +{shift:g} mm"] = fixed_origin((moved[0], moved[1]))
+    for fraction in SUPPORT_FRACTIONS:
+        candidates[f"support {fraction:g}"] = support_centroid(fraction)
+    return candidates
 
 
-def _score(p: np.ndarray, axis: int, truth: np.ndarray) -> float:
-    """R^2 of the tilt [p_y, -p_x] on ``axis`` (dipole.DipoleMoment.tilt_torque_raw)."""
-    tilt = p[:, 1] if axis == 0 else -p[:, 0]
-    return held_out_fit(tilt, truth).r2
+def origin_scores(spec: SequenceSpec, config: EstimatorConfig) -> dict[str, float]:
+    """Held-out R^2 of the tilt on ``spec``'s axis for every candidate origin (module
+    docstring), ``config``'s pipeline running on the true field."""
+    mech = mechanics(spec)
+    axis = 0 if spec.axis == "x" else 1
+    truth = mech.truth[:, axis]
+    return {
+        name: held_out_fit(oracle_tilts(spec, mech, config, origin)[:, axis], truth).r2
+        for name, origin in candidate_origins(spec, mech).items()
+    }
 
 
 def with_dipole_grid(config: EstimatorConfig, grid: str) -> EstimatorConfig:

@@ -17,7 +17,7 @@ from core.config import ConfigError
 from evaluation.machine import git_revision
 from evaluation.realgel.check import sequence_specs
 from evaluation.realgel.cli import _numbers
-from evaluation.realgel.origins import oracle_run, origin_scores, table, with_dipole_grid
+from evaluation.realgel.origins import origin_scores, table, with_dipole_grid
 from evaluation.realgel.textures import SIZE_HW
 
 
@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         if spec.push > 0
     ]
     results = [
-        (label, spec, origin_scores(oracle_run(spec, config)))
+        (label, spec, origin_scores(spec, config))
         for label, config in configs
         for spec in specs
     ]

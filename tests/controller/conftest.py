@@ -65,17 +65,21 @@ class ScriptedMachine:
 
 
 class ScriptedEstimator:
-    """Stands for ``TactileEstimator``: returns ``wrench(t_s)`` for each pushed frame and
-    records pushes and re-zero requests."""
+    """A ``WrenchSource`` standing for ``TactileEstimator``: returns ``wrench(t_s)`` for each
+    pushed frame and records pushes, open-gel captures and re-zero requests."""
 
     def __init__(self, wrench: Callable[[float], WrenchEstimate] | None = None) -> None:
         self.wrench = wrench if wrench is not None else quiet
         self.pushed: list[float] = []
+        self.opened: list[int | None] = []
         self.rezeroed: list[int | None] = []
 
     def push(self, frame, t_s: float) -> WrenchEstimate:
         self.pushed.append(t_s)
         return self.wrench(t_s)
+
+    def capture_open(self, n_frames: int | None = None) -> None:
+        self.opened.append(n_frames)
 
     def rezero(self, n_frames: int | None = None) -> None:
         self.rezeroed.append(n_frames)

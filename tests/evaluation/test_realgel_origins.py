@@ -8,7 +8,6 @@ from controller.tactile.settings import estimator_config
 from evaluation.realgel import origins_cli
 from evaluation.realgel.origins import (
     contact_centroid_mm,
-    oracle_run,
     origin_scores,
     support_centroid,
     with_dipole_grid,
@@ -34,7 +33,7 @@ def test_the_support_centroid_of_a_box_is_its_centre_and_zero_for_no_divergence(
 def test_about_the_contact_centroid_the_push_does_not_leak_into_the_tilt():
     spec = SequenceSpec("gelsight_markers_a", "y", 0.45, 0.4, 2.0, seed=3, frames=32)
     config = with_dipole_grid(estimator_config("default"), "field")
-    scores = origin_scores(oracle_run(spec, config))
+    scores = origin_scores(spec, config)
     assert scores["contact"] > 0.99
     assert scores["gel centre"] < scores["contact"] - 0.05
     assert scores["contact +0.5 mm"] < scores["contact"]

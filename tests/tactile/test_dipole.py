@@ -142,3 +142,15 @@ def test_translating_the_pattern_leaves_torque_unchanged(sep, strength, angle, s
     # Exact up to the charges' tails that cross the grid border (the grid is 15 x 20 mm).
     assert d1.p_x == pytest.approx(d0.p_x, abs=0.02 * scale)
     assert d1.p_y == pytest.approx(d0.p_y, abs=0.02 * scale)
+
+
+def test_an_origin_rule_takes_the_moment_about_the_point_it_gives():
+    x, y = np.linspace(-3.0, 3.0, 7), np.linspace(-2.0, 2.0, 5)
+    div = np.random.default_rng(4).normal(size=(5, 7))
+    centre = DipoleMomentCalculator(x, y, "sensor_centre")(div)
+    about_zero = DipoleMomentCalculator(x, y, lambda d, gx, gy: (0.0, 0.0))(div)
+    assert (about_zero.p_x, about_zero.p_y) == (centre.p_x, centre.p_y)
+    moved = DipoleMomentCalculator(x, y, lambda d, gx, gy: (1.0, -0.5))(div)
+    assert (moved.m_x, moved.m_y) == (1.0, -0.5)
+    assert moved.p_x == pytest.approx(centre.p_x - 1.0 * div.sum() / div.size)
+    assert moved.p_y == pytest.approx(centre.p_y + 0.5 * div.sum() / div.size)

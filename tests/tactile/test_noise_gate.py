@@ -134,22 +134,22 @@ def test_with_the_grasps_contact_there_is_no_gate(renderer):
     est = TactileEstimator(DEFAULT, PROFILE)
     est.set_open_reference(renderer.render())
     est.set_reference(renderer.render(_press_and_tilt_px(1.0, 0.0)))
-    assert est.contact_centre_mm is not None and est._noise_gate is None
+    assert est.contact_centre_mm is not None and not est.noise_gated
     est = TactileEstimator(DEFAULT, PROFILE)
     est.set_reference(renderer.render())
-    assert est._noise_gate is not None
+    assert est.noise_gated
 
 
 def test_other_flows_form_no_gate(renderer):
     config = replace(DEFAULT, flow=replace(DEFAULT.flow, method="dis"))
     est = TactileEstimator(config, PROFILE)
     est.set_reference(renderer.render())
-    assert est._noise_gate is None
+    assert not est.noise_gated
 
 
 def test_a_featureless_reference_forms_no_gate():
     est = TactileEstimator(DEFAULT, PROFILE)
     est.set_reference(np.full((240, 320, 3), 128, np.uint8))
-    assert est._noise_gate is None
+    assert not est.noise_gated
     estimate = est.push(np.full((240, 320, 3), 128, np.uint8), 0.0)
     assert (estimate.tau_x, estimate.tau_y) == (0.0, 0.0)
