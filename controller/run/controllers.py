@@ -22,7 +22,7 @@ import numpy as np
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.blind import BlindMachine
 from controller.run.task import TaskConfig
-from controller.tactile import TactileEstimator, WrenchEstimate
+from controller.tactile import TactileEstimator, WrenchEstimate, WrenchSource
 
 
 class BaselineTorques:
@@ -51,7 +51,7 @@ class Controller:
     ``sim_only``: refused on the real backend."""
 
     machine: Callable[[TaskConfig], Machine]
-    wrench_source: Callable[[TactileEstimator, Any], Any]
+    wrench_source: Callable[[TactileEstimator, Any], WrenchSource]
     sim_only: bool = False
 
 
