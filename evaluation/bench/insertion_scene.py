@@ -36,8 +36,8 @@ from drivers.sim.scenes.insertion import (
     default_devices,
     load_scene_section,
 )
-from evaluation.cli import integer, run_tool
-from evaluation.machine import describe_machine
+from evaluation.common.cli_support import integer, run_tool
+from evaluation.common.machine_info import describe_machine
 
 RATE_HZ = 100.0
 TILT_RAD = 0.15  # the tilted approach's tilt, about the hole's y

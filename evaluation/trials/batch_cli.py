@@ -33,7 +33,14 @@ from pathlib import Path
 from typing import Any
 
 from core.config import ConfigError, parse_override
-from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, one_line, run_tool
+from evaluation.common.cli_support import (
+    EXIT_SIGINT,
+    EXIT_SIGTERM,
+    ToolError,
+    integer,
+    one_line,
+    run_tool,
+)
 from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor
 from evaluation.trials.spec import (

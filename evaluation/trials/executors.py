@@ -21,8 +21,8 @@ from multiprocessing import get_context
 from types import TracebackType
 from typing import Protocol
 
-from evaluation.cli import ignore_interrupts_in_worker, one_line
-from evaluation.machine import one_thread_env
+from evaluation.common.cli_support import ignore_interrupts_in_worker, one_line
+from evaluation.common.machine_info import one_thread_env
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 

@@ -17,7 +17,7 @@ from collections.abc import Iterable, Iterator
 from types import TracebackType
 from typing import Any
 
-from evaluation.cli import ToolError, one_line
+from evaluation.common.cli_support import ToolError, one_line
 from evaluation.trials.executors import error_result, guarded
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec

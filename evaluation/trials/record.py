@@ -21,7 +21,7 @@ import numpy as np
 from controller.insertion import Machine, Transition
 from controller.loop import TickRecord
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.outputs import atomic_text
+from evaluation.common.outputs import atomic_text
 
 FLUSH_TICKS = 100
 

@@ -29,7 +29,7 @@ from core.config import ConfigError
 from drivers.registry import load_device, load_device_config
 from drivers.sim.scenes.insertion import SimDevices, build_insertion_sim
 from drivers.sim.twins.gamepad import PadEvent
-from evaluation.cli import Terminated
+from evaluation.common.cli_support import Terminated
 from evaluation.trials.record import TrialRecorder
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec

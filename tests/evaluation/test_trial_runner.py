@@ -11,7 +11,7 @@ import pytest
 from controller.loop import ControlLoop
 from core.config import ConfigError
 from drivers.sim.scenes.insertion import TruthLog
-from evaluation.cli import Terminated
+from evaluation.common.cli_support import Terminated
 from evaluation.trials import runner
 from evaluation.trials.spec import TrialSpec
 from evaluation.trials.task import load_task
