@@ -44,6 +44,7 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
         controller=spec.controller,
         seed=spec.seed,
         success=success,
+        status="inserted" if success else "failed",
         failure_reason=None if success else "timeout",
         time_to_insert_s=time_s if success else None,
         duration_s=time_s + 1.0,
@@ -112,8 +113,10 @@ def test_wilson_interval_known_values():
     assert wilson_ci(0, 0) is None
 
 
-def _result(seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0):
-    return TrialResult("usb_c", "dipole", seed, success, reason, time_s, duration, force,
+def _result(seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0,
+            status=None):
+    status = status or ("inserted" if success else "failed")
+    return TrialResult("usb_c", "dipole", seed, success, status, reason, time_s, duration, force,
                        FORCE_LIMIT_N, wall)
 
 
@@ -138,6 +141,25 @@ def test_summary_values():
     assert summary["failures"] == {"slip": 1, "timeout": 2}
     assert summary["failed_seeds"] == [3, 4, 5]
     assert summary["sim_speed_x_realtime"] == pytest.approx(80.0 / 8.0)
+
+
+def test_summary_counts_errors_by_status_not_by_reason():
+    results = [
+        _result(0, False, reason="error: a failure reason that happens to read so"),
+        _result(1, False, reason="worker lost", duration=0.0, wall=5.0, status="error"),
+    ]
+    summary = summarize(results)
+    assert summary["errors"] == 1
+    assert summary["sim_duration_s"] == 10.0 and summary["wall_time_s"] == 1.0
+
+
+def test_a_status_must_agree_with_success():
+    with pytest.raises(ValueError, match="contradicts"):
+        _result(0, True, 4.0, status="failed")
+    with pytest.raises(ValueError, match="contradicts"):
+        _result(0, False, status="inserted")
+    with pytest.raises(ValueError, match="expected one of inserted, failed, error"):
+        _result(0, False, status="crashed")
 
 
 def test_summary_is_independent_of_arrival_order():
@@ -179,6 +201,8 @@ def test_batch_writes_summary_and_csv_and_turns_an_exception_into_an_error_trial
     assert [int(r["seed"]) for r in rows] == list(range(12))
     error = rows[5]
     assert error["success"] == "False" and error["failure_reason"].startswith("error: Runtime")
+    assert error["status"] == "error"
+    assert {r["status"] for i, r in enumerate(rows) if i != 5} == {"inserted", "failed"}
     assert error["time_to_insert_s"] == ""
 
 
