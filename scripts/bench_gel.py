@@ -3,7 +3,7 @@
 
 import sys
 
-from evaluation.machine import one_thread_env
+from evaluation.common.machine_info import one_thread_env
 
 one_thread_env()  # before NumPy loads its BLAS
 

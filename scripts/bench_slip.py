@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
-"""Per-frame cost of the slip detector and of the estimator's push; see evaluation/bench/slip.py."""
+"""Per-frame cost of the slip detector and of the estimator's push; see
+evaluation/bench/slip_detection.py."""
 
 import sys
 
-from evaluation.bench.slip import main
+from evaluation.bench.slip_detection import main
 
 if __name__ == "__main__":
     sys.exit(main())

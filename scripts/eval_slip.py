@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
-"""Score the estimator's slip flags on the simulated gel; see evaluation/slip_cli.py."""
+"""Score the estimator's slip flags on the simulated gel; see evaluation/experiments/slip_cli.py."""
 
 import sys
 
-from evaluation.slip_cli import main
+from evaluation.experiments.slip_cli import main
 
 if __name__ == "__main__":
     sys.exit(main())

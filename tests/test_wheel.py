@@ -8,6 +8,7 @@ Slow (it installs the dependencies into a new venv); ``.ci/run`` runs it.
 from __future__ import annotations
 
 import csv
+import shutil
 import subprocess
 import sys
 import venv
@@ -18,6 +19,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
 REAL_GEL = ROOT / "drivers" / "sim" / "render" / "real_gels" / "gelsight_markers_a.png"
+
+NOT_SOURCE = (".git", ".venv", "build", "out", "*.egg-info", "__pycache__", ".*_cache")
 
 pytestmark = pytest.mark.slow
 
@@ -32,7 +35,9 @@ def run(command: list[str], cwd: Path, timeout_s: float = 900.0) -> subprocess.C
 def installed(tmp_path_factory) -> Path:
     """The bin/ folder of a fresh venv holding the wheel and its dependencies."""
     work = tmp_path_factory.mktemp("wheel")
-    run([sys.executable, "-m", "pip", "wheel", str(ROOT), "--no-deps", "-q", "-w",
+    source = work / "source"  # a clean copy: no stale build/ of an earlier tree
+    shutil.copytree(ROOT, source, ignore=shutil.ignore_patterns(*NOT_SOURCE))
+    run([sys.executable, "-m", "pip", "wheel", str(source), "--no-deps", "-q", "-w",
          str(work / "dist")], cwd=work)  # fmt: skip
     (wheel,) = (work / "dist").glob("tactile_insertion-*.whl")
     venv.create(work / "venv", with_pip=True)

@@ -12,7 +12,7 @@ slides as a whole (gross slip): the traction saturates, so the tangential field 
 growing (or relaxes, when kinetic friction is lower than static friction).
 
 **The features used here**, chosen by measurement on the simulated gel against the
-alternatives below (evaluation/slip_eval.py; docs/EVALUATION.md gives the numbers):
+alternatives below (evaluation/experiments/slip_eval.py; docs/EVALUATION.md gives the numbers):
 
 1. Only the divergence-free part of the field (the NHHD rotational plus harmonic parts,
    ``t = v - d``) is watched. Normal-load and tilt changes live mostly in the diverging
@@ -31,7 +31,8 @@ alternatives below (evaluation/slip_eval.py; docs/EVALUATION.md gives the number
    pressing) leaks into ``t`` through the flow's errors and the decomposition's harmonic
    part as a non-affine pattern that grows with the load, nearly along itself, so it passed
    the direction test with a large residual; its rigid part is 4-25% of its RMS on
-   realistic images, a real tangential increment's 95-98% (evaluation/slip_false_alarms.py).
+   realistic images, a real tangential increment's 95-98%
+   (evaluation/experiments/slip_false_alarms.py).
    Under slip the affine residual r bounds the rigid fraction by sqrt(1 - r^2), so the gate
    at 0.5 still judges residuals up to 0.87. Cores of fewer than ``MIN_CORE_CELLS`` cells
    (an affine fit explains them exactly) are not judged either.

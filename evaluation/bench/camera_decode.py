@@ -21,8 +21,8 @@ import cv2
 import numpy as np
 
 from drivers.tactile.decode import FrameProcessor, decode_jpeg
-from evaluation.cli import SEED, integer, run_tool
-from evaluation.machine import describe_machine
+from evaluation.common.cli_support import SEED, integer, run_tool
+from evaluation.common.machine_info import describe_machine
 
 WIDTH_PX, HEIGHT_PX = 3280, 2464
 QUALITIES = (70, 85, 95)

@@ -23,8 +23,8 @@ import numpy as np
 
 from drivers.sim.gel.model import GelModel, Wrench
 from drivers.sim.gel.profile import SHAPES
-from evaluation.machine import describe_machine
-from evaluation.sim_setup import SENSORS, gel_profile
+from evaluation.common.machine_info import describe_machine
+from evaluation.common.sim_setup import SENSORS, gel_profile
 
 STAGES = {
     "normal": "solve_normal",
@@ -33,7 +33,7 @@ STAGES = {
     "camera": "image_field_px",
 }
 
-from evaluation.cli import integer, run_tool  # noqa: E402
+from evaluation.common.cli_support import integer, run_tool  # noqa: E402
 
 
 def sequence(steps: int) -> list[tuple[float, Wrench]]:

@@ -32,8 +32,8 @@ from controller.tactile import estimator_for_sensor
 from core.devices import Pose
 from drivers.registry import WorldSpec, build_device_set
 from drivers.sim.scenes.insertion import InsertionSim
-from evaluation.cli import integer, run_tool
-from evaluation.machine import describe_machine
+from evaluation.common.cli_support import integer, run_tool
+from evaluation.common.machine_info import describe_machine
 
 RATE_HZ = 100.0
 TILT_RAD = 0.15  # the tilted approach's tilt, about the hole's y

@@ -26,8 +26,8 @@ from core.clock import MonotonicClock
 from core.config import CONFIG_ROOT
 from core.devices import Devices, Twist
 from drivers import registry
-from evaluation.cli import integer, number, run_tool
-from evaluation.machine import describe_machine
+from evaluation.common.cli_support import integer, number, run_tool
+from evaluation.common.machine_info import describe_machine
 
 
 class HoldStill:

@@ -28,7 +28,7 @@ from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.image_warp import SplineWarper
 from drivers.sim.render.lighting import led_shading, shade
 from drivers.sim.render.marker_images import MarkerImageRenderer, smooth_random_field
-from evaluation.machine import describe_machine
+from evaluation.common.machine_info import describe_machine
 
 SHAPE_HW = (240, 320)
 GRIDS = {"48x64": (48, 64), "240x320": SHAPE_HW}
@@ -40,7 +40,7 @@ STATIC_EFFECTS = ImageEffects(
     marker_dropout_fraction=0.1,
     occlusion_count=2,
 )
-from evaluation.cli import integer, run_tool  # noqa: E402
+from evaluation.common.cli_support import integer, run_tool  # noqa: E402
 
 N_FIELDS = 8
 

@@ -48,8 +48,8 @@ import numpy as np
 import yaml
 
 from core.config import Config, ConfigError, build, load_yaml, number
+from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
-from evaluation.outputs import discard_folder, partial_folder, publish_folder
 
 FORMAT = "tactile-insertion/dataset/v1"
 VIDEO, FRAMES_CSV, FT_CSV, TRUTH_CSV, META = (

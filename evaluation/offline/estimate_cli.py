@@ -33,7 +33,7 @@ leaves an earlier OUT as it was. Expected failures (unreadable input, empty fold
 mismatched frame sizes (naming the image), several inputs that are not all image files,
 reference out of range, bad configuration, an OUT that is an input
 or cannot be written) print one line ``estimate: error: ...`` and exit with code 2; SIGINT
-and SIGTERM exit with 130 and 143 (evaluation/cli.py).
+and SIGTERM exit with 130 and 143 (evaluation/common/cli_support.py).
 """
 
 from __future__ import annotations
@@ -54,13 +54,13 @@ from tqdm import tqdm
 from controller.tactile import Calibration, EstimatorConfig, WrenchEstimate, estimator_for_sensor
 from controller.tactile.wrench import VALUE_FIELDS
 from core.sensor_profile import sensor_profile
-from evaluation.cli import (
+from evaluation.common.cli_support import (
     ToolError,
     resolved_config_path,
     run_tool,
 )
+from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
-from evaluation.outputs import atomic_text, check_output_file
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")

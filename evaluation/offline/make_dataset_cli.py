@@ -8,7 +8,7 @@ The paper's runs held about 12,500 frames per axis. Calibrate with scripts/calib
 OUT must not exist; it is checked (and every argument) before any work. The dataset is
 built in a hidden folder beside OUT and renamed to OUT only when complete: an error or an
 interruption leaves no OUT. Expected failures print one line ``make_dataset: error: ...``
-and exit with code 2; SIGINT and SIGTERM exit with 130 and 143 (evaluation/cli.py).
+and exit with code 2; SIGINT and SIGTERM exit with 130 and 143 (evaluation/common/cli_support.py).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pathlib import Path
 
 from core.sensor_profile import sensor_profile
 from drivers.sim.gel.profile import SHAPES
-from evaluation.cli import (
+from evaluation.common.cli_support import (
     SEED,
     ToolError,
     distinct,
@@ -28,10 +28,10 @@ from evaluation.cli import (
     resolved_config_path,
     run_tool,
 )
-from evaluation.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiments, write_jig_dataset
-from evaluation.outputs import check_output_folder
-from evaluation.rendering import make_renderer
-from evaluation.sim_setup import gel_model, jig_config
+from evaluation.common.outputs import check_output_folder
+from evaluation.common.rendering import make_renderer
+from evaluation.common.sim_setup import gel_model, jig_config
+from evaluation.offline.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiments, write_jig_dataset
 
 
 def build_parser() -> argparse.ArgumentParser:

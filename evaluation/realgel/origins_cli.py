@@ -14,9 +14,9 @@ import sys
 
 from controller.tactile.settings import dipole_grid_mismatch, estimator_config, field_grid
 from core.config import ConfigError
-from evaluation.machine import git_revision
+from evaluation.common.machine_info import git_revision
 from evaluation.realgel.check import sequence_specs
-from evaluation.realgel.cli import _numbers
+from evaluation.realgel.check_cli import _numbers
 from evaluation.realgel.origins import origin_scores, table, with_dipole_grid
 from evaluation.realgel.textures import SIZE_HW
 

@@ -29,8 +29,8 @@ from typing import Any, TextIO
 
 from tqdm import tqdm
 
-from evaluation.cli import Terminated, ToolError
-from evaluation.outputs import check_output_folder, write_text
+from evaluation.common.cli_support import Terminated, ToolError
+from evaluation.common.outputs import check_output_folder, write_text
 from evaluation.trials.executors import Executor
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec

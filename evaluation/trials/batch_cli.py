@@ -14,9 +14,9 @@ chart under OUT/records/<controller>-<seed>/.
 OUT/trials.csv gets one row per trial as it finishes; OUT/summary.json (keys: docs/
 EVALUATION.md, ``evaluation.trials.summary``) is written at the end, also after Ctrl-C or
 SIGTERM, then holding only the finished trials and ``"complete": false`` (exit 130 or 143).
-A trial that raises is a failed trial (``error: ...``), not the end of the batch. Bad
-arguments, an unknown task or override key, an OUT that already holds a batch: one line
-``run_trials: error: ...`` and exit code 2.
+A trial that raises is a failed trial of status ``error`` (``error: ...``), not the end of
+the batch. Bad arguments, an unknown task or override key, an OUT that already holds a
+batch: one line ``run_trials: error: ...`` and exit code 2.
 
 The trial function: ``TRIAL_FUNCTION`` below names it (``module:function``, see
 ``evaluation.trials.spec`` for its contract and the optional ``check_spec``); the hidden
@@ -33,7 +33,14 @@ from pathlib import Path
 from typing import Any
 
 from core.config import ConfigError, parse_override
-from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, one_line, run_tool
+from evaluation.common.cli_support import (
+    EXIT_SIGINT,
+    EXIT_SIGTERM,
+    ToolError,
+    integer,
+    one_line,
+    run_tool,
+)
 from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor
 from evaluation.trials.oracle import TRIAL_CONTROLLERS

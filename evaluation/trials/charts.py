@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 from matplotlib.ticker import MaxNLocator
 
-from evaluation.outputs import atomic_file
+from evaluation.common.outputs import atomic_file
 
 DPI = 90
 DODGE = 0.012  # relative horizontal shift between controllers, so equal points stay visible

@@ -32,8 +32,8 @@ from pathlib import Path
 from typing import Any
 
 from core.config import ConfigError, parse_override
-from evaluation.cli import distinct, number_list, run_tool
-from evaluation.outputs import check_output_folder, write_text
+from evaluation.common.cli_support import distinct, number_list, run_tool
+from evaluation.common.outputs import check_output_folder, write_text
 from evaluation.trials.batch import Batch, check_batch_folder, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,

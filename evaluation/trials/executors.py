@@ -2,8 +2,8 @@
 
 Every executor is a context manager whose ``run(function, specs)`` yields ``(spec,
 result)`` for each spec, in the order the trials finish. A trial that raises becomes a failed
-result (``failure_reason`` ``"error: <one line>"``, see ``guarded``), so one bad seed never
-ends the batch. Leaving the context on an exception (Ctrl-C, SIGTERM) stops the trials still
+result (status ``error``, see ``evaluation.trials.guard``), so one bad seed never ends the
+batch. Leaving the context on an exception (Ctrl-C, SIGTERM) stops the trials still
 running: the local pool's worker processes are terminated, Ray's tasks cancelled.
 
 The Ray executor lives in ``evaluation.trials.ray_executor`` (Ray is an optional extra);
@@ -12,7 +12,6 @@ The Ray executor lives in ``evaluation.trials.ray_executor`` (Ray is an optional
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -21,8 +20,9 @@ from multiprocessing import get_context
 from types import TracebackType
 from typing import Protocol
 
-from evaluation.cli import ignore_interrupts_in_worker, one_line
-from evaluation.machine import one_thread_env
+from evaluation.common.cli_support import ignore_interrupts_in_worker
+from evaluation.common.machine_info import one_thread_env
+from evaluation.trials.guard import error_result, guarded
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
@@ -49,38 +49,6 @@ class Executor(Protocol):
     ) -> Iterator[tuple[TrialSpec, TrialResult]]:
         """``(spec, result)`` per spec, as the trials finish."""
         ...
-
-
-def error_result(spec: TrialSpec, reason: str, wall_time_s: float) -> TrialResult:
-    """The result of a trial that did not run to an outcome: failed with ``"error: ..."``,
-    no simulated time, no force measured (0 N) and an unknown force limit (NaN)."""
-    return TrialResult(
-        task=spec.task,
-        controller=spec.controller,
-        seed=spec.seed,
-        success=False,
-        failure_reason=f"error: {one_line(reason)}",
-        time_to_insert_s=None,
-        duration_s=0.0,
-        max_true_force_n=0.0,
-        force_limit_n=math.nan,
-        wall_time_s=wall_time_s,
-    )
-
-
-def is_error(result: TrialResult) -> bool:
-    """Whether the trial ended in an exception rather than an outcome."""
-    return (result.failure_reason or "").startswith("error:")
-
-
-def guarded(function: TrialFunction, spec: TrialSpec) -> TrialResult:
-    """``function(spec)``, with an exception turned into an error result naming its type
-    and message (module-level: the worker processes and Ray import it by name)."""
-    began = time.perf_counter()
-    try:
-        return function(spec)
-    except Exception as exc:  # noqa: BLE001 -- any trial failure is a result, not a crash
-        return error_result(spec, f"{type(exc).__name__}: {exc}", time.perf_counter() - began)
 
 
 class LocalExecutor:

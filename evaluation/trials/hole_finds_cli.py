@@ -17,8 +17,8 @@ from functools import partial
 from multiprocessing import get_context
 
 from controller.run.task import load_task
-from evaluation.cli import ignore_interrupts_in_worker, integer, run_tool
-from evaluation.machine import one_thread_env
+from evaluation.common.cli_support import ignore_interrupts_in_worker, integer, run_tool
+from evaluation.common.machine_info import one_thread_env
 from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
 from evaluation.trials.executors import terminate_pool
 from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds

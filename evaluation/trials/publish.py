@@ -6,7 +6,7 @@ the tasks' sections one after another, image paths made relative to DOCS. The pa
 last section of DOCS/EVALUATION.md: ``make evaluate`` includes it, and publishing replaces
 that section of an existing report (atomically), so the report always shows the latest
 trials. Everything is staged and moved into place only when complete
-(evaluation/outputs.py).
+(evaluation/common/outputs.py).
 """
 
 from __future__ import annotations
@@ -16,8 +16,8 @@ import re
 import shutil
 from pathlib import Path
 
-from evaluation.cli import ToolError, run_tool
-from evaluation.outputs import check_output_folder, staged_folder, write_text
+from evaluation.common.cli_support import ToolError, run_tool
+from evaluation.common.outputs import check_output_folder, staged_folder, write_text
 from evaluation.trials.compare import TABLE
 
 PAGE = "TRIALS.md"

@@ -2,7 +2,7 @@
 
     pip install 'tactile-insertion[ray]'
 
-Each trial is one Ray task of one CPU running ``executors.guarded``, so a trial's exception
+Each trial is one Ray task of one CPU running ``guard.guarded``, so a trial's exception
 is a failed result exactly as with the local executor, and the batch's summary is the same
 for the same seeds. The trial function and this package must be importable on the workers
 (on a cluster: the same installation on every node, or a ``runtime_env``).
@@ -17,8 +17,8 @@ from collections.abc import Iterable, Iterator
 from types import TracebackType
 from typing import Any
 
-from evaluation.cli import ToolError, one_line
-from evaluation.trials.executors import error_result, guarded
+from evaluation.common.cli_support import ToolError, one_line
+from evaluation.trials.guard import error_result, guarded
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 

@@ -3,7 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
-from typing import Any
+from typing import Any, Literal, get_args
+
+TrialStatus = Literal["inserted", "failed", "error"]
+"""How a trial ended: ``inserted`` (the plug reached the depth and the machine ended in DONE),
+``failed`` (it ran to another outcome) or ``error`` (it raised, or its worker was lost, before
+any outcome: no simulated time, no force measured)."""
+
+STATUSES: tuple[TrialStatus, ...] = get_args(TrialStatus)
 
 
 @dataclass(frozen=True)
@@ -12,11 +19,12 @@ class TrialResult:
 
     ``task``: the task name (usb_a, usb_c); ``controller``: which torques drove the machine
     (dipole, fingervision, blind, oracle); ``seed``: the scene's seed; ``success``: the plug
-    reached the depth and the machine ended in DONE; ``failure_reason``: the FAILED
-    transition's reason (None on success); ``time_to_insert_s``: simulated time from the
-    controller's first tick (the devices' start-up, such as the gripper's activation, comes
-    before it) to reaching the depth (None when it never did); ``duration_s``: simulated time of
-    the whole run; ``max_true_force_n``: the largest true contact force between plug and
+    reached the depth and the machine ended in DONE; ``status``: how the trial ended
+    (``TrialStatus``; ``inserted`` exactly when ``success``); ``failure_reason``: the FAILED
+    transition's reason, or the error's (None on success); ``time_to_insert_s``: simulated time
+    from the controller's first tick (the devices' start-up, such as the gripper's activation,
+    comes before it) to reaching the depth (None when it never did); ``duration_s``: simulated
+    time of the whole run; ``max_true_force_n``: the largest true contact force between plug and
     board or receptacle (ground truth, N); ``force_limit_n``: the task's limit on it;
     ``wall_time_s``: the wall-clock time the trial took.
     """
@@ -25,12 +33,19 @@ class TrialResult:
     controller: str
     seed: int
     success: bool
+    status: TrialStatus
     failure_reason: str | None
     time_to_insert_s: float | None
     duration_s: float
     max_true_force_n: float
     force_limit_n: float
     wall_time_s: float
+
+    def __post_init__(self) -> None:
+        if self.status not in STATUSES:
+            raise ValueError(f"status {self.status!r}: expected one of {', '.join(STATUSES)}")
+        if self.success != (self.status == "inserted"):
+            raise ValueError(f"status {self.status!r} contradicts success={self.success}")
 
     def as_row(self) -> dict[str, Any]:
         """The result as a flat dict (one CSV row)."""

@@ -18,7 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
-from evaluation.cli import ToolError
+from evaluation.common.cli_support import ToolError
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 

@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 from scipy.stats import binomtest
 
-from evaluation.trials.executors import is_error
 from evaluation.trials.result import TrialResult
 
 CONFIDENCE = 0.95
@@ -48,7 +47,7 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     successes = sum(r.success for r in ordered)
     times = [r.time_to_insert_s for r in ordered if r.success and r.time_to_insert_s is not None]
     failed = [r for r in ordered if not r.success]
-    ran = [r for r in ordered if not is_error(r)]
+    ran = [r for r in ordered if r.status != "error"]
     wall_s = sum(r.wall_time_s for r in ran)
     limits = sorted({r.force_limit_n for r in ran if math.isfinite(r.force_limit_n)})
     summary = dict(context)
@@ -64,7 +63,7 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         over_force_trials=sum(r.max_true_force_n > r.force_limit_n for r in ordered),
         failures=dict(sorted(Counter(r.failure_reason or "unknown" for r in failed).items())),
         failed_seeds=sorted({r.seed for r in failed}),
-        errors=sum(is_error(r) for r in ordered),
+        errors=sum(r.status == "error" for r in ordered),
         sim_duration_s=sum(r.duration_s for r in ran),
         wall_time_s=wall_s,
         sim_speed_x_realtime=_finite_or_none(sum(r.duration_s for r in ran) / wall_s)

@@ -24,7 +24,7 @@ from controller.loop import LoopResult
 from controller.run import RunOutcome, Task, load_task, run_task
 from core.atomic_files import atomic_file
 from core.config import ConfigError
-from evaluation.cli import Terminated
+from evaluation.common.cli_support import Terminated
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
@@ -141,6 +141,7 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         controller=controller,
         seed=seed,
         success=success,
+        status="inserted" if success else "failed",
         failure_reason=failure,
         time_to_insert_s=time_to_insert if success else None,
         duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
@@ -159,6 +160,7 @@ def _result_on_hardware(task, controller, seed, ran: RunOutcome) -> TrialResult:
         controller=controller,
         seed=seed,
         success=success,
+        status="inserted" if success else "failed",
         failure_reason=None if success else (failed[-1] if failed else ran.loop.reason),
         time_to_insert_s=None,
         duration_s=ran.wall_s,

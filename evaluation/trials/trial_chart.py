@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from evaluation.outputs import atomic_file  # noqa: E402
+from evaluation.common.outputs import atomic_file  # noqa: E402
 
 PHASE_COLOURS = {
     "grasp": "#dddddd", "approach": "#cfe2f3", "search": "#fff2cc", "align": "#d9ead3",

@@ -8,9 +8,9 @@ It prints the phase timeline and the outcome, and writes into DIR the trial's re
 ``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
-possible. Exit codes as every tool's (evaluation/cli.py); a trial that fails still exits 0
-(the outcome is the result), a run stopped by SIGINT/SIGTERM exits 130/143 after its safe
-stop, with the record kept.
+possible. Exit codes as every tool's (evaluation/common/cli_support.py); a trial that fails
+still exits 0 (the outcome is the result), a run stopped by SIGINT/SIGTERM exits 130/143
+after its safe stop, with the record kept.
 """
 
 from __future__ import annotations
@@ -19,8 +19,8 @@ import argparse
 from pathlib import Path
 
 from controller.run.task import load_task
-from evaluation.cli import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
-from evaluation.outputs import check_output_folder
+from evaluation.common.cli_support import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
+from evaluation.common.outputs import check_output_folder
 from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED

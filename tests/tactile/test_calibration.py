@@ -3,7 +3,7 @@ import pytest
 
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
 from core.config import ConfigError
-from evaluation.outputs import write_text
+from evaluation.common.outputs import write_text
 
 
 def series(rng, slope=0.004, offset=0.0, noise=0.0):

@@ -2,7 +2,7 @@
 
 Shared by the real-texture appearance (drivers/sim/render/real_texture.py: where the markers
 are, and the static LED shading to divide out) and the appearance statistics
-(evaluation/appearance.py). Images are (H, W) grey or (H, W, C) colour float32 or uint8 grey
+(evaluation/appearance/stats.py). Images are (H, W) grey or (H, W, C) colour float32 or uint8 grey
 levels; positions are px (x right, y down, pixel centres at integers).
 
 A marker is a dark, compact blob: a connected region darker than the image's grey-level
@@ -38,7 +38,7 @@ MASK_MARGIN_PX = 2
 
 OCTAVE_SIGMAS_PX = (0.0, 1.0, 2.0, 4.0, 8.0, 16.0)
 """Gaussian sigmas (px at 320 px width; 0: no blur) bounding the octave bands in which the
-shading between markers is measured (evaluation/appearance.py) and the ``realistic``
+shading between markers is measured (evaluation/appearance/stats.py) and the ``realistic``
 texture is drawn (drivers/sim/render/realistic.py): band k lies between sigmas k and k + 1."""
 
 

@@ -2,9 +2,9 @@
 
 ``RealisticLook`` holds the numbers; ``REALISTIC`` is fitted to the two GelSight captures
 with markers, ``REALISTIC_DIGIT`` to the two DIGIT captures (drivers/sim/render/real_gels/).
-They were fitted by ``python scripts/fit_appearance.py`` (evaluation/appearance_fit.py):
+They were fitted by ``python scripts/fit_appearance.py`` (evaluation/appearance/fit.py):
 starting from a guess, it renders the look with a few seeds, measures the rendered frames
-with the same statistics as the captures (evaluation/appearance.py), and scales each
+with the same statistics as the captures (evaluation/appearance/stats.py), and scales each
 parameter by the ratio of the captures' statistic to the rendered one, eight times over.
 docs/SIMULATION.md tabulates the statistics real against rendered.
 

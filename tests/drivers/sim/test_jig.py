@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from drivers.sim.scenes.jig import Experiment, JigGel, ft_samples, jig_program, tactile_times
-from evaluation.sim_setup import gel_model, jig_config
+from evaluation.common.sim_setup import gel_model, jig_config
 
 EXPERIMENTS = [Experiment("x", 0.02, 2), Experiment("y", 0.04, 2)]
 

@@ -13,7 +13,7 @@ from drivers.sim.scenes.press_roll import (
     press_roll_program,
     press_roll_states,
 )
-from evaluation.sim_setup import gel_profile
+from evaluation.common.sim_setup import gel_profile
 
 SHORT = PressRollConfig(open_frames=2, press_frames=4, roll_frames=8, press_rolled_frames=4)
 

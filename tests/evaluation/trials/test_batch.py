@@ -1,0 +1,436 @@
+"""Batches of trials: seeds, executors (local and Ray), summary, CSV, charts, CLI."""
+
+import csv
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from core.config import ConfigError
+from evaluation.common.cli_support import ToolError
+from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
+from evaluation.trials.batch_cli import TRIAL_FUNCTION
+from evaluation.trials.batch_cli import main as batch_main
+from evaluation.trials.charts import speed_success_chart, time_histogram
+from evaluation.trials.compare import main as compare_main
+from evaluation.trials.executors import LocalExecutor, open_executor
+from evaluation.trials.result import TrialResult
+from evaluation.trials.spec import SpecError, TrialSpec, format_seeds, parse_seeds
+from evaluation.trials.summary import summarize, wilson_ci
+
+ROOT = Path(__file__).resolve().parents[3]
+FORCE_LIMIT_N = 20.0
+
+
+def fake_trial(spec: TrialSpec) -> TrialResult:
+    """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed."""
+    if spec.seed == 5:
+        raise RuntimeError("boom\nsecond line")
+    success = spec.seed % 4 != 3
+    speed = 1.0
+    for item in spec.overrides:
+        key, _, value = item.partition("=")
+        if key == "machine.insert.speed_m_s":
+            speed = float(value)
+    time_s = 5.0 + 0.5 * spec.seed / speed
+    return TrialResult(
+        task=spec.task,
+        controller=spec.controller,
+        seed=spec.seed,
+        success=success,
+        status="inserted" if success else "failed",
+        failure_reason=None if success else "timeout",
+        time_to_insert_s=time_s if success else None,
+        duration_s=time_s + 1.0,
+        max_true_force_n=10.0 + spec.seed,
+        force_limit_n=FORCE_LIMIT_N,
+        wall_time_s=0.25,
+    )
+
+
+def slow_trial(spec: TrialSpec) -> TrialResult:
+    """Seed 0 returns at once, the others take long (to interrupt)."""
+    if spec.seed > 0:
+        time.sleep(30)
+    return fake_trial(spec)
+
+
+def recording_trial(spec: TrialSpec) -> TrialResult:
+    """Writes the spec into its out_dir, as the real trial writes its record."""
+    spec.out_dir.mkdir(parents=True)
+    (spec.out_dir / "spec.txt").write_text(repr(spec))
+    return fake_trial(spec)
+
+
+def specs(seeds, controller="dipole", overrides=()):
+    return [TrialSpec("usb_c", controller, s, tuple(overrides)) for s in seeds]
+
+
+# -- seeds and specs ---------------------------------------------------------------------
+
+
+def test_seeds_run_from_a_up_to_b_excluded():
+    assert list(parse_seeds("3:7")) == [3, 4, 5, 6]
+    assert list(parse_seeds(" 0 : 1 ")) == [0]
+    assert format_seeds(parse_seeds("10:200")) == "10:200"
+
+
+@pytest.mark.parametrize("text", ["5", "5:5", "7:3", "a:b", "-1:3", "1.5:3", "", "1:2:3", "0:1e3"])
+def test_bad_seeds_are_one_line_errors(text):
+    with pytest.raises(SpecError, match=r"seeds .*expected") as caught:
+        parse_seeds(text)
+    assert "\n" not in str(caught.value)
+
+
+def test_spec_refuses_an_unknown_controller():
+    with pytest.raises(SpecError, match="expected one of dipole, fingervision, blind, oracle"):
+        TrialSpec("usb_c", "magic", 0)
+
+
+# -- summary -------------------------------------------------------------------------------
+
+
+def _wilson_by_formula(k, n, z=1.959963984540054):
+    centre = (k + z * z / 2) / (n + z * z)
+    half = z / (n + z * z) * math.sqrt(k * (n - k) / n + z * z / 4)
+    return centre - half, centre + half
+
+
+@pytest.mark.parametrize("k, n", [(0, 10), (8, 10), (10, 10), (196, 200), (1, 1)])
+def test_wilson_interval_matches_the_formula(k, n):
+    assert wilson_ci(k, n) == pytest.approx(_wilson_by_formula(k, n), abs=1e-9)
+
+
+def test_wilson_interval_known_values():
+    low, high = wilson_ci(8, 10)
+    assert (round(low, 4), round(high, 4)) == (0.4902, 0.9433)
+    assert wilson_ci(0, 0) is None
+
+
+def _result(seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0,
+            status=None):
+    status = status or ("inserted" if success else "failed")
+    return TrialResult("usb_c", "dipole", seed, success, status, reason, time_s, duration, force,
+                       FORCE_LIMIT_N, wall)
+
+
+def test_summary_values():
+    results = [
+        _result(0, True, 4.0),
+        _result(1, True, 6.0, force=25.0),
+        _result(2, True, 8.0),
+        _result(3, False, reason="timeout"),
+        _result(4, False, reason="timeout", force=21.0),
+        _result(5, False, reason="slip", duration=30.0, wall=3.0),
+    ]
+    summary = summarize(results, task="usb_c", controller="dipole")
+    assert summary["task"] == "usb_c" and summary["controller"] == "dipole"
+    assert summary["n"] == 6 and summary["successes"] == 3
+    assert summary["success_rate"] == 0.5
+    assert summary["success_ci95"] == pytest.approx(_wilson_by_formula(3, 6))
+    assert summary["median_time_s"] == 6.0
+    assert summary["p90_time_s"] == pytest.approx(7.6)  # linear interpolation
+    assert summary["max_true_force_n"] == 25.0
+    assert summary["over_force_trials"] == 2
+    assert summary["failures"] == {"slip": 1, "timeout": 2}
+    assert summary["failed_seeds"] == [3, 4, 5]
+    assert summary["sim_speed_x_realtime"] == pytest.approx(80.0 / 8.0)
+
+
+def test_summary_counts_errors_by_status_not_by_reason():
+    results = [
+        _result(0, False, reason="error: a failure reason that happens to read so"),
+        _result(1, False, reason="worker lost", duration=0.0, wall=5.0, status="error"),
+    ]
+    summary = summarize(results)
+    assert summary["errors"] == 1
+    assert summary["sim_duration_s"] == 10.0 and summary["wall_time_s"] == 1.0
+
+
+def test_a_status_must_agree_with_success():
+    with pytest.raises(ValueError, match="contradicts"):
+        _result(0, True, 4.0, status="failed")
+    with pytest.raises(ValueError, match="contradicts"):
+        _result(0, False, status="inserted")
+    with pytest.raises(ValueError, match="expected one of inserted, failed, error"):
+        _result(0, False, status="crashed")
+
+
+def test_summary_is_independent_of_arrival_order():
+    results = [fake_trial(s) for s in specs([0, 1, 2, 3, 4, 6])]
+    assert summarize(results) == summarize(results[::-1])
+
+
+def test_summary_of_no_success_has_no_times():
+    summary = summarize([_result(0, False, reason="timeout")])
+    assert summary["median_time_s"] is None and summary["p90_time_s"] is None
+    assert summary["success_rate"] == 0.0
+
+
+# -- batches -------------------------------------------------------------------------------
+
+
+def _read_csv(path):
+    with path.open(newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def _run(tmp_path, executor, seeds=range(0, 12), function=fake_trial, name="batch"):
+    batch = Batch(specs(seeds), tmp_path / name, {"task": "usb_c", "controller": "dipole"})
+    stopped = run_batches(function, [batch], executor, progress=False)
+    return batch, stopped
+
+
+def test_batch_writes_summary_and_csv_and_turns_an_exception_into_an_error_trial(tmp_path):
+    batch, stopped = _run(tmp_path, LocalExecutor(1))
+    assert stopped is None
+    summary = json.loads((tmp_path / "batch" / SUMMARY_NAME).read_text())
+    assert summary["n"] == 12 and summary["requested"] == 12 and summary["complete"] is True
+    assert summary["successes"] == 8  # 3, 7, 11 time out, 5 raises
+    assert summary["failures"] == {"error: RuntimeError: boom second line": 1, "timeout": 3}
+    assert summary["errors"] == 1
+    assert summary["max_true_force_n"] == 21.0 and summary["over_force_trials"] == 1
+    rows = _read_csv(tmp_path / "batch" / CSV_NAME)
+    assert tuple(rows[0]) == CSV_COLUMNS
+    assert [int(r["seed"]) for r in rows] == list(range(12))
+    error = rows[5]
+    assert error["success"] == "False" and error["failure_reason"].startswith("error: Runtime")
+    assert error["status"] == "error"
+    assert {r["status"] for i, r in enumerate(rows) if i != 5} == {"inserted", "failed"}
+    assert error["time_to_insert_s"] == ""
+
+
+def test_csv_streams_each_result_as_it_arrives(tmp_path):
+    seen = []
+    path = tmp_path / "batch" / CSV_NAME
+
+    def check(result):
+        seen.append(len(_read_csv(path)))
+
+    batch = Batch(specs(range(4)), tmp_path / "batch")
+    run_batches(fake_trial, [batch], LocalExecutor(1), progress=False, on_result=check)
+    assert seen == [1, 2, 3, 4]  # on disk before the next trial starts
+
+
+def test_a_folder_holding_a_batch_is_refused(tmp_path):
+    from evaluation.trials.batch import check_batch_folder
+
+    _run(tmp_path, LocalExecutor(1), seeds=range(2))
+    with pytest.raises(ToolError, match="already holds a batch"):
+        check_batch_folder(tmp_path / "batch")
+
+
+def test_local_pool_gives_the_same_summary_as_in_process(tmp_path):
+    serial, _ = _run(tmp_path, LocalExecutor(1), name="serial")
+    pooled, _ = _run(tmp_path, LocalExecutor(2), name="pooled")
+    assert pooled.summary == serial.summary
+    assert sorted(r.seed for r in pooled.results) == list(range(12))
+
+
+def test_interrupt_keeps_what_finished(tmp_path):
+    batch = Batch(specs(range(3)), tmp_path / "batch")
+
+    def interrupt(result):
+        raise KeyboardInterrupt
+
+    stopped = run_batches(
+        slow_trial, [batch], LocalExecutor(2), progress=False, on_result=interrupt
+    )
+    assert stopped == "SIGINT"
+    summary = json.loads((tmp_path / "batch" / SUMMARY_NAME).read_text())
+    assert summary["complete"] is False and summary["requested"] == 3 and summary["n"] == 1
+    assert len(_read_csv(tmp_path / "batch" / CSV_NAME)) == 1
+
+
+# -- Ray -------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def ray_available():
+    return pytest.importorskip("ray")
+
+
+def test_ray_gives_the_same_summary_as_local(tmp_path, ray_available):
+    local, _ = _run(tmp_path, LocalExecutor(1), name="local")
+    began = time.perf_counter()
+    remote, stopped = _run(tmp_path, open_executor("ray", workers=2), name="ray")
+    print(f"ray batch took {time.perf_counter() - began:.1f} s")
+    assert stopped is None
+    assert remote.summary == local.summary
+    assert json.loads((tmp_path / "ray" / SUMMARY_NAME).read_text()) == json.loads(
+        (tmp_path / "local" / SUMMARY_NAME).read_text()
+    )
+
+
+# -- command line --------------------------------------------------------------------------
+
+FAKE = f"{__name__}:fake_trial"
+
+
+def check_spec(spec: TrialSpec) -> None:
+    """The fake trial function's check: only usb_a and usb_c, only known override keys."""
+    if spec.task not in ("usb_a", "usb_c"):
+        raise ConfigError(f"unknown task configuration {spec.task!r}")
+    for item in spec.overrides:
+        if item.partition("=")[0] not in ("machine.insert.speed_m_s", "scene.friction"):
+            raise ConfigError(f"override {item!r}: unknown key")
+
+
+def run_cli(tmp_path, *args, out="out"):
+    return batch_main(
+        ["--task", "usb_c", "--out", str(tmp_path / out), "--trial-function", FAKE, *args]
+    )
+
+
+def test_cli_runs_a_batch(tmp_path, capsys):
+    assert run_cli(tmp_path, "--seeds", "0:8", "--set", "scene.friction=0.4") == 0
+    summary = json.loads((tmp_path / "out" / SUMMARY_NAME).read_text())
+    assert summary["seeds"] == "0:8" and summary["n"] == 8 and summary["successes"] == 5
+    assert summary["overrides"] == ["scene.friction=0.4"]
+    assert summary["executor"] == "local" and summary["workers"] == 1
+    assert summary["controller"] == "dipole" and summary["task"] == "usb_c"
+    assert "5/8 succeeded" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--seeds", "5:2"], "argument --seeds"),
+        (["--seeds", "0:2", "--workers", "0"], "argument --workers"),
+        (["--seeds", "0:2", "--controller", "magic"], "argument --controller"),
+        (["--seeds", "0:2", "--executor", "dask"], "argument --executor"),
+        (["--seeds", "0:2", "--set", "scene.friction"], "argument --set"),
+        (["--seeds", "0:2", "--ray-address", "auto"], "only with --executor ray"),
+    ],
+)
+def test_bad_cli_arguments_exit_2(tmp_path, capsys, args, message):
+    with pytest.raises(SystemExit) as caught:
+        run_cli(tmp_path, *args)
+    assert caught.value.code == 2
+    err = capsys.readouterr().err
+    assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--seeds", "0:2", "--set", "scene.frction=1"], "override 'scene.frction=1'"),
+        (["--seeds", "0:2", "--trial-function", "nowhere.at_all:run"], "cannot be imported"),
+    ],
+)
+def test_bad_inputs_found_before_any_trial_exit_2(tmp_path, capsys, args, message):
+    assert run_cli(tmp_path, *args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and err.startswith("run_trials: error:")
+    assert not (tmp_path / "out" / CSV_NAME).exists()
+
+
+def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, capsys):
+    assert batch_main(["--task", "usb_x", "--seeds", "0:2", "--out", str(tmp_path / "a"),
+                       "--trial-function", FAKE]) == 2
+    assert "unknown task configuration 'usb_x'" in capsys.readouterr().err
+    assert run_cli(tmp_path, "--seeds", "0:2") == 0
+    assert run_cli(tmp_path, "--seeds", "0:2") == 2
+    assert "already holds a batch" in capsys.readouterr().err
+
+
+def test_records_give_each_trial_its_own_folder(tmp_path):
+    assert run_cli(tmp_path, "--seeds", "0:2", "--controller", "blind", "--records",
+                   "--trial-function", f"{__name__}:recording_trial") == 0
+    text = (tmp_path / "out" / "records" / "blind-1" / "spec.txt").read_text()
+    assert "seed=1" in text and "controller='blind'" in text
+
+
+def test_default_trial_function_is_the_real_runner():
+    assert TRIAL_FUNCTION == "evaluation.trials.trial:run_trial"
+
+
+def test_ray_missing_is_a_one_line_error(monkeypatch):
+    monkeypatch.setitem(sys.modules, "ray", None)
+    monkeypatch.delitem(sys.modules, "evaluation.trials.ray_executor", raising=False)
+    with pytest.raises(ToolError, match=r"^the Ray executor needs Ray.*tactile-insertion\[ray\]"):
+        open_executor("ray", workers=1)
+
+
+# -- comparison and charts ---------------------------------------------------------------------
+
+
+def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    code = compare_main(
+        ["--task", "usb_c", "--seeds", "0:6", "--controllers", "dipole,blind,oracle",
+         "--speeds", "0.01,0.02", "--out", str(out), "--trial-function", FAKE]
+    )
+    assert code == 0
+    for name in ("speed_success.png", "time_to_insert_0.01.png", "time_to_insert_0.02.png"):
+        assert (out / name).stat().st_size > 1000
+    table = (out / "comparison.md").read_text()
+    assert table.count("\n| ") == 1 + 6  # header and one row per cell
+    assert "oracle (true wrench: upper bound)" in table and "![success against" in table
+    summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
+    assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
+    assert summary["controller"] == "blind" and summary["n"] == 6
+    every = json.loads((out / "comparison.json").read_text())
+    assert len(every) == 6
+    # the fake trial is slower at the lower speed: the histogram's data differ by speed
+    slow = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
+    assert slow["median_time_s"] > summary["median_time_s"]
+
+
+def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
+    with pytest.raises(SystemExit) as caught:
+        compare_main(["--task", "usb_c", "--seeds", "0:2", "--out", str(tmp_path),
+                      "--set", "machine.insert.speed_m_s=1", "--trial-function", FAKE])
+    assert caught.value.code == 2
+    assert "is the speed key" in capsys.readouterr().err
+
+
+def test_charts_with_an_empty_controller(tmp_path):
+    summary = summarize([_result(0, True, 4.0), _result(1, False, reason="timeout")])
+    speed_success_chart({"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png",
+                        "speed", "t")
+    time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
+    assert (tmp_path / "a.png").stat().st_size > 1000
+    assert (tmp_path / "b.png").stat().st_size > 1000
+
+
+def test_an_unreachable_ray_address_is_a_quick_one_line_error(ray_available):
+    from evaluation.trials.ray_executor import check_reachable
+
+    with pytest.raises(ToolError, match=r"--ray-address 127.0.0.1:1: cannot connect"):
+        check_reachable("127.0.0.1:1")
+    with pytest.raises(ToolError, match=r"expected auto, HOST:PORT"):
+        check_reachable("somewhere")
+
+
+def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
+    out = tmp_path / "out"
+    code = (
+        "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
+    )
+    process = subprocess.Popen(
+        [sys.executable, "-c", code, "--task", "usb_c", "--seeds", "0:3", "--workers", "2",
+         "--out", str(out), "--trial-function", f"{__name__}:slow_trial"],
+        cwd=ROOT,
+        env={**os.environ, "PYTHONPATH": str(ROOT)},
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (
+        (out / CSV_NAME).exists() and len(_read_csv(out / CSV_NAME)) == 1
+    ):
+        time.sleep(0.1)
+    process.send_signal(signal.SIGTERM)
+    _, err = process.communicate(timeout=30)
+    assert process.returncode == 143, err
+    assert "interrupted by SIGTERM after 1 of 3 trials" in err
+    summary = json.loads((out / SUMMARY_NAME).read_text())
+    assert summary["complete"] is False and summary["n"] == 1 and summary["requested"] == 3

@@ -1,0 +1,122 @@
+"""The single-trial tool: task files, overrides, the information barrier, the record."""
+
+from __future__ import annotations
+
+import json
+import types
+
+import numpy as np
+import pytest
+
+from controller.loop import ControlLoop
+from controller.run.task import load_task
+from core.config import ConfigError
+from drivers.sim.scenes.insertion import TruthLog
+from evaluation.common.cli_support import Terminated
+from evaluation.trials import trial
+from evaluation.trials.spec import TrialSpec
+from evaluation.trials.trial_cli import main
+
+SHORT = ("machine.timeouts.total_s=6.0",)  # grasp and the start of the approach only
+
+
+def test_both_task_files_load_whole():
+    for name in ("usb_a", "usb_c"):
+        task = load_task(name)
+        assert task.config.task == name
+        assert task.config.plug.width_m < task.scene.receptacle.width_m
+
+
+@pytest.mark.parametrize(
+    ("override", "message"),
+    [
+        ("scene.friction=abc", "key 'scene.friction': expected a number"),
+        ("scene.frict=0.5", "unknown key 'frict' in 'scene'"),
+        ("machine.search.pattern=zigzag", "key 'machine.search.pattern'"),
+        ("loop.rate_hz=-5", "key 'loop.rate_hz'"),
+    ],
+)
+def test_a_bad_override_is_one_line_and_exit_2(override, message, tmp_path, capsys):
+    code = main(["--task", "usb_c", "--set", override, "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and len(err.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_bad_task_file_is_one_line_and_exit_2(tmp_path, capsys):
+    bad = tmp_path / "task.yaml"
+    bad.write_text(
+        (load_task("usb_c").path.read_text()).replace("  rate_hz: 100.0", "  rate_hz: fast")
+    )
+    code = main(["--task", str(bad), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 2 and "key 'loop.rate_hz'" in err and len(err.strip().splitlines()) == 1
+    code = main(["--task", "usb_z", "--out", str(tmp_path / "out")])
+    assert code == 2 and "unknown task configuration 'usb_z'" in capsys.readouterr().err
+
+
+def test_the_oracle_is_refused_on_the_robot(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["--task", "usb_c", "--backend", "real", "--controller", "oracle",
+              "--out", str(tmp_path / "o")])  # fmt: skip
+    assert exit_info.value.code == 2 and "sim only" in capsys.readouterr().err
+    with pytest.raises(ConfigError, match="sim only"):
+        trial.run(load_task("usb_c"), "oracle", 0, backend="real")
+
+
+def test_the_controller_never_reads_the_truth(monkeypatch, tmp_path):
+    """While the loop runs, nothing reads the scene's truth (except the labelled oracle)."""
+    reads: list[str] = []
+    running = {"now": False}
+    original_run = ControlLoop.run
+
+    def run_and_mark(self, *args, **kwargs):
+        running["now"] = True
+        try:
+            return original_run(self, *args, **kwargs)
+        finally:
+            running["now"] = False
+
+    def spy(name, original):
+        def wrapped(self, *args, **kwargs):
+            if running["now"]:
+                reads.append(name)
+            return original(self, *args, **kwargs)
+
+        return wrapped
+
+    monkeypatch.setattr(ControlLoop, "run", run_and_mark)
+    monkeypatch.setattr(TruthLog, "arrays", spy("arrays", TruthLog.arrays))
+    outcome = trial.run(load_task("usb_c", SHORT), "dipole", 3, out_dir=tmp_path / "d")
+    assert outcome.truth is not None and len(outcome.truth["t_s"]) > 100
+    assert reads == []
+    trial.run(load_task("usb_c", SHORT), "oracle", 3)
+    assert reads  # the oracle does read it: the spy works
+
+
+def test_a_short_trial_writes_its_record(tmp_path):
+    out = tmp_path / "trial"
+    code = main(["--task", "usb_c", "--seed", "2", "--out", str(out), *sum(
+        (["--set", s] for s in SHORT), [])])  # fmt: skip
+    assert code == 0
+    ticks = [json.loads(line) for line in (out / "ticks.jsonl").read_text().splitlines()]
+    assert len(ticks) > 500 and ticks[0]["phase"] == "grasp"
+    transitions = (out / "transitions.jsonl").read_text().splitlines()
+    assert json.loads(transitions[0])["from"] == "grasp"
+    summary = json.loads((out / "trial.json").read_text())
+    assert summary["seed"] == 2 and summary["config"]["machine"]["timeouts"]["total_s"] == 6.0
+    truth = np.load(out / "truth.npz")
+    assert np.isfinite(truth["depth_m"]).all() and (out / "summary.png").stat().st_size > 10000
+    code = main(["--task", "usb_c", "--out", str(out)])  # never over an earlier record
+    assert code == 2
+
+
+@pytest.mark.parametrize(
+    ("name", "raised"), [("SIGINT", KeyboardInterrupt), ("SIGTERM", Terminated)]
+)
+def test_a_signal_that_stopped_a_batch_trial_stops_the_batch(monkeypatch, name, raised):
+    loop = types.SimpleNamespace(reason="signal", message=name)
+    outcome = types.SimpleNamespace(loop=loop, result="never recorded")
+    monkeypatch.setattr(trial, "run", lambda *args, **kwargs: outcome)
+    with pytest.raises(raised):
+        trial.run_trial(TrialSpec("usb_c", "dipole", 0))
