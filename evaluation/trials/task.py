@@ -11,6 +11,7 @@ from typing import Any
 
 from controller.insertion import MachineConfig
 from controller.insertion.blind import BlindConfig
+from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
@@ -95,4 +96,13 @@ def load_task(name_or_path: str, overrides: Sequence[str] = ()) -> Task:
         device = config.devices.path(kind)
         if device is not None and not device.is_file():
             raise ConfigError(f"{source}: key 'devices.{kind}': no such file {device}")
+    check_task_limits(
+        source=source,
+        machine_limits=config.machine.limits,
+        limits=config.limits,
+        arm_file=config.devices.path("arm"),
+        plug=config.plug,
+        hole=config.hole,
+        hole_depth_m=config.scene.receptacle.depth_m,
+    )
     return Task(config, path, tuple(overrides), raw)
