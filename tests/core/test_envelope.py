@@ -53,12 +53,6 @@ def _angle_between(a: Rotation, b: Rotation) -> float:
     return float((a * b.inv()).magnitude())
 
 
-def test_tilt_is_zero_pointing_down_and_grows_with_pitch():
-    assert tilt_of_rotation(rotation_from_rpy((math.pi, 0.0, 0.7))) == pytest.approx(0.0, abs=1e-12)
-    assert tilt_of_rotation(rotation_from_rpy((math.pi, 0.3, 0.0))) == pytest.approx(0.3)
-    assert tilt_of_rotation(rotation_from_rpy((0.0, 0.0, 0.0))) == pytest.approx(math.pi)
-
-
 def test_clamp_position_clips_each_axis_into_the_box():
     clipped = clamp_position((0.0, 0.1, 9.0), ENV)
     np.testing.assert_allclose(clipped, [0.2, 0.1, 0.4])
@@ -103,7 +97,7 @@ def test_clamp_pose_leaves_a_pose_inside_unchanged(pose):
 
 @settings(max_examples=200, deadline=None)
 @given(previous=inside_poses(), xyz=anywhere, rpy=rpys)
-def test_servo_target_respects_box_tilt_and_step(previous, xyz, rpy):
+def test_limit_pose_respects_box_tilt_and_step(previous, xyz, rpy):
     command = limit_pose(Pose(xyz, rpy), previous, ENV, STEP_M, STEP_RAD).value
     position = np.asarray(command.xyz_m)
     assert np.all(position >= ENV.box_min_m - TOL) and np.all(position <= ENV.box_max_m + TOL)
@@ -115,7 +109,7 @@ def test_servo_target_respects_box_tilt_and_step(previous, xyz, rpy):
 
 @settings(max_examples=60, deadline=None)
 @given(start=inside_poses(), goal=inside_poses())
-def test_servo_target_reaches_a_goal_inside_the_envelope(start, goal):
+def test_limit_pose_reaches_a_goal_inside_the_envelope(start, goal):
     pose = start
     for _ in range(40):  # the box diagonal is 0.6 m (12 steps); a half turn is 16 steps
         pose = limit_pose(goal, pose, ENV, max_step_m=0.05, max_step_rad=0.2).value
@@ -132,7 +126,7 @@ def test_servo_target_reaches_a_goal_inside_the_envelope(start, goal):
     angular=st.tuples(*(st.floats(-5.0, 5.0),) * 3),
     duration=st.floats(0.001, 1.0),
 )
-def test_clamp_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angular, duration):
+def test_limit_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angular, duration):
     pose = Pose(xyz, rpy)
     twist = limit_twist(Twist(linear, angular), pose, duration, ENV).value
     v, w = np.asarray(twist.linear_m_s), np.asarray(twist.angular_rad_s)
@@ -151,7 +145,7 @@ def test_clamp_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angul
         assert tilt_of_rotation(Rotation.from_rotvec(w * t) * rotation) <= allowed
 
 
-def test_clamp_twist_zeroes_the_component_leaving_at_a_face_only():
+def test_limit_twist_zeroes_the_component_leaving_at_a_face_only():
     at_floor = Pose((0.3, 0.0, ENV.z_min_m), (math.pi, 0.0, 0.0))
     twist = limit_twist(Twist((0.05, 0.0, -0.05), (0.0, 0.0, 0.0)), at_floor, 0.1, ENV).value
     assert twist.linear_m_s == pytest.approx((0.05, 0.0, 0.0))
@@ -159,7 +153,7 @@ def test_clamp_twist_zeroes_the_component_leaving_at_a_face_only():
     assert up.linear_m_s == pytest.approx((0.0, 0.0, 0.05))
 
 
-def test_clamp_twist_keeps_rotation_about_the_vertical_at_the_tilt_limit():
+def test_limit_twist_keeps_rotation_about_the_vertical_at_the_tilt_limit():
     at_limit = Pose((0.3, 0.0, 0.2), (math.pi, ENV.max_tilt_rad, 0.0))
     twist = limit_twist(Twist((0.0, 0.0, 0.0), (0.0, 0.3, 0.2)), at_limit, 0.1, ENV).value
     assert twist.angular_rad_s == pytest.approx((0.0, 0.0, 0.2))

@@ -275,6 +275,7 @@ def test_controller_imports_only_the_driver_interfaces():
         "core.clock",
         "core.sensor_profile",  # sensor geometry: a driver-level fact, not a driver
         "core.task_geometry",  # the task's plug and hole, shared with the scene
+        "drivers.registry",  # devices by configuration (the layer rule, tests/test_layers.py)
     }
     imported = _imports("controller")
     assert not [(p, m) for p, m in imported if m.startswith("drivers") and m not in allowed]
