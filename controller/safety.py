@@ -1,20 +1,14 @@
 """Safety of the control loop: command limits, the watchdog and the safe stop.
 
 **Limits** (``CommandLimiter.limit``, applied by the loop to every command before it is
-sent; frames: B the arm base, T the tool; SI units). The arm driver enforces its own
-envelope as well (drivers/arm/envelope.py); these are the task's, usually tighter.
+sent; frames: B the arm base, T the tool; SI units): the task's ``limits:``, an
+``core.envelope.Envelope`` applied with that module's clamps (its docstring gives the
+policy), the same geometry as the arm driver's own envelope (drivers/arm/arm_envelope.py),
+usually tighter. A twist is limited over the loop's
+``hold_s``; a pose target is stepped from the previous pose target (or, for the first, the
+measured TCP) by at most ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` times one
+period.
 
-* Twist (held for the loop's ``hold_s``): the linear speed is scaled down to
-  ``max_linear_speed_m_s`` and the angular one to ``max_angular_speed_rad_s`` (directions
-  kept); each linear component is then cut so the TCP stays in the workspace box for
-  ``hold_s`` (a component leaving the box at its face becomes zero; moving back in is
-  allowed); if the rotation would tilt the tool beyond ``max_tilt_rad`` from the downward
-  vertical (or beyond its current tilt, if already outside) within ``hold_s``, the
-  horizontal angular components are zeroed, leaving the rotation about the vertical, which
-  keeps the tilt.
-* Pose target: clipped into the box, its tilt turned back to ``max_tilt_rad`` along the
-  shortest arc, then stepped from the previous pose target (or, for the first, the measured
-  TCP) by at most ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` times one period.
 * **Tactile budget**: the newest ``WrenchEstimate`` is over budget when ``|(tau_x, tau_y)|
   > max_tilt_torque``, ``|tau_z| > max_twist_torque`` or ``|normal| > max_normal`` (each
   ``None``: unchecked), in the estimate's own units, which must be ``wrench_units``
@@ -45,42 +39,25 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-import numpy as np
-from scipy.spatial.transform import Rotation, Slerp
-
 from controller.insertion.interface import Command, TeleopInput
 from controller.tactile.wrench import WrenchEstimate
 from controller.teleop import lost_in_control
-from core.config import Config, number
+from core.config import number
 from core.devices import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
+from core.envelope import Envelope, limit_pose, limit_twist, require_finite
 from core.errors import DeviceTimeoutError
-from core.task_geometry import WorkspaceBox
-
-_DOWN_B = np.array([0.0, 0.0, -1.0])
-_TILT_SAMPLES = 8  # points along the twist's horizon where the tilt is checked
-_ROUNDING = 1e-12
 
 
-@dataclass(frozen=True)
-class LimitsConfig(WorkspaceBox, Config):
-    """The task YAML's ``limits:`` section (see the module doc): the workspace box of the TCP
-    in B (m), speeds, the tilt from the downward vertical (rad) and the tactile budget."""
+@dataclass(frozen=True, kw_only=True)
+class LimitsConfig(Envelope):
+    """The task YAML's ``limits:`` section (see the module doc): an ``Envelope`` (the TCP's
+    box in B, speeds, tilt from the downward vertical) and the tactile budget."""
 
-    x_min_m: float = number(-2.0, 2.0, default=0.20)
-    x_max_m: float = number(-2.0, 2.0, default=0.55)
-    y_min_m: float = number(-2.0, 2.0, default=-0.25)
-    y_max_m: float = number(-2.0, 2.0, default=0.25)
-    z_min_m: float = number(-2.0, 2.0, default=0.02)
-    z_max_m: float = number(-2.0, 2.0, default=0.40)
-    max_linear_speed_m_s: float = number(0.0, 1.0, default=0.05)
-    max_angular_speed_rad_s: float = number(0.0, math.pi, default=0.5)
-    max_tilt_rad: float = number(0.0, math.pi / 2, default=0.35)
     wrench_units: Literal["calibrated", "raw"] = "calibrated"
     max_tilt_torque: float | None = number(0.0, 1e6, default=None)
     max_twist_torque: float | None = number(0.0, 1e6, default=None)
     max_normal: float | None = number(0.0, 1e6, default=None)
     over_budget: Literal["lift_only", "stop"] = "lift_only"
-
 
 
 @dataclass(frozen=True)
@@ -90,12 +67,6 @@ class LimitedCommand:
 
     command: Command
     limited: tuple[str, ...] = ()
-
-
-def tilt_rad(rpy_rad: tuple[float, float, float]) -> float:
-    """Angle (rad, [0, pi]) between the tool z-axis of ``rpy_rad`` (T2B, the xArm's fixed-axis
-    roll, pitch, yaw) and the downward vertical of B."""
-    return _tilt_of(Rotation.from_euler("xyz", rpy_rad).as_matrix()[:, 2])
 
 
 def over_budget(wrench: WrenchEstimate | None, limits: LimitsConfig) -> str | None:
@@ -164,31 +135,10 @@ class CommandLimiter:
     # -- twists --------------------------------------------------------------------------
 
     def _limit_twist(self, twist: Twist, tcp: Pose, limited: list[str]) -> Twist:
-        lim = self.limits
-        linear = np.asarray(twist.linear_m_s, dtype=float)
-        angular = np.asarray(twist.angular_rad_s, dtype=float)
-        if not (np.all(np.isfinite(linear)) and np.all(np.isfinite(angular))):
-            raise ValueError(f"command twist: expected finite numbers, got {twist!r}")
-        linear, cut = _scaled_to(linear, lim.max_linear_speed_m_s)
-        angular, turned = _scaled_to(angular, lim.max_angular_speed_rad_s)
-        if cut or turned:
-            limited.append("speed")
-
-        position = np.asarray(tcp.xyz_m, dtype=float)
-        low = np.minimum(0.0, (lim.box_min_m - position) / self.hold_s)
-        high = np.maximum(0.0, (lim.box_max_m - position) / self.hold_s)
-        boxed = np.clip(linear, low, high)
-        if not np.array_equal(boxed, linear):
-            limited.append("workspace")
-
-        z_t = Rotation.from_euler("xyz", tcp.rpy_rad).as_matrix()[:, 2]
-        allowed = max(lim.max_tilt_rad, _tilt_of(z_t)) + _ROUNDING
-        times = np.linspace(self.hold_s / _TILT_SAMPLES, self.hold_s, _TILT_SAMPLES)
-        z_path = Rotation.from_rotvec(np.outer(times, angular)).apply(z_t)
-        if np.any(_tilts_of(z_path) > allowed):
-            angular = np.array([0.0, 0.0, angular[2]])
-            limited.append("tilt")
-        return Twist(_vec3(boxed), _vec3(angular))
+        require_finite("command twist", (*twist.linear_m_s, *twist.angular_rad_s))
+        twist, changes = limit_twist(twist, tcp, self.hold_s, self.limits)
+        limited.extend(changes)
+        return twist
 
     def _unloading_twist(self, twist: Twist) -> Twist:
         if self.limits.over_budget == "stop":
@@ -198,43 +148,17 @@ class CommandLimiter:
     # -- pose targets ----------------------------------------------------------------------
 
     def _limit_pose(self, target: Pose, reference: Pose, limited: list[str]) -> Pose:
+        require_finite("command pose", (*target.xyz_m, *target.rpy_rad))
         lim = self.limits
-        values = np.asarray((*target.xyz_m, *target.rpy_rad), dtype=float)
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"command pose: expected finite numbers, got {target!r}")
-        goal_xyz = np.clip(values[:3], lim.box_min_m, lim.box_max_m)
-        if not np.array_equal(goal_xyz, values[:3]):
-            limited.append("workspace")
-        goal_rot = Rotation.from_euler("xyz", values[3:])
-        clamped = _clamp_tilt(goal_rot, lim.max_tilt_rad)
-        if clamped is not goal_rot:
-            limited.append("tilt")
-            goal_rot = clamped
-
-        start = np.asarray(reference.xyz_m, dtype=float)
-        delta = goal_xyz - start
-        max_step_m = lim.max_linear_speed_m_s * self.period_s
-        distance = float(np.linalg.norm(delta))
-        xyz = goal_xyz
-        if distance > max_step_m:
-            xyz = np.clip(start + delta * (max_step_m / distance), lim.box_min_m, lim.box_max_m)
-            limited.append("step")
-
-        start_rot = Rotation.from_euler("xyz", reference.rpy_rad)
-        max_step_rad = lim.max_angular_speed_rad_s * self.period_s
-        angle = (goal_rot * start_rot.inv()).magnitude()
-        rotation = goal_rot
-        if angle > max_step_rad:
-            if "step" not in limited:
-                limited.append("step")
-            slerp = Slerp([0.0, 1.0], Rotation.concatenate([start_rot, goal_rot]))
-            fraction = max_step_rad / angle
-            for _ in range(2):  # the re-clamp turns by at most the step: one halving suffices
-                rotation = _clamp_tilt(slerp(fraction), lim.max_tilt_rad)
-                if (rotation * start_rot.inv()).magnitude() <= max_step_rad + _ROUNDING:
-                    break
-                fraction /= 2.0
-        return Pose(_vec3(xyz), _rpy_near(rotation, target.rpy_rad))
+        pose, changes = limit_pose(
+            target,
+            reference,
+            lim,
+            max_step_m=lim.max_linear_speed_m_s * self.period_s,
+            max_step_rad=lim.max_angular_speed_rad_s * self.period_s,
+        )
+        limited.extend(changes)
+        return pose
 
     def _unloading_pose(self, pose: Pose, reference: Pose) -> Pose:
         if self.limits.over_budget == "stop":
@@ -337,45 +261,3 @@ def safe_stop(arm: Arm, gripper: Gripper | None = None) -> Exception | None:
             pass
     del gripper  # nothing to send: see the docstring
     return first
-
-
-# -- geometry helpers ------------------------------------------------------------------------
-
-
-def _tilt_of(z_t: np.ndarray) -> float:
-    return math.atan2(math.hypot(z_t[0], z_t[1]), -z_t[2])
-
-
-def _tilts_of(z_t: np.ndarray) -> np.ndarray:
-    return np.arctan2(np.hypot(z_t[:, 0], z_t[:, 1]), -z_t[:, 2])
-
-
-def _clamp_tilt(rotation: Rotation, max_tilt_rad: float) -> Rotation:
-    """``rotation`` turned toward vertical along the shortest arc until its tilt is at most
-    ``max_tilt_rad``; the same object when already within."""
-    z_t = rotation.as_matrix()[:, 2]
-    tilt = _tilt_of(z_t)
-    if tilt <= max_tilt_rad + _ROUNDING:
-        return rotation
-    axis = np.cross(z_t, _DOWN_B)
-    norm = float(np.linalg.norm(axis))
-    axis = np.array([1.0, 0.0, 0.0]) if norm < 1e-12 else axis / norm
-    return Rotation.from_rotvec(axis * (tilt - max_tilt_rad)) * rotation
-
-
-def _rpy_near(rotation: Rotation, reference: tuple[float, float, float]) -> tuple[float, ...]:
-    rpy = rotation.as_euler("xyz")
-    ref = np.asarray(reference, dtype=float)
-    return _vec3(rpy + 2.0 * np.pi * np.round((ref - rpy) / (2.0 * np.pi)))
-
-
-def _scaled_to(vector: np.ndarray, limit: float) -> tuple[np.ndarray, bool]:
-    norm = float(np.linalg.norm(vector))
-    if norm > limit:
-        return vector * (limit / norm), True
-    return vector, False
-
-
-def _vec3(values: np.ndarray) -> tuple[float, float, float]:
-    x, y, z = (float(v) for v in values)
-    return (x, y, z)

@@ -8,8 +8,8 @@
 * ``task_geometry``: the plug and hole of a task;
 * ``sensor_profile``: a visuotactile sensor's image geometry;
 * ``spatial``: rotations and tilts with their frames in the names;
-* ``envelope``: the workspace box and the rate limits, one geometry for the arm driver's
-  envelope and the controller's limiter.
+* ``envelope``: the workspace box, the tilt limit and the speed limits with their clamps,
+  one geometry for the arm driver's envelope and the controller's limiter.
 
 Import rule: ``core`` imports only the standard library, NumPy, SciPy and PyYAML; it never
 imports ``controller``, ``drivers`` or ``evaluation`` (tests/test_layers.py).

@@ -10,13 +10,6 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("controller", "core", "drivers", "evaluation")
 
-# Basenames allowed to repeat for now, each with the clash it stands for. Shrink it; never
-# grow it: a new module takes a name that says what it does.
-ALLOWED_REPEATS = {
-    "config.py",  # core/config.py and controller/insertion/config.py
-}
-
-
 def repeated_basenames(root: Path, packages: tuple[str, ...]) -> dict[str, list[str]]:
     """Basename -> the paths (relative to ``root``) of every module of ``packages`` that bears
     it, for the basenames borne by more than one module."""
@@ -29,12 +22,7 @@ def repeated_basenames(root: Path, packages: tuple[str, ...]) -> dict[str, list[
 
 
 def test_no_module_name_repeats_across_the_packages():
-    repeats = repeated_basenames(ROOT, PACKAGES)
-    assert {n: p for n, p in repeats.items() if n not in ALLOWED_REPEATS} == {}
-
-
-def test_the_allow_list_holds_only_repeats_that_still_exist():
-    assert ALLOWED_REPEATS <= set(repeated_basenames(ROOT, PACKAGES))
+    assert repeated_basenames(ROOT, PACKAGES) == {}
 
 
 def test_a_repeated_name_is_found(tmp_path):

@@ -4,7 +4,6 @@
 task's ``plug:`` and ``hole:``, is read by the task file's schema (controller/run/task.py).
 """
 
-from controller.insertion.config import MachineConfig
 from controller.insertion.definition import INSERTION, Definition, DefinitionError, Edge
 from controller.insertion.interface import (
     Command,
@@ -17,6 +16,7 @@ from controller.insertion.interface import (
     Transition,
 )
 from controller.insertion.machine import InsertionMachine
+from controller.insertion.machine_config import MachineConfig
 from core.task_geometry import HolePose, PlugGeometry
 
 __all__ = [

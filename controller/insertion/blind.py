@@ -25,7 +25,6 @@ from typing import Literal
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import GripperSettings
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.interface import (
     Command,
@@ -35,10 +34,12 @@ from controller.insertion.interface import (
     Phase,
     Transition,
 )
-from controller.insertion.motion import bounded_twist, clamp_norm, rotation_error, rotation_of
+from controller.insertion.machine_config import GripperSettings
+from controller.insertion.motion import bounded_twist, rotation_error
 from controller.insertion.search import SearchPattern
 from core.config import Config, number
 from core.devices import Twist
+from core.spatial import clamp_norm, rotation_from_rpy
 from core.task_geometry import HolePose, PlugGeometry
 
 
@@ -224,6 +225,6 @@ class BlindMachine:
         cfg = self.config
         error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
         v = clamp_norm(cfg.pose_gain_1_s * error, speed_m_s or cfg.move_speed_m_s)
-        turn = rotation_error(rotation_of(obs.arm.tcp), self._upright)
+        turn = rotation_error(rotation_from_rpy(obs.arm.tcp.rpy_rad), self._upright)
         w = clamp_norm(cfg.pose_gain_1_s * turn, cfg.rotate_speed_rad_s)
         return Command(twist=bounded_twist(v, w, cfg.move_speed_m_s, cfg.rotate_speed_rad_s))

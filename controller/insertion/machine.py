@@ -16,7 +16,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import MachineConfig
 from controller.insertion.definition import (
     AUTONOMOUS,
     IN_CONTACT,
@@ -33,19 +32,24 @@ from controller.insertion.interface import (
     Phase,
     Transition,
 )
+from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import (
     approach_rotation,
     bounded_twist,
-    clamp_norm,
     pivot_twist,
     rotation_error,
-    rotation_of,
-    tilt_from_down,
     tip_position,
 )
 from controller.insertion.search import HoleDetector, SearchPattern
 from controller.insertion.signals import TactileSignals
 from core.devices import Twist
+from core.spatial import (
+    clamp_norm,
+    rotation_from_rpy,
+    tilt_of_rotation,
+    tilt_of_tool_axis,
+    tool_z_in_base,
+)
 from core.task_geometry import HolePose, PlugGeometry
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
@@ -220,8 +224,8 @@ class InsertionMachine:
 
     def _limit_exceeded(self, obs: Observation) -> bool:
         limits = self.config.limits
-        rotation = rotation_of(obs.arm.tcp)
-        if tilt_from_down(rotation)[0] > limits.max_tilt_rad:
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        if tilt_of_rotation(rotation) > limits.max_tilt_rad:
             return True
         if self._phase is Phase.APPROACH:
             overtravel = self.hole.z_m - self.config.approach.overtravel_m
@@ -274,8 +278,8 @@ class InsertionMachine:
         twist = bounded_twist(
             np.asarray(teleop.twist.linear_m_s),
             np.asarray(teleop.twist.angular_rad_s),
-            limits.max_linear_m_s,
-            limits.max_angular_rad_s,
+            limits.max_linear_speed_m_s,
+            limits.max_angular_speed_rad_s,
         )
         gripper = None
         if teleop.gripper_close:
@@ -339,7 +343,7 @@ class InsertionMachine:
         """Servo to the tilted pose above the opening (rising first if the tip is below its
         height there, so the plug never sweeps over the board), then descend until contact."""
         stage, settings = self._stage, self.config.approach
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         resume = self._planar(self._pattern.offset(self._search_s_m))
         target_tip = self._hole_xyz + resume + np.array([0.0, 0.0, settings.height_m])
         if stage.name == "":
@@ -380,7 +384,7 @@ class InsertionMachine:
         tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
         tip = tip_position(obs.arm.tcp, self.plug.length_m)
         gain = self.config.approach.pose_gain_1_s
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         if stage.name == "probe":
             return self._probe(obs, new)
         if new:
@@ -422,7 +426,7 @@ class InsertionMachine:
             return _hold()
         if tip_z < self.hole.z_m - approach.overtravel_m:
             return self._fail(obs, FailureReason.CONTACT_LOST)
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         v_tip = np.array([0.0, 0.0, -approach.descend_speed_m_s])
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
@@ -431,7 +435,7 @@ class InsertionMachine:
         ALIGN began, pressing it down toward SEARCH's preload but never below that point (so a
         tip caught in the opening stays there while the plug turns)."""
         stage, settings = self._stage, self.config.align
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         edge = self._lowest_edge(obs, rotation)
         if stage.name == "":
             stage.name = "servo"
@@ -446,13 +450,13 @@ class InsertionMachine:
             stage.point = stage.point + step * stage.v_tip
         if new:
             aligned = self._torques_within_tolerance() and (
-                tilt_from_down(rotation)[0] <= settings.tilt_tol_rad
+                tilt_of_rotation(rotation) <= settings.tilt_tol_rad
             )
             stage.count = stage.count + 1 if aligned else 0
         if stage.count >= settings.frames:
             self._go(obs, Phase.INSERT, "aligned")
             return _hold()
-        w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_rad_s)
+        w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_speed_rad_s)
         v_edge = self.config.approach.pose_gain_1_s * (stage.point - edge)
         v_edge[2] = max(v_edge[2], -self._press_rate())  # never below where ALIGN began
         v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
@@ -500,10 +504,10 @@ class InsertionMachine:
             stage.count = stage.count + 1 if jammed else 0
         if stage.count >= settings.jam_frames:
             return self._back_off(obs, "jam")
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         w = clamp_norm(
             self._align_rate(rotation, settings.compliance_scale),
-            self.config.align.max_angular_rad_s,
+            self.config.align.max_angular_speed_rad_s,
         )
         w[2] = 0.0  # the yaw found while pressing is held
         return self._tip_command(obs, np.array([0.0, 0.0, -settings.speed_m_s]), w)
@@ -513,7 +517,7 @@ class InsertionMachine:
         the yaw; engaged: the push stage; the sweeps done: back off and search again."""
         stage, settings = self._stage, self.config.insert
         z_tcp = float(obs.arm.tcp.xyz_m[2])
-        rotation = rotation_of(obs.arm.tcp)
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         yaw = _yaw_of(rotation) - self.hole.yaw_rad
         if math.isnan(stage.stall_z_m) and not (
             self.signals.axial_force_n < 0.8 * target_load
@@ -539,7 +543,7 @@ class InsertionMachine:
                 return self._back_off(obs, "not_engaged")
             w[2] = stage.yaw_sign * settings.yaw_rate_rad_s
         w[:2] = clamp_norm(self._align_rate(rotation, settings.compliance_scale),
-                           self.config.align.max_angular_rad_s)[:2]
+                           self.config.align.max_angular_speed_rad_s)[:2]
         shortfall = (target_load - self.signals.axial_force_n) / target_load
         v_tip = np.array([0.0, 0.0, -settings.speed_m_s * float(np.clip(shortfall, -1.0, 1.0))])
         return self._tip_command(obs, v_tip, w)
@@ -625,7 +629,7 @@ class InsertionMachine:
         torque_s = self.signals.normalised[:3]
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
         w_t = -self.signals.s2t @ (gains * outside) * scale
-        angle, axis = tilt_from_down(rotation)
+        angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
         return rotation.apply(w_t) + settings.upright_gain_1_s * angle * axis
 
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
@@ -648,7 +652,9 @@ class InsertionMachine:
 
     def _command(self, v: np.ndarray, w: np.ndarray) -> Command:
         limits = self.config.limits
-        return Command(twist=bounded_twist(v, w, limits.max_linear_m_s, limits.max_angular_rad_s))
+        return Command(
+            twist=bounded_twist(v, w, limits.max_linear_speed_m_s, limits.max_angular_speed_rad_s)
+        )
 
     def _capture_open(self, obs: Observation) -> Command:
         """Capture the open gel; the fingers (if wider) travel fast to just above the plug."""

@@ -1,5 +1,5 @@
-"""Kinematics the machine needs: the plug's tip, twists about the tip, bounded twists, tilt.
-Vectors are NumPy arrays in B (m, m/s, rad/s).
+"""Kinematics the machine needs: the plug's tip, twists about the tip, bounded twists.
+Vectors are NumPy arrays in B (m, m/s, rad/s); rotations and tilts are core.spatial's.
 """
 
 from __future__ import annotations
@@ -10,25 +10,13 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from core.devices import Pose, Twist
-
-DOWN_B = np.array([0.0, 0.0, -1.0])
-
-
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """a x b for 3-vectors (``np.cross`` costs ~20 us a call, too much for every tick)."""
-    return np.array(
-        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-    )
-
-
-def rotation_of(pose: Pose) -> Rotation:
-    """T2B rotation of ``pose`` (R = Rz(yaw) Ry(pitch) Rx(roll), the xArm convention)."""
-    return Rotation.from_euler("xyz", pose.rpy_rad)
+from core.spatial import clamp_norm, cross, rotation_from_rpy, vec3
 
 
 def tip_position(pose: Pose, length_m: float) -> np.ndarray:
     """Position in B of the plug's tip, ``length_m`` along T z from the TCP."""
-    return np.asarray(pose.xyz_m, dtype=float) + rotation_of(pose).apply([0.0, 0.0, length_m])
+    tip_offset_B = rotation_from_rpy(pose.rpy_rad).apply([0.0, 0.0, length_m])
+    return np.asarray(pose.xyz_m, dtype=float) + tip_offset_B
 
 
 def pivot_twist(
@@ -40,28 +28,11 @@ def pivot_twist(
     return v_tip + cross(w, p_tcp - p_tip), w
 
 
-def tilt_from_down(rotation: Rotation) -> tuple[float, np.ndarray]:
-    """Angle (rad) between T z and straight down, and the unit axis in B turning T z toward
-    straight down (zero when already aligned or exactly opposite)."""
-    z_t = rotation.apply([0.0, 0.0, 1.0])
-    turn = cross(z_t, DOWN_B)
-    norm = float(np.linalg.norm(turn))
-    angle = math.atan2(norm, float(np.dot(z_t, DOWN_B)))
-    axis = turn / norm if norm > 1e-12 else np.zeros(3)
-    return angle, axis
-
-
-def clamp_norm(vector: np.ndarray, limit: float) -> np.ndarray:
-    """``vector`` scaled down to a norm of at most ``limit``."""
-    norm = float(np.linalg.norm(vector))
-    return vector * (limit / norm) if norm > limit else vector
-
-
 def bounded_twist(v: np.ndarray, w: np.ndarray, max_linear: float, max_angular: float) -> Twist:
     """A Twist with each part's norm bounded (the direction kept)."""
     v = clamp_norm(np.asarray(v, dtype=float), max_linear)
     w = clamp_norm(np.asarray(w, dtype=float), max_angular)
-    return Twist(linear_m_s=tuple(map(float, v)), angular_rad_s=tuple(map(float, w)))
+    return Twist(linear_m_s=vec3(v), angular_rad_s=vec3(w))
 
 
 def rotation_error(current: Rotation, target: Rotation) -> np.ndarray:

@@ -12,9 +12,9 @@ import math
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import SearchSettings
-from controller.insertion.motion import cross
+from controller.insertion.machine_config import SearchSettings
 from controller.insertion.signals import TactileSignals
+from core.spatial import cross
 
 STEADY_COSINE = 0.95  # the resistance is judged only on a steady drag direction
 

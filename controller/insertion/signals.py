@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.insertion.config import SignalSettings, s2t_matrix
+from controller.insertion.machine_config import SignalSettings, s2t_matrix
 from controller.tactile.wrench import WrenchEstimate
 
 CHANNELS = ("tau_x", "tau_y", "tau_z", "shear_x", "shear_y", "normal")

@@ -22,6 +22,7 @@ from typing import Any
 
 from controller.insertion import MachineConfig
 from controller.insertion.blind import BlindConfig
+from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
@@ -126,5 +127,14 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
     for kind, device in config.devices.paths().items():
         if not device.is_file():
             raise ConfigError(f"{source}: key 'devices.{kind}': no such file {device}")
+    check_task_limits(
+        source=source,
+        machine_limits=config.machine.limits,
+        limits=config.limits,
+        arm_file=config.devices.paths()["arm"],
+        plug=config.plug,
+        hole=config.hole,
+        tip_depth_m=max(config.machine.insert.depth_m, config.blind.push_depth_m),
+    )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
     return Task(config, scene, path, tuple(overrides), raw)

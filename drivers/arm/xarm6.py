@@ -19,11 +19,12 @@ connection and never replies; every reply is then awaited at most ``io_timeout_s
 (API code 3: DeviceTimeoutError), a waited move at most ``move_timeout_s``. SDK calls made
 from the main thread wait interruptibly, so Ctrl-C always raises KeyboardInterrupt at once.
 
-Safety envelope. Every target, step and twist passes through ``drivers.arm.envelope``
-before it reaches the SDK (see that module for the policy). Servo streams start from the
-measured pose (projected into the envelope; refused if the arm is more than 1 mm /
-0.01 rad outside); the step per command is bounded by ``max_step_m``/``max_step_rad`` and
-by the maximum speeds times the time since the previous command.
+Safety envelope. Every target, step and twist passes through ``drivers.arm.arm_envelope``
+(the clamps of ``core.envelope``) before it reaches the SDK (see those modules for the
+policy). Servo streams start from the measured pose (projected into the envelope; refused
+if the arm is more than 1 mm / 0.01 rad outside); the step per command is bounded by
+``max_step_m``/``max_step_rad`` and by the maximum speeds times the time since the previous
+command.
 
 Faults. Every ``(code, value)`` or ``code`` the SDK returns is checked: -1 raises
 DeviceNotConnectedError, reply/motion timeouts (3, 100) DeviceTimeoutError, anything else
@@ -50,21 +51,16 @@ import numpy as np
 from core.clock import Clock, MonotonicClock
 from core.config import Config, number
 from core.devices import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import (
     DeviceError,
     DeviceFaultError,
     DeviceNotConnectedError,
     DeviceTimeoutError,
 )
+from core.spatial import rotation_from_rpy
 from drivers.arm import xarm_codes, xarm_sdk
-from drivers.arm.envelope import (
-    SafetyEnvelope,
-    clamp_pose,
-    clamp_twist,
-    require_finite,
-    rotation_from_rpy,
-    timed_servo_target,
-)
+from drivers.arm.arm_envelope import SafetyEnvelope, timed_servo_target
 
 _LOG = logging.getLogger(__name__)
 
@@ -246,8 +242,8 @@ class XArm6(ContextManagedDevice):
         if not math.isfinite(speed_m_s) or speed_m_s <= 0:
             raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
         self._prepare_motion()
-        goal = clamp_pose(target, self.config.envelope)
-        speed = min(speed_m_s, self.config.envelope.max_speed_m_s)
+        goal = clamp_pose(target, self.config.envelope).value
+        speed = min(speed_m_s, self.config.envelope.max_linear_speed_m_s)
         self._enter_mode(ArmMode.POSITION)
         x, y, z, roll, pitch, yaw = _sdk_pose(goal)
         code = self._api.set_position(
@@ -292,7 +288,7 @@ class XArm6(ContextManagedDevice):
         self._prepare_motion()
         duration = min(duration_s, self.config.velocity_timeout_s)
         self._enter_mode(ArmMode.VELOCITY)
-        command = clamp_twist(self._read_pose(), twist, duration, self.config.envelope)
+        command = limit_twist(twist, self._read_pose(), duration, self.config.envelope).value
         code = self._api.vc_set_cartesian_velocity(
             _sdk_twist(command), is_radian=True, is_tool_coord=False, duration=duration
         )
@@ -377,7 +373,7 @@ class XArm6(ContextManagedDevice):
             self._arm(mode)
         if mode is ArmMode.SERVO and self._servo_reference is None:
             measured = self._read_pose()
-            start = clamp_pose(measured, self.config.envelope)
+            start = clamp_pose(measured, self.config.envelope).value
             offset_m = float(np.linalg.norm(np.subtract(measured.xyz_m, start.xyz_m)))
             turn = rotation_from_rpy(start.rpy_rad) * rotation_from_rpy(measured.rpy_rad).inv()
             if offset_m > _ENTRY_TOLERANCE_M or turn.magnitude() > _ENTRY_TOLERANCE_RAD:

@@ -19,11 +19,13 @@ from controller.safety import (
     Watchdog,
     over_budget,
     safe_stop,
-    tilt_rad,
 )
 from controller.tactile.wrench import WrenchEstimate
 from core.devices import ArmMode, ArmState, ArmStatus, Pose, Twist
+from core.envelope import Envelope, limit_twist
 from core.errors import DeviceFaultError, DeviceTimeoutError
+from core.spatial import rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
+from drivers.arm.arm_envelope import SafetyEnvelope
 
 LIMITS = LimitsConfig(max_linear_speed_m_s=0.05, max_angular_speed_rad_s=0.5, max_tilt_rad=0.3)
 PERIOD, HOLD = 0.01, 0.05
@@ -45,7 +47,7 @@ def poses(draw, max_tilt=0.6):
     yaw = draw(st.floats(-math.pi, math.pi))
     tilted = Rotation.from_rotvec([tilt * math.cos(axis_angle), tilt * math.sin(axis_angle), 0])
     rotation = tilted * Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
-    return Pose(tuple(xyz), tuple(rotation.as_euler("xyz")))
+    return Pose(tuple(xyz), rpy_from_rotation(rotation))
 
 
 twists = st.builds(
@@ -61,12 +63,15 @@ def box_excess(xyz) -> float:
     return float(np.max(np.maximum(0, LIMITS.box_min_m - p) + np.maximum(0, p - LIMITS.box_max_m)))
 
 
+def tilt_rad(rpy_rad) -> float:
+    return tilt_of_rotation(rotation_from_rpy(rpy_rad))
+
+
 def after(pose: Pose, twist: Twist, t_s: float) -> Pose:
-    rotation = Rotation.from_rotvec(np.asarray(twist.angular_rad_s) * t_s) * Rotation.from_euler(
-        "xyz", pose.rpy_rad
-    )
+    turn = Rotation.from_rotvec(np.asarray(twist.angular_rad_s) * t_s)
+    rotation = turn * rotation_from_rpy(pose.rpy_rad)
     xyz = np.asarray(pose.xyz_m) + np.asarray(twist.linear_m_s) * t_s
-    return Pose(tuple(xyz), tuple(rotation.as_euler("xyz")))
+    return Pose(tuple(xyz), rpy_from_rotation(rotation))
 
 
 @settings(max_examples=300, deadline=None)
@@ -93,9 +98,19 @@ def test_a_limited_pose_target_stays_in_the_box_the_cone_and_the_step(tcp, targe
     step = np.linalg.norm(np.subtract(out.pose.xyz_m, tcp.xyz_m))
     assert step <= LIMITS.max_linear_speed_m_s * PERIOD + EPS
     turn = (
-        Rotation.from_euler("xyz", out.pose.rpy_rad) * Rotation.from_euler("xyz", tcp.rpy_rad).inv()
+        rotation_from_rpy(out.pose.rpy_rad) * rotation_from_rpy(tcp.rpy_rad).inv()
     )
     assert turn.magnitude() <= LIMITS.max_angular_speed_rad_s * PERIOD + 1e-9
+
+
+@settings(max_examples=100, deadline=None)
+@given(tcp=poses(), twist=twists)
+def test_the_limiter_and_the_arm_envelope_share_one_geometry(tcp, twist):
+    """The same box, speeds and tilt give the same twist, bit for bit, in the loop's limiter
+    and in the arm driver's envelope (both core.envelope's, read by the same key names)."""
+    arm = SafetyEnvelope(**{f.name: getattr(LIMITS, f.name) for f in dataclasses.fields(Envelope)})
+    limited = CommandLimiter(LIMITS, PERIOD, HOLD).limit(Command(twist=twist), tcp, None)
+    assert limited.command.twist == limit_twist(twist, tcp, HOLD, arm).value
 
 
 def test_a_reachable_pose_target_passes_unchanged_and_steps_from_the_last_target():
@@ -122,7 +137,7 @@ def test_a_twist_into_a_face_is_cut_at_the_face():
 
 def test_a_tilting_rotation_at_the_cone_keeps_only_the_vertical_part():
     at_limit = Rotation.from_rotvec([LIMITS.max_tilt_rad, 0, 0]) * Rotation.from_euler("x", math.pi)
-    tcp = Pose((0.3, 0.0, 0.2), tuple(at_limit.as_euler("xyz")))
+    tcp = Pose((0.3, 0.0, 0.2), rpy_from_rotation(at_limit))
     outward = Command(twist=Twist((0, 0, 0), (0.2, 0.0, 0.1)))
     result = CommandLimiter(LIMITS, PERIOD, HOLD).limit(outward, tcp, None)
     assert result.command.twist.angular_rad_s == (0.0, 0.0, 0.1)

@@ -24,8 +24,8 @@ from core.clock import ManualClock
 from core.config import CONFIG_ROOT
 from core.devices import Arm, ArmMode, ArmState, Pose, Twist
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
+from core.spatial import rotation_from_rpy, tilt_of_rotation
 from drivers.arm import SafetyEnvelope, TcpConfig, XArm6, XArm6Config
-from drivers.arm.envelope import rotation_from_rpy, tilt_rad
 from drivers.registry import load_device, load_device_config
 from tests.drivers.fake_xarm_api import FakeXArmAPI
 
@@ -33,7 +33,7 @@ CONFIG_FILE = CONFIG_ROOT / "robot" / "xarm6.yaml"
 TOL = 1e-9
 ENV = SafetyEnvelope(
     x_min_m=0.2, x_max_m=0.5, y_min_m=-0.2, y_max_m=0.2, z_min_m=0.05, z_max_m=0.4,
-    max_speed_m_s=0.1, max_angular_speed_rad_s=0.5, max_step_m=0.002, max_step_rad=0.01,
+    max_linear_speed_m_s=0.1, max_angular_speed_rad_s=0.5, max_step_m=0.002, max_step_rad=0.01,
     max_tilt_rad=0.35,
 )  # fmt: skip
 TCP = TcpConfig(
@@ -240,10 +240,10 @@ def test_no_servo_command_ever_leaves_the_envelope(stream, start):
         sent = np.array(fake.named("set_servo_cartesian")[-1].sent)
         position, last_position = sent[:3] / 1e3, previous[:3] / 1e3
         assert np.all(position >= ENV.box_min_m - TOL) and np.all(position <= ENV.box_max_m + TOL)
-        step_m = min(ENV.max_step_m, ENV.max_speed_m_s * elapsed)
+        step_m = min(ENV.max_step_m, ENV.max_linear_speed_m_s * elapsed)
         assert np.linalg.norm(position - last_position) <= step_m + TOL
         rotation, last_rotation = rotation_from_rpy(sent[3:]), rotation_from_rpy(previous[3:])
-        assert tilt_rad(rotation) <= ENV.max_tilt_rad + TOL
+        assert tilt_of_rotation(rotation) <= ENV.max_tilt_rad + TOL
         step_rad = min(ENV.max_step_rad, ENV.max_angular_speed_rad_s * elapsed)
         assert (rotation * last_rotation.inv()).magnitude() <= step_rad + 1e-6  # SDK rounding
         previous = sent
@@ -259,8 +259,8 @@ def test_no_position_move_ever_leaves_the_envelope(target, speed):
     sent = fake.named("set_position")[-1]
     position = np.array(sent.sent["pose"][:3]) / 1e3
     assert np.all(position >= ENV.box_min_m - TOL) and np.all(position <= ENV.box_max_m + TOL)
-    assert tilt_rad(rotation_from_rpy(sent.sent["pose"][3:])) <= ENV.max_tilt_rad + TOL
-    assert 0 < sent.kwargs["speed"] <= ENV.max_speed_m_s * 1e3 + TOL
+    assert tilt_of_rotation(rotation_from_rpy(sent.sent["pose"][3:])) <= ENV.max_tilt_rad + TOL
+    assert 0 < sent.kwargs["speed"] <= ENV.max_linear_speed_m_s * 1e3 + TOL
 
 
 @settings(max_examples=40, deadline=None)
@@ -279,12 +279,13 @@ def test_no_velocity_command_ever_leaves_the_envelope(start, linear, angular, du
     speeds, sent_duration = fake.named("vc_set_cartesian_velocity")[-1].sent
     v, w = np.array(speeds[:3]) / 1e3, np.array(speeds[3:])
     assert 0 < sent_duration <= CONFIG.velocity_timeout_s
-    assert np.linalg.norm(v) <= ENV.max_speed_m_s + TOL
+    assert np.linalg.norm(v) <= ENV.max_linear_speed_m_s + TOL
     assert np.linalg.norm(w) <= ENV.max_angular_speed_rad_s + TOL
     after = np.array(fake.pose[:3]) / 1e3 + v * sent_duration
     assert np.all(after >= ENV.box_min_m - 1e-8) and np.all(after <= ENV.box_max_m + 1e-8)
     rotation = rotation_from_rpy(fake.pose[3:])
-    assert tilt_rad(Rotation.from_rotvec(w * sent_duration) * rotation) <= ENV.max_tilt_rad + 1e-6
+    turned = Rotation.from_rotvec(w * sent_duration) * rotation
+    assert tilt_of_rotation(turned) <= ENV.max_tilt_rad + 1e-6
 
 
 def test_servo_stream_is_refused_from_outside_the_envelope_until_moved_inside():

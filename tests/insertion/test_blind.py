@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from controller.insertion.blind import BLIND, BlindConfig, BlindMachine
-from controller.insertion.config import GripperSettings
 from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
+from controller.insertion.machine_config import GripperSettings
 from controller.run.task import load_task
 from core.config import ConfigError
 from tests.insertion.world import ToyWorld

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
-from controller.insertion.config import (
+from controller.insertion.machine_config import (
     ApproachSettings,
     MachineConfig,
     SignalSettings,
@@ -94,7 +94,7 @@ def test_cross_field_rules_apply_in_code_too():
     with pytest.raises(ValueError, match="key 'approach.tilt_rad'"):
         MachineConfig(approach=ApproachSettings(tilt_rad=0.6)).limits  # noqa: B018
     with pytest.raises(ValueError, match="key 'search.contact_lost_sigma'"):
-        from controller.insertion.config import SearchSettings
+        from controller.insertion.machine_config import SearchSettings
 
         MachineConfig(search=SearchSettings(contact_lost_sigma=9.0))
     with pytest.raises(ValueError, match="key 'torque_axes'"):

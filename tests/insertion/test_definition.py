@@ -4,7 +4,6 @@ from dataclasses import replace
 
 import pytest
 
-from controller.insertion.config import MachineConfig
 from controller.insertion.definition import (
     INSERTION,
     DefinitionError,
@@ -13,6 +12,7 @@ from controller.insertion.definition import (
 )
 from controller.insertion.interface import Phase
 from controller.insertion.machine import InsertionMachine
+from controller.insertion.machine_config import MachineConfig
 from core.task_geometry import HolePose, PlugGeometry
 from tests.insertion.world import ToyWorld
 

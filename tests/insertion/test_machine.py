@@ -6,7 +6,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.insertion.config import (
+from controller.insertion.interface import Phase
+from controller.insertion.machine_config import (
     BackoffSettings,
     GripperSettings,
     InsertSettings,
@@ -16,7 +17,6 @@ from controller.insertion.config import (
     SlipSettings,
     Timeouts,
 )
-from controller.insertion.interface import Phase
 from controller.insertion.search import SearchPattern
 from tests.insertion.world import ToyWorld, make_machine, path, toy_config
 
@@ -61,8 +61,9 @@ def test_commands_are_bounded_twists_and_hold_still_while_grasping():
     world.run_until(machine, Phase.DONE)
     for command in world.commands:
         assert command.pose is None and command.twist is not None
-        assert np.linalg.norm(command.twist.linear_m_s) <= cfg.limits.max_linear_m_s + 1e-12
-        assert np.linalg.norm(command.twist.angular_rad_s) <= cfg.limits.max_angular_rad_s + 1e-12
+        limits = cfg.limits
+        assert np.linalg.norm(command.twist.linear_m_s) <= limits.max_linear_speed_m_s + 1e-12
+        assert np.linalg.norm(command.twist.angular_rad_s) <= limits.max_angular_speed_rad_s + 1e-12
     grasp_ticks = int(machine.transitions[0].t_s / 0.01)
     assert all(c.twist == type(c.twist)() for c in world.commands[:grasp_ticks])
 

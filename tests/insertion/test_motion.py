@@ -1,4 +1,4 @@
-"""Kinematics: the tip-pivot twist, tilt, bounded twists, the search patterns."""
+"""Kinematics: the tip-pivot twist, the approach rotation, bounded twists, the search patterns."""
 
 import math
 
@@ -10,11 +10,11 @@ from controller.insertion.motion import (
     approach_rotation,
     bounded_twist,
     pivot_twist,
-    tilt_from_down,
     tip_position,
 )
 from controller.insertion.search import SearchPattern
 from core.devices import Pose
+from core.spatial import rpy_from_rotation, tilt_of_tool_axis, tool_z_in_base
 
 
 def test_pivot_twist_keeps_the_tip_still_to_first_order():
@@ -33,7 +33,7 @@ def test_pivot_twist_keeps_the_tip_still_to_first_order():
         # integrated over a short step, the tip moves by v_tip dt (second-order error)
         dt = 1e-4
         moved = Rotation.from_rotvec(w * dt) * rotation
-        pose = Pose(tuple(p_tcp + v_tcp * dt), tuple(moved.as_euler("xyz")))
+        pose = Pose(tuple(p_tcp + v_tcp * dt), rpy_from_rotation(moved))
         np.testing.assert_allclose(tip_position(pose, length), p_tip + v_tip * dt, atol=1e-9)
 
 
@@ -49,7 +49,7 @@ def test_tip_position_straight_down():
 
 def test_approach_rotation_tilts_by_the_angle_and_keeps_the_width_axis():
     rotation = approach_rotation(0.3, math.radians(15), "x")
-    angle, axis = tilt_from_down(rotation)
+    angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
     assert angle == pytest.approx(math.radians(15))
     np.testing.assert_allclose(rotation.apply([1, 0, 0]), [math.cos(0.3), math.sin(0.3), 0],
                                atol=1e-12)

@@ -7,7 +7,7 @@ from types import SimpleNamespace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import SearchSettings
+from controller.insertion.machine_config import SearchSettings
 from controller.insertion.search import HoleDetector
 
 UPRIGHT = Rotation.from_euler("x", np.pi)

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from controller.insertion.config import NoiseFloor, SignalSettings
+from controller.insertion.machine_config import NoiseFloor, SignalSettings
 from controller.insertion.signals import TactileSignals
 from controller.tactile.wrench import WrenchEstimate
 from tests.insertion.world import estimate

@@ -17,12 +17,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.insertion.config import MachineConfig, NoiseFloor, s2t_matrix
 from controller.insertion.interface import Command, Observation, Phase, TeleopInput
 from controller.insertion.machine import InsertionMachine
-from controller.insertion.motion import cross
+from controller.insertion.machine_config import MachineConfig, NoiseFloor, s2t_matrix
 from controller.tactile.wrench import WrenchEstimate
 from core.devices import ArmMode, ArmState, ArmStatus, GripperObject, GripperStatus, Pose
+from core.spatial import cross, rotation_from_rpy, rpy_from_rotation
 from core.task_geometry import HolePose, PlugGeometry
 
 DT_S = 0.01
@@ -89,7 +89,7 @@ class ToyWorld:
         self.s2t = s2t_matrix(("+x", "+z", "-y"))
         self.t_s = 0.0
         self.tick = 0
-        self.rotation = Rotation.from_euler("xyz", (math.pi, 0.0, 0.0))
+        self.rotation = rotation_from_rpy((math.pi, 0.0, 0.0))
         self.p = np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + 0.04 + self.plug.length_m])
         self.gripper_holding = False
         self.gripper_width = 0.02
@@ -115,7 +115,7 @@ class ToyWorld:
         return np.array([self.hole.x_m, self.hole.y_m]) + np.array(self.hole_offset_m)
 
     def pose(self) -> Pose:
-        return Pose(tuple(map(float, self.p)), tuple(map(float, self.rotation.as_euler("xyz"))))
+        return Pose(tuple(map(float, self.p)), rpy_from_rotation(self.rotation))
 
     # -- the observation -----------------------------------------------------------------
 

@@ -2,14 +2,14 @@
 
 What is modelled. The TCP (frame T) as a rigid body moving in the base frame B with a linear
 velocity and an angular velocity, each limited in magnitude (the envelope's
-``max_speed_m_s`` / ``max_angular_speed_rad_s``) and in rate of change (the ``sim:``
+``max_linear_speed_m_s`` / ``max_angular_speed_rad_s``) and in rate of change (the ``sim:``
 section's ``max_accel_m_s2`` / ``max_angular_accel_rad_s2``, limits on the norm). There is
 no joint model: ``ArmState.joints_rad`` holds six NaNs.
 
-Commands go through the same ``drivers.arm.envelope`` clamps as in ``drivers.arm.xarm6``
-and in the same way (``move_to``: ``clamp_pose`` and the speed capped at the envelope's;
-``servo_pose``: ``servo_target`` with the step budget min(max step, max speed x time since
-the previous command); ``move_velocity``: ``clamp_twist`` over ``min(duration_s,
+Commands go through the same ``core.envelope`` clamps as in ``drivers.arm.xarm6`` and in
+the same way (``move_to``: ``clamp_pose`` and the speed capped at the envelope's;
+``servo_pose``: ``limit_pose`` with the step budget min(max step, max speed x time since
+the previous command); ``move_velocity``: ``limit_twist`` over ``min(duration_s,
 velocity_timeout_s)``), then the TCP tracks the result:
 
 * position and servo targets: straight toward the goal (along the geodesic for the
@@ -42,15 +42,10 @@ from typing import Any
 from core.clock import Clock, MonotonicClock
 from core.config import Config, number
 from core.devices import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
-from drivers.arm.envelope import (
-    clamp_pose,
-    clamp_twist,
-    require_finite,
-    rotation_from_rpy,
-    tilt_rad,
-    timed_servo_target,
-)
+from core.spatial import rotation_from_rpy, tilt_of_rotation
+from drivers.arm.arm_envelope import timed_servo_target
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
 from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
@@ -105,7 +100,7 @@ class SimArmConfig(XArm6Config):
                     f"key 'sim.start_{axis}_m': expected a number in [{low}, {high}] (inside "
                     f"the envelope), got {value!r}"
                 )
-        tilt = tilt_rad(rotation_from_rpy(start.rpy_rad))
+        tilt = tilt_of_rotation(rotation_from_rpy(start.rpy_rad))
         if tilt > env.max_tilt_rad:
             raise ValueError(
                 f"key 'sim.start_roll_rad': the start orientation tilts the tool {tilt:.3f} rad "
@@ -200,8 +195,8 @@ class SimArm(ContextManagedDevice):
         if not math.isfinite(speed_m_s) or speed_m_s <= 0:
             raise ValueError(f"speed_m_s: expected a positive number, got {speed_m_s!r}")
         self._prepare_motion(ArmMode.POSITION)
-        goal = clamp_pose(target, self.config.envelope)
-        self._goal = _Goal.at(goal, min(speed_m_s, self.config.envelope.max_speed_m_s))
+        goal = clamp_pose(target, self.config.envelope).value
+        self._goal = _Goal.at(goal, min(speed_m_s, self.config.envelope.max_linear_speed_m_s))
         if not wait:
             return
         deadline_s = self._clock.now() + self.config.move_timeout_s
@@ -223,7 +218,7 @@ class SimArm(ContextManagedDevice):
         env = self.config.envelope
         now = self._clock.now()
         if self._servo_reference is None:
-            self._servo_reference = clamp_pose(self._pose(), env)
+            self._servo_reference = clamp_pose(self._pose(), env).value
         command = timed_servo_target(
             self._servo_reference,
             target,
@@ -232,7 +227,7 @@ class SimArm(ContextManagedDevice):
             now,
             self.config.servo_rate_hz,
         )
-        self._goal = _Goal.at(command, env.max_speed_m_s)
+        self._goal = _Goal.at(command, env.max_linear_speed_m_s)
         self._servo_reference = command
         self._servo_time_s = now
 
@@ -246,7 +241,7 @@ class SimArm(ContextManagedDevice):
             )
         self._prepare_motion(ArmMode.VELOCITY)
         duration = min(duration_s, self.config.velocity_timeout_s)
-        self._twist = clamp_twist(self._pose(), twist, duration, self.config.envelope)
+        self._twist = limit_twist(twist, self._pose(), duration, self.config.envelope).value
         self._twist_until_s = self._clock.now() + duration
 
     def stop(self) -> None:

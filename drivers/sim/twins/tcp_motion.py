@@ -4,9 +4,9 @@ The TCP (frame T) is a rigid body in the base frame B with position ``p`` (m), l
 velocity ``v`` (m/s), orientation ``R`` (T2B, a scipy ``Rotation``) and angular velocity ``w``
 (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt_s``:
 
-1. ``v_des`` is scaled to the envelope's ``max_speed_m_s`` and each component is capped so
-   that the TCP can still stop on the faces of the box: toward a face at distance ``d`` the
-   speed is at most ``max(sqrt(2 b d) - b dt / 2, min(d / dt, b dt))`` with
+1. ``v_des`` is scaled to the envelope's ``max_linear_speed_m_s`` and each component is
+   capped so that the TCP can still stop on the faces of the box: toward a face at
+   distance ``d`` the speed is at most ``max(sqrt(2 b d) - b dt / 2, min(d / dt, b dt))`` with
    ``b = max_accel_m_s2 / sqrt(3)``. With the position updated by the new velocity, braking
    by ``b dt`` per step from that speed stops on or before the face, and after one step at
    that speed the bound for the remaining distance still allows braking by ``b dt`` (for
@@ -23,12 +23,12 @@ velocity ``v`` (m/s), orientation ``R`` (T2B, a scipy ``Rotation``) and angular 
    braking at half the angular acceleration limit (the margin covers the axis turning with
    the tool's rotation about the vertical).
 4. ``p += v dt``, ``R = exp(w dt) R``; a final projection on the box and the tilt cone
-   (``drivers.arm.envelope.clamp_tilt``) only absorbs rounding.
+   (``core.envelope.clamp_tilt``) only absorbs rounding.
 
 Vectors are tuples of Python floats: the twin steps this at hundreds of Hz, where NumPy's
 per-call overhead on 3-vectors would dominate. Orientations are scipy Rotations, with the
-envelope's helpers (roll/pitch/yaw, tilt, tilt clamp); quaternions (x, y, z, w) only name a
-goal orientation.
+helpers of ``core.spatial`` (roll/pitch/yaw, tilt) and ``core.envelope`` (tilt clamp);
+quaternions (x, y, z, w) only name a goal orientation.
 """
 
 from __future__ import annotations
@@ -39,13 +39,8 @@ from collections.abc import Iterable
 from scipy.spatial.transform import Rotation
 
 from core.devices import Pose
-from drivers.arm.envelope import (
-    SafetyEnvelope,
-    clamp_tilt,
-    rotation_from_rpy,
-    rpy_near,
-    tilt_rad,
-)
+from core.envelope import Envelope, clamp_tilt
+from core.spatial import rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
 
 Vec = tuple[float, float, float]
 Quat = tuple[float, float, float, float]  # x, y, z, w
@@ -57,7 +52,7 @@ class TcpMotion:
 
     def __init__(
         self,
-        envelope: SafetyEnvelope,
+        envelope: Envelope,
         start: Pose,
         max_accel_m_s2: float,
         max_angular_accel_rad_s2: float,
@@ -78,7 +73,7 @@ class TcpMotion:
 
     def pose(self, rpy_hint: Vec) -> Pose:
         """The TCP pose, its roll/pitch/yaw wrapped to lie nearest ``rpy_hint``."""
-        return Pose(self.position_m, rpy_near(self.rotation, rpy_hint))
+        return Pose(self.position_m, rpy_from_rotation(self.rotation, rpy_hint))
 
     def at_rest(self, tolerance: float) -> bool:
         return _norm(self.velocity_m_s) <= tolerance and _norm(self.angular_rad_s) <= tolerance
@@ -129,7 +124,7 @@ class TcpMotion:
         p = self.position_m
         high = tuple(stopping_speed(h - x, brake, dt) for h, x in zip(self._high, p, strict=True))
         low = tuple(-stopping_speed(x - lo, brake, dt) for lo, x in zip(self._low, p, strict=True))
-        v_des = _clip(_scaled_to(v_des, env.max_speed_m_s), low, high)
+        v_des = _clip(_scaled_to(v_des, env.max_linear_speed_m_s), low, high)
         v = self.velocity_m_s
         candidate = _add(v, _scaled_to(_sub(v_des, v), self.max_accel_m_s2 * dt))
         if all(lo <= c <= hi for c, lo, hi in zip(candidate, low, high, strict=True)):
@@ -150,7 +145,7 @@ class TcpMotion:
         w_des = _scaled_to(w_des, env.max_angular_speed_rad_s)
         candidate = _add(w, _scaled_to(_sub(w_des, w), self.max_angular_accel_rad_s2 * dt))
         brake = self.max_angular_accel_rad_s2 / 2.0
-        limit = stopping_speed(env.max_tilt_rad - tilt_rad(self.rotation), brake, dt)
+        limit = stopping_speed(env.max_tilt_rad - tilt_of_rotation(self.rotation), brake, dt)
         zx, zy, _ = _vec(self.rotation.as_matrix()[:, 2])  # the tool's z-axis in B
         horizontal = math.hypot(zx, zy)
         if horizontal < 1e-9:

@@ -16,8 +16,8 @@ from scipy.spatial.transform import Rotation
 from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError
 from core.devices import Pose
+from core.spatial import rotation_from_rpy, rpy_from_rotation
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.arm.envelope import rotation_from_rpy
 from drivers.registry import load_device_config
 from drivers.sim.scenes.insertion import (
     InsertionSceneConfig,
@@ -67,7 +67,7 @@ def tilted_pose(hole: HolePose, length_m: float, tip_h: tuple[float, float, floa
     x, y, z = tip_h
     tip = np.array([hole.x_m + c * x - s * y, hole.y_m + s * x + c * y, hole.z_m + z])
     tcp = tip - length_m * rotation.as_matrix()[:, 2]
-    return Pose(tuple(float(v) for v in tcp), tuple(float(v) for v in rotation.as_euler("xyz")))
+    return Pose(tuple(float(v) for v in tcp), rpy_from_rotation(rotation))
 
 
 def lower(
@@ -253,15 +253,18 @@ def test_a_grasped_plug_lowered_by_the_arm_inserts_and_the_frames_show_contact()
     assert sim.truth.arrays()["depth_m"][-1] > depth - 1e-3
 
 
-def test_the_arm_starts_over_the_nominal_hole_and_may_reach_the_floor():
-    section = task("usb_a")
-    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=0)
+@pytest.mark.parametrize("name", ["usb_a", "usb_c"])
+def test_the_arm_starts_over_the_nominal_hole_with_the_robot_envelope_unchanged(name):
+    section = task(name)
+    devices = default_devices()
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, devices, seed=0)
     config = sim.arm.config
     start = config.sim.start_pose
     assert start.xyz_m[:2] == (HOLE.x_m, HOLE.y_m)
     assert start.xyz_m[2] == pytest.approx(section.plug.length_m + section.scene.start_above_hole_m)
-    depth = section.scene.receptacle.depth_m
-    assert config.envelope.z_min_m <= section.plug.length_m - depth - 0.001
+    assert config.envelope == devices.arm.envelope  # the robot file's, not relaxed for the sim
+    depth = section.scene.receptacle.depth_m  # ... and it reaches the receptacle's floor
+    assert config.envelope.z_min_m <= HOLE.z_m + section.plug.length_m - depth
     assert sim.gripper.config.sim.object_width_m == section.plug.thickness_m
 
 

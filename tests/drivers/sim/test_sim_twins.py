@@ -12,15 +12,15 @@ import numpy as np
 import pytest
 from hypothesis import example, given, settings
 from hypothesis import strategies as st
-from scipy.spatial.transform import Rotation
 
 from core.clock import ManualClock
 from core.config import CONFIG_ROOT as CONFIGS
 from core.devices import ArmMode, ArmState, GripperObject, Pose, Twist
+from core.envelope import clamp_pose
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from core.sensor_profile import sensor_profile
+from core.spatial import rotation_from_rpy, tilt_of_rotation
 from drivers import registry
-from drivers.arm.envelope import clamp_pose, rotation_from_rpy, tilt_rad
 from drivers.gripper import hande_registers as regs
 from drivers.registry import load_device_config
 from drivers.sim.render.gel_renderer import GelRenderer
@@ -104,7 +104,7 @@ def test_move_to_reaches_the_clamped_target_and_reports_ready(clock, arm):
     target = Pose((0.9, -0.1, 0.0), (math.pi - 0.1, 0.8, 0.5))  # outside the box, too tilted
     arm.move_to(target, speed_m_s=0.05, wait=True)
     state = arm.read_status()
-    goal = clamp_pose(target, ENV)
+    goal = clamp_pose(target, ENV).value
     assert state.tcp.xyz_m == pytest.approx(goal.xyz_m, abs=2e-6)
     turn = rotation_from_rpy(goal.rpy_rad) * rotation_from_rpy(state.tcp.rpy_rad).inv()
     assert turn.magnitude() < 2e-6
@@ -138,7 +138,7 @@ def test_the_velocity_watchdog_stops_the_arm(clock, arm):
 def test_a_servo_stream_steps_at_most_the_budget(clock, arm):
     arm.servo_pose(Pose((0.5, 0.0, 0.2), DOWN))  # first command: one servo period of travel
     run(clock, arm, 0.5)
-    step = min(ENV.max_step_m, ENV.max_speed_m_s / ARM.servo_rate_hz)
+    step = min(ENV.max_step_m, ENV.max_linear_speed_m_s / ARM.servo_rate_hz)
     assert arm.read_status().tcp.xyz_m[0] == pytest.approx(ARM.sim.start_x_m + step, abs=1e-9)
 
 
@@ -211,14 +211,14 @@ def test_random_command_streams_respect_the_limits_and_the_envelope(stream):
             arm.move_velocity(argument, extra)
         poses += [s.tcp for s in run(clock, arm, steps * DT)]
     xyz = np.array([p.xyz_m for p in poses])
-    rotations = Rotation.from_euler("xyz", [p.rpy_rad for p in poses])
+    rotations = rotation_from_rpy([p.rpy_rad for p in poses])
     tol = 1e-9
     assert np.all(xyz >= ENV.box_min_m - tol) and np.all(xyz <= ENV.box_max_m + tol)
-    assert max(tilt_rad(r) for r in rotations) <= ENV.max_tilt_rad + tol
+    assert max(tilt_of_rotation(r) for r in rotations) <= ENV.max_tilt_rad + tol
     # Positions and orientations step by exactly the velocity of each step times DT.
     v = np.diff(xyz, axis=0) / DT
     w = (rotations[1:] * rotations[:-1].inv()).as_rotvec() / DT
-    assert np.linalg.norm(v, axis=1).max() <= ENV.max_speed_m_s * (1 + 1e-6)
+    assert np.linalg.norm(v, axis=1).max() <= ENV.max_linear_speed_m_s * (1 + 1e-6)
     assert np.linalg.norm(w, axis=1).max() <= ENV.max_angular_speed_rad_s * (1 + 1e-6)
     accel = np.linalg.norm(np.diff(v, axis=0), axis=1) / DT
     angular_accel = np.linalg.norm(np.diff(w, axis=0), axis=1) / DT

@@ -8,10 +8,14 @@ import numpy as np
 import pytest
 
 from core.devices import Pose
-from drivers.arm.envelope import SafetyEnvelope, tilt_rad
+from core.envelope import Envelope
+from core.spatial import tilt_of_rotation
 from drivers.sim.twins.tcp_motion import TcpMotion
 
-ENV = SafetyEnvelope(0.1, 0.5, -0.3, 0.3, 0.0, 0.4, 0.2, 1.0, 0.01, 0.05, 0.35)
+ENV = Envelope(
+    x_min_m=0.1, x_max_m=0.5, y_min_m=-0.3, y_max_m=0.3, z_min_m=0.0, z_max_m=0.4,
+    max_linear_speed_m_s=0.2, max_angular_speed_rad_s=1.0, max_tilt_rad=0.35,
+)  # fmt: skip
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -25,6 +29,6 @@ def test_changing_twists_never_tilt_the_tool_past_the_limit(seed):
         w_des = tuple(rng.normal(0.0, 1.0, 3))
         for _ in range(150):
             motion.step((0.0, 0.0, 0.0), w_des)
-            worst = max(worst, tilt_rad(motion.rotation))
+            worst = max(worst, tilt_of_rotation(motion.rotation))
     assert worst == pytest.approx(ENV.max_tilt_rad, abs=1e-12)  # it reaches the limit ...
     assert worst <= ENV.max_tilt_rad + 1e-12  # ... and stays on it

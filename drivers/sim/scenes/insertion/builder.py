@@ -8,8 +8,9 @@ twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realti
 
 * the SimArm, its configuration adapted to the scene through the config objects: it
   starts upright over the nominal hole, the plug's tip ``start_above_hole_m`` above the
-  board, turned to the nominal yaw; its envelope's floor is lowered when needed so that
-  the TCP can reach the receptacle's floor (2 mm spare);
+  board, turned to the nominal yaw; its envelope is the robot configuration's, unchanged
+  (a task whose insertion that envelope cannot reach is refused when it loads:
+  ``core.envelope_checks``);
 * the SimGripper, its object width the plug's thickness;
 * the SimTactileSensor on the gel coupling (``coupling``) with the scene's appearance, its
   noise seeded by its configuration's seed and ``seed``;
@@ -48,7 +49,6 @@ from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
 from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
 from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
 
-FLOOR_SPARE_M = 0.002  # how far below full insertion the TCP may still go, m
 
 @dataclass(frozen=True)
 class SimDevices:
@@ -97,12 +97,10 @@ def draw_hole(nominal: HolePose, uncertainty: HoleUncertainty, seed: int) -> Hol
 def scene_arm_config(
     arm: SimArmConfig, scene: InsertionSceneConfig, plug: PlugGeometry, hole: HolePose
 ) -> SimArmConfig:
-    """``arm`` starting over the nominal ``hole`` with a floor low enough to insert."""
+    """``arm`` starting over the nominal ``hole`` (its envelope unchanged)."""
     start = upright_pose(
         (hole.x_m, hole.y_m, hole.z_m + plug.length_m + scene.start_above_hole_m), hole.yaw_rad
     )
-    lowest = hole.z_m + plug.length_m - scene.receptacle.depth_m - FLOOR_SPARE_M
-    envelope = dataclasses.replace(arm.envelope, z_min_m=min(arm.envelope.z_min_m, lowest))
     (x, y, z), (roll, pitch, yaw) = start.xyz_m, start.rpy_rad
     sim = dataclasses.replace(
         arm.sim,
@@ -113,7 +111,7 @@ def scene_arm_config(
         start_pitch_rad=pitch,
         start_yaw_rad=yaw,
     )
-    return dataclasses.replace(arm, envelope=envelope, sim=sim)
+    return dataclasses.replace(arm, sim=sim)
 
 
 def build_insertion_sim(

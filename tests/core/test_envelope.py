@@ -1,4 +1,5 @@
-"""The safety envelope's pure clamp functions (drivers/arm/envelope.py)."""
+"""The envelope's clamps (core/envelope.py), shared by the arm driver and the loop's limiter,
+and the arm's SafetyEnvelope (drivers/arm/arm_envelope.py)."""
 
 from __future__ import annotations
 
@@ -12,24 +13,23 @@ from hypothesis import strategies as st
 from scipy.spatial.transform import Rotation
 
 from core.devices import Pose, Twist
-from drivers.arm.envelope import (
-    SafetyEnvelope,
+from core.envelope import (
+    Envelope,
     clamp_pose,
     clamp_position,
     clamp_tilt,
-    clamp_twist,
-    rotation_from_rpy,
-    rpy_near,
-    servo_target,
-    tilt_rad,
+    limit_pose,
+    limit_twist,
 )
+from core.spatial import rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
+from drivers.arm.arm_envelope import SafetyEnvelope
 
 TOL = 1e-9
-ENV = SafetyEnvelope(
+ENV = Envelope(
     x_min_m=0.2, x_max_m=0.5, y_min_m=-0.2, y_max_m=0.2, z_min_m=0.05, z_max_m=0.4,
-    max_speed_m_s=0.1, max_angular_speed_rad_s=0.5, max_step_m=0.002, max_step_rad=0.01,
-    max_tilt_rad=0.35,
+    max_linear_speed_m_s=0.1, max_angular_speed_rad_s=0.5, max_tilt_rad=0.35,
 )  # fmt: skip
+STEP_M, STEP_RAD = 0.002, 0.01  # one servo command's step
 
 angles = st.floats(-math.pi, math.pi)
 rpys = st.tuples(angles, angles, angles)
@@ -45,18 +45,12 @@ def inside_poses(draw) -> Pose:
     tilt = draw(st.floats(0.0, ENV.max_tilt_rad))
     azimuth, spin = draw(angles), draw(angles)
     tip = Rotation.from_rotvec(tilt * np.array([math.cos(azimuth), math.sin(azimuth), 0.0]))
-    rotation = tip * Rotation.from_euler("xyz", [math.pi, 0.0, spin])
-    return Pose(xyz, tuple(rotation.as_euler("xyz")))
+    rotation = tip * rotation_from_rpy([math.pi, 0.0, spin])
+    return Pose(xyz, rpy_from_rotation(rotation))
 
 
 def _angle_between(a: Rotation, b: Rotation) -> float:
     return float((a * b.inv()).magnitude())
-
-
-def test_tilt_is_zero_pointing_down_and_grows_with_pitch():
-    assert tilt_rad(rotation_from_rpy((math.pi, 0.0, 0.7))) == pytest.approx(0.0, abs=1e-12)
-    assert tilt_rad(rotation_from_rpy((math.pi, 0.3, 0.0))) == pytest.approx(0.3)
-    assert tilt_rad(rotation_from_rpy((0.0, 0.0, 0.0))) == pytest.approx(math.pi)
 
 
 def test_clamp_position_clips_each_axis_into_the_box():
@@ -67,7 +61,7 @@ def test_clamp_position_clips_each_axis_into_the_box():
 def test_clamp_tilt_rotates_along_the_shortest_arc_to_the_limit():
     rotation = rotation_from_rpy((math.pi, 0.8, 0.4))  # tilted 0.8 rad
     clamped = clamp_tilt(rotation, 0.35)
-    assert tilt_rad(clamped) == pytest.approx(0.35)
+    assert tilt_of_rotation(clamped) == pytest.approx(0.35)
     assert _angle_between(clamped, rotation) == pytest.approx(0.8 - 0.35)
     # the tool z-axis stays in the vertical plane through its old direction
     z_old, z_new = rotation.as_matrix()[:, 2], clamped.as_matrix()[:, 2]
@@ -77,23 +71,18 @@ def test_clamp_tilt_rotates_along_the_shortest_arc_to_the_limit():
 def test_clamp_tilt_keeps_an_allowed_orientation_and_handles_pointing_up():
     rotation = rotation_from_rpy((math.pi, 0.1, 0.0))
     assert clamp_tilt(rotation, 0.35) is rotation
-    assert tilt_rad(clamp_tilt(rotation_from_rpy((0.0, 0.0, 0.0)), 0.35)) == pytest.approx(0.35)
-
-
-def test_rpy_near_keeps_roll_on_the_side_of_the_reference():
-    rotation = rotation_from_rpy((math.pi, 0.0, 0.0))
-    assert rpy_near(rotation, (3.1, 0.0, 0.0))[0] == pytest.approx(math.pi)
-    assert rpy_near(rotation, (-3.1, 0.0, 0.0))[0] == pytest.approx(-math.pi)
+    pointing_up = rotation_from_rpy((0.0, 0.0, 0.0))
+    assert tilt_of_rotation(clamp_tilt(pointing_up, 0.35)) == pytest.approx(0.35)
 
 
 @settings(max_examples=150, deadline=None)
 @given(xyz=anywhere, rpy=rpys)
 def test_clamp_pose_lands_inside_and_is_idempotent(xyz, rpy):
-    clamped = clamp_pose(Pose(xyz, rpy), ENV)
+    clamped = clamp_pose(Pose(xyz, rpy), ENV).value
     assert np.all(np.asarray(clamped.xyz_m) >= ENV.box_min_m - TOL)
     assert np.all(np.asarray(clamped.xyz_m) <= ENV.box_max_m + TOL)
-    assert tilt_rad(rotation_from_rpy(clamped.rpy_rad)) <= ENV.max_tilt_rad + TOL
-    again = clamp_pose(clamped, ENV)
+    assert tilt_of_rotation(rotation_from_rpy(clamped.rpy_rad)) <= ENV.max_tilt_rad + TOL
+    again = clamp_pose(clamped, ENV).value
     np.testing.assert_allclose(again.xyz_m, clamped.xyz_m)
     assert (
         _angle_between(rotation_from_rpy(again.rpy_rad), rotation_from_rpy(clamped.rpy_rad)) < 1e-9
@@ -103,27 +92,27 @@ def test_clamp_pose_lands_inside_and_is_idempotent(xyz, rpy):
 @settings(max_examples=100, deadline=None)
 @given(pose=inside_poses())
 def test_clamp_pose_leaves_a_pose_inside_unchanged(pose):
-    assert clamp_pose(pose, ENV) == pose
+    assert clamp_pose(pose, ENV) == (pose, ())
 
 
 @settings(max_examples=200, deadline=None)
 @given(previous=inside_poses(), xyz=anywhere, rpy=rpys)
-def test_servo_target_respects_box_tilt_and_step(previous, xyz, rpy):
-    command = servo_target(previous, Pose(xyz, rpy), ENV, ENV.max_step_m, ENV.max_step_rad)
+def test_limit_pose_respects_box_tilt_and_step(previous, xyz, rpy):
+    command = limit_pose(Pose(xyz, rpy), previous, ENV, STEP_M, STEP_RAD).value
     position = np.asarray(command.xyz_m)
     assert np.all(position >= ENV.box_min_m - TOL) and np.all(position <= ENV.box_max_m + TOL)
-    assert np.linalg.norm(position - previous.xyz_m) <= ENV.max_step_m + TOL
+    assert np.linalg.norm(position - previous.xyz_m) <= STEP_M + TOL
     rotation = rotation_from_rpy(command.rpy_rad)
-    assert tilt_rad(rotation) <= ENV.max_tilt_rad + TOL
-    assert _angle_between(rotation, rotation_from_rpy(previous.rpy_rad)) <= ENV.max_step_rad + TOL
+    assert tilt_of_rotation(rotation) <= ENV.max_tilt_rad + TOL
+    assert _angle_between(rotation, rotation_from_rpy(previous.rpy_rad)) <= STEP_RAD + TOL
 
 
 @settings(max_examples=60, deadline=None)
 @given(start=inside_poses(), goal=inside_poses())
-def test_servo_target_reaches_a_goal_inside_the_envelope(start, goal):
+def test_limit_pose_reaches_a_goal_inside_the_envelope(start, goal):
     pose = start
     for _ in range(40):  # the box diagonal is 0.6 m (12 steps); a half turn is 16 steps
-        pose = servo_target(pose, goal, ENV, max_step_m=0.05, max_step_rad=0.2)
+        pose = limit_pose(goal, pose, ENV, max_step_m=0.05, max_step_rad=0.2).value
     np.testing.assert_allclose(pose.xyz_m, goal.xyz_m, atol=1e-12)
     goal_rotation = rotation_from_rpy(goal.rpy_rad)
     assert _angle_between(rotation_from_rpy(pose.rpy_rad), goal_rotation) < 1e-9
@@ -137,11 +126,11 @@ def test_servo_target_reaches_a_goal_inside_the_envelope(start, goal):
     angular=st.tuples(*(st.floats(-5.0, 5.0),) * 3),
     duration=st.floats(0.001, 1.0),
 )
-def test_clamp_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angular, duration):
+def test_limit_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angular, duration):
     pose = Pose(xyz, rpy)
-    twist = clamp_twist(pose, Twist(linear, angular), duration, ENV)
+    twist = limit_twist(Twist(linear, angular), pose, duration, ENV).value
     v, w = np.asarray(twist.linear_m_s), np.asarray(twist.angular_rad_s)
-    assert np.linalg.norm(v) <= ENV.max_speed_m_s + TOL
+    assert np.linalg.norm(v) <= ENV.max_linear_speed_m_s + TOL
     assert np.linalg.norm(w) <= ENV.max_angular_speed_rad_s + TOL
     after = np.asarray(xyz) + v * duration
     position = np.asarray(xyz)
@@ -151,22 +140,22 @@ def test_clamp_twist_limits_speed_and_keeps_box_and_tilt(xyz, rpy, linear, angul
             or (position[i] < ENV.box_min_m[i] and v[i] >= 0)
         )
     rotation = rotation_from_rpy(rpy)
-    allowed = max(ENV.max_tilt_rad, tilt_rad(rotation)) + TOL
+    allowed = max(ENV.max_tilt_rad, tilt_of_rotation(rotation)) + TOL
     for t in np.linspace(0.0, duration, 9):
-        assert tilt_rad(Rotation.from_rotvec(w * t) * rotation) <= allowed
+        assert tilt_of_rotation(Rotation.from_rotvec(w * t) * rotation) <= allowed
 
 
-def test_clamp_twist_zeroes_the_component_leaving_at_a_face_only():
+def test_limit_twist_zeroes_the_component_leaving_at_a_face_only():
     at_floor = Pose((0.3, 0.0, ENV.z_min_m), (math.pi, 0.0, 0.0))
-    twist = clamp_twist(at_floor, Twist((0.05, 0.0, -0.05), (0.0, 0.0, 0.0)), 0.1, ENV)
+    twist = limit_twist(Twist((0.05, 0.0, -0.05), (0.0, 0.0, 0.0)), at_floor, 0.1, ENV).value
     assert twist.linear_m_s == pytest.approx((0.05, 0.0, 0.0))
-    up = clamp_twist(at_floor, Twist((0.0, 0.0, 0.05), (0.0, 0.0, 0.0)), 0.1, ENV)
+    up = limit_twist(Twist((0.0, 0.0, 0.05), (0.0, 0.0, 0.0)), at_floor, 0.1, ENV).value
     assert up.linear_m_s == pytest.approx((0.0, 0.0, 0.05))
 
 
-def test_clamp_twist_keeps_rotation_about_the_vertical_at_the_tilt_limit():
+def test_limit_twist_keeps_rotation_about_the_vertical_at_the_tilt_limit():
     at_limit = Pose((0.3, 0.0, 0.2), (math.pi, ENV.max_tilt_rad, 0.0))
-    twist = clamp_twist(at_limit, Twist((0.0, 0.0, 0.0), (0.0, 0.3, 0.2)), 0.1, ENV)
+    twist = limit_twist(Twist((0.0, 0.0, 0.0), (0.0, 0.3, 0.2)), at_limit, 0.1, ENV).value
     assert twist.angular_rad_s == pytest.approx((0.0, 0.0, 0.2))
 
 
@@ -175,10 +164,44 @@ def test_clamp_twist_keeps_rotation_about_the_vertical_at_the_tilt_limit():
     [
         ({"x_max_m": 0.1}, "x_max_m"),
         ({"max_tilt_rad": 2.0}, "max_tilt_rad"),
-        ({"max_step_m": 0.0}, "max_step_m"),
-        ({"max_speed_m_s": True}, "max_speed_m_s"),
+        ({"max_linear_speed_m_s": True}, "max_linear_speed_m_s"),
     ],
 )
 def test_envelope_validation_names_the_key(change, key):
     with pytest.raises(ValueError, match=f"key '{key}'"):
         dataclasses.replace(ENV, **change)
+
+
+@settings(max_examples=100, deadline=None)
+@given(yaw=angles, turn=st.floats(0.02, 3.0), sign=st.sampled_from([-1.0, 1.0]))
+def test_a_limited_turn_takes_the_whole_step_not_half_of_it(yaw, turn, sign):
+    """Rounding in the stepped turn (a hair over ``max_step_rad``) must not halve the step."""
+    previous = Pose((0.3, 0.0, 0.2), (math.pi, 0.0, yaw))
+    target = Pose((0.3, 0.0, 0.2), (math.pi, 0.0, yaw + sign * turn))
+    step = limit_pose(target, previous, ENV, STEP_M, STEP_RAD)
+    assert step.limited == ("step",)
+    stepped = rotation_from_rpy(step.value.rpy_rad)
+    turned = _angle_between(stepped, rotation_from_rpy(previous.rpy_rad))
+    assert turned == pytest.approx(STEP_RAD, abs=1e-9)
+
+
+def test_each_clamp_reports_the_limits_that_acted():
+    inside = Pose((0.3, 0.0, 0.2), (math.pi, 0.0, 0.0))
+    assert limit_twist(Twist((0.01, 0.0, 0.0)), inside, 0.1, ENV).limited == ()
+    fast = limit_twist(Twist((1.0, 0.0, 0.0), (0.0, 0.0, 0.0)), inside, 0.1, ENV)
+    assert fast.limited == ("speed",)
+    at_floor = Pose((0.3, 0.0, ENV.z_min_m), (math.pi, 0.0, 0.0))
+    assert limit_twist(Twist((0.0, 0.0, -0.01)), at_floor, 0.1, ENV).limited == ("workspace",)
+    at_limit = Pose((0.3, 0.0, 0.2), (math.pi, ENV.max_tilt_rad, 0.0))
+    tilting = limit_twist(Twist((0.0, 0.0, 0.0), (0.0, 0.3, 0.0)), at_limit, 0.1, ENV)
+    assert tilting.limited == ("tilt",)
+    outside = Pose((0.0, 0.0, 0.2), (math.pi, 0.8, 0.0))
+    assert clamp_pose(outside, ENV).limited == ("workspace", "tilt")
+    far = limit_pose(Pose((0.4, 0.0, 0.2), inside.rpy_rad), inside, ENV, 0.002, 0.01)
+    assert far.limited == ("step",)
+
+
+def test_the_arm_envelope_holds_the_step_per_servo_command():
+    with pytest.raises(ValueError, match="key 'max_step_m'"):
+        SafetyEnvelope(max_step_m=0.0)
+    assert SafetyEnvelope().max_tilt_rad == Envelope().max_tilt_rad  # the same base keys

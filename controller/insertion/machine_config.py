@@ -201,7 +201,7 @@ class AlignSettings(Config):
     tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
     upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
-    max_angular_rad_s: float = number(1e-3, 1.0, default=0.2)
+    max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
     wall_seek_m_s: float = number(0.0, 0.02, default=0.001)
     wall_seek_max_m: float = number(0.0, 0.01, default=0.0015)
@@ -283,15 +283,16 @@ class Limits(Config):
     """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in estimate units on the
     baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|),
     ``inplane_torque_limit`` (|tau_z|), ``force_limit`` (axial force). ``max_tilt_rad``: the
-    plug's tilt from straight down. Every command's twist is bounded by
-    ``max_linear_m_s`` and ``max_angular_rad_s`` (norms)."""
+    TCP's tilt from straight down (below the loop's and the arm's tilt limits, or it could
+    never trip: controller/limit_checks.py). Every command's twist is bounded by
+    ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` (norms)."""
 
     tilt_torque_limit: float = number(1e-6, 1e4, default=0.05)
     inplane_torque_limit: float = number(1e-6, 1e6, default=2.5)
     force_limit: float = number(1e-6, 1e4, default=0.2)
-    max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=30 * _DEG)
-    max_linear_m_s: float = number(1e-4, 0.5, default=0.05)
-    max_angular_rad_s: float = number(1e-3, 3.0, default=0.6)
+    max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=0.30)
+    max_linear_speed_m_s: float = number(1e-4, 0.5, default=0.05)
+    max_angular_speed_rad_s: float = number(1e-3, 3.0, default=0.6)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,79 @@
+"""Load-time checks that a task's limits agree with each other and with the arm's envelope.
+
+A limit that can never act, or an envelope that cannot reach the task, is a configuration
+error, not a run that quietly fails: ``check_task_limits`` raises a one-line ConfigError
+naming the file and the key.
+
+* **The machine's tilt limit must be able to trip.** The state machine fails a run whose
+  tool tilts more than ``machine.limits.max_tilt_rad``, but the loop's limiter
+  (``limits.max_tilt_rad``) and the arm's envelope (the robot file's
+  ``envelope.max_tilt_rad``) keep the tool within their own cones; a machine limit at or
+  above the tighter of the two could never trip.
+* **The envelopes must reach the insertion.** With the hole's opening at height
+  ``hole.z_m`` (in B), a plug of ``plug.length_m`` from the TCP to the tip, driven
+  ``tip_depth_m`` below the opening (the deepest the task's controllers drive it: the
+  machine's ``insert.depth_m``, the blind baseline's ``push_depth_m``), puts the TCP at
+  ``hole.z_m + plug.length_m - tip_depth_m``; pressing it in through the compliant wrist
+  takes the TCP up to ``PRESS_MARGIN_M`` lower. Both the arm's ``envelope.z_min_m`` and the
+  task's ``limits.z_min_m`` must allow that height, or a run stops at the board. The check
+  reads only the product's own configuration, so it holds for the robot and the simulator
+  alike (the simulated arm uses the robot file's envelope unchanged).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from controller.insertion.machine_config import Limits
+from controller.safety import LimitsConfig
+from core.config import ConfigError
+from core.envelope import Envelope
+from core.task_geometry import HolePose, PlugGeometry
+from drivers.registry import load_device_config
+
+PRESS_MARGIN_M = 0.002
+"""How far below the fully inserted height the TCP may have to go (m): the compliant wrist's
+give while the plug is pressed home (about 2 N on its 1000 N/m axial spring)."""
+
+
+def check_task_limits(
+    *,
+    source: str,
+    machine_limits: Limits,
+    limits: LimitsConfig,
+    arm_file: Path,
+    plug: PlugGeometry,
+    hole: HolePose,
+    tip_depth_m: float,
+) -> None:
+    """ConfigError (one line) unless the task's limits agree (module doc). ``source``: the
+    task file; ``arm_file``: the robot file its ``devices.arm`` names."""
+    arm_envelope = load_device_config(arm_file, backend="real", kind="arm").config.envelope
+    for name, envelope, where in (
+        ("limits.max_tilt_rad", limits, "the loop's limiter"),
+        (f"envelope.max_tilt_rad of {arm_file}", arm_envelope, "the arm's envelope"),
+    ):
+        if not machine_limits.max_tilt_rad < envelope.max_tilt_rad:
+            raise ConfigError(
+                f"{source}: key 'machine.limits.max_tilt_rad': expected less than {name} "
+                f"({envelope.max_tilt_rad}), got {machine_limits.max_tilt_rad}: {where} keeps "
+                f"the tool within {envelope.max_tilt_rad} rad, so this limit could never trip"
+            )
+    lowest_m = inserted_tcp_z_m(plug, hole, tip_depth_m) - PRESS_MARGIN_M
+    _check_reaches(str(arm_file), "envelope.z_min_m", arm_envelope, lowest_m, source)
+    _check_reaches(source, "limits.z_min_m", limits, lowest_m, source)
+
+
+def inserted_tcp_z_m(plug: PlugGeometry, hole: HolePose, tip_depth_m: float) -> float:
+    """The TCP's height in B (m) with the plug upright and inserted: its tip ``tip_depth_m``
+    below the opening at ``hole.z_m``."""
+    return hole.z_m + plug.length_m - tip_depth_m
+
+
+def _check_reaches(file: str, key: str, envelope: Envelope, lowest_m: float, task: str) -> None:
+    if envelope.z_min_m > lowest_m:
+        raise ConfigError(
+            f"{file}: key '{key}': expected at most {lowest_m:.4f} (the TCP's height with the "
+            f"plug of {task} inserted, less {PRESS_MARGIN_M} m to press it home), got "
+            f"{envelope.z_min_m}: the TCP would stop above the insertion"
+        )

@@ -1,0 +1,82 @@
+"""Rotations and tilts of the tool, with their frames in the names.
+
+Frames (docs/ARCHITECTURE.md): B the arm base (z_B up), T the tool at the grasp point (z_T from
+the gripper toward the plug's tip). A ``Pose`` (core/devices.py) is T2B: its ``xyz_m`` is the
+TCP in B (m) and its ``rpy_rad`` the orientation of T in B as fixed-axis roll, pitch, yaw
+(rad): R_T2B = Rz(yaw) @ Ry(pitch) @ Rx(roll), the xArm convention. This module is the one
+place that convention is written; everything else converts through ``rotation_from_rpy`` and
+``rpy_from_rotation``. Rotations are scipy ``Rotation`` objects.
+
+The tilt of the tool is the angle (rad, in [0, pi]) between z_T and the downward vertical
+-z_B: 0 with the tool pointing straight down.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+DOWN_B = np.array([0.0, 0.0, -1.0])
+"""The downward vertical, a unit vector in B."""
+
+_RPY_AXES = "xyz"  # scipy's extrinsic (fixed-axis) x, then y, then z: R = Rz @ Ry @ Rx
+
+
+def rotation_from_rpy(rpy_rad: tuple[float, float, float] | np.ndarray) -> Rotation:
+    """R_T2B from ``Pose.rpy_rad`` (fixed-axis roll, pitch, yaw, rad)."""
+    return Rotation.from_euler(_RPY_AXES, rpy_rad)
+
+
+def rpy_from_rotation(
+    T2B: Rotation, near_rpy_rad: tuple[float, float, float] | None = None
+) -> tuple[float, float, float]:
+    """Roll, pitch, yaw (rad) of R_T2B; with ``near_rpy_rad``, each angle is wrapped by 2*pi
+    to lie nearest the reference (so that a roll near +pi is not reported as -pi)."""
+    rpy = T2B.as_euler(_RPY_AXES)
+    if near_rpy_rad is not None:
+        reference = np.asarray(near_rpy_rad, dtype=float)
+        rpy = rpy + 2.0 * np.pi * np.round((reference - rpy) / (2.0 * np.pi))
+    return vec3(rpy)
+
+
+def tool_z_in_base(T2B: Rotation) -> np.ndarray:
+    """z_T expressed in B (a unit 3-vector): the third column of R_T2B."""
+    return T2B.as_matrix()[:, 2]
+
+
+def tilt_of_tool_axis(z_T_in_B: np.ndarray) -> tuple[float, np.ndarray]:
+    """The tilt (rad) of a tool whose z-axis in B is ``z_T_in_B`` (unit 3-vector), and the
+    unit axis in B about which turning by the tilt brings z_T straight down (the shortest
+    arc, ``z_T x -z_B`` normalised; zeros when pointing straight down or straight up)."""
+    turn = cross(z_T_in_B, DOWN_B)
+    norm = float(np.linalg.norm(turn))
+    angle = math.atan2(norm, float(np.dot(z_T_in_B, DOWN_B)))
+    axis = turn / norm if norm > 1e-12 else np.zeros(3)
+    return angle, axis
+
+
+def tilt_of_rotation(T2B: Rotation) -> float:
+    """The tilt (rad, in [0, pi]) of the tool oriented by R_T2B."""
+    return tilt_of_tool_axis(tool_z_in_base(T2B))[0]
+
+
+def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b for 3-vectors (``np.cross`` costs ~20 us a call, too much for every tick)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
+def clamp_norm(vector: np.ndarray, limit: float) -> np.ndarray:
+    """``vector`` scaled down to a norm of at most ``limit`` (its direction kept); the same
+    object when already within."""
+    norm = float(np.linalg.norm(vector))
+    return vector * (limit / norm) if norm > limit else vector
+
+
+def vec3(values: np.ndarray | tuple[float, ...]) -> tuple[float, float, float]:
+    """Three Python floats from a 3-vector (the tuples of ``Pose`` and ``Twist``)."""
+    x, y, z = (float(v) for v in values)
+    return (x, y, z)

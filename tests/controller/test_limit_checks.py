@@ -1,0 +1,75 @@
+"""The load-time checks of a task's limits (controller/limit_checks.py), as ``load_task``
+raises them: one line naming the file and the key."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pytest
+
+from controller.run.task import load_task, task_path
+from core.config import CONFIG_ROOT, ConfigError
+
+ROBOT = CONFIG_ROOT / "robot" / "xarm6.yaml"
+
+
+def robot_with(tmp_path: Path, old: str, new: str) -> Path:
+    """A copy of the shipped robot file with one line changed."""
+    text = ROBOT.read_text()
+    assert old in text
+    path = tmp_path / "robot.yaml"
+    path.write_text(text.replace(old, new))
+    return path
+
+
+def refusal(name: str, overrides: list[str]) -> str:
+    with pytest.raises(ConfigError) as error:
+        load_task(name, overrides)
+    message = str(error.value)
+    assert "\n" not in message
+    return message
+
+
+def test_the_shipped_tasks_pass_the_checks():
+    for name in ("usb_a", "usb_c"):
+        load_task(name)
+
+
+def test_a_machine_tilt_limit_the_limiter_never_lets_happen_is_refused():
+    message = refusal("usb_c", ["machine.limits.max_tilt_rad=0.4"])
+    assert message == (
+        f"{task_path('usb_c')}: key 'machine.limits.max_tilt_rad': expected less than "
+        "limits.max_tilt_rad (0.35), got 0.4: the loop's limiter keeps the tool within 0.35 "
+        "rad, so this limit could never trip"
+    )
+
+
+def test_a_machine_tilt_limit_beyond_the_arm_envelope_is_refused(tmp_path):
+    robot = robot_with(tmp_path, "  max_tilt_rad: 0.35 ", "  max_tilt_rad: 0.30 ")
+    message = refusal("usb_c", [f"devices.arm={robot}"])
+    assert message.startswith(
+        f"{task_path('usb_c')}: key 'machine.limits.max_tilt_rad': expected less than "
+        f"envelope.max_tilt_rad of {robot} (0.3), got 0.3: the arm's envelope keeps"
+    )
+
+
+def test_an_arm_envelope_that_stops_above_the_insertion_is_refused(tmp_path):
+    robot = robot_with(tmp_path, "  z_min_m: 0.011 ", "  z_min_m: 0.02 ")
+    message = refusal("usb_c", [f"devices.arm={robot}"])
+    # USB-C: 20 mm plug, tip driven 6 mm deep (the blind's pushes): TCP at 14 mm, less 2 mm
+    assert message == (
+        f"{robot}: key 'envelope.z_min_m': expected at most 0.0120 (the TCP's height with the "
+        f"plug of {task_path('usb_c')} inserted, less 0.002 m to press it home), got 0.02: the "
+        "TCP would stop above the insertion"
+    )
+
+
+def test_task_limits_that_stop_above_the_insertion_are_refused():
+    message = refusal("usb_a", ["limits.z_min_m=0.013"])
+    # USB-A: 25 mm plug, tip driven 11 mm deep (the blind's pushes): TCP at 14 mm, less 2 mm
+    assert re.fullmatch(
+        re.escape(f"{task_path('usb_a')}: key 'limits.z_min_m': expected at most 0.0120 ")
+        + r".* got 0\.013: the TCP would stop above the insertion",
+        message,
+    )
