@@ -13,13 +13,13 @@ from controller.insertion.machine_config import (
     s2t_matrix,
 )
 from controller.run.task import load_task
-from core.config import CONFIG_ROOT, ConfigError, load_yaml
+from core.config import CONFIG_ROOT, ConfigError, load_yaml_extending
 
 EXAMPLE = CONFIG_ROOT / "tasks" / "usb_c.yaml"
 
 
 def example() -> dict:
-    return load_yaml(EXAMPLE)
+    return load_yaml_extending(EXAMPLE)
 
 
 def load_edited(data: dict, folder) -> object:
@@ -110,4 +110,4 @@ def test_s2t_matrix_default_mapping():
 
 
 def test_the_task_file_has_the_machine_sections():
-    assert {"plug", "hole", "machine"} <= set(yaml.safe_load(EXAMPLE.read_text()))
+    assert {"plug", "hole", "machine"} <= set(load_yaml_extending(EXAMPLE))

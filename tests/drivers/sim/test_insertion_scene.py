@@ -14,7 +14,7 @@ import yaml
 from scipy.spatial.transform import Rotation
 
 from controller.run.task import load_task
-from core.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT, ConfigError, load_yaml_extending
 from core.devices import Pose
 from core.spatial import rotation_from_rpy, rpy_from_rotation
 from core.task_geometry import HolePose, PlugGeometry
@@ -277,7 +277,7 @@ def test_the_closed_form_quaternion_matches_the_arm_convention():
 
 
 def _write_task(tmp_path: Path, edit) -> Path:
-    data = yaml.safe_load((CONFIG_ROOT / "tasks" / "usb_c.yaml").read_text())
+    data = load_yaml_extending(CONFIG_ROOT / "tasks" / "usb_c.yaml")
     edit(data)
     path = tmp_path / "task.yaml"
     path.write_text(yaml.safe_dump(data))

@@ -10,7 +10,7 @@ import pytest
 
 from controller.loop import ControlLoop
 from controller.run.task import load_task
-from core.config import ConfigError
+from core.config import CONFIG_ROOT, ConfigError
 from drivers.sim.scenes.insertion import TruthLog
 from evaluation.common.cli_support import Terminated
 from evaluation.trials import trial
@@ -44,10 +44,10 @@ def test_a_bad_override_is_one_line_and_exit_2(override, message, tmp_path, caps
 
 
 def test_a_bad_task_file_is_one_line_and_exit_2(tmp_path, capsys):
-    bad = tmp_path / "task.yaml"
-    bad.write_text(
-        (load_task("usb_c").path.read_text()).replace("  rate_hz: 100.0", "  rate_hz: fast")
-    )
+    bad = tmp_path / "task.yaml"  # a user's task on the shipped base, with one bad value
+    base = CONFIG_ROOT / "tasks" / "base" / "usb.yaml"
+    text = load_task("usb_c").path.read_text().replace("extends: base/usb.yaml", f"extends: {base}")
+    bad.write_text(text + "loop:\n  rate_hz: fast\n")
     code = main(["--task", str(bad), "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert code == 2 and "key 'loop.rate_hz'" in err and len(err.strip().splitlines()) == 1
