@@ -5,7 +5,7 @@ keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
 * ``dipole``: the insertion machine on the estimator as it is (dipole tilt, NHHD in-plane
   torque): the product;
 * ``fingervision``: the same machine on the FingerVision baseline's torques
-  (``fv_tau_*``, ``BaselineTorques``);
+  (``fv_tau_*``, ``fingervision_torques``);
 * ``blind``: a spiral of pushes without tactile feedback (``BlindMachine``); the estimator
   still runs, and its estimates are recorded, never used.
 """
@@ -17,30 +17,17 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.blind import BlindMachine
 from controller.run.task import TaskConfig
-from controller.tactile import TactileEstimator, WrenchEstimate, WrenchSource
+from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
 
-class BaselineTorques:
-    """The estimator with its torques replaced by the FingerVision baseline's
+def fingervision_torques(estimate: WrenchEstimate) -> WrenchEstimate:
+    """``estimate`` with its torques replaced by the FingerVision baseline's
     (``fv_tau_x``, ``fv_tau_y``, ``fv_tau_z``; raw units as the estimate's)."""
-
-    def __init__(self, estimator: TactileEstimator) -> None:
-        self.estimator = estimator
-
-    def capture_open(self, n_frames: int | None = None) -> None:
-        self.estimator.capture_open(n_frames)
-
-    def rezero(self, n_frames: int | None = None) -> None:
-        self.estimator.rezero(n_frames)
-
-    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        e = self.estimator.push(frame, t_s)
-        return dataclasses.replace(e, tau_x=e.fv_tau_x, tau_y=e.fv_tau_y, tau_z=e.fv_tau_z)
+    e = estimate
+    return dataclasses.replace(e, tau_x=e.fv_tau_x, tau_y=e.fv_tau_y, tau_z=e.fv_tau_z)
 
 
 @dataclass(frozen=True)
@@ -67,8 +54,8 @@ def _the_estimator(estimator: TactileEstimator, world: Any) -> TactileEstimator:
     return estimator
 
 
-def _baseline(estimator: TactileEstimator, world: Any) -> BaselineTorques:
-    return BaselineTorques(estimator)
+def _baseline(estimator: TactileEstimator, world: Any) -> WrenchSource:
+    return TransformedSource(estimator, fingervision_torques)
 
 
 CONTROLLERS: Mapping[str, Controller] = {

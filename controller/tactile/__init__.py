@@ -25,7 +25,7 @@ from controller.tactile.field import VectorField
 from controller.tactile.settings import EstimatorConfig, estimator_config
 from controller.tactile.slip import RezeroState, SlipStatus
 from controller.tactile.wrench import WrenchEstimate
-from controller.tactile.wrench_source import WrenchSource
+from controller.tactile.wrench_source import TransformedSource, WrenchSource
 
 __all__ = [
     "Calibration",
@@ -33,6 +33,7 @@ __all__ = [
     "RezeroState",
     "SlipStatus",
     "TactileEstimator",
+    "TransformedSource",
     "VectorField",
     "WrenchEstimate",
     "WrenchSource",

@@ -1,8 +1,11 @@
 """What the control loop reads the wrench from (controller/loop.py): the tactile estimator,
-or an evaluation's stand-in that wraps it (evaluation/trials/torque_sources.py)."""
+or the estimator with part of each estimate replaced (``TransformedSource``: the
+FingerVision baseline's torques, controller/run/controllers.py; the simulator's true wrench,
+evaluation/trials/oracle.py)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Protocol, runtime_checkable
 
 import numpy as np
@@ -32,3 +35,24 @@ class WrenchSource(Protocol):
         """Take the mean of the next ``n_frames`` pushed frames (None: the source's default)
         as the zero-wrench reference."""
         ...
+
+
+class TransformedSource:
+    """A WrenchSource that runs ``estimator`` on every frame and hands each estimate through
+    ``transform`` (e.g. replacing the torques by another method's); the captures of the open
+    gel and of the reference are the estimator's."""
+
+    def __init__(
+        self, estimator: WrenchSource, transform: Callable[[WrenchEstimate], WrenchEstimate]
+    ) -> None:
+        self.estimator = estimator
+        self.transform = transform
+
+    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
+        return self.transform(self.estimator.push(frame, t_s))
+
+    def capture_open(self, n_frames: int | None = None) -> None:
+        self.estimator.capture_open(n_frames)
+
+    def rezero(self, n_frames: int | None = None) -> None:
+        self.estimator.rezero(n_frames)

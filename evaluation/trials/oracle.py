@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from controller.run import CONTROLLERS, Controller
-from controller.tactile import TactileEstimator, WrenchEstimate
+from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
 # Nominal slopes of the GelSight Mini's default estimator, N*m (or N) per raw unit
 # (docs/EVALUATION.md, section 1: tilt about 1.5-2.1, tau_z about 0.02-0.04).
@@ -27,25 +27,16 @@ ORACLE_FORCE_N_PER_RAW = 100.0
 
 
 class TrueWrench:
-    """The simulator's true gel wrench in place of the estimate's values (see the module
-    doc). ``true_wrench_s``: returns the newest true (fx, fy, fz, tau_x, tau_y, tau_z) in S,
-    N and N*m, of the gel on the plug."""
+    """The simulator's true gel wrench in place of an estimate's values (see the module
+    doc), relative to the true wrench while the reference was captured. ``true_wrench_s``:
+    returns the newest true (fx, fy, fz, tau_x, tau_y, tau_z) in S, N and N*m, of the gel on
+    the plug."""
 
-    def __init__(
-        self, estimator: TactileEstimator, true_wrench_s: Callable[[], np.ndarray]
-    ) -> None:
-        self.estimator = estimator
+    def __init__(self, true_wrench_s: Callable[[], np.ndarray]) -> None:
         self._true = true_wrench_s
         self._zero = np.zeros(6)
 
-    def capture_open(self, n_frames: int | None = None) -> None:
-        self.estimator.capture_open(n_frames)
-
-    def rezero(self, n_frames: int | None = None) -> None:
-        self.estimator.rezero(n_frames)
-
-    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        e = self.estimator.push(frame, t_s)
+    def __call__(self, e: WrenchEstimate) -> WrenchEstimate:
         wrench = np.asarray(self._true(), float)
         if e.zeroing:
             self._zero = wrench.copy()
@@ -62,15 +53,16 @@ class TrueWrench:
         )
 
 
-def _true_wrench_source(estimator: TactileEstimator, world: Any) -> TrueWrench:
-    """``TrueWrench`` reading the newest true gel wrench of the simulated ``world``."""
+def _true_wrench_source(estimator: TactileEstimator, world: Any) -> WrenchSource:
+    """The estimator with ``TrueWrench`` reading the newest true gel wrench of the simulated
+    ``world``."""
 
     def newest_true_wrench() -> np.ndarray:
         world.sync()
         rows = world.truth.arrays()["gel_wrench_s"]
         return rows[-1] if len(rows) else np.zeros(6)
 
-    return TrueWrench(estimator, newest_true_wrench)
+    return TransformedSource(estimator, TrueWrench(newest_true_wrench))
 
 
 ORACLE = Controller(CONTROLLERS["dipole"].machine, _true_wrench_source, sim_only=True)

@@ -12,7 +12,6 @@ on the robot, and the outcome is the machine's (no truth).
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,7 +22,6 @@ from controller.insertion import Phase
 from controller.loop import LoopResult
 from controller.run import RunOutcome, Task, load_task, run_task
 from core.atomic_files import atomic_file
-from core.config import ConfigError
 from evaluation.common.cli_support import Terminated
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
@@ -64,35 +62,15 @@ def raise_if_interrupted(outcome: TrialOutcome) -> None:
 
 
 def run(
-    task: Task,
-    controller: str,
-    seed: int,
-    *,
-    backend: str = "sim",
-    realtime: bool = False,
-    out_dir: Path | None = None,
-    pad_script: Sequence[Any] = (),
+    task: Task, controller: str, seed: int, *, out_dir: Path | None = None, **run_options: Any
 ) -> TrialOutcome:
-    """Run one trial of ``task`` with ``controller`` on ``backend`` (see the module doc).
-    ``pad_script``: in simulation, events (``drivers.sim.twins.gamepad.PadEvent``) the
-    simulated gamepad plays from the trial's start (a scripted operator; the task's devices
-    must name a gamepad)."""
-
-    def play_script(device_set: Any) -> None:
-        if pad_script:
-            if device_set.devices.gamepad is None:
-                raise ConfigError("pad_script: the task's devices name no gamepad")
-            device_set.devices.gamepad.play(pad_script)
-
+    """Run one trial of ``task`` with ``controller`` (see the module doc): the product's
+    ``run_task`` with the trial tools' controllers (the oracle too) and the same
+    ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored against
+    the simulated world's truth; ``out_dir``: the run's record, with ``truth.npz`` and the
+    trial's summary in ``trial.json``."""
     ran = run_task(
-        task,
-        controller,
-        seed,
-        backend=backend,
-        realtime=realtime,
-        out_dir=out_dir,
-        controllers=TRIAL_CONTROLLERS,
-        prepare=play_script,
+        task, controller, seed, out_dir=out_dir, controllers=TRIAL_CONTROLLERS, **run_options
     )
     world = ran.devices.world
     if world is None:

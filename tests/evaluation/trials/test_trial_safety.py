@@ -89,7 +89,8 @@ def test_an_operator_takes_over_and_hands_back_through_the_gamepad():
         PadEvent(3.5, buttons={"hand_back": True}),
         PadEvent(3.6, buttons={"hand_back": False}),
     ]
-    outcome = trial.run(task, "dipole", 9, pad_script=script)
+    play = lambda built: built.devices.gamepad.play(script)  # noqa: E731
+    outcome = trial.run(task, "dipole", 9, prepare=play)
     reasons = [(t.source, t.target, t.reason) for t in outcome.transitions]
     takeover = next(t for t in outcome.transitions if t.reason == "operator_takeover")
     back = next(t for t in outcome.transitions if t.reason == "hand_back")
