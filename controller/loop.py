@@ -27,13 +27,15 @@ Tick order:
 7. on a trip: ``safe_stop`` at once, then one more ``machine.step`` with
    ``Observation.fault`` set (its command is not sent) so the machine records its failure,
    the observer sees it, and the loop ends: the stop comes within the tick that saw the
-   fault, i.e. within one period of the fault being observable.
+   fault, i.e. within one period of the fault being observable. Any exception raised in a
+   tick (an estimator's ValueError on a wrong-size frame, a ConnectionResetError, an
+   observer that cannot write) is such a trip: its type and message are the fault's.
 
-Whatever ends the loop (the machine, a trip, a signal, an exception), a ``finally`` runs
+Whatever ends the loop (the machine, a trip, a signal), a ``finally`` runs
 ``safe_stop`` unless the loop already did. SIGINT and SIGTERM (handlers installed only in
 the main thread, the previous ones restored afterwards) end the loop at the next tick
 start, i.e. within one period. ``safe_stop``'s error, if any, is in the result
-(``LoopResult.safe_stop_error``) and logged; an exception from the loop itself propagates.
+(``LoopResult.safe_stop_error``) and logged.
 """
 
 from __future__ import annotations
@@ -311,7 +313,11 @@ class ControlLoop:
                 return "max_duration", f"{max_duration_s} s"
             self._starts.append(now)
             self._deadlines.append(deadline)
-            ended = self._tick(k, deadline, now)
+            try:
+                ended = self._tick(k, deadline, now)
+            except Exception as error:  # any failure in a tick ends as a device fault does
+                message = f"the tick raised {type(error).__name__}: {error}"
+                ended = "fault", self._fault(message, self._last_observation, k, deadline, now)
             end = self.clock.now()
             self._ends.append(end)
             if ended is not None:
@@ -411,12 +417,17 @@ class ControlLoop:
         deadline: float,
         start: float,
     ) -> str:
-        """Stop now, then let the machine see the fault (its command is dropped)."""
+        """Stop now, then let the machine see the fault (its command is dropped) and the
+        observer record it. A failure of either is logged, not raised: the run has already
+        stopped safely and ends with ``message``."""
         self._stop_once()
         if observation is not None:
             faulted = dataclasses.replace(observation, fault=message)
-            self.machine.step(faulted)
-            self._notify(faulted, None, (), k, deadline, start, message)
+            try:
+                self.machine.step(faulted)
+                self._notify(faulted, None, (), k, deadline, start, message)
+            except Exception as error:
+                log.error("after the fault %r: %s: %s", message, type(error).__name__, error)
         return message
 
     def _notify(

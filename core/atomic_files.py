@@ -36,7 +36,8 @@ def fsync_file(path: Path) -> None:
 def atomic_file(path: PathLike) -> Iterator[Path]:
     """Yield a temporary path beside ``path`` (same folder, same suffix, so libraries that
     pick a format from the suffix still work); when the block succeeds, flush it to disk and
-    rename it over ``path``; on any exception or interruption, remove it."""
+    rename it over ``path``; on any exception or interruption, remove it. An OSError that
+    names no file (a write on a full disk) is raised naming ``path``."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     temporary = hidden_sibling(path, "partial")
@@ -45,6 +46,11 @@ def atomic_file(path: PathLike) -> Iterator[Path]:
         yield temporary
         fsync_file(temporary)
         os.replace(temporary, path)
+    except OSError as error:
+        temporary.unlink(missing_ok=True)
+        if error.filename is None:
+            raise OSError(error.errno, error.strerror, str(path)) from error
+        raise
     except BaseException:
         temporary.unlink(missing_ok=True)
         raise

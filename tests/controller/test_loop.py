@@ -257,17 +257,55 @@ def test_outside_the_main_thread_no_handler_is_installed(devices, clock):
     assert seen == [before] * 3 and machine.phase is Phase.DONE
 
 
-def test_an_exception_in_the_machine_still_stops_and_restores(devices, clock):
+def test_an_exception_in_a_tick_ends_as_a_device_fault(devices, clock):
+    """A bug in the machine: safe stop, the machine records FAILED, the observer sees the
+    fault, the run ends "fault" naming the exception, and the handlers are restored."""
+
     def script(obs, k):
         if k == 4:
             raise RuntimeError("bug in a handler")
         return Command(twist=Twist((0.02, 0.0, 0.0)))
 
-    spy = StopSpy(devices.arm, clock)
+    spy, seen, machine = StopSpy(devices.arm, clock), [], ScriptedMachine(script)
     before = signal.getsignal(signal.SIGTERM)
-    with pytest.raises(RuntimeError, match="bug in a handler"):
-        make_loop(ScriptedMachine(script), devices, clock, arm=spy).run()
+    result = make_loop(machine, devices, clock, arm=spy, observer=seen.append).run()
+    assert result.reason == "fault"
+    assert result.message == "the tick raised RuntimeError: bug in a handler"
     assert len(spy.stops) == 1 and signal.getsignal(signal.SIGTERM) is before
+    assert machine.phase is Phase.FAILED and machine.transitions[-1].reason == "device_fault"
+    assert seen[-1].fault == result.message and seen[-1].command is None
+
+
+@pytest.mark.parametrize(
+    "error", [ValueError("frame 10x10: expected 320x240"), ConnectionResetError(104, "reset")]
+)
+def test_an_estimator_or_link_error_is_a_fault_too(devices, clock, error):
+    class Failing(ScriptedEstimator):
+        def push(self, image, t_s):
+            if len(self.pushed) == 3:
+                raise error
+            return super().push(image, t_s)
+
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.02, 0.0, 0.0))))
+    spy = StopSpy(devices.arm, clock)
+    result = make_loop(machine, devices, clock, estimator=Failing(), arm=spy).run()
+    assert result.reason == "fault" and type(error).__name__ in result.message
+    assert len(spy.stops) == 1 and machine.phase is Phase.FAILED
+
+
+def test_a_failure_while_recording_the_fault_still_ends_the_run(devices, clock):
+    def observer(record):
+        if record.fault is not None:
+            raise OSError(28, "No space left on device", "ticks.jsonl")
+        if len(seen) == 5:
+            raise OSError(28, "No space left on device", "ticks.jsonl")
+        seen.append(record)
+
+    seen = []
+    spy = StopSpy(devices.arm, clock)
+    result = make_loop(ScriptedMachine(), devices, clock, arm=spy, observer=observer).run()
+    assert result.reason == "fault" and "No space left on device" in result.message
+    assert len(spy.stops) == 1
 
 
 def test_safe_stop_errors_are_reported_not_raised(devices, clock):
