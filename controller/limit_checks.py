@@ -18,6 +18,10 @@ naming the file and the key.
   task's ``limits.z_min_m`` must allow that height, or a run stops at the board. The check
   reads only the product's own configuration, so it holds for the robot and the simulator
   alike (the simulated arm uses the robot file's envelope unchanged).
+* **The boxes must hold the search.** The hole's nominal x and y, widened by the search's
+  half width (``search_half_width_m``: the farthest the task's controllers search from the
+  nominal hole), must lie inside both workspace boxes, or the machine would search and
+  insert against a face of the box.
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ def check_task_limits(
     plug: PlugGeometry,
     hole: HolePose,
     tip_depth_m: float,
+    search_half_width_m: float,
 ) -> None:
     """ConfigError (one line) unless the task's limits agree (module doc). ``source``: the
     task file; ``arm_file``: the robot file its ``devices.arm`` names."""
@@ -62,6 +67,8 @@ def check_task_limits(
     lowest_m = inserted_tcp_z_m(plug, hole, tip_depth_m) - PRESS_MARGIN_M
     _check_reaches(str(arm_file), "envelope.z_min_m", arm_envelope, lowest_m, source)
     _check_reaches(source, "limits.z_min_m", limits, lowest_m, source)
+    _check_holds_search(str(arm_file), "envelope.", arm_envelope, hole, search_half_width_m)
+    _check_holds_search(source, "limits.", limits, hole, search_half_width_m)
 
 
 def inserted_tcp_z_m(plug: PlugGeometry, hole: HolePose, tip_depth_m: float) -> float:
@@ -77,3 +84,16 @@ def _check_reaches(file: str, key: str, envelope: Envelope, lowest_m: float, tas
             f"plug of {task} inserted, less {PRESS_MARGIN_M} m to press it home), got "
             f"{envelope.z_min_m}: the TCP would stop above the insertion"
         )
+
+
+def _check_holds_search(
+    file: str, prefix: str, box: Envelope, hole: HolePose, margin_m: float
+) -> None:
+    for axis, centre_m in (("x", hole.x_m), ("y", hole.y_m)):
+        low_m, high_m = getattr(box, f"{axis}_min_m"), getattr(box, f"{axis}_max_m")
+        if not (low_m <= centre_m - margin_m and centre_m + margin_m <= high_m):
+            raise ConfigError(
+                f"{file}: keys '{prefix}{axis}_min_m', '{prefix}{axis}_max_m': expected a box "
+                f"holding the hole's {axis} {centre_m} m with the search's +-{margin_m} m, got "
+                f"[{low_m}, {high_m}]: the machine would search against a face of the box"
+            )

@@ -96,7 +96,11 @@ class LoopConfig(Config):
     ``max_consecutive_overruns`` overruns in a row or ``max_overruns_in_window`` within the
     last ``overrun_window_ticks`` ticks. ``rt_priority``: run the loop's thread under the
     SCHED_FIFO real-time policy at this priority (1..99; Linux, needs CAP_SYS_NICE or an
-    ``rtprio`` limit), restoring its policy afterwards; None: the default scheduler. On a
+    ``rtprio`` limit), restoring its policy afterwards; None: the default scheduler.
+    ``max_held_by_limits_s``: the longest the workspace or tilt limit may hold the machine's
+    commands back without a break before the watchdog trips (a target outside the envelope
+    is a fault, not a run that goes on against the box's face); an operator in control is
+    held without tripping. On a
     shared or loaded machine this is what keeps the period error under a millisecond
     (docs/BENCHMARKS.md, "Control loop period").
     """
@@ -109,6 +113,7 @@ class LoopConfig(Config):
     max_overruns_in_window: int = number(1, 100_000, default=20)
     overrun_window_ticks: int = number(1, 100_000, default=100)
     rt_priority: int | None = number(1, 99, default=None)
+    max_held_by_limits_s: float = number(0.01, 600.0, default=1.0)
 
     def __post_init__(self) -> None:
         if self.hold_s < 1.0 / self.rate_hz:
@@ -254,6 +259,7 @@ class ControlLoop:
             cfg.max_consecutive_overruns,
             cfg.max_overruns_in_window,
             cfg.overrun_window_ticks,
+            cfg.max_held_by_limits_s,
         )
         self._signal: int | None = None
         self._stopped = False
@@ -380,6 +386,9 @@ class ControlLoop:
             assert trip is not None  # an error always trips
             return "fault", self._fault(trip, observation, k, deadline, now)
         self._notify(observation, limited.command, limited.limited, k, deadline, now, None)
+        trip = self.watchdog.record_limits(now, limited.limited, observation.teleop.in_control)
+        if trip is not None:
+            return "fault", self._fault(trip, observation, k, deadline, now)
         phase = self.machine.phase
         if phase in TERMINAL:
             return ("done" if phase is Phase.DONE else "failed"), phase.value

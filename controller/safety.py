@@ -170,6 +170,10 @@ class CommandLimiter:
 # -- watchdog ------------------------------------------------------------------------------
 
 
+HOLDING_LIMITS = ("workspace", "tilt")
+"""The limits that stop a command's motion (``speed`` only slows it, ``step`` only splits it)."""
+
+
 class Watchdog:
     """Decides each tick whether the loop must stop (module doc). ``trip`` holds the first
     reason (a one-line message), latched."""
@@ -180,8 +184,11 @@ class Watchdog:
         max_consecutive_overruns: int,
         max_overruns_in_window: int,
         overrun_window_ticks: int,
+        max_held_by_limits_s: float = 1.0,
     ) -> None:
         self.tactile_max_age_s = tactile_max_age_s
+        self.max_held_by_limits_s = max_held_by_limits_s
+        self._held_since_s: float | None = None
         self.max_consecutive_overruns = max_consecutive_overruns
         self.max_overruns_in_window = max_overruns_in_window
         self._window: deque[bool] = deque(maxlen=overrun_window_ticks)
@@ -230,6 +237,27 @@ class Watchdog:
         in_window = sum(self._window)
         if in_window >= self.max_overruns_in_window:
             return self._latch(f"overruns: {in_window} in the last {len(self._window)} ticks")
+        return self.trip
+
+    def record_limits(
+        self, now_s: float, limited: tuple[str, ...], operator_in_control: bool
+    ) -> str | None:
+        """Note which limits acted on this tick's command; the trip message once the
+        workspace or tilt limit has held the machine's commands back for
+        ``max_held_by_limits_s`` without a break (an operator in control is never tripped:
+        the envelope holds the pad's commands at its faces)."""
+        holding = [name for name in limited if name in HOLDING_LIMITS]
+        if not holding or operator_in_control:
+            self._held_since_s = None
+            return self.trip
+        if self._held_since_s is None:
+            self._held_since_s = now_s
+        held_s = now_s - self._held_since_s
+        if held_s >= self.max_held_by_limits_s:
+            return self._latch(
+                f"the {' and '.join(holding)} limit held the commands back for {held_s:.2f} s "
+                f"(budget {self.max_held_by_limits_s} s): the target lies outside the envelope"
+            )
         return self.trip
 
     def _latch(self, message: str) -> str:

@@ -135,6 +135,7 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
         plug=config.plug,
         hole=config.hole,
         tip_depth_m=max(config.machine.insert.depth_m, config.blind.push_depth_m),
+        search_half_width_m=max(config.machine.search.uncertainty_xy_m, config.blind.half_width_m),
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
     return Task(config, scene, path, tuple(overrides), raw)

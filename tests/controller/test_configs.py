@@ -20,6 +20,7 @@ loop:
   max_overruns_in_window: 20
   overrun_window_ticks: 100
   rt_priority: null
+  max_held_by_limits_s: 1.0
 limits:
   x_min_m: 0.20
   x_max_m: 0.55

@@ -73,3 +73,19 @@ def test_task_limits_that_stop_above_the_insertion_are_refused():
         + r".* got 0\.013: the TCP would stop above the insertion",
         message,
     )
+
+
+def test_a_limits_box_that_excludes_the_hole_is_refused():
+    message = refusal("usb_c", ["limits.x_max_m=0.3"])
+    assert message == (
+        f"{task_path('usb_c')}: keys 'limits.x_min_m', 'limits.x_max_m': expected a box holding "
+        "the hole's x 0.4 m with the search's +-0.003 m, got [0.2, 0.3]: the machine would "
+        "search against a face of the box"
+    )
+
+
+def test_an_arm_envelope_that_excludes_the_search_is_refused(tmp_path):
+    robot = robot_with(tmp_path, "  y_max_m: 0.25\n", "  y_max_m: 0.002\n")
+    message = refusal("usb_a", [f"devices.arm={robot}"])
+    assert message.startswith(f"{robot}: keys 'envelope.y_min_m', 'envelope.y_max_m': ")
+    assert "the hole's y 0.0 m with the search's +-0.003 m, got [-0.25, 0.002]" in message

@@ -17,7 +17,7 @@ import pytest
 
 from controller.insertion.interface import Command, GripperTarget, Phase
 from controller.loop import ControlLoop, LoopConfig, LoopStats
-from controller.safety import LimitsConfig
+from controller.safety import LimitsConfig, Watchdog
 from controller.tactile import estimator_for_sensor
 from controller.tactile.wrench import WrenchEstimate
 from core.clock import MonotonicClock
@@ -430,3 +430,27 @@ def test_the_bench_script_runs():
         capture_output=True, text=True, cwd=root, timeout=120,
     )  # fmt: skip
     assert bad.returncode == 2 and "--rate-hz" in bad.stderr
+
+
+def test_a_limit_holding_the_machine_back_trips_the_watchdog(devices, clock):
+    """A target beyond the workspace box: the limiter holds the arm at the box's face, and
+    after max_held_by_limits_s of that the run ends in a fault, not against the face."""
+    records = []
+    machine = ScriptedMachine(lambda obs, k: Command(twist=Twist((0.05, 0.0, 0.0))))
+    result = make_loop(machine, devices, clock, observer=records.append,
+                       max_held_by_limits_s=0.5).run(max_duration_s=30.0)  # fmt: skip
+    assert result.reason == "fault" and "workspace limit held the commands back" in result.message
+    held = [r for r in records if "workspace" in r.limited]
+    assert held and 0.5 <= records[-1].timing.start_s - held[0].timing.start_s <= 0.5 + 2 * PERIOD
+    assert machine.phase is Phase.FAILED
+
+
+def test_an_operator_held_at_the_box_face_is_not_tripped(devices, clock):
+    watchdog = Watchdog(0.15, 5, 20, 100, max_held_by_limits_s=0.5)
+    for k in range(200):
+        assert watchdog.record_limits(k * PERIOD, ("workspace",), operator_in_control=True) is None
+    for k in range(49):  # the machine held 0.48 s, then free again: no trip
+        assert watchdog.record_limits(k * PERIOD, ("tilt", "speed"), False) is None
+    assert watchdog.record_limits(0.5, ("speed",), False) is None
+    assert watchdog.record_limits(0.6, ("workspace",), False) is None
+    assert watchdog.record_limits(1.1, ("workspace",), False).startswith("the workspace limit")
