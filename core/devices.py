@@ -307,7 +307,8 @@ class Devices:
     tactile: TactileSensor
     gamepad: Gamepad | None = None
 
-    def each(self) -> tuple[Device, ...]:
-        """The devices present, arm first (the order they are connected in)."""
-        present = (self.arm, self.gripper, self.tactile, self.gamepad)
-        return tuple(device for device in present if device is not None)
+    def named(self) -> tuple[tuple[str, Device], ...]:
+        """(role, device) of the devices present, arm first (the order they connect in)."""
+        roles = (("arm", self.arm), ("gripper", self.gripper), ("tactile", self.tactile),
+                 ("gamepad", self.gamepad))  # fmt: skip
+        return tuple((role, device) for role, device in roles if device is not None)

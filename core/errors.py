@@ -1,7 +1,8 @@
 """Typed errors raised by every device driver, real or simulated.
 
 The tree is ``DeviceError`` > ``DeviceNotConnectedError``, ``DeviceTimeoutError``,
-``DeviceFaultError``. Each error names the device and carries the device's own error
+``DeviceFaultError``, ``DevicesNotReady`` (a run's devices that could not all be
+connected, each named). Each error names the device and carries the device's own error
 code and message when it has one, so a user can look the code up in the vendor manual.
 """
 
@@ -30,3 +31,14 @@ class DeviceTimeoutError(DeviceError):
 
 class DeviceFaultError(DeviceError):
     """The device reports a fault (an error code, a protective stop, a gripper fault)."""
+
+
+class DevicesNotReady(DeviceError):
+    """Some of a run's devices could not be connected; ``failures`` maps each one's role
+    (arm, gripper, tactile, gamepad) to its error, and the message names them all."""
+
+    def __init__(self, failures: dict[str, DeviceError]) -> None:
+        self.failures = failures
+        roles = ", ".join(failures)
+        details = "; ".join(f"{role}: {error}" for role, error in failures.items())
+        super().__init__(roles, f"not ready: {details}")

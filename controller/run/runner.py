@@ -7,7 +7,8 @@
    ``seed``);
 2. picks the controller by name from ``CONTROLLERS`` (a machine and the wrench source that
    feeds it; a caller may pass a table extended with its own entries);
-3. connects the devices, activates the gripper, and runs the control loop until the machine
+3. connects the devices (all of them are tried; ``DevicesNotReady`` names each that
+   failed), activates the gripper, and runs the control loop until the machine
    ends, a trip, a signal or the task's time budget, with every tick handed to the
    observers (the run's record when ``out_dir`` is given; the episode writer and the live
    view hook in the same way);
@@ -35,6 +36,8 @@ from controller.run.record import RunRecorder
 from controller.run.task import Task
 from controller.tactile import estimator_for_sensor
 from core.config import ConfigError
+from core.devices import Devices
+from core.errors import DeviceError, DevicesNotReady
 from drivers import registry
 
 LOOP_MARGIN_S = 5.0
@@ -100,13 +103,12 @@ def run_task(
     estimator = estimator_for_sensor(task.tactile_model(backend), config.estimator)
     source = entry.wrench_source(estimator, device_set.world)
     machine = entry.machine(config)
-    recorder = RunRecorder(out_dir) if out_dir is not None else None
-    ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])
     with ExitStack() as stack:
+        connect_all(device_set.devices, stack)
+        recorder = RunRecorder(out_dir) if out_dir is not None else None  # once connected
         if recorder is not None:
             stack.callback(recorder.close)
-        for device in device_set.devices.each():
-            stack.enter_context(device)
+        ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])
         device_set.devices.gripper.activate()
         began = time.perf_counter()
         loop = ControlLoop(
@@ -122,6 +124,20 @@ def run_task(
         loop_result = loop.run(max_duration_s=config.machine.timeouts.total_s + LOOP_MARGIN_S)
         wall_s = time.perf_counter() - began
     return RunOutcome(loop_result, machine, device_set, wall_s, recorder)
+
+
+def connect_all(devices: Devices, stack: ExitStack) -> None:
+    """Connect every device, each disconnected by ``stack`` when the run ends; try them
+    all, then raise ``DevicesNotReady`` naming each that failed (the ones connected are
+    disconnected as the stack unwinds)."""
+    failures: dict[str, DeviceError] = {}
+    for role, device in devices.named():
+        try:
+            stack.enter_context(device)
+        except DeviceError as error:
+            failures[role] = error
+    if failures:
+        raise DevicesNotReady(failures)
 
 
 def _fan_out(observers: Sequence[Observer]) -> Observer | None:

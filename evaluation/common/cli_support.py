@@ -3,6 +3,8 @@
 Exit codes (docs/ARCHITECTURE.md, "Failure behaviour"):
 
 * 0 -- done (warnings, if any, on stderr);
+* 1 -- a device could not be reached or failed (a run on the robot): one line naming every
+  device that was not ready and what to check;
 * 2 -- bad input (argument, file, configuration) or an output that cannot be written: one
   line ``PROG: error: ...`` on stderr, never a traceback;
 * 130 -- interrupted by SIGINT (Ctrl-C), 143 -- ended by SIGTERM: one line
@@ -26,8 +28,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from core.config import CONFIG_ROOT, ConfigError
+from core.errors import DeviceError
 
 EXIT_ERROR = 2
+EXIT_DEVICE = 1  # a device could not be reached or failed (as scripts/check_hardware.py)
 EXIT_SIGINT = 128 + signal.SIGINT  # 130
 EXIT_SIGTERM = 128 + signal.SIGTERM  # 143
 
@@ -70,6 +74,9 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
     except (ToolError, ConfigError) as exc:
         print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_ERROR
+    except DeviceError as exc:
+        print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
+        return EXIT_DEVICE
     except OSError as exc:
         print(f"{prog}: error: {one_line(describe_os_error(exc))}", file=sys.stderr)
         return EXIT_ERROR

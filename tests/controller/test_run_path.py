@@ -51,7 +51,8 @@ def test_a_real_run_never_loads_the_simulator_or_mujoco(tmp_path):
         [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, timeout=120
     )
     assert ran.returncode == 0, ran.stderr
-    assert "device error: xarm6: cannot connect to the controller at 127.0.0.1" in ran.stdout
+    assert "device error: arm, gripper, tactile, gamepad: not ready: " in ran.stdout
+    assert "arm: xarm6: cannot connect to the controller at 127.0.0.1" in ran.stdout
     assert "simulator modules: []" in ran.stdout
 
 

@@ -3,7 +3,11 @@
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
 import types
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -16,6 +20,8 @@ from evaluation.common.cli_support import Terminated
 from evaluation.trials import trial
 from evaluation.trials.spec import TrialSpec
 from evaluation.trials.trial_cli import main
+
+ROOT = Path(__file__).resolve().parents[3]
 
 SHORT = ("machine.timeouts.total_s=6.0",)  # grasp and the start of the approach only
 
@@ -120,3 +126,23 @@ def test_a_signal_that_stopped_a_batch_trial_stops_the_batch(monkeypatch, name, 
     monkeypatch.setattr(trial, "run", lambda *args, **kwargs: outcome)
     with pytest.raises(raised):
         trial.run_trial(TrialSpec("usb_c", "dipole", 0))
+
+
+def test_a_real_run_without_hardware_names_every_device_in_one_line(tmp_path):
+    """No robot at the arm's address, no gripper, camera or pad: exit 1, one line naming
+    each device and what to check, no traceback, and no record left behind."""
+    arm = tmp_path / "arm.yaml"
+    arm.write_text((CONFIG_ROOT / "robot" / "xarm6.yaml").read_text().replace(
+        "ip: 192.168.1.185", "ip: 127.0.0.1"))  # fmt: skip
+    out = tmp_path / "run"
+    ran = subprocess.run(
+        [sys.executable, str(ROOT / "scripts" / "run_trial.py"), "--task", "usb_c",
+         "--backend", "real", "--set", f"devices.arm={arm}", "--out", str(out)],
+        capture_output=True, text=True, timeout=120, env=dict(os.environ, MPLBACKEND="Agg"),
+    )  # fmt: skip
+    errors = [line for line in ran.stderr.splitlines() if line.startswith("run_trial:")]
+    assert ran.returncode == 1 and "Traceback" not in ran.stderr
+    assert len(errors) == 1 and errors[0].startswith("run_trial: error: arm, gripper, tactile")
+    for role in ("arm: xarm6: ", "gripper: hande: ", "tactile: ", "gamepad: "):
+        assert f"; {role}" in errors[0] or f"not ready: {role}" in errors[0]
+    assert not out.exists() or not any(out.iterdir())
