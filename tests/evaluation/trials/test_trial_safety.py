@@ -2,6 +2,7 @@
 hands back through the scripted gamepad; a driver fault mid-insertion and SIGTERM end in a
 safe stop."""
 
+import dataclasses
 import json
 import os
 import signal
@@ -125,3 +126,33 @@ def test_sigterm_during_a_trial_stops_safely_and_keeps_the_record(tmp_path):
     assert not summary["result"]["success"]
     ticks = (out / "ticks.jsonl").read_text().splitlines()
     assert ticks and all(json.loads(line) for line in ticks)  # every line whole
+
+
+def test_a_wrong_size_frame_mid_trial_ends_as_a_fault_with_a_complete_record(tmp_path):
+    """Fault injection: from 3 s on the camera delivers frames of the wrong size, so the
+    estimator raises ValueError inside a tick. The trial stops safely, the machine records
+    FAILED, and trial.json is written and says why."""
+
+    def shrink_frames_after_3_s(built):
+        read = built.devices.tactile.read_latest
+
+        def read_latest(max_age_s):
+            frame = read(max_age_s)
+            if frame.t_s < 3.0:
+                return frame
+            return dataclasses.replace(frame, image=frame.image[::2, ::2])
+
+        built.devices.tactile.read_latest = read_latest
+
+    out = tmp_path / "trial"
+    outcome = trial.run(load_task("usb_c"), "dipole", 9, out_dir=out,
+                        prepare=shrink_frames_after_3_s)  # fmt: skip
+    assert outcome.loop.reason == "fault"
+    assert outcome.loop.message.startswith("the tick raised ValueError")
+    assert outcome.transitions[-1].target is Phase.FAILED
+    summary = json.loads((out / "trial.json").read_text())
+    assert summary["loop"]["reason"] == "fault" and "ValueError" in summary["loop"]["message"]
+    assert summary["result"]["status"] == "failed"
+    assert summary["result"]["failure_reason"] == "device_fault"
+    last = json.loads((out / "ticks.jsonl").read_text().splitlines()[-1])
+    assert last["fault"] == outcome.loop.message and 2.9 <= last["t_s"] <= 3.1
