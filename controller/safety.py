@@ -212,6 +212,8 @@ class Watchdog:
             if role == "tactile" and isinstance(error, DeviceTimeoutError):
                 return self._latch(f"stale tactile frame: {error}")
             return self._latch(f"device fault ({role}): {error}")
+        if frame_t_s is not None and not math.isfinite(frame_t_s):
+            return self._latch(f"tactile frame time {frame_t_s!r}: expected a finite time (s)")
         if frame_t_s is not None and now_s - frame_t_s > self.tactile_max_age_s:
             return self._latch(
                 f"stale tactile frame: {now_s - frame_t_s:.3f} s old "

@@ -252,6 +252,8 @@ def check(dog, now_s=1.0, frame_t_s=0.95, arm=None, teleop=NO_PAD, errors=None):
 def test_the_watchdog_rules():
     assert check(watchdog()) is None
     assert check(watchdog(), frame_t_s=0.89).startswith("stale tactile frame: 0.110 s old")
+    for bad in (float("nan"), float("inf"), float("-inf")):  # never "not older than budget"
+        assert check(watchdog(), frame_t_s=bad).startswith(f"tactile frame time {bad!r}")
     stale = DeviceTimeoutError("mini", "newest frame is 200 ms old")
     assert check(watchdog(), errors={"tactile": stale}) == (
         "stale tactile frame: mini: newest frame is 200 ms old"
