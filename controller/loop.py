@@ -65,7 +65,7 @@ from controller.tactile.wrench import WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from controller.teleop import TeleopArbiter, TeleopConfig
 from core.clock import Clock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import (
     ArmStatus,
     Devices,
@@ -83,7 +83,7 @@ _EPS_S = 1e-9  # deadlines closer than this count as met (float round-off of the
 StopReason = Literal["done", "failed", "max_duration", "signal", "fault"]
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class LoopConfig(Config):
     """The task YAML's ``loop:`` section.
 

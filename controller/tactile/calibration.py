@@ -25,14 +25,13 @@ import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import yaml
 
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from core.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
 
 FORMAT = "tactile-insertion/calibration/v2"
 FORMAT_V1 = "tactile-insertion/calibration/v1"
@@ -40,7 +39,7 @@ AXES = VALUE_FIELDS
 _MIN_SAMPLES = 3
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class AxisFit(Config):
     """One axis: ``truth ~= slope * raw + intercept``, with the fit's RMSE (truth units), R^2
     and the number of samples used."""
@@ -108,7 +107,7 @@ def estimator_sha256(config: object) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Calibration(Config):
     """Per-axis fits for one sensor profile (``sensor``: its name) and estimator
     configuration (``estimator``: its name or path, ``estimator_sha256``: the fingerprint of
