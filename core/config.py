@@ -122,10 +122,11 @@ class Config:
                 _check_fields(self)
             if rules is not None:
                 rules(self)
-            else:
-                super(cls, self).__post_init__()
+            else:  # the rules after cls's in self's MRO (mypy would look after Config's)
+                following: Any = super(cls, self)
+                following.__post_init__()
 
-        cls.__post_init__ = __post_init__  # type: ignore[method-assign]
+        cls.__post_init__ = __post_init__  # type: ignore[method-assign]  # wrapping is the point
 
     def __post_init__(self) -> None:
         """The end of the chain: no rules of its own."""
@@ -138,10 +139,11 @@ def check_number(
     ``[low, high]``; otherwise ValueError ``key '<key>': expected a number in [low, high]``.
     The check behind every ``number`` field, for ranges known only at run time."""
     kind = numbers.Integral if integer else numbers.Real
+    convert: Callable[[Any], float] = int if integer else float
     converted: float | None = None
     if isinstance(value, kind) and not isinstance(value, bool):
         try:
-            converted = int(value) if integer else float(value)
+            converted = convert(value)
         except OverflowError:
             converted = None
     if converted is None or not math.isfinite(converted) or not low <= converted <= high:
@@ -169,7 +171,8 @@ def _field_specs(cls: type) -> tuple[tuple[str, Any, tuple[float, float] | None]
 
 
 def _check_fields(config: Config) -> None:
-    for name, hint, bounds in _field_specs(type(config)):
+    specs = _field_specs(type(config))  # type: ignore[arg-type]  # a class is Hashable, mypy#11470
+    for name, hint, bounds in specs:
         value = getattr(config, name)
         checked = _check(hint, value, name, bounds)
         if checked is not value:

@@ -163,7 +163,7 @@ def limit_pose(
     p0 = np.asarray(previous.xyz_m, dtype=float)
     delta = np.asarray(goal.xyz_m) - p0
     distance = float(np.linalg.norm(delta))
-    position = goal.xyz_m
+    position: tuple[float, float, float] | np.ndarray = goal.xyz_m
     if distance > max_step_m:
         position = p0 + delta * (max_step_m / distance)
         limited = (*limited, "step")

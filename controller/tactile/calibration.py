@@ -26,10 +26,12 @@ import math
 import re
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
 
+from controller.tactile.settings import EstimatorConfig
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
 
@@ -99,7 +101,7 @@ def fit_axis(
     return AxisFit(float(slope), float(intercept), rmse, r2, int(x.size))
 
 
-def estimator_sha256(config: object) -> str:
+def estimator_sha256(config: EstimatorConfig) -> str:
     """Fingerprint of an estimator configuration (a dataclass): SHA-256 of its values as
     sorted JSON. Two configurations with equal values have equal fingerprints, whatever
     their file names."""
@@ -131,7 +133,7 @@ class Calibration(Config):
                 f"key 'estimator_sha256': expected 64 hexadecimal digits, got {digest!r}"
             )
 
-    def mismatch(self, sensor: str, config: object) -> str | None:
+    def mismatch(self, sensor: str, config: EstimatorConfig) -> str | None:
         """Why this calibration does not fit the sensor profile named ``sensor`` with the
         estimator configuration ``config``; None when it does."""
         if sensor != self.sensor:
@@ -150,7 +152,9 @@ class Calibration(Config):
 
     def apply(self, estimate: WrenchEstimate) -> WrenchEstimate:
         """The estimate with each calibrated axis scaled (and offset); others unchanged."""
-        values = {axis: fit.apply(getattr(estimate, axis)) for axis, fit in self.axes.items()}
+        values: dict[str, Any] = {
+            axis: fit.apply(getattr(estimate, axis)) for axis, fit in self.axes.items()
+        }
         return dataclasses.replace(estimate, calibrated=True, **values)
 
     def to_yaml(self) -> str:
