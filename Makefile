@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 SEEDS  ?= 200
 
-.PHONY: install demo estimator-demo test bench evaluate trials lint clean
+.PHONY: install demo estimator-demo test typecheck bench evaluate trials lint clean
 
 install: $(STAMP)
 
@@ -24,6 +24,9 @@ estimator-demo: $(STAMP)
 
 test: $(STAMP)
 	MPLBACKEND=Agg SDL_VIDEODRIVER=dummy $(BIN)/python -m pytest
+
+typecheck: $(STAMP)
+	$(BIN)/mypy
 
 bench: $(STAMP)
 	$(BIN)/python scripts/bench_estimation.py --write docs/BENCHMARKS.md

@@ -67,7 +67,7 @@ from controller.tactile.wrench import WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from controller.teleop import TeleopArbiter, TeleopConfig
 from core.clock import Clock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import (
     ArmStatus,
     Devices,
@@ -80,12 +80,15 @@ from core.errors import DeviceError
 
 log = logging.getLogger(__name__)
 
+_SignalHandler = Callable[[int, FrameType | None], Any] | int | signal.Handlers | None
+"""A signal's handler as ``signal.signal`` takes and returns it."""
+
 TERMINAL = (Phase.DONE, Phase.FAILED)
 _EPS_S = 1e-9  # deadlines closer than this count as met (float round-off of the clock)
 StopReason = Literal["done", "failed", "max_duration", "signal", "fault"]
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class LoopConfig(Config):
     """The task YAML's ``loop:`` section.
 
@@ -470,12 +473,12 @@ class ControlLoop:
 
     # -- signals ---------------------------------------------------------------------------
 
-    def _install_signal_handlers(self) -> dict[int, Any]:
+    def _install_signal_handlers(self) -> dict[signal.Signals, _SignalHandler]:
         """Catch SIGINT and SIGTERM for the run, except a signal the process ignores (a
         batch's worker leaves SIGINT to its parent, as nohup leaves SIGHUP)."""
         if threading.current_thread() is not threading.main_thread():
             return {}
-        previous = {}
+        previous: dict[signal.Signals, _SignalHandler] = {}
         for signum in (signal.SIGINT, signal.SIGTERM):
             if signal.getsignal(signum) is not signal.SIG_IGN:
                 previous[signum] = signal.signal(signum, self._on_signal)

@@ -42,13 +42,13 @@ from typing import Literal
 from controller.insertion.interface import Command, TeleopInput
 from controller.tactile.wrench import WrenchEstimate
 from controller.teleop import lost_in_control
-from core.config import number
+from core.config import config_dataclass, number
 from core.devices import Arm, ArmStatus, Gripper, GripperStatus, Pose, Twist
 from core.envelope import Envelope, limit_pose, limit_twist, require_finite
 from core.errors import DeviceTimeoutError
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class LimitsConfig(Envelope):
     """The task YAML's ``limits:`` section (see the module doc): an ``Envelope`` (the TCP's
     box in B, speeds, tilt from the downward vertical) and the tactile budget."""

@@ -29,12 +29,10 @@ Rules (``TeleopArbiter.update``, once per control tick):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 from controller.insertion.interface import TeleopInput
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import GamepadState, Twist
 
 LINEAR_ACTIONS = ("vx", "vy", "vz")
@@ -42,7 +40,7 @@ ANGULAR_ACTIONS = ("wx", "wy", "wz")
 EDGE_BUTTONS = ("hand_back", "estop_ack", "gripper_open", "gripper_close")
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class TeleopConfig(Config):
     """The task YAML's ``teleop:`` section.
 

@@ -1,8 +1,9 @@
 """Configuration: YAML files loaded into frozen dataclasses that validate themselves.
 
 One mechanism serves the controller, the drivers and evaluation (it lives in ``core``, below
-every layer). A configuration class derives from ``Config`` and declares
-each key once, on its dataclass field:
+every layer). A configuration class derives from ``Config``, is decorated with
+``@config_dataclass`` (a frozen dataclass; ``@config_dataclass(kw_only=True)`` for keyword-only
+fields) and declares each key once, on its dataclass field:
 
 * ``float``/``int`` annotations with ``number(low, high)`` -- a finite number (an integer
   for ``int``) in the closed range ``[low, high]``; a bool is never a number;
@@ -24,6 +25,12 @@ not files), and an error names the file, the dotted key path and what was expect
 
 Command-line overrides (``--set scene.friction=0.5``) go through ``apply_overrides`` on the
 raw mapping before ``build``, so an overridden value is validated exactly as one from YAML.
+
+``config_dataclass`` is ``dataclasses.dataclass(frozen=True)`` at run time. It is declared a
+PEP 681 dataclass transform with ``number`` as a field specifier, so the type checker (mypy,
+``make typecheck``) knows that ``number(low, high)`` declares a required key and
+``number(low, high, default=d)`` an optional one; a plain ``@dataclass`` would take every
+``number`` field for one with a default.
 """
 
 from __future__ import annotations
@@ -37,7 +44,7 @@ import math
 import numbers
 import types
 import typing
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypeVar
 
@@ -62,16 +69,45 @@ class ConfigError(ValueError):
         super().__init__(str(message).replace("\r", "\\r").replace("\n", "\\n"))
 
 
+@typing.overload
+def number(low: float, high: float) -> Any: ...
+
+
+@typing.overload
+def number(low: float, high: float, *, default: T) -> T: ...
+
+
 def number(low: float, high: float, *, default: Any = dataclasses.MISSING) -> Any:
     """A numeric dataclass field restricted to ``[low, high]`` (an integer if annotated
-    ``int``); ``default`` serves construction in code (a YAML file must give every key)."""
+    ``int``); ``default`` serves construction in code (a YAML file must give every key).
+    The overloads tell a type checker which fields have a default (``config_dataclass``)."""
     return dataclasses.field(default=default, metadata={_RANGE: (low, high)})
+
+
+@typing.overload
+def config_dataclass(cls: type[T], /) -> type[T]: ...
+
+
+@typing.overload
+def config_dataclass(*, kw_only: bool = False) -> Callable[[type[T]], type[T]]: ...
+
+
+@typing.dataclass_transform(frozen_default=True, field_specifiers=(dataclasses.field, number))
+def config_dataclass(cls: type[T] | None = None, /, *, kw_only: bool = False) -> Any:
+    """The decorator of every ``Config`` class: ``dataclasses.dataclass(frozen=True)``
+    (``@config_dataclass``, or ``@config_dataclass(kw_only=True)`` for keyword-only fields),
+    which type checkers see as a dataclass transform with ``number`` fields (module doc)."""
+
+    def decorate(cls: type[T]) -> type[T]:
+        return dataclasses.dataclass(frozen=True, kw_only=kw_only)(cls)
+
+    return decorate if cls is None else decorate(cls)
 
 
 class Config:
     """Base of every configuration dataclass: construction checks the declared fields.
 
-    Subclasses are ``@dataclass(frozen=True)``; a subclass's own ``__post_init__`` (its
+    Subclasses are ``@config_dataclass``; a subclass's own ``__post_init__`` (its
     cross-field rules) runs after the checks of every field, which run once per instance.
     Values are normalised on the way: an int given for a ``float`` becomes a float, a list
     for a tuple a tuple, a mapping a read-only mapping.
@@ -86,10 +122,11 @@ class Config:
                 _check_fields(self)
             if rules is not None:
                 rules(self)
-            else:
-                super(cls, self).__post_init__()
+            else:  # the rules after cls's in self's MRO (mypy would look after Config's)
+                following: Any = super(cls, self)
+                following.__post_init__()
 
-        cls.__post_init__ = __post_init__  # type: ignore[method-assign]
+        cls.__post_init__ = __post_init__  # type: ignore[method-assign]  # wrapping is the point
 
     def __post_init__(self) -> None:
         """The end of the chain: no rules of its own."""
@@ -102,10 +139,11 @@ def check_number(
     ``[low, high]``; otherwise ValueError ``key '<key>': expected a number in [low, high]``.
     The check behind every ``number`` field, for ranges known only at run time."""
     kind = numbers.Integral if integer else numbers.Real
+    convert: Callable[[Any], float] = int if integer else float
     converted: float | None = None
     if isinstance(value, kind) and not isinstance(value, bool):
         try:
-            converted = int(value) if integer else float(value)
+            converted = convert(value)
         except OverflowError:
             converted = None
     if converted is None or not math.isfinite(converted) or not low <= converted <= high:
@@ -133,7 +171,8 @@ def _field_specs(cls: type) -> tuple[tuple[str, Any, tuple[float, float] | None]
 
 
 def _check_fields(config: Config) -> None:
-    for name, hint, bounds in _field_specs(type(config)):
+    specs = _field_specs(type(config))  # type: ignore[arg-type]  # a class is Hashable, mypy#11470
+    for name, hint, bounds in specs:
         value = getattr(config, name)
         checked = _check(hint, value, name, bounds)
         if checked is not value:

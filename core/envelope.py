@@ -35,13 +35,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable
-from dataclasses import dataclass
 from typing import Generic, NamedTuple, TypeVar
 
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import Pose, Twist
 from core.spatial import (
     clamp_norm,
@@ -88,7 +87,7 @@ class WorkspaceBox:
         return np.array([self.x_max_m, self.y_max_m, self.z_max_m])
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class Envelope(WorkspaceBox, Config):
     """The keys every envelope has (the robot YAML's ``envelope:``, a task's ``limits:``):
     the TCP's box in B (m), its linear and angular speed (norms, m/s and rad/s) and its tilt
@@ -164,7 +163,7 @@ def limit_pose(
     p0 = np.asarray(previous.xyz_m, dtype=float)
     delta = np.asarray(goal.xyz_m) - p0
     distance = float(np.linalg.norm(delta))
-    position = goal.xyz_m
+    position: tuple[float, float, float] | np.ndarray = goal.xyz_m
     if distance > max_step_m:
         position = p0 + delta * (max_step_m / distance)
         limited = (*limited, "step")

@@ -9,17 +9,16 @@ is checked against it by tests/drivers/test_sensor_files.py.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
-from core.config import CONFIG_ROOT, Config, ConfigError, load_config, number
+from core.config import CONFIG_ROOT, Config, ConfigError, config_dataclass, load_config, number
 
 FOLDER = "sensors"
 COMPANION_SUFFIXES = ("_camera", "_gel")
 """Files of configs/sensors/ that belong to a profile but are not one."""
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SensorProfile(Config):
     """Geometry of a visuotactile sensor's working image (after the driver's crop/resize).
 

@@ -6,12 +6,11 @@ at the grasp point with z_T from the gripper toward the plug's tip, H the openin
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class PlugGeometry(Config):
     """The plug in the grasp (``plug:``): a box ``width_m`` (along T's x) by ``thickness_m``
     (along T's y, the fingers' closing direction: the gel presses its wide face), and
@@ -23,7 +22,7 @@ class PlugGeometry(Config):
     length_m: float = number(5e-3, 0.1, default=0.012)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class HolePose(Config):
     """A hole pose in B (``hole:`` holds the nominal one): the opening's centre at the board
     surface (m) and its yaw about B's z (rad), the angle of the opening's width axis (H's x)

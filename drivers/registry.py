@@ -45,10 +45,10 @@ import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Required, TypedDict, cast
 
 from core.clock import Clock, MonotonicClock
-from core.config import ConfigError, build, load_yaml
+from core.config import Config, ConfigError, build, load_yaml
 from core.devices import (
     Arm,
     Device,
@@ -74,11 +74,11 @@ class Driver:
     config: str
 
     @property
-    def device_class(self) -> type:
+    def device_class(self) -> type[Device]:
         return _load(self.device)
 
     @property
-    def config_class(self) -> type:
+    def config_class(self) -> type[Config]:
         return _load(self.config)
 
 
@@ -142,6 +142,16 @@ PROTOCOLS: Mapping[str, type] = {
 RUN_DEVICE_KINDS = ("arm", "gripper", "tactile", "gamepad")
 """The kinds a run drives (``Devices``' fields); the gamepad is optional."""
 
+
+class _RunDevices(TypedDict, total=False):
+    """A run's devices by kind (``RUN_DEVICE_KINDS``): ``Devices``' keyword arguments."""
+
+    arm: Required[Arm]
+    gripper: Required[Gripper]
+    tactile: Required[TactileSensor]
+    gamepad: Gamepad
+
+
 SIM_WORLD = Driver(
     "drivers.sim.scenes.insertion.builder:build_world",
     "drivers.sim.scenes.insertion.scene_config:InsertionSceneConfig",
@@ -161,7 +171,7 @@ class Selection:
     kind: str
     type_name: str
     backend: str
-    config_class: type
+    config_class: type[Config]
     keys: Mapping[str, Any]
 
 
@@ -227,7 +237,7 @@ def kind_of(type_name: str) -> str:
         ) from None
 
 
-def config_class(kind: str, type_name: str, backend: str = DEFAULT_BACKEND) -> type:
+def config_class(kind: str, type_name: str, backend: str = DEFAULT_BACKEND) -> type[Config]:
     """The config dataclass of ``type_name`` (of ``kind``) on ``backend``."""
     return _driver(kind, type_name, backend).config_class
 
@@ -270,7 +280,7 @@ def _driver(kind: str, type_name: str, backend: str) -> Driver:
     return backends[backend]
 
 
-def _load(reference: str) -> type:
+def _load(reference: str) -> Any:
     module, name = reference.split(":")
     return getattr(importlib.import_module(module), name)
 
@@ -320,7 +330,8 @@ def build_device_set(
     }
     if backend == "real":
         clock = MonotonicClock()
-        built = {kind: spec.build(clock) for kind, spec in specs.items()}
+        # each kind's drivers implement its Protocol (PROTOCOLS; tests/drivers/test_registry.py)
+        built = cast(_RunDevices, {kind: spec.build(clock) for kind, spec in specs.items()})
         return DeviceSet(Devices(**built), clock)
     if world is None:
         raise ValueError("backend 'sim': the simulated world needs a WorldSpec")

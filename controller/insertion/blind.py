@@ -19,7 +19,6 @@ or the timeout. The baseline ignores the gamepad (it runs only in batch comparis
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -37,13 +36,13 @@ from controller.insertion.interface import (
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.motion import bounded_twist, rotation_error
 from controller.insertion.search import SearchPattern
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import Twist
 from core.spatial import clamp_norm, rotation_from_rpy
 from core.task_geometry import HolePose, PlugGeometry
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class BlindConfig(Config):
     """The task file's ``blind:`` section. Lengths in m, speeds in m/s, times in s.
 

@@ -87,6 +87,11 @@ class _Stage:
     reversals: int = 0  # INSERT: the yaw sweep's turns so far
     start_yaw_rad: float = 0.0  # INSERT: the yaw (from the nominal) when the sweep began
 
+    @classmethod
+    def entered(cls, obs: Observation) -> _Stage:
+        """The stage of a phase entered at ``obs``."""
+        return cls(entered_t_s=obs.t_s, since_t_s=obs.t_s, z0_m=float(obs.arm.tcp.xyz_m[2]))
+
 
 class InsertionMachine:
     """The insertion machine for one run (implements ``interface.Machine``).
@@ -119,7 +124,7 @@ class InsertionMachine:
         )
         self._phase = definition.initial
         self._transitions: list[Transition] = []
-        self._stage: _Stage | None = None
+        self._stage_or_none: _Stage | None = None  # None until the first step
         self._last_t_s: float | None = None
         self._tick_s = 0.0
         self._autonomous_s = 0.0
@@ -151,9 +156,8 @@ class InsertionMachine:
         dt = 0.0 if self._last_t_s is None else max(obs.t_s - self._last_t_s, 0.0)
         self._last_t_s = obs.t_s
         self._tick_s = dt
-        if self._stage is None:
-            self._stage = _Stage(entered_t_s=obs.t_s, since_t_s=obs.t_s)
-            self._stage.z0_m = float(obs.arm.tcp.xyz_m[2])
+        if self._stage_or_none is None:
+            self._stage_or_none = _Stage.entered(obs)
         if self._phase in AUTONOMOUS:
             self._autonomous_s += dt
         new = self.signals.update(obs.wrench)
@@ -176,6 +180,13 @@ class InsertionMachine:
             return self._on_slip(obs)
         return self._handlers[self._phase](self, obs, new)
 
+    @property
+    def _stage(self) -> _Stage:
+        """What the current phase has done so far (RuntimeError before the first step)."""
+        if self._stage_or_none is None:
+            raise RuntimeError("the insertion machine has no phase stage before its first step")
+        return self._stage_or_none
+
     # -- transitions -----------------------------------------------------------------------
 
     def _go(self, obs: Observation, target: Phase, guard: str) -> None:
@@ -184,8 +195,7 @@ class InsertionMachine:
                                "is not in the machine's definition")
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard))
         self._phase = target
-        self._stage = _Stage(entered_t_s=obs.t_s, since_t_s=obs.t_s)
-        self._stage.z0_m = float(obs.arm.tcp.xyz_m[2])
+        self._stage_or_none = _Stage.entered(obs)
         if target is Phase.RELEASE:
             self._released = True
 

@@ -19,20 +19,20 @@ is (docs/ARCHITECTURE.md, "Insertion state machine").
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Literal
 
 import numpy as np
 
 from controller.insertion.interface import GripperTarget
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 
 SignedAxis = Literal["+x", "-x", "+y", "-y", "+z", "-z"]
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 _DEG = math.pi / 180.0
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class GripperSettings(Config):
     """Grasp and release. The close command targets ``close_width_m`` (below the plug's
     thickness, so the fingers stop on it) at ``close_speed_m_s`` with ``close_force_n``; the
@@ -62,7 +62,7 @@ class GripperSettings(Config):
         return GripperTarget(preclose_m, self.preclose_speed_m_s, self.close_force_n)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class NoiseFloor(Config):
     """Lowest noise level each channel group is credited with, in estimate units, so a
     noise-free (simulated) signal does not make every departure infinitely significant:
@@ -74,7 +74,7 @@ class NoiseFloor(Config):
     normal: float = number(1e-9, 1e3, default=0.002)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SignalSettings(Config):
     """How the tactile estimate becomes the machine's signals.
 
@@ -101,7 +101,7 @@ class SignalSettings(Config):
             raise ValueError(f"key 'torque_axes': {exc}") from None
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ApproachSettings(Config):
     """APPROACH: move the tip to ``height_m`` above the nominal opening with the plug tilted by
     ``tilt_rad`` about T's ``tilt_axis`` (the paper's tilted approach), moving at up to
@@ -126,7 +126,7 @@ class ApproachSettings(Config):
     contact_frames: int = number(1, 100, default=3)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SearchSettings(Config):
     """SEARCH: drag the tilted tip over the board along ``pattern`` (``spiral``: Archimedean,
     ``pitch_m`` between turns; ``raster``: lines ``pitch_m`` apart along the hole's width
@@ -177,7 +177,7 @@ class SearchSettings(Config):
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class AlignSettings(Config):
     """ALIGN: rotate the TCP about the plug's tip (the tip stays put). The angular velocity in
     T is w_T = -R_S2T (k * n_S) (the TCP yields to the contact's torque; n_S the normalised,
@@ -207,7 +207,7 @@ class AlignSettings(Config):
     wall_seek_max_m: float = number(0.0, 0.01, default=0.0015)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class InsertSettings(Config):
     """INSERT, in two stages.
 
@@ -245,7 +245,7 @@ class InsertSettings(Config):
     sweeps: int = number(1, 20, default=1)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class BackoffSettings(Config):
     """BACKOFF: lift the tip ``distance_m`` at ``speed_m_s``, then ALIGN again (after a jam)
     or APPROACH and SEARCH again (after a press that never engaged). More than
@@ -256,7 +256,7 @@ class BackoffSettings(Config):
     max_retries: int = number(0, 100, default=10)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ReleaseSettings(Config):
     """RELEASE opens the gripper and waits until it stops (at least ``settle_s``); RETRACT
     lifts the TCP ``retract_distance_m`` at ``retract_speed_m_s``."""
@@ -266,7 +266,7 @@ class ReleaseSettings(Config):
     retract_speed_m_s: float = number(1e-4, 0.25, default=0.03)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SlipSettings(Config):
     """What a slip does: ``trigger`` ``gross`` (the estimate's ``slip_gross``) or ``suspected``
     (also incipient slip), or the gripper no longer holding. ``policy`` ``regrasp``: lift the
@@ -278,7 +278,7 @@ class SlipSettings(Config):
     lift_m: float = number(0.0, 0.05, default=0.005)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Limits(Config):
     """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in estimate units on the
     baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|),
@@ -295,7 +295,7 @@ class Limits(Config):
     max_angular_speed_rad_s: float = number(1e-3, 3.0, default=0.6)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Timeouts(Config):
     """Longest time in each autonomous phase, and in all of them together (time under TELEOP
     or ESTOP does not count): exceeded -> FAILED (timeout)."""
@@ -311,7 +311,7 @@ class Timeouts(Config):
     total_s: float = number(1.0, 3600.0, default=90.0)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class MachineConfig(Config):
     """The insertion machine (task file ``machine:``); see each part's docstring."""
 

@@ -32,6 +32,7 @@ from core.config import (
     ConfigError,
     apply_overrides,
     build,
+    config_dataclass,
     load_yaml_extending,
     number,
     resolve_config_path,
@@ -43,7 +44,7 @@ SCENE_KEY = "scene"
 BACKENDS = registry.BACKENDS
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class DeviceFiles(Config):
     """``devices:``: each device's YAML, relative to configs/ (or absolute)."""
 
@@ -63,7 +64,7 @@ class DeviceFiles(Config):
         return paths
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class TaskConfig(Config):
     """A task file but its ``scene:`` (see the module doc). ``force_limit_n``: the largest
     true force (N) the compliant wrist may pass to the plug; a simulated trial over it counts

@@ -25,14 +25,15 @@ import json
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import yaml
 
+from controller.tactile.settings import EstimatorConfig
 from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
-from core.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
 
 FORMAT = "tactile-insertion/calibration/v2"
 FORMAT_V1 = "tactile-insertion/calibration/v1"
@@ -40,7 +41,7 @@ AXES = VALUE_FIELDS
 _MIN_SAMPLES = 3
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class AxisFit(Config):
     """One axis: ``truth ~= slope * raw + intercept``, with the fit's RMSE (truth units), R^2
     and the number of samples used."""
@@ -100,7 +101,7 @@ def fit_axis(
     return AxisFit(float(slope), float(intercept), rmse, r2, int(x.size))
 
 
-def estimator_sha256(config: object) -> str:
+def estimator_sha256(config: EstimatorConfig) -> str:
     """Fingerprint of an estimator configuration (a dataclass): SHA-256 of its values as
     sorted JSON. Two configurations with equal values have equal fingerprints, whatever
     their file names."""
@@ -108,7 +109,7 @@ def estimator_sha256(config: object) -> str:
     return hashlib.sha256(text.encode()).hexdigest()
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Calibration(Config):
     """Per-axis fits for one sensor profile (``sensor``: its name) and estimator
     configuration (``estimator``: its name or path, ``estimator_sha256``: the fingerprint of
@@ -132,7 +133,7 @@ class Calibration(Config):
                 f"key 'estimator_sha256': expected 64 hexadecimal digits, got {digest!r}"
             )
 
-    def mismatch(self, sensor: str, config: object) -> str | None:
+    def mismatch(self, sensor: str, config: EstimatorConfig) -> str | None:
         """Why this calibration does not fit the sensor profile named ``sensor`` with the
         estimator configuration ``config``; None when it does."""
         if sensor != self.sensor:
@@ -151,7 +152,9 @@ class Calibration(Config):
 
     def apply(self, estimate: WrenchEstimate) -> WrenchEstimate:
         """The estimate with each calibrated axis scaled (and offset); others unchanged."""
-        values = {axis: fit.apply(getattr(estimate, axis)) for axis, fit in self.axes.items()}
+        values: dict[str, Any] = {
+            axis: fit.apply(getattr(estimate, axis)) for axis, fit in self.axes.items()
+        }
         return dataclasses.replace(estimate, calibrated=True, **values)
 
     def to_yaml(self) -> str:

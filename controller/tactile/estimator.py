@@ -216,6 +216,7 @@ class TactileEstimator:
                 raise ValueError(f"{what} frame {index}: {exc}") from None
             shape = frame.shape[:2]
             total = image.astype(np.float32) if total is None else total + image
+        assert total is not None and shape is not None  # the stack is not empty
         return MeanImage.of_sum(total, len(stack), shape)
 
     def _install_reference(self, reference: MeanImage) -> None:
@@ -326,9 +327,10 @@ class TactileEstimator:
             image = self._working_image(frame, self._reference.frame_shape)
             self._reference.add(image, frame.shape[:2], self._install_reference)
             return self._zeroing(t_s)
-        image = self._working_image(frame, self._reference.result.frame_shape)
-        pipeline = self._pipeline
-        self._grid_flow.measure(image, pipeline.grid_px)
+        grid_flow, pipeline, reference = self._grid_flow, self._pipeline, self._reference.result
+        assert grid_flow is not None and pipeline is not None and reference is not None  # zeroed
+        image = self._working_image(frame, reference.frame_shape)
+        grid_flow.measure(image, pipeline.grid_px)
         pipeline.update_field()
         estimate, slip = pipeline.estimate(t_s, self._rezero_policy)
         if slip is not None:

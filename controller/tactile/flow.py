@@ -55,7 +55,7 @@ def make_grid_flow(config: FlowConfig, shape_hw: tuple[int, int], rows: int, col
 
 def create_dis(params: DisParams) -> cv2.DISOpticalFlow:
     """An OpenCV DIS solver from its preset, with every non-null override applied."""
-    dis = cv2.DISOpticalFlow_create(_DIS_PRESETS[params.preset])
+    dis = cv2.DISOpticalFlow.create(_DIS_PRESETS[params.preset])
     setters = {
         "finest_scale": dis.setFinestScale,
         "patch_size": dis.setPatchSize,

@@ -76,14 +76,15 @@ class FrameCapture:
         total = image.astype(np.float32)
         if self._sum is not None:
             total += self._sum
-        shape = frame_shape if self._count == 0 else self._frame_shape
-        if self.frames_left == 1:
+        captured = self.frame_shape
+        shape = frame_shape if captured is None else captured
+        last = self.frames_left == 1
+        if last:
             mean = MeanImage.of_sum(total, self._count + 1, shape)
             if accept is not None:
                 accept(mean)
             self.result = mean
-            total = None
         self._frame_shape = shape
-        self._sum = total
+        self._sum = None if last else total
         self._count += 1
         self.frames_left -= 1

@@ -162,6 +162,8 @@ class GridLKFlow:
             cv2.sepFilter2D(reference, cv2.CV_32F, _DERIVATIVE, _IDENTITY),
             cv2.sepFilter2D(reference, cv2.CV_32F, _IDENTITY, _DERIVATIVE),
         )
+        # the gradients' cell means, None without brightness normalisation
+        self._gradient_cells: tuple[np.ndarray | None, ...]
         if self.params.normalize_brightness:
             self._gradient_cells = tuple(
                 self._cell_means(g, np.empty_like(self._pooled)) for g in self._gradients

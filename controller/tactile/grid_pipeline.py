@@ -51,11 +51,14 @@ class GridPipeline:
         self._filtered = False
         self.nhhd = NHHD(x_mm, y_mm, config.tau_z_about)
         self.divergence = TiltDivergence(config, x_mm, y_mm, self.nhhd.dx, self.nhhd.dy)
-        if origin is None:  # grasp_centroid: the fallback's rule (the grasp's is below)
-            configured = config.dipole_origin
-            origin = "centroid_midpoint" if configured == "grasp_centroid" else configured
+        # the fallback's rule (the origin hook's if given); grasp_centroid's is below
+        configured = config.dipole_origin
+        rule = "centroid_midpoint" if configured == "grasp_centroid" else configured
         self.dipole = DipoleMomentCalculator(
-            self.divergence.x_mm, self.divergence.y_mm, origin, config.dipole_full_midpoint_ratio
+            self.divergence.x_mm,
+            self.divergence.y_mm,
+            rule if origin is None else origin,
+            config.dipole_full_midpoint_ratio,
         )
         self.grasp_dipole = DipoleMomentCalculator(x_mm, y_mm, "grasp_centroid")
         self.noise_gate: NoiseGate | None = None

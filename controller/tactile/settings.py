@@ -6,16 +6,22 @@ a file, and ``null`` means "the library's default" where a field allows it.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Literal
 
-from core.config import Config, ConfigError, load_config, number, resolve_config_path
+from core.config import (
+    Config,
+    ConfigError,
+    config_dataclass,
+    load_config,
+    number,
+    resolve_config_path,
+)
 from core.sensor_profile import SensorProfile
 
 FlowMethod = Literal["dis", "farneback", "markers", "grid_lk"]
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class DisParams(Config):
     """OpenCV DIS optical flow: a preset, then optional overrides of its tunables."""
 
@@ -43,7 +49,7 @@ class DisParams(Config):
             )
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class FarnebackParams(Config):
     """OpenCV Farneback dense flow (cv2.calcOpticalFlowFarneback's arguments)."""
 
@@ -56,7 +62,7 @@ class FarnebackParams(Config):
     gaussian_window: bool
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class MarkerParams(Config):
     """Sparse tracking of the gel's printed markers with pyramidal Lucas-Kanade.
 
@@ -84,7 +90,7 @@ class MarkerParams(Config):
             raise ValueError(f"key 'window_px': expected an odd number, got {self.window_px}")
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class GridLKParams(Config):
     """Regularised Lucas-Kanade on the grid (controller/tactile/grid_lk.py): one displacement
     per grid cell fitted to every pixel, with a membrane prior of relative weight
@@ -98,7 +104,7 @@ class GridLKParams(Config):
     normalize_brightness: bool
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class FlowConfig(Config):
     """How the displacement field is measured from images.
 
@@ -118,7 +124,7 @@ class FlowConfig(Config):
     grid_lk: GridLKParams
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class RezeroConfig(Config):
     """When the zeroing reference should be refreshed after gross slip
     (controller/tactile/slip.py: ``RezeroPolicy``).
@@ -136,7 +142,7 @@ class RezeroConfig(Config):
     quiet_s: float = number(0.0, 60.0)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SlipConfig(Config):
     """The slip detector (controller/tactile/slip.py: ``SlipDetector``).
 
@@ -185,7 +191,7 @@ class SlipConfig(Config):
             )
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class DipoleGrid(Config):
     """The grid the dipole works on: ``cols`` x ``rows`` cells over the whole image, each a
     block of the field's cells (so each must divide the field grid's count)."""
@@ -194,7 +200,7 @@ class DipoleGrid(Config):
     rows: int = number(3, 64)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class NoiseGateConfig(Config):
     """The no-contact gate of the dipole without the grasp's contact
     (controller/tactile/noise_gate.py): ``noise_grey``, the camera's pixel noise (standard
@@ -205,7 +211,7 @@ class NoiseGateConfig(Config):
     false_alarm: float = number(1e-12, 0.5)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class EstimatorConfig(Config):
     """The whole frame-to-wrench pipeline.
 

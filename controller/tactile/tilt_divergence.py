@@ -59,6 +59,8 @@ class TiltDivergence:
         grid; ``decomposition``, the field's NHHD, is needed only on the field's grid. The
         result may be a buffer of the decomposition's or of this object's: do not modify it."""
         if self.on_field_grid:
+            if decomposition is None:
+                raise ValueError("the divergence on the field's grid needs the field's NHHD")
             return self.on_field(decomposition)
         block = self.block
         u = block_mean(u_mm, block, self._pooled[0])

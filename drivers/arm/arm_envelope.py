@@ -8,14 +8,12 @@ and tilt over the time it is held.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from core.config import number
+from core.config import config_dataclass, number
 from core.devices import Pose
 from core.envelope import Envelope, limit_pose
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class SafetyEnvelope(Envelope):
     """The arm's envelope: ``core.envelope.Envelope`` (box in B, speeds, tilt) and the largest
     step of one servo command (m, rad)."""

@@ -43,13 +43,12 @@ import logging
 import math
 import threading
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
 from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import (
@@ -70,7 +69,7 @@ _ENTRY_TOLERANCE_M = 1e-3
 _ENTRY_TOLERANCE_RAD = 1e-2
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class TcpConfig(Config):
     """The tool on the flange (compliant wrist + gripper + plug).
 
@@ -91,7 +90,7 @@ class TcpConfig(Config):
     load_com_z_m: float = number(-0.5, 0.5)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class XArm6Config(Config):
     """Configuration of the xArm6 driver (``configs/robot/xarm6.yaml``).
 

@@ -27,10 +27,9 @@ from __future__ import annotations
 
 import typing
 from collections.abc import Mapping
-from dataclasses import dataclass
 from typing import Literal
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 
 AxisName = Literal["leftx", "lefty", "rightx", "righty", "lefttrigger", "righttrigger"]
 ButtonName = Literal[
@@ -48,7 +47,7 @@ AXIS_FULL_SCALE = 32767
 MAX_DEAD_ZONE = 0.5
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class AxisBinding(Config):
     """One analog action: the SDL axis it reads, whether its sign is flipped, and its gain.
 
@@ -64,7 +63,7 @@ class AxisBinding(Config):
             raise ValueError("key 'scale': expected a number in (0, 1], got 0")
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class GamepadConfig(Config):
     """The pad's mapping.
 

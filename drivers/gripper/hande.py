@@ -23,11 +23,10 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Any, Literal, TypeVar
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ContextManagedDevice, GripperObject, GripperStatus
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
@@ -38,7 +37,7 @@ T = TypeVar("T")
 _POLL_PERIOD_S = 0.02  # status polling while waiting for activation or motion
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class HandEConfig(Config):
     """Configuration of the Hand-E driver (configs/gripper/hande.yaml).
 

@@ -38,14 +38,13 @@ import logging
 import os
 import threading
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import Literal, Protocol
 
 import cv2
 import numpy as np
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ContextManagedDevice, TactileFrame
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.tactile.decode import FrameProcessor, JpegDownscale, cropped_size
@@ -83,7 +82,7 @@ def open_v4l2(node: str) -> Capture:
     return cv2.VideoCapture(node, cv2.CAP_V4L2)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class TactileCameraConfig(Config):
     """Configuration of one tactile camera (see configs/sensors/*_camera.yaml).
 

@@ -47,7 +47,7 @@ import cv2
 import numpy as np
 import yaml
 
-from core.config import Config, ConfigError, build, load_yaml, number
+from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
 from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
@@ -65,7 +65,7 @@ _TIME_LIMIT_S = 1e12  # times are finite numbers of seconds on the recording's c
 _SLACK_INTERVALS = 2.0  # a segment may end this many frame (or F/T) intervals after the last
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Segment(Config):
     """One experiment: torques about S's ``axis`` up to ``amplitude_nm`` during
     [t_start_s, t_end_s)."""
@@ -83,7 +83,7 @@ class Segment(Config):
             )
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class _MetaHead(Config):
     """The scalar keys of meta.yaml, loaded through the configuration loader."""
 

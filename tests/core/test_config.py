@@ -17,6 +17,7 @@ from core.config import (
     ConfigError,
     apply_overrides,
     build,
+    config_dataclass,
     load_config,
     load_yaml,
     number,
@@ -121,12 +122,12 @@ def test_missing_and_malformed_files(tmp_path):
         sensor_profile(str(bad))
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Gains(Config):
     kp: float = number(0, 10)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Table(Config):
     gains: Mapping[str, Gains]
 
@@ -157,7 +158,7 @@ def test_a_dipole_grid_that_does_not_divide_the_sensors_field_grid_is_refused(tm
 # -- one mechanism: the same declarations checked from YAML and in code ----------------
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Knobs(Config):
     count: int = number(1, 100)
     slope: float = number(-1.0, 1.0)
@@ -382,13 +383,13 @@ def test_a_config_holding_a_mapping_survives_pickling():
 # -- command-line overrides ------------------------------------------------------------
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class _Scene(Config):
     friction: float = number(0.0, 2.0)
     shape: Literal["box", "round"]
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class _Task(Config):
     rate_hz: float = number(1.0, 1000.0)
     scene: _Scene

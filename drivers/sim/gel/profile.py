@@ -11,11 +11,19 @@ about absolute gains, which every real sensor needs a calibration for.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
 
-from core.config import CONFIG_ROOT, Config, ConfigError, build, load_yaml, number, show
+from core.config import (
+    CONFIG_ROOT,
+    Config,
+    ConfigError,
+    build,
+    config_dataclass,
+    load_yaml,
+    number,
+    show,
+)
 from core.sensor_profile import FOLDER, sensor_names, sensor_profile
 
 GEL_SUFFIX = "_gel"
@@ -25,7 +33,7 @@ GEOMETRY_KEYS = ("width_px", "height_px", "mm_per_px")
 ObjectKind = Literal["plate", "square_peg", "round_peg"]
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class GelProfile(Config):
     """A sensor's gel and camera, frame S (x right, y down in the image, origin at the centre).
 
@@ -102,7 +110,7 @@ def gel_profile(name_or_path: str) -> GelProfile:
     return build(GelProfile, {**data, **geometry}, source=str(path))
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ObjectShape(Config):
     """The grasped object's face against the gel.
 

@@ -7,12 +7,11 @@ independent stream per effect), so a render is a function of (rng seed, inputs, 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ImageEffects(Config):
     """What degrades a rendered tactile image, in named units.
 

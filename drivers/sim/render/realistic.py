@@ -20,15 +20,13 @@ are px at an image width of 320 px and scale with the width.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 
 REFERENCE_WIDTH_PX = 320
 """The image width at which a look's lengths are given, px."""
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class RealisticLook(Config):
     """A procedural gel appearance (see the module docstring); px at 320 px width.
 

@@ -27,14 +27,14 @@ from typing import Literal
 
 import numpy as np
 
-from core.config import Config, check_number, number
+from core.config import Config, check_number, config_dataclass, number
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 
 _AXIS_COLUMN = {"x": 3, "y": 4, "z": 5}  # torque columns of a (fx, fy, fz, tx, ty, tz) row
 _PROGRAM_RATE_HZ = 500.0
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class JigConfig(Config):
     """``configs/scenes/calibration_jig.yaml``: timing in s, forces N, torques N*m."""
 
@@ -68,7 +68,7 @@ class JigConfig(Config):
             check_number(high, getattr(self, high), getattr(self, low), 60.0)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class Experiment(Config):
     """Alternating torque pulses about S's ``axis`` up to ``amplitude_nm`` (N*m, applied by
     the hand), ``pulses`` of them."""

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from drivers.sim.gel.footprint import Footprint
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 from drivers.sim.gel.profile import GelProfile, ObjectShape
@@ -39,7 +39,7 @@ from drivers.sim.gel.profile import GelProfile, ObjectShape
 PHASES = ("open", "press", "roll", "press_rolled")
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class PressRollConfig(Config):
     """The ball and its program: radius m, forces N, roll (centre-of-pressure excursion) m,
     frame counts per phase at ``rate_hz``."""

@@ -21,13 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from drivers.sim.gel.model import GelModel, GelState, Wrench
 
 PHASES = ("open", "press", "tilt_x", "tilt_y", "release")
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class PressTiltConfig(Config):
     """The program: grip N, tilt torque N*m, frame counts per phase at ``rate_hz``."""
 

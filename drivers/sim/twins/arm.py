@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
 from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
@@ -55,7 +55,7 @@ ARRIVED_RAD = 1e-6  # ... and this angle, with the TCP at rest
 _AT_REST = 1e-9  # m/s and rad/s below which the TCP is at rest
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimArmSettings(Config):
     """The ``sim:`` section of an arm YAML: what only the twin needs.
 
@@ -83,7 +83,7 @@ class SimArmSettings(Config):
         )
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class SimArmConfig(XArm6Config):
     """An xArm6 YAML with ``backend: sim``: the real driver's keys (the same envelope, rates
     and name) plus the ``sim:`` section."""

@@ -15,12 +15,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
 
 import numpy as np
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ContextManagedDevice, Vector3, WrenchSample
 from core.errors import DeviceNotConnectedError
 
@@ -28,7 +27,7 @@ WrenchSource = Callable[[float], tuple[Sequence[float], Sequence[float]]]
 """Gives (force in N, torque in N*m), three components each, at a time in s."""
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimForceTorqueSettings(Config):
     """The ``sim:`` section: noise standard deviations per component (N, N*m) and the seed
     of the twin's randomness when the registry builds it."""
@@ -38,7 +37,7 @@ class SimForceTorqueSettings(Config):
     seed: int = number(0, 2**32 - 1)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimForceTorqueConfig(Config):
     """A force/torque sensor YAML (``backend: sim``). ``frame``: name of the frame the
     wrench is expressed in (e.g. ``"S"``, the tactile sensor's)."""

@@ -23,13 +23,13 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config
+from core.config import Config, config_dataclass
 from core.devices import ContextManagedDevice, GamepadState
 from core.errors import DeviceNotConnectedError
 from drivers.gamepad.mapping import GamepadConfig
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimGamepadSettings(Config):
     """The ``sim:`` section of a gamepad YAML. ``attached``: whether a pad is plugged in at
     start-up."""
@@ -37,7 +37,7 @@ class SimGamepadSettings(Config):
     attached: bool
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class SimGamepadConfig(GamepadConfig):
     """A gamepad YAML with ``backend: sim``: the real mapping plus the ``sim:`` section."""
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, check_number, number
+from core.config import Config, check_number, config_dataclass, number
 from core.devices import ContextManagedDevice, GripperObject, GripperStatus
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from drivers.gripper import hande_registers as regs
@@ -40,7 +40,7 @@ _POLL_PERIOD_S = 0.02  # as the real driver polls during activation
 _NOT_ACTIVATED_CODE = 0x07
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimGripperSettings(Config):
     """The ``sim:`` section of a gripper YAML.
 
@@ -54,7 +54,7 @@ class SimGripperSettings(Config):
     object_width_m: float | None = number(0.0, 0.2)
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class SimGripperConfig(HandEConfig):
     """A Hand-E YAML with ``backend: sim``: the real driver's keys plus the ``sim:`` section."""
 

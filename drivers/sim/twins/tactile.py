@@ -26,13 +26,13 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Any
 
 import numpy as np
 
 from core.clock import Clock, MonotonicClock
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.devices import ContextManagedDevice, TactileFrame
 from core.errors import DeviceNotConnectedError, DeviceTimeoutError
 from core.sensor_profile import sensor_profile
@@ -44,7 +44,7 @@ FieldSource = Callable[[float], np.ndarray | None]
 """Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class SimTactileSettings(Config):
     """The ``sim:`` section of a tactile camera YAML.
 
@@ -59,7 +59,7 @@ class SimTactileSettings(Config):
     marker_radius_px: float | None = number(0.5, 100.0)
 
 
-@dataclass(frozen=True, kw_only=True)
+@config_dataclass(kw_only=True)
 class SimTactileConfig(TactileCameraConfig):
     """A tactile camera YAML with ``backend: sim``: the real driver's keys (output size, frame
     rate, name) plus the ``sim:`` section.

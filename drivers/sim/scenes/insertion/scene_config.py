@@ -23,14 +23,13 @@ ConfigError naming the file and the dotted key.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
-from core.config import Config, number
+from core.config import Config, config_dataclass, number
 from core.task_geometry import PlugGeometry
 from drivers.sim.render.appearance import appearance_names
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ReceptacleConfig(Config):
     """The opening in the board (m): ``width_m`` along H's x, ``height_m`` along H's y, and
     ``depth_m`` from the board surface to the receptacle's floor."""
@@ -40,7 +39,7 @@ class ReceptacleConfig(Config):
     depth_m: float = number(1e-3, 0.05, default=0.0065)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class BoardConfig(Config):
     """The board around the opening: its top surface is ``size_x_m`` by ``size_y_m``
     (centred on the nominal hole) and ``thickness_m`` thick below the surface."""
@@ -50,7 +49,7 @@ class BoardConfig(Config):
     thickness_m: float = number(1e-3, 0.1, default=0.02)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class HoleUncertainty(Config):
     """The true hole is the nominal one moved by independent uniform draws in
     [-x_m, x_m], [-y_m, y_m] (m, along B) and [-yaw_rad, yaw_rad], seeded."""
@@ -60,7 +59,7 @@ class HoleUncertainty(Config):
     yaw_rad: float = number(0.0, 0.5, default=math.radians(3.0))
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class WristConfig(Config):
     """The compliant wrist between the commanded TCP and the gripper (OMRON soft wrist
     defaults): stiffness and damping per axis of the tool frame at the wrist's pivot,
@@ -79,7 +78,7 @@ class WristConfig(Config):
     twist_damping_nm_s_rad: float = number(0.0, 100.0, default=0.05)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class GelSpringConfig(Config):
     """The grasp: a stiff spring-damper between the gripper and the plug standing for the
     gel pads, per axis of the sensor frame S at the grasp point (translation N/m, N*s/m;
@@ -95,7 +94,7 @@ class GelSpringConfig(Config):
     plug_mass_kg: float = number(1e-3, 0.5, default=0.01)
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class ContactConfig(Config):
     """MuJoCo's contact softness between the plug and the board: ``solref`` (time constant
     s, damping ratio) and ``solimp`` (dmin, dmax, width m, midpoint, power); see MuJoCo's
@@ -114,7 +113,7 @@ class ContactConfig(Config):
             )
 
 
-@dataclass(frozen=True)
+@config_dataclass
 class InsertionSceneConfig(Config):
     """The ``scene:`` section of a task YAML (see the module docstring).
 
