@@ -47,7 +47,6 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 from tqdm import tqdm
 
@@ -60,6 +59,7 @@ from evaluation.common.cli_support import (
     run_tool,
 )
 from evaluation.common.outputs import atomic_text, check_output_file
+from evaluation.common.quiet_decoding import read_image
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -112,7 +112,7 @@ class FrameSource:
             yield from self.video.frames(log)
             return
         for number, image_path in enumerate(self.images or ()):
-            image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)
+            image = read_image(image_path)
             if image is not None:
                 log.record(number)
                 yield number, image

@@ -476,3 +476,29 @@ def test_open_frames_locate_the_contact_for_grid_lk(tmp_path, capsys, monkeypatc
     assert main([*args, "--open", "3:9"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith("estimate: error: --open 3:9 is out of range") and "\n" not in err
+
+
+def _damaged_inputs(folder, tmp_path):
+    """Inputs whose decoders write to stderr themselves: a PNG with a bad CRC (libpng), a
+    truncated JPEG (libjpeg), a truncated BMP (OpenCV's log), an AVI cut inside its header
+    (OpenCV's AVI parser)."""
+    good = (folder / "f0.png").read_bytes()
+    bad_crc = bytearray(good)
+    bad_crc[100:110] = b"x" * 10
+    (folder / "f1.png").write_bytes(bytes(bad_crc))
+    image = cv2.imread(str(folder / "f0.png"))
+    for suffix in ("jpg", "bmp"):
+        cv2.imwrite(str(tmp_path / f"a.{suffix}"), image)
+        data = (tmp_path / f"a.{suffix}").read_bytes()
+        (folder / f"f2.{suffix}").write_bytes(data[: len(data) // 2])
+    video = write_mjpg(tmp_path / "v.avi", [image] * 3, fps=20.0)
+    (tmp_path / "cut.avi").write_bytes(video.read_bytes()[:200])
+    return [[str(folder)], [str(tmp_path / "cut.avi")]]
+
+
+def test_the_decoders_own_messages_never_reach_the_terminal(folder, tmp_path):
+    for inputs in _damaged_inputs(folder, tmp_path):
+        result = run_cli(*inputs, "--out", str(tmp_path / "x.csv"))
+        err = result.stderr.strip()
+        assert result.returncode == 2 and err.startswith("estimate: error:"), err
+        assert "\n" not in err, err
