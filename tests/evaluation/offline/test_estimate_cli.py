@@ -473,9 +473,63 @@ def test_open_frames_locate_the_contact_for_grid_lk(tmp_path, capsys, monkeypatc
     assert main(args) == 0
     assert centres[0] is not None and centres[0][0] > 1.5 and centres[1] is None
     assert len(read_rows(out)) == 5
+    assert capsys.readouterr().err == ""  # the open gel as it should be: no warning
     assert main([*args, "--open", "3:9"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("estimate: error: --open 3:9 is out of range") and "\n" not in err
+    assert err.startswith("estimate: error: --open 3:9 and --reference 2:4 overlap") and (
+        "\n" not in err
+    )
+
+
+@pytest.fixture
+def grasp_folder(tmp_path):
+    """Two frames of the open gel, then four of a grasp (a spreading press at (200, 100))."""
+    renderer = MarkerImageRenderer(rng=np.random.default_rng(5))
+    ys, xs = np.mgrid[0:240, 0:320].astype(float)
+    k = 2.0 / 30.0 * np.exp(-((xs - 200) ** 2 + (ys - 100) ** 2) / (2 * 30.0**2))
+    grasp = renderer.render(np.stack([k * (xs - 200), k * (ys - 100)], axis=-1))
+    path = tmp_path / "grasp"
+    path.mkdir()
+    for i, frame in enumerate([renderer.render()] * 2 + [grasp] * 4):
+        cv2.imwrite(str(path / f"f{i}.png"), frame)
+    return path
+
+
+@pytest.mark.parametrize(
+    "open_gel, message",
+    [
+        ("0:5", "--open 0:5 and --reference 4:6 overlap"),
+        ("4", "--open 4:5 and --reference 4:6 overlap"),
+        ("6:8", "--open 6:8 comes after --reference 4:6"),
+    ],
+)
+def test_open_frames_overlapping_or_after_the_reference_are_refused(
+    grasp_folder, tmp_path, capsys, open_gel, message
+):
+    out = tmp_path / "out.csv"
+    args = [str(grasp_folder), "--reference", "4:6", "--open", open_gel, "--out", str(out)]
+    assert main(args) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"estimate: error: {message}: the open gel") and "\n" not in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    "open_gel, message",
+    [
+        ("2:4", "--open 2:4: frame 0 differs from frame 2 by"),  # during the press
+        ("1:3", "--open 1:3: frame 2 differs from frame 1 by"),  # the press begins in them
+    ],
+)
+def test_open_frames_that_are_not_the_open_gel_are_a_warning(
+    grasp_folder, tmp_path, capsys, open_gel, message
+):
+    out = tmp_path / "out.csv"
+    args = [str(grasp_folder), "--reference", "4:6", "--open", open_gel, "--out", str(out)]
+    assert main(args) == 0
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"estimate: warning: {message}") and "beyond the camera noise" in err
+    assert "\n" not in err and len(read_rows(out)) == 6
 
 
 def _damaged_inputs(folder, tmp_path):
