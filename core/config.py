@@ -263,6 +263,12 @@ _StrictLoader.add_implicit_resolver(
 )
 
 
+_YAML_ERRORS = (yaml.YAMLError, ValueError, TypeError, AttributeError, RecursionError)
+"""What reading YAML text may raise: PyYAML's constructors raise plain Python errors on a few
+malformed scalars (the timestamp 2020-13-45, a tagged !!float x, an integer of more digits
+than Python converts), and deep nesting exhausts the recursion limit."""
+
+
 def load_yaml(path: Path | str) -> dict[str, Any]:
     """The top-level mapping of the YAML file at ``path``; ConfigError naming the file if it
     is missing, not UTF-8 text, not valid YAML (with line and column), empty or not a
@@ -291,9 +297,7 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
             f"{path}: line {line}, column {column}: not valid YAML: "
             f"unacceptable character {code} ({exc.reason})"
         ) from None
-    except (yaml.YAMLError, ValueError, TypeError, AttributeError, RecursionError) as exc:
-        # PyYAML's constructors raise plain Python errors on a few malformed scalars
-        # (e.g. the timestamp 2020-13-45, or a tagged !!float x).
+    except _YAML_ERRORS as exc:
         raise ConfigError(f"{path}: not valid YAML ({_one_line(str(exc))})") from None
     if data is None:
         raise ConfigError(f"{path}: empty configuration file; expected a mapping of keys")
@@ -454,7 +458,7 @@ def parse_override(item: str) -> tuple[str, Any]:
         raise ConfigError(f"override {show(item)}: expected KEY=VALUE with a dotted KEY")
     try:
         value = yaml.load(text, Loader=_StrictLoader) if text.strip() else None
-    except yaml.YAMLError as exc:
+    except _YAML_ERRORS as exc:
         raise ConfigError(
             f"override {show(item)}: the value is not valid YAML ({_one_line(str(exc))})"
         ) from None

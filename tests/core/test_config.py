@@ -421,6 +421,9 @@ def test_overrides_later_item_wins_and_value_is_validated_like_yaml():
         ("=3", r"expected KEY=VALUE"),
         ("scene..friction=3", r"expected KEY=VALUE"),
         ("scene.friction=[1", r"the value is not valid YAML"),
+        ("scene.friction=" + "9" * 5000, r"not valid YAML \(Exceeds the limit"),
+        ("scene.friction=2020-13-45", r"not valid YAML \(month must be in 1..12\)"),
+        ("scene.friction=!!float x", r"not valid YAML \(could not convert"),
     ],
 )
 def test_bad_overrides_are_one_line_errors_naming_the_key(item, message):
