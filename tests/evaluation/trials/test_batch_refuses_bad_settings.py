@@ -7,6 +7,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[3]
+BATCH = [sys.executable, str(ROOT / "scripts" / "run_trials.py"), "--task", "usb_c"]
 
 
 @pytest.mark.parametrize(
@@ -15,26 +16,9 @@ ROOT = Path(__file__).resolve().parents[3]
 )
 def test_a_bad_setting_is_exit_2_with_one_line_and_no_trial(tmp_path, override, key):
     out = tmp_path / "batch"
-    result = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "scripts" / "run_trials.py"),
-            "--task",
-            "usb_c",
-            "--seeds",
-            "0:2",
-            "--set",
-            override,
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
-    assert result.returncode == 2, result.stderr
+    command = [*BATCH, "--seeds", "0:2", "--set", override, "--out", str(out)]
+    result = subprocess.run(command, capture_output=True, text=True, cwd=ROOT, timeout=120)
     err = result.stderr.strip()
-    assert err.startswith("run_trials: error:") and "\n" not in err, err
+    assert result.returncode == 2 and err.startswith("run_trials: error:") and "\n" not in err
     assert f"usb_c.yaml: key '{key}'" in err
     assert not (out / "trials.csv").exists() and "succeeded" not in result.stdout
