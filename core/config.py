@@ -42,6 +42,7 @@ import functools
 import importlib.resources
 import math
 import numbers
+import re
 import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
@@ -273,7 +274,9 @@ def _kind(value: Any) -> type:
 
 
 class _StrictLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, refusing a key given twice in one mapping."""
+    """PyYAML's safe loader, refusing a key given twice in one mapping, and reading a number
+    with an exponent as a float (YAML 1.2) even without a dot or the exponent's sign
+    (``5e-1``, ``1E3``, ``1.5e3``), which PyYAML's YAML 1.1 pattern leaves as text."""
 
     def construct_mapping(self, node: Any, deep: bool = False) -> Any:
         if isinstance(node, yaml.MappingNode):
@@ -290,6 +293,19 @@ class _StrictLoader(yaml.SafeLoader):
                     )
                 seen.add(key)
         return super().construct_mapping(node, deep=deep)
+
+
+_StrictLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9][0-9_]*)[eE][-+]?[0-9]+$"),
+    list("-+.0123456789"),
+)
+
+
+_YAML_ERRORS = (yaml.YAMLError, ValueError, TypeError, AttributeError, RecursionError)
+"""What reading YAML text may raise: PyYAML's constructors raise plain Python errors on a few
+malformed scalars (the timestamp 2020-13-45, a tagged !!float x, an integer of more digits
+than Python converts), and deep nesting exhausts the recursion limit."""
 
 
 def load_yaml(path: Path | str) -> dict[str, Any]:
@@ -320,9 +336,7 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
             f"{path}: line {line}, column {column}: not valid YAML: "
             f"unacceptable character {code} ({exc.reason})"
         ) from None
-    except (yaml.YAMLError, ValueError, TypeError, AttributeError, RecursionError) as exc:
-        # PyYAML's constructors raise plain Python errors on a few malformed scalars
-        # (e.g. the timestamp 2020-13-45, or a tagged !!float x).
+    except _YAML_ERRORS as exc:
         raise ConfigError(f"{path}: not valid YAML ({_one_line(str(exc))})") from None
     if data is None:
         raise ConfigError(f"{path}: empty configuration file; expected a mapping of keys")
@@ -473,16 +487,17 @@ def resolve_config_path(name_or_path: str, folder: str) -> Path:
 
 
 def parse_override(item: str) -> tuple[str, Any]:
-    """``'KEY=VALUE'`` -> (dotted key, value parsed as YAML: ``0.5`` a float, ``true`` a bool,
-    ``[1, 2]`` a list, ``abc`` a string); ConfigError (one line) for anything else."""
+    """``'KEY=VALUE'`` -> (dotted key, value parsed as YAML by the files' loader: ``0.5`` and
+    ``5e-1`` floats, ``true`` a bool, ``[1, 2]`` a list, ``abc`` a string); ConfigError (one
+    line) for anything else."""
     key, sep, text = item.partition("=")
     key = key.strip()
     parts = key.split(".")
     if not sep or not key or not all(part.strip() for part in parts):
         raise ConfigError(f"override {show(item)}: expected KEY=VALUE with a dotted KEY")
     try:
-        value = yaml.safe_load(text) if text.strip() else None
-    except yaml.YAMLError as exc:
+        value = yaml.load(text, Loader=_StrictLoader) if text.strip() else None
+    except _YAML_ERRORS as exc:
         raise ConfigError(
             f"override {show(item)}: the value is not valid YAML ({_one_line(str(exc))})"
         ) from None

@@ -2,9 +2,7 @@
 """Real gel captures beside rendered frames (docs/figures/appearance.png) and the appearance
 statistics table; see evaluation/appearance/figure.py."""
 
-import sys
-
-from evaluation.appearance.figure import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.appearance.figure")

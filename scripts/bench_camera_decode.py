@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Mini frame decoding, full vs reduced; see evaluation/bench/camera_decode.py."""
 
-import sys
-
-from evaluation.bench.camera_decode import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.bench.camera_decode")

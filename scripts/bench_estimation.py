@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Speed and field error of each estimator configuration; see evaluation/bench/estimation.py."""
 
-import sys
-
-from evaluation.bench.estimation import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.bench.estimation")

@@ -1,13 +1,10 @@
 #!/usr/bin/env python3
 """Speed of the simulated insertion scene on one thread; evaluation/bench/insertion_scene.py."""
 
-import sys
-
-from evaluation.common.machine_info import one_thread_env
-
-one_thread_env()  # before NumPy loads its BLAS
-
-from evaluation.bench.insertion_scene import main  # noqa: E402
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main(
+        "evaluation.bench.insertion_scene",
+        first="evaluation.common.machine_info:one_thread_env",
+    )

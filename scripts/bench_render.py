@@ -1,13 +1,7 @@
 #!/usr/bin/env python3
 """Speed of the simulated camera's renderer, on one thread; see evaluation/bench/render.py."""
 
-import sys
-
-from evaluation.common.machine_info import one_thread_env
-
-one_thread_env()  # before NumPy loads its BLAS
-
-from evaluation.bench.render import main  # noqa: E402
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.bench.render", first="evaluation.common.machine_info:one_thread_env")

@@ -2,9 +2,7 @@
 """Per-frame cost of the slip detector and of the estimator's push; see
 evaluation/bench/slip_detection.py."""
 
-import sys
-
-from evaluation.bench.slip_detection import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.bench.slip_detection")

@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Fit c_x, c_y (and c_z) on a calibration dataset; see evaluation/offline/calibrate_cli.py."""
 
-import sys
-
-from evaluation.offline.calibrate_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.offline.calibrate_cli")

@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Check the configured devices, one line each; see drivers/check_hardware.py."""
 
-import sys
-
-from drivers.check_hardware import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("drivers.check_hardware")

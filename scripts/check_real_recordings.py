@@ -2,9 +2,7 @@
 """Estimators on rendered real-texture recordings; see
 evaluation/real_recordings/recordings_cli.py."""
 
-import sys
-
-from evaluation.real_recordings.recordings_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.real_recordings.recordings_cli")

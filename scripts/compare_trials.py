@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Controllers compared across insertion speed settings; see evaluation/trials/compare.py."""
 
-import sys
-
-from evaluation.trials.compare import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.trials.compare")

@@ -2,9 +2,7 @@
 """The offline estimator demo on a synthetic sequence (``make estimator-demo``); see
 evaluation/offline/estimator_demo.py."""
 
-import sys
-
-from evaluation.offline.estimator_demo import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.offline.estimator_demo")

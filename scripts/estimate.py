@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Offline torque estimation on recorded tactile frames; see evaluation/offline/estimate_cli.py."""
 
-import sys
-
-from evaluation.offline.estimate_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.offline.estimate_cli")

@@ -2,9 +2,7 @@
 """Tilt estimates on a simulated ball pressed and rolled; see
 evaluation/experiments/press_roll_eval.py."""
 
-import sys
-
-from evaluation.experiments.press_roll_eval import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.experiments.press_roll_eval")

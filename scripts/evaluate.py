@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Regenerate docs/EVALUATION.md and its charts; see evaluation/experiments/run.py."""
 
-import sys
-
-from evaluation.experiments.run import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.experiments.run")

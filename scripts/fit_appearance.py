@@ -2,9 +2,7 @@
 """Fit the renderer's realistic looks to the shipped real captures; see
 evaluation/appearance/fit.py. ``python scripts/fit_appearance.py [realistic|realistic_digit]``."""
 
-import sys
-
-from evaluation.appearance.fit import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.appearance.fit")

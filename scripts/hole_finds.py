@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Where the tip really was at each hole find; see evaluation/trials/hole_finds_cli.py."""
 
-import sys
-
-from evaluation.trials.hole_finds_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.trials.hole_finds_cli")

@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Write a simulated calibration dataset; see evaluation/offline/make_dataset_cli.py."""
 
-import sys
-
-from evaluation.offline.make_dataset_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.offline.make_dataset_cli")

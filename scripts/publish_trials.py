@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """Publish make trials' comparisons into docs/; see evaluation/trials/publish.py."""
 
-import sys
-
-from evaluation.trials.publish import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.trials.publish")

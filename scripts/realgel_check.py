@@ -2,9 +2,7 @@
 """Estimators on real gel textures under an independent elastic model; see
 evaluation/realgel/check_cli.py."""
 
-import sys
-
-from evaluation.realgel.check_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.realgel.check_cli")

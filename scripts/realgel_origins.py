@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """The dipole's origin under pushing, on the true field; see evaluation/realgel/origins_cli.py."""
 
-import sys
-
-from evaluation.realgel.origins_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.realgel.origins_cli")

@@ -1,9 +1,7 @@
 #!/usr/bin/env python3
 """One insertion trial, simulated or on the robot; see evaluation/trials/trial_cli.py."""
 
-import sys
-
-from evaluation.trials.trial_cli import main
+from core.entry_point import run_main
 
 if __name__ == "__main__":
-    sys.exit(main())
+    run_main("evaluation.trials.trial_cli")

@@ -1,6 +1,7 @@
 """Every script refuses nonsense counts, seeds and outputs with exit code 2 before any work."""
 
-import runpy
+import importlib
+import re
 from pathlib import Path
 
 import pytest
@@ -9,7 +10,9 @@ SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
 
 
 def script_main(name: str):
-    return runpy.run_path(str(SCRIPTS / f"{name}.py"), run_name=f"script_{name}")["main"]
+    """The ``main`` of the tool the script runs (``run_main("package.module")``)."""
+    module = re.search(r'run_main\(\s*"([\w.]+)"', (SCRIPTS / f"{name}.py").read_text())
+    return importlib.import_module(module.group(1)).main
 
 
 @pytest.mark.parametrize(

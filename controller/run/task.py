@@ -25,6 +25,7 @@ from controller.insertion.blind import BlindConfig
 from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
 from controller.safety import LimitsConfig
+from controller.tactile.settings import sensor_estimator
 from controller.teleop import TeleopConfig
 from core.config import (
     CONFIG_ROOT,
@@ -37,6 +38,7 @@ from core.config import (
     number,
     resolve_config_path,
 )
+from core.sensor_profile import sensor_profile
 from core.task_geometry import HolePose, PlugGeometry
 from drivers import registry
 
@@ -125,9 +127,7 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
         raise ConfigError(f"{source}: missing key '{SCENE_KEY}'")
     sections = {key: value for key, value in raw.items() if key != SCENE_KEY}
     config = build(TaskConfig, sections, source)
-    for kind, device in config.devices.paths().items():
-        if not device.is_file():
-            raise ConfigError(f"{source}: key 'devices.{kind}': no such file {device}")
+    _check_devices_and_estimator(config, source, backend)
     check_task_limits(
         source=source,
         machine_limits=config.machine.limits,
@@ -140,3 +140,23 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
     return Task(config, scene, path, tuple(overrides), raw)
+
+
+def _check_devices_and_estimator(config: TaskConfig, source: str, backend: str) -> None:
+    """Each device file holds a device of its kind (content and ``type:`` checked by the
+    registry), and the estimator configuration exists and suits the tactile sensor; a
+    ConfigError naming ``source`` and the key otherwise, so every tool refuses the task when
+    it loads, not at a trial's start."""
+    specs = {}
+    for kind, device in config.devices.paths().items():
+        if not device.is_file():
+            problem = "is not a regular file" if device.exists() else "does not exist"
+            raise ConfigError(f"{source}: key 'devices.{kind}': {device} {problem}")
+        try:
+            specs[kind] = registry.load_device_config(device, backend, kind)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: key 'devices.{kind}': {exc}") from None
+    try:
+        sensor_estimator(sensor_profile(specs["tactile"].config.model), config.estimator)
+    except ConfigError as exc:
+        raise ConfigError(f"{source}: key 'estimator': {exc}") from None

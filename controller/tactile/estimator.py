@@ -36,6 +36,7 @@ must (its flow outputs) and the returned estimate.
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Callable, Sequence
 from dataclasses import replace
@@ -114,6 +115,11 @@ class TactileEstimator:
         flow: GridFlowFactory = make_grid_flow,
         origin: OriginRule | None = None,
     ) -> None:
+        if calibration is not None and not isinstance(calibration, Calibration):
+            raise TypeError(
+                "calibration: expected a Calibration (e.g. Calibration.load(path)) or None, "
+                f"got {type(calibration).__name__} {calibration!r}"
+            )
         self.config = config
         self.profile = profile
         self.calibration = calibration
@@ -128,6 +134,7 @@ class TactileEstimator:
         self._rezero_policy = RezeroPolicy(config.slip.rezero)
         self._last_slip: SlipStatus | None = None
         self._divergence_map_cache: tuple[object, np.ndarray] | None = None
+        self._last_t_s = -math.inf  # the latest pushed frame's time (set_reference resets it)
 
     # -- reference ---------------------------------------------------------------------------
 
@@ -198,6 +205,7 @@ class TactileEstimator:
         gel's) the estimator is left as it was."""
         mean = self._mean_image(frames, "reference")
         self._install_reference(mean)
+        self._last_t_s = -math.inf
         self._reference.set(mean)
         self._open.stop()
         self._awaiting_rezero = False
@@ -315,7 +323,9 @@ class TactileEstimator:
     # -- estimation --------------------------------------------------------------------------
 
     def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
-        """Estimate the wrench from one frame captured at ``t_s`` seconds."""
+        """Estimate the wrench from one frame captured at ``t_s`` seconds: a finite number,
+        never before the previous frame's (TypeError, ValueError otherwise)."""
+        t_s = self._frame_time(t_s)
         if self._open.active:
             self._open.add(self._working_image(frame, self._open.frame_shape), frame.shape[:2])
             return self._zeroing(t_s)
@@ -338,6 +348,20 @@ class TactileEstimator:
         if estimate.rezero_recommended and self.config.slip.rezero.auto:
             self.rezero()
         return self.calibration.apply(estimate) if self.calibration else estimate
+
+    def _frame_time(self, t_s: float) -> float:
+        """``t_s`` as a float, checked against the previous frame's time (which it becomes)."""
+        if isinstance(t_s, bool) or not isinstance(t_s, numbers.Real):
+            raise TypeError(f"push: t_s: expected a number of seconds, got {t_s!r}")
+        t = float(t_s)
+        if not math.isfinite(t):
+            raise ValueError(f"push: t_s: expected a finite time in seconds, got {t}")
+        if t < self._last_t_s:
+            raise ValueError(
+                f"push: t_s: time went backwards, {t:g} s after a frame at {self._last_t_s:g} s"
+            )
+        self._last_t_s = t
+        return t
 
     def _zeroing(self, t_s: float) -> WrenchEstimate:
         """The zero estimate of a frame taken into a capture."""

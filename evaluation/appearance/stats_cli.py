@@ -24,11 +24,11 @@ import sys
 from collections.abc import Iterator
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from drivers.sim.render.real_texture import fit_to_size
 from evaluation.appearance.stats import AppearanceStats, format_table, measure, summarise
+from evaluation.common.quiet_decoding import read_image
 from evaluation.offline.estimate_cli import IMAGE_SUFFIXES, InputError, open_source
 from evaluation.offline.video import ReadLog
 
@@ -46,7 +46,7 @@ def parse_size(text: str) -> tuple[int, int] | None:
 def frames_of(path: Path, every: int) -> Iterator[np.ndarray]:
     """The BGR frames of an image file, image folder or video (every ``every``-th)."""
     if path.is_file() and path.suffix.lower() in IMAGE_SUFFIXES:
-        image = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        image = read_image(path)
         if image is None:
             raise InputError(f"cannot read image '{path}'")
         yield image

@@ -28,24 +28,15 @@ from collections.abc import Callable
 from pathlib import Path
 
 from core.config import CONFIG_ROOT, ConfigError
+from core.entry_point import EXIT_SIGINT, EXIT_SIGTERM, Terminated, raise_terminated
 from core.errors import DeviceError
 
 EXIT_ERROR = 2
 EXIT_DEVICE = 1  # a device could not be reached or failed (as scripts/check_hardware.py)
-EXIT_SIGINT = 128 + signal.SIGINT  # 130
-EXIT_SIGTERM = 128 + signal.SIGTERM  # 143
 
 
 class ToolError(Exception):
     """A problem with the user's input or outputs; the message is one line naming it."""
-
-
-class Terminated(BaseException):
-    """Raised in the main thread when the process receives SIGTERM."""
-
-
-def _raise_terminated(signum: int, frame: object) -> None:
-    raise Terminated()
 
 
 def one_line(text: object) -> str:
@@ -68,7 +59,7 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
     quiet_video_decoder()
     previous = None
     if threading.current_thread() is threading.main_thread():
-        previous = signal.signal(signal.SIGTERM, _raise_terminated)
+        previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
         return body()
     except (ToolError, ConfigError) as exc:

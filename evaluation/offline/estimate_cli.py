@@ -11,7 +11,10 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 (a included, b excluded) are averaged into the zeroing reference. ``--open`` names frames
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
-(without, it falls back to the centroid midpoint). ``--method`` names an
+(without, it falls back to the centroid midpoint). The open frames must end before the
+reference begins (overlapping or later ranges are refused); open frames that differ from each
+other or from the recording's first frame far beyond the camera noise are used with one
+warning (evaluation/offline/open_gel.py). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -47,7 +50,6 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import cv2
 import numpy as np
 from tqdm import tqdm
 
@@ -60,6 +62,8 @@ from evaluation.common.cli_support import (
     run_tool,
 )
 from evaluation.common.outputs import atomic_text, check_output_file
+from evaluation.common.quiet_decoding import read_image
+from evaluation.offline.open_gel import open_gel_doubt
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -112,7 +116,7 @@ class FrameSource:
             yield from self.video.frames(log)
             return
         for number, image_path in enumerate(self.images or ()):
-            image = cv2.imread(str(image_path), cv2.IMREAD_COLOR)
+            image = read_image(image_path)
             if image is not None:
                 log.record(number)
                 yield number, image
@@ -185,6 +189,22 @@ def parse_reference(spec: str, option: str = "--reference") -> tuple[int, int]:
     return start, stop
 
 
+def check_open_before_reference(open_range: tuple[int, int], reference: tuple[int, int]) -> None:
+    """InputError unless the open gel's frames all come before the reference's: the open gel
+    is seen before the grasp, the reference after it."""
+    (a, b), (c, d) = open_range, reference
+    if b <= c:
+        return
+    if a < d:
+        problem = f"--open {a}:{b} and --reference {c}:{d} overlap"
+    else:
+        problem = f"--open {a}:{b} comes after --reference {c}:{d}"
+    raise InputError(
+        f"{problem}: the open gel (before the grasp, nothing touching) must end before the "
+        "reference (the grasp, zeroed) begins"
+    )
+
+
 def read_reference(
     source: FrameSource, start: int, stop: int, option: str = "--reference"
 ) -> list[np.ndarray]:
@@ -255,6 +275,8 @@ def estimate_file(
     before any frame is read. ``open_gel``: the open gel's frames (``--open``), or None."""
     start, stop = parse_reference(reference)
     open_range = None if open_gel is None else parse_reference(open_gel, "--open")
+    if open_range is not None:
+        check_open_before_reference(open_range, (start, stop))
     if fps is not None and not MIN_RATE_HZ <= fps <= MAX_RATE_HZ:
         raise InputError(
             f"--fps {fps:g}: expected a positive number of frames per second in "
@@ -281,6 +303,9 @@ def estimate_file(
             estimator.set_open_reference(open_frames)
         except ValueError as exc:
             raise InputError(f"open frames {open_range[0]}:{open_range[1]}: {exc}") from None
+        doubt = open_gel_doubt(open_frames, open_range[0], next(source.frames(ReadLog())))
+        if doubt:
+            warn(f"--open {open_range[0]}:{open_range[1]}: {doubt}")
     reference_frames = read_reference(source, start, stop)
     try:
         estimator.set_reference(reference_frames)

@@ -2,7 +2,8 @@
 
 OpenCV (FFmpeg backend) hides damage: a frame whose data does not decode ends the stream
 (the frames after it are only found by reading on), a damaged frame may be patched, and a
-truncated file simply ends early. This reader reads on past failures and numbers each frame
+truncated file simply ends early. The decoders' own messages are kept off the terminal
+(evaluation/common/quiet_decoding.py). This reader reads on past failures and numbers each frame
 it returns by the container's presentation time (``round(pts * fps)``; by its position,
 counting the failed reads, when the container gives no usable time), so a lost frame
 leaves a gap in the numbers and the frames after it keep their true times. After a pass,
@@ -20,6 +21,8 @@ from pathlib import Path
 
 import cv2
 import numpy as np
+
+from evaluation.common.quiet_decoding import native_stderr_muted
 
 UNREADABLE_IN_A_ROW = 50  # failed reads in a row that end a pass (the end of the file)
 
@@ -72,9 +75,11 @@ class VideoFile:
     def open(cls, path: Path | str) -> VideoFile:
         """Check that ``path`` opens and its first frame decodes; read the header."""
         path = Path(path)
-        capture = cv2.VideoCapture(str(path))
+        with native_stderr_muted():
+            capture = cv2.VideoCapture(str(path))
         try:
-            ok = capture.isOpened() and capture.read()[0]
+            with native_stderr_muted():
+                ok = capture.isOpened() and capture.read()[0]
             count = capture.get(cv2.CAP_PROP_FRAME_COUNT) if ok else 0.0
             fps = capture.get(cv2.CAP_PROP_FPS) if ok else 0.0
         finally:
@@ -91,11 +96,13 @@ class VideoFile:
         the stream; reading on finds the frames after it, so the pass ends only after
         ``UNREADABLE_IN_A_ROW`` failed reads in a row."""
         log = ReadLog() if log is None else log
-        capture = cv2.VideoCapture(str(self.path))
+        with native_stderr_muted():
+            capture = cv2.VideoCapture(str(self.path))
         failures = 0
         try:
             while failures < UNREADABLE_IN_A_ROW:
-                ok, image = capture.read()
+                with native_stderr_muted():
+                    ok, image = capture.read()
                 if not ok or image is None:
                     failures += 1
                     continue

@@ -98,3 +98,26 @@ def test_a_bad_scene_key_is_refused_for_sim_and_unread_for_real():
     with pytest.raises(ConfigError, match="key 'scene.friction'"):
         load_task("usb_c", bad)
     assert load_task("usb_c", bad, backend="real").scene is None
+
+
+@pytest.mark.parametrize(
+    "override, message",
+    [
+        ("estimator=nonexistent", r"key 'estimator': unknown estimator configuration"),
+        ("estimator=/etc/passwd", r"key 'estimator': unknown estimator configuration"),
+        ("devices.tactile=/etc/passwd", r"key 'devices.tactile': /etc/passwd: expected a mapping"),
+        (
+            "devices.tactile=robot/xarm6.yaml",
+            r"key 'devices.tactile': .*xarm6.yaml: key 'type': expected a device of kind 'tactile'",
+        ),
+        ("devices.arm=/dev/null", r"key 'devices.arm': /dev/null is not a regular file"),
+        ("devices.gripper=absent.yaml", r"key 'devices.gripper': .*absent.yaml does not exist"),
+    ],
+)
+@pytest.mark.parametrize("backend", ["sim", "real"])
+def test_a_bad_estimator_or_device_file_is_refused_when_the_task_loads(override, message, backend):
+    """Refused by load_task (so by every tool, a batch's check included), naming the task
+    file and the key, not at the first trial's start."""
+    with pytest.raises(ConfigError, match=r"usb_c.yaml: " + message) as caught:
+        load_task("usb_c", (override,), backend=backend)
+    assert "\n" not in str(caught.value)

@@ -422,9 +422,33 @@ def test_overrides_later_item_wins_and_value_is_validated_like_yaml():
         ("=3", r"expected KEY=VALUE"),
         ("scene..friction=3", r"expected KEY=VALUE"),
         ("scene.friction=[1", r"the value is not valid YAML"),
+        ("scene.friction=" + "9" * 5000, r"not valid YAML \(Exceeds the limit"),
+        ("scene.friction=2020-13-45", r"not valid YAML \(month must be in 1..12\)"),
+        ("scene.friction=!!float x", r"not valid YAML \(could not convert"),
     ],
 )
 def test_bad_overrides_are_one_line_errors_naming_the_key(item, message):
     with pytest.raises(ConfigError, match=message) as caught:
         apply_overrides(_RAW, [item], "t")
     assert "\n" not in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    "text, value",
+    [("5e-1", 0.5), ("1e-05", 1e-05), ("1E3", 1000.0), ("1.5e3", 1500.0), ("-2e+2", -200.0)],
+)
+def test_a_number_with_an_exponent_is_a_number_in_overrides_and_files(tmp_path, text, value):
+    """PyYAML's YAML 1.1 float needs a dot and a signed exponent; the loader reads YAML 1.2's."""
+    raw = apply_overrides(_RAW, [f"scene.friction={text}"], "t")
+    assert raw["scene"]["friction"] == value
+    path = tmp_path / "task.yaml"
+    path.write_text(f"rate_hz: 100\nscene:\n  friction: {text}\n  shape: box\n")
+    assert load_yaml(path)["scene"]["friction"] == value
+    assert yaml.safe_load(text) == text  # PyYAML's own safe loader is left as it was
+
+
+@pytest.mark.parametrize("text", ["inf", "nan", ".inf", "-.inf", ".nan"])
+def test_infinities_and_nan_stay_refused_in_overrides(text):
+    raw = apply_overrides(_RAW, [f"scene.friction={text}"], "t")
+    with pytest.raises(ConfigError, match=r"key 'scene.friction': expected a number"):
+        build(_Task, raw, source="t")

@@ -234,3 +234,32 @@ def test_failed_push_during_zeroing_keeps_the_capture(renderer):
         est.push(renderer.render()[::2, ::2].copy(), 0.1)
     assert est.push(renderer.render(), 0.2).zeroing  # the second frame of the two
     assert est.is_zeroed
+
+
+def test_a_calibration_that_is_not_one_is_refused_at_construction():
+    with pytest.raises(
+        TypeError, match=r"calibration: expected a Calibration .* got str 'cal\.yaml'"
+    ):
+        estimator_for_sensor("gelsight_mini", None, "cal.yaml")
+
+
+@pytest.mark.parametrize(
+    "t_s, error, message",
+    [
+        ("0.84", TypeError, r"t_s: expected a number of seconds, got '0.84'"),
+        (True, TypeError, r"t_s: expected a number of seconds"),
+        (None, TypeError, r"t_s: expected a number of seconds"),
+        (float("nan"), ValueError, r"t_s: expected a finite time in seconds, got nan"),
+        (float("inf"), ValueError, r"t_s: expected a finite time in seconds, got inf"),
+        (0.5, ValueError, r"t_s: time went backwards, 0.5 s after a frame at 1 s"),
+    ],
+)
+def test_push_refuses_a_time_that_is_not_one_or_goes_backwards(t_s, error, message):
+    estimator = estimator_for_sensor("gelsight_mini")
+    frame = np.zeros((240, 320, 3), np.uint8)
+    estimator.push(frame, 1)
+    with pytest.raises(error, match=message):
+        estimator.push(frame, t_s)
+    estimator.push(frame, np.float32(1.0))  # the same time again, and NumPy numbers, pass
+    estimator.set_reference(frame)  # a new reference starts a new recording's times
+    estimator.push(frame, 0.0)

@@ -473,6 +473,72 @@ def test_open_frames_locate_the_contact_for_grid_lk(tmp_path, capsys, monkeypatc
     assert main(args) == 0
     assert centres[0] is not None and centres[0][0] > 1.5 and centres[1] is None
     assert len(read_rows(out)) == 5
+    assert capsys.readouterr().err == ""  # the open gel as it should be: no warning
     assert main([*args, "--open", "3:9"]) == 2
     err = capsys.readouterr().err.strip()
-    assert err.startswith("estimate: error: --open 3:9 is out of range") and "\n" not in err
+    assert err.startswith("estimate: error: --open 3:9 and --reference 2:4 overlap") and (
+        "\n" not in err
+    )
+
+
+@pytest.fixture
+def grasp_folder(tmp_path):
+    """Two frames of the open gel, then four of a grasp (a spreading press at (200, 100))."""
+    renderer = MarkerImageRenderer(rng=np.random.default_rng(5))
+    ys, xs = np.mgrid[0:240, 0:320].astype(float)
+    k = 2.0 / 30.0 * np.exp(-((xs - 200) ** 2 + (ys - 100) ** 2) / (2 * 30.0**2))
+    grasp = renderer.render(np.stack([k * (xs - 200), k * (ys - 100)], axis=-1))
+    path = tmp_path / "grasp"
+    path.mkdir()
+    for i, frame in enumerate([renderer.render()] * 2 + [grasp] * 4):
+        cv2.imwrite(str(path / f"f{i}.png"), frame)
+    return path
+
+
+@pytest.mark.parametrize(
+    "open_gel, code, message",
+    [
+        ("0:5", 2, "error: --open 0:5 and --reference 4:6 overlap: the open gel"),
+        ("4", 2, "error: --open 4:5 and --reference 4:6 overlap: the open gel"),
+        ("6:8", 2, "error: --open 6:8 comes after --reference 4:6: the open gel"),
+        ("2:4", 0, "warning: --open 2:4: frame 0 differs from frame 2 by"),  # during the press
+        ("1:3", 0, "warning: --open 1:3: frame 2 differs from frame 1 by"),  # the press begins
+    ],
+)
+def test_open_frames_that_are_not_the_open_gel(
+    grasp_folder, tmp_path, capsys, open_gel, code, message
+):
+    """Before or overlapping the reference: refused. Not the open gel by their content (a
+    press during them): estimated, with one warning naming the frame."""
+    out = tmp_path / "out.csv"
+    args = [str(grasp_folder), "--reference", "4:6", "--open", open_gel, "--out", str(out)]
+    assert main(args) == code
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"estimate: {message}") and "\n" not in err
+    assert len(read_rows(out)) == 6 if code == 0 else not out.exists()
+
+
+def _damaged_inputs(folder, tmp_path):
+    """Inputs whose decoders write to stderr themselves: a PNG with a bad CRC (libpng), a
+    truncated JPEG (libjpeg), a truncated BMP (OpenCV's log), an AVI cut inside its header
+    (OpenCV's AVI parser)."""
+    good = (folder / "f0.png").read_bytes()
+    bad_crc = bytearray(good)
+    bad_crc[100:110] = b"x" * 10
+    (folder / "f1.png").write_bytes(bytes(bad_crc))
+    image = cv2.imread(str(folder / "f0.png"))
+    for suffix in ("jpg", "bmp"):
+        cv2.imwrite(str(tmp_path / f"a.{suffix}"), image)
+        data = (tmp_path / f"a.{suffix}").read_bytes()
+        (folder / f"f2.{suffix}").write_bytes(data[: len(data) // 2])
+    video = write_mjpg(tmp_path / "v.avi", [image] * 3, fps=20.0)
+    (tmp_path / "cut.avi").write_bytes(video.read_bytes()[:200])
+    return [[str(folder)], [str(tmp_path / "cut.avi")]]
+
+
+def test_the_decoders_own_messages_never_reach_the_terminal(folder, tmp_path):
+    for inputs in _damaged_inputs(folder, tmp_path):
+        result = run_cli(*inputs, "--out", str(tmp_path / "x.csv"))
+        err = result.stderr.strip()
+        assert result.returncode == 2 and err.startswith("estimate: error:"), err
+        assert "\n" not in err, err

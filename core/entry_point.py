@@ -1,0 +1,69 @@
+"""How a script in scripts/ runs its tool: Ctrl-C and SIGTERM end it with one line at any
+moment, the imports of the tool's (heavy) modules included.
+
+A script is two lines, ``from core.entry_point import run_main`` and
+``run_main("package.module")``. ``run_main`` turns SIGINT into KeyboardInterrupt and SIGTERM
+into ``Terminated`` *before* it imports the tool's module, so a signal while NumPy, OpenCV
+or MuJoCo load is handled like one during the work: the tool's own handler
+(``evaluation.common.cli_support.run_tool``) reports it while the tool works, and
+``run_main`` reports what reaches it (``PROG: interrupted by SIGINT``, exit 130;
+``PROG: ended by SIGTERM``, exit 143; no traceback). Once ``main`` has returned, its outputs
+are complete and a signal during the interpreter's shutdown ends the process at once with
+the same code, silently. Only the interpreter's own start-up (before the script's first line
+runs, some tens of milliseconds) is beyond reach. Importing this module loads only the
+standard library.
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import signal
+import sys
+from pathlib import Path
+from typing import NoReturn
+
+EXIT_SIGINT = 128 + signal.SIGINT  # 130
+EXIT_SIGTERM = 128 + signal.SIGTERM  # 143
+
+
+class Terminated(BaseException):
+    """Raised in the main thread when the process receives SIGTERM."""
+
+
+def raise_terminated(signum: int, frame: object) -> None:
+    """A SIGTERM handler: raise ``Terminated`` where the main thread is."""
+    raise Terminated()
+
+
+def _exit_at_once(signum: int, frame: object) -> None:
+    os._exit(128 + signum)
+
+
+def run_main(module: str, first: str | None = None) -> NoReturn:
+    """Exit with the code of ``module.main()`` (None: 0), 130 on SIGINT, 143 on SIGTERM.
+    ``first``: ``"module:function"`` to call before ``module`` is imported (e.g. to limit
+    the threads of the numerical libraries it loads)."""
+    prog = Path(sys.argv[0]).stem
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    signal.signal(signal.SIGTERM, raise_terminated)
+    stopped_by = None
+    try:
+        if first is not None:
+            first_module, function = first.split(":")
+            getattr(importlib.import_module(first_module), function)()
+        code = importlib.import_module(module).main()
+    except KeyboardInterrupt:
+        code, stopped_by = EXIT_SIGINT, "interrupted by SIGINT"
+    except Terminated:
+        code, stopped_by = EXIT_SIGTERM, "ended by SIGTERM"
+    signal.signal(signal.SIGINT, _exit_at_once)
+    signal.signal(signal.SIGTERM, _exit_at_once)
+    if stopped_by is not None:
+        print(f"{prog}: {stopped_by}", file=sys.stderr)
+    try:  # before a signal could end the process without flushing them
+        sys.stdout.flush()
+        sys.stderr.flush()
+    except (OSError, ValueError):  # a closed pipe: Python reports it at exit
+        pass
+    sys.exit(code)
