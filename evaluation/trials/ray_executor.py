@@ -4,8 +4,10 @@
 
 Each trial is one Ray task of one CPU running ``guard.guarded``, so a trial's exception
 is a failed result exactly as with the local executor, and the batch's summary is the same
-for the same seeds. The trial function and this package must be importable on the workers
-(on a cluster: the same installation on every node, or a ``runtime_env``).
+for the same seeds. The tasks are submitted a few at a time (``WINDOW_PER_WORKER`` per CPU
+of the instance or cluster), so a batch of any length takes the same memory. The trial
+function and this package must be importable on the workers (on a cluster: the same
+installation on every node, or a ``runtime_env``).
 """
 
 from __future__ import annotations
@@ -14,10 +16,12 @@ import logging
 import socket
 import time
 from collections.abc import Iterable, Iterator
+from itertools import islice
 from types import TracebackType
 from typing import Any
 
 from evaluation.common.cli_support import ToolError, one_line
+from evaluation.trials.executors import WINDOW_PER_WORKER
 from evaluation.trials.guard import error_result, guarded
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
@@ -100,13 +104,20 @@ class RayExecutor:
         self, function: TrialFunction, specs: Iterable[TrialSpec]
     ) -> Iterator[tuple[TrialSpec, TrialResult]]:
         task = ray.remote(num_cpus=1, max_retries=0)(guarded)
-        by_ref = {task.remote(function, spec): spec for spec in specs}
-        self._pending = list(by_ref)
+        window = WINDOW_PER_WORKER * max(self.workers, int(ray.cluster_resources().get("CPU", 1)))
+        queued = iter(specs)
+        by_ref: dict[Any, TrialSpec] = {}
         began = time.perf_counter()
-        while self._pending:
+        while True:
+            for spec in islice(queued, window - len(self._pending)):
+                ref = task.remote(function, spec)
+                by_ref[ref] = spec
+                self._pending.append(ref)
+            if not self._pending:
+                return
             done, self._pending = ray.wait(self._pending, num_returns=1)
             for ref in done:
-                spec = by_ref[ref]
+                spec = by_ref.pop(ref)
                 try:
                     result = ray.get(ref)
                 except ray.exceptions.RayError as exc:  # a worker died, a task was lost

@@ -1,0 +1,59 @@
+"""Process pools whose workers leave signals to their parent, die with it, and are killed
+at once when the parent stops.
+
+* ``worker_pool(workers)``: a spawned ``ProcessPoolExecutor`` whose workers ignore SIGINT
+  and SIGTERM (Ctrl-C and ``kill`` to the process group reach the parent, which decides;
+  a worker's own control loop then does not catch them either, see
+  ``controller.loop``) and are sent SIGKILL by the kernel when the parent dies, even by
+  SIGKILL (Linux ``prctl(PR_SET_PDEATHSIG)``).
+* ``kill_pool(pool)``: cancel the queued tasks and SIGKILL the workers now (their running
+  tasks are abandoned), then wait for them to be gone.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import signal
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+
+PR_SET_PDEATHSIG = 1  # linux/prctl.h
+JOIN_TIMEOUT_S = 5.0
+
+
+def _leave_signals_and_die_with(parent_pid: int) -> None:
+    """Pool initializer (see the module doc); exits at once if the parent is already gone."""
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(signum, signal.SIG_IGN)
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None, use_errno=True).prctl(PR_SET_PDEATHSIG, signal.SIGKILL)
+    if os.getppid() != parent_pid:
+        os._exit(1)
+
+
+def worker_pool(workers: int) -> ProcessPoolExecutor:
+    """A pool of ``workers`` spawned processes set up as the module doc says."""
+    return ProcessPoolExecutor(
+        workers,
+        get_context("spawn"),
+        initializer=_leave_signals_and_die_with,
+        initargs=(os.getpid(),),
+    )
+
+
+def kill_pool(pool: ProcessPoolExecutor) -> None:
+    """Cancel the pool's queued tasks and SIGKILL its workers, waiting until they are gone.
+    Before Python 3.14 (``kill_workers``) the processes are only reachable as
+    ``_processes``, which ``shutdown`` clears: taken first."""
+    kill = getattr(pool, "kill_workers", None)
+    if kill is not None:
+        kill()
+        return
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        process.kill()
+    for process in processes:
+        process.join(timeout=JOIN_TIMEOUT_S)
+    pool.shutdown(wait=False, cancel_futures=True)
