@@ -6,8 +6,8 @@ at once when the parent stops.
   a worker's own control loop then does not catch them either, see
   ``controller.loop``) and are sent SIGKILL by the kernel when the parent dies, even by
   SIGKILL (Linux ``prctl(PR_SET_PDEATHSIG)``).
-* ``kill_pool(pool)``: cancel the queued tasks and SIGKILL the workers now (their running
-  tasks are abandoned), then wait for them to be gone.
+* ``kill_pool(pool)``: SIGKILL the workers now (their running and queued tasks are
+  abandoned), then wait for them to be gone.
 """
 
 from __future__ import annotations
@@ -44,9 +44,11 @@ def worker_pool(workers: int) -> ProcessPoolExecutor:
 
 
 def kill_pool(pool: ProcessPoolExecutor) -> None:
-    """Cancel the pool's queued tasks and SIGKILL its workers, waiting until they are gone.
-    Before Python 3.14 (``kill_workers``) the processes are only reachable as
-    ``_processes``, which ``shutdown`` clears: taken first."""
+    """SIGKILL the pool's workers, waiting until they are gone; its tasks, running or
+    queued, end with BrokenProcessPool. Before Python 3.14 (``kill_workers``) the processes
+    are only reachable as ``_processes``, which ``shutdown`` clears: taken first. No future
+    is cancelled: before Python 3.12 the pool's own thread raises InvalidStateError (a
+    traceback) when it fails a cancelled future of a broken pool."""
     kill = getattr(pool, "kill_workers", None)
     if kill is not None:
         kill()
@@ -56,4 +58,4 @@ def kill_pool(pool: ProcessPoolExecutor) -> None:
         process.kill()
     for process in processes:
         process.join(timeout=JOIN_TIMEOUT_S)
-    pool.shutdown(wait=False, cancel_futures=True)
+    pool.shutdown(wait=False)

@@ -102,25 +102,21 @@ class LocalExecutor:
         queued = iter(specs)
         pending: dict[Future[TrialResult], TrialSpec] = {}
         began = time.perf_counter()
-        try:
-            while True:
-                for spec in islice(queued, WINDOW_PER_WORKER * self.workers - len(pending)):
-                    pending[self._pool.submit(guarded, function, spec)] = spec
-                if not pending:
-                    return
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    spec = pending.pop(future)
-                    try:
-                        result = future.result()
-                    except BrokenProcessPool:
-                        result = error_result(
-                            spec, "a worker process died", time.perf_counter() - began
-                        )
-                    yield spec, result
-        finally:
-            for future in pending:
-                future.cancel()
+        while True:
+            for spec in islice(queued, WINDOW_PER_WORKER * self.workers - len(pending)):
+                pending[self._pool.submit(guarded, function, spec)] = spec
+            if not pending:
+                return
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                spec = pending.pop(future)
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    result = error_result(
+                        spec, "a worker process died", time.perf_counter() - began
+                    )
+                yield spec, result
 
 
 def open_executor(name: str, workers: int = 1, address: str | None = None) -> Executor:
