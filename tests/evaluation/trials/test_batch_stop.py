@@ -179,3 +179,4 @@ def test_a_batch_of_a_hundred_million_seeds_starts_at_once_in_bounded_memory(
     assert "interrupted by SIGINT after" in capsys.readouterr().err
     summary = json.loads((out / SUMMARY_NAME).read_text())
     assert summary["requested"] == 100_000_000 and 1 <= summary["n"] < 10  # what finished first
+
