@@ -129,5 +129,5 @@ def open_executor(name: str, workers: int = 1, address: str | None = None) -> Ex
     if name == "ray":
         from evaluation.trials.ray_executor import RayExecutor
 
-        return RayExecutor(workers, address)
+        return RayExecutor(workers, address, WINDOW_PER_WORKER)
     raise ValueError(f"executor {name!r}: expected one of {', '.join(EXECUTORS)}")
