@@ -10,7 +10,14 @@ each result to its batch's folder as it arrives:
   written atomically when the batch ends -- also when Ctrl-C or SIGTERM stops it, then with
   ``"complete": false`` and only the trials that finished.
 
-A folder that already holds a batch (either file) is refused before any trial runs.
+A trial's own record (``TrialSpec.out_dir``) is kept under its name right after its row
+(``evaluation.trials.records``); when the batch stops early, the records of the trials that
+did not finish are removed, so the records, ``trials.csv`` and ``summary.json`` agree. A
+signal that arrives while a finished trial is recorded takes effect right after it, and
+later signals are ignored while the batch stops (``evaluation.trials.stop_signals``).
+
+The output folder must be new or empty (``check_batch_folder``), checked before any trial
+runs.
 """
 
 from __future__ import annotations
@@ -21,7 +28,7 @@ import json
 import math
 import os
 import sys
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import ExitStack, closing
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -32,8 +39,10 @@ from tqdm import tqdm
 from evaluation.common.cli_support import Terminated, ToolError
 from evaluation.common.outputs import check_output_folder, write_text
 from evaluation.trials.executors import Executor
+from evaluation.trials.records import RECORDS, discard_unfinished_records, keep_record
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
+from evaluation.trials.stop_signals import StopSignals
 from evaluation.trials.summary import summarize
 
 CSV_NAME = "trials.csv"
@@ -53,17 +62,22 @@ class Batch:
     summary: dict[str, Any] = field(default_factory=dict, init=False)
 
 
-def check_batch_folder(
-    path: Path, inputs: Sequence[Path | None] = (), option: str = "--out"
-) -> None:
-    """Refuse an output folder that cannot be written or already holds a batch."""
-    check_output_folder(path, inputs, option=option)
+def check_batch_folder(path: Path, option: str = "--out") -> None:
+    """Refuse an output folder that cannot be written or is not empty: one that holds an
+    earlier batch (either file) is named so; any other content (a task file, a trial's
+    record, ...) is refused as well, so a batch never writes beside or over it."""
+    check_output_folder(path, option=option)
+    if not path.is_dir() or not any(path.iterdir()):
+        return
     for name in (CSV_NAME, SUMMARY_NAME):
         if (path / name).exists():
             raise ToolError(
                 f"{option} '{path}' already holds a batch ({name}); choose a new folder "
                 "(or remove it first)"
             )
+    raise ToolError(
+        f"{option} '{path}' is not empty and holds no batch; expected a new or empty folder"
+    )
 
 
 class TrialLog:
@@ -123,40 +137,57 @@ def run_batches(
     batch's ``results`` and ``summary``. Returns None when every trial finished, or the
     signal (``"SIGINT"``, ``"SIGTERM"``) that stopped the run, after the summaries of what
     finished are written. The progress bar goes to stderr."""
-    owner: dict[TrialSpec, Batch] = {}
-    for batch in batches:
-        for spec in batch.specs:
-            if spec in owner:
-                raise ValueError(f"trial {spec} is given twice")
-            owner[spec] = batch
-    stopped: str | None = None
-    try:
-        with executor, ExitStack() as stack:
-            logs = {
-                id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME)))
-                for b in batches
-            }
-            bar = stack.enter_context(
-                tqdm(total=len(owner), unit="trial", file=sys.stderr, disable=not progress)
-            )
-            successes = 0
-            for spec, result in executor.run(function, list(owner)):
-                batch = owner[spec]
-                logs[id(batch)].write(result)
-                batch.results.append(result)
-                successes += result.success
-                bar.set_postfix(succeeded=successes, refresh=False)
-                bar.update(1)
-                if on_result is not None:
-                    on_result(result)
-    except KeyboardInterrupt:
-        stopped = "SIGINT"
-    except Terminated:
-        stopped = "SIGTERM"
-    for batch in batches:
-        batch.summary = summarize(
-            batch.results, **batch.context, requested=len(batch.specs), complete=stopped is None
-        )
-        write_summary(batch.out_dir / SUMMARY_NAME, batch.summary)
-    return stopped
+    in_flight: dict[TrialSpec, Batch] = {}
 
+    def submitted() -> Iterator[TrialSpec]:
+        for batch in batches:
+            for spec in batch.specs:
+                if spec in in_flight:
+                    raise ValueError(f"trial {spec} is given twice")
+                in_flight[spec] = batch
+                yield spec
+
+    stopped: str | None = None
+    with StopSignals() as signals:
+        try:
+            with executor, ExitStack() as stack:
+                logs = {
+                    id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME)))
+                    for b in batches
+                }
+                bar = stack.enter_context(
+                    tqdm(
+                        total=sum(len(b.specs) for b in batches),
+                        unit="trial",
+                        file=sys.stderr,
+                        disable=not progress,
+                    )
+                )
+                successes = 0
+                for spec, result in executor.run(function, submitted()):
+                    with signals.recording():
+                        batch = in_flight.pop(spec)
+                        logs[id(batch)].write(result)
+                        batch.results.append(result)
+                        if spec.out_dir is not None:
+                            keep_record(spec.out_dir)
+                    successes += result.success
+                    bar.set_postfix(succeeded=successes, refresh=False)
+                    bar.update(1)
+                    if on_result is not None:
+                        on_result(result)
+        except KeyboardInterrupt:
+            stopped = "SIGINT"
+        except Terminated:
+            stopped = "SIGTERM"
+        signals.ignore_further()
+        for batch in batches:
+            discard_unfinished_records(batch.out_dir / RECORDS)
+            batch.summary = summarize(
+                batch.results,
+                **batch.context,
+                requested=len(batch.specs),
+                complete=stopped is None,
+            )
+            write_summary(batch.out_dir / SUMMARY_NAME, batch.summary)
+    return stopped

@@ -9,14 +9,18 @@ by dotted path (``--set scene.friction=0.5``), validated like the YAML. ``--work
 number of trials run at once (1: in this process); with ``--executor ray`` the trials are
 Ray tasks on a local Ray instance of that many CPUs, or on the cluster at ``--ray-address``
 (then its CPUs set the parallelism). ``--records`` lets each trial write its own record and
-chart under OUT/records/<controller>-<seed>/.
+chart (``summary.png``) under OUT/records/<controller>-<seed>/, kept there once its row is in
+trials.csv (``evaluation.trials.records``).
 
-OUT/trials.csv gets one row per trial as it finishes; OUT/summary.json (keys: docs/
-EVALUATION.md, ``evaluation.trials.summary``) is written at the end, also after Ctrl-C or
-SIGTERM, then holding only the finished trials and ``"complete": false`` (exit 130 or 143).
-A trial that raises is a failed trial of status ``error`` (``error: ...``), not the end of
-the batch. Bad arguments, an unknown task or override key, an OUT that already holds a
-batch: one line ``run_trials: error: ...`` and exit code 2.
+OUT must be a new or empty folder. OUT/trials.csv gets one row per trial as it finishes;
+OUT/summary.json (keys: docs/EVALUATION.md, ``evaluation.trials.summary``) is written at the
+end. Ctrl-C or SIGTERM (to this process or its group) stops the batch within a second: the
+workers are killed, the unfinished trials' records removed, and summary.json holds only the
+finished trials and ``"complete": false`` (exit 130 or 143); a second signal is ignored. The
+workers die with this process even if it is killed with SIGKILL. A trial that raises is a
+failed trial of status ``error`` (``error: ...``), not the end of the batch. Bad arguments,
+an unknown task or override key, a non-empty OUT: one line ``run_trials: error: ...`` and
+exit code 2.
 
 The trial function: ``TRIAL_FUNCTION`` below names it (``module:function``, see
 ``evaluation.trials.spec`` for its contract and the optional ``check_spec``); the hidden
@@ -44,7 +48,9 @@ from evaluation.common.cli_support import (
 from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
+from evaluation.trials.records import RECORDS
 from evaluation.trials.spec import (
+    SeedSpecs,
     SpecError,
     TrialFunction,
     TrialSpec,
@@ -137,16 +143,12 @@ def load_trial_function(path: str) -> tuple[TrialFunction, SpecCheck | None]:
     return function, check if callable(check) else None
 
 
-def check_specs(check: SpecCheck | None, specs: Sequence[TrialSpec]) -> None:
-    """Run ``check`` once per distinct (task, controller, overrides) before any trial."""
-    if check is None:
-        return
-    seen: set[tuple[Any, ...]] = set()
-    for spec in specs:
-        key = (spec.task, spec.controller, spec.overrides)
-        if key not in seen:
-            seen.add(key)
-            check(spec)
+def check_batches(check: SpecCheck | None, batches: Sequence[Batch]) -> None:
+    """Run ``check`` before any trial on the first trial of each batch (a batch's trials
+    differ only by seed: ``SeedSpecs``)."""
+    if check is not None:
+        for batch in batches:
+            check(batch.specs[0])
 
 
 def make_executor(args: argparse.Namespace) -> Executor:
@@ -206,18 +208,8 @@ def main(argv: list[str] | None = None) -> int:
 def _run(args: argparse.Namespace) -> int:
     check_batch_folder(args.out)
     function, check = load_trial_function(args.trial_function)
-    records = args.out / "records" if args.records else None
-    specs = [
-        TrialSpec(
-            args.task,
-            args.controller,
-            seed,
-            tuple(args.overrides),
-            records / f"{args.controller}-{seed}" if records else None,
-        )
-        for seed in args.seeds
-    ]
-    check_specs(check, specs)
+    records = args.out / RECORDS if args.records else None
+    specs = SeedSpecs(args.task, args.controller, args.seeds, tuple(args.overrides), records)
     context = {
         "task": args.task,
         "controller": args.controller,
@@ -226,6 +218,7 @@ def _run(args: argparse.Namespace) -> int:
         **executor_context(args),
     }
     batch = Batch(specs, args.out, context)
+    check_batches(check, [batch])
     stopped = run_batches(function, [batch], make_executor(args))
     line = describe(batch.summary)
     if stopped is not None:

@@ -33,20 +33,20 @@ from typing import Any
 
 from core.config import ConfigError, parse_override
 from evaluation.common.cli_support import distinct, number_list, run_tool
-from evaluation.common.outputs import check_output_folder, write_text
+from evaluation.common.outputs import write_text
 from evaluation.trials.batch import Batch, check_batch_folder, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,
     add_run_arguments,
+    check_batches,
     check_run_arguments,
-    check_specs,
     executor_context,
     load_trial_function,
     make_executor,
 )
 from evaluation.trials.charts import controller_label, speed_success_chart, time_histogram
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
-from evaluation.trials.spec import TrialSpec, format_seeds
+from evaluation.trials.spec import SeedSpecs, format_seeds
 
 DEFAULT_SPEED_KEY = "machine.insert.speed_m_s"
 DEFAULT_SPEEDS = (0.002, 0.004, 0.008)
@@ -87,7 +87,7 @@ def grid(
         for speed in speeds:
             cell = Cell(controller, speed)
             cell_overrides = (*overrides, f"{speed_key}={speed!r}")
-            specs = [TrialSpec(task, controller, seed, cell_overrides) for seed in seeds]
+            specs = SeedSpecs(task, controller, seeds, cell_overrides)
             cell_context = {
                 "task": task,
                 "controller": controller,
@@ -256,7 +256,7 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    check_output_folder(args.out, option="--out")
+    check_batch_folder(args.out)
     cells = grid(
         args.task,
         args.seeds,
@@ -267,10 +267,8 @@ def _run(args: argparse.Namespace) -> int:
         args.out,
         executor_context(args),
     )
-    for batch in cells.values():
-        check_batch_folder(batch.out_dir)
     function, check = load_trial_function(args.trial_function)
-    check_specs(check, [spec for batch in cells.values() for spec in batch.specs])
+    check_batches(check, list(cells.values()))
     stopped = run_batches(function, list(cells.values()), make_executor(args))
     seeds = format_seeds(args.seeds)
     write_comparison(args.out, args.task, seeds, args.speed_key, cells, _command(args))

@@ -3,8 +3,10 @@
 Every executor is a context manager whose ``run(function, specs)`` yields ``(spec,
 result)`` for each spec, in the order the trials finish. A trial that raises becomes a failed
 result (status ``error``, see ``evaluation.trials.guard``), so one bad seed never ends the
-batch. Leaving the context on an exception (Ctrl-C, SIGTERM) stops the trials still
-running: the local pool's worker processes are terminated, Ray's tasks cancelled.
+batch. The trials are submitted a few at a time (``WINDOW_PER_WORKER`` per worker), so
+``specs`` may be a lazy sequence of any length. Leaving the context on an exception (Ctrl-C,
+SIGTERM) stops the trials still running: the local pool's worker processes are killed, Ray's
+tasks cancelled.
 
 The Ray executor lives in ``evaluation.trials.ray_executor`` (Ray is an optional extra);
 ``open_executor`` imports it only when asked for.
@@ -16,12 +18,12 @@ import time
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
-from multiprocessing import get_context
+from itertools import islice
 from types import TracebackType
 from typing import Protocol
 
-from evaluation.common.cli_support import ignore_interrupts_in_worker
 from evaluation.common.machine_info import one_thread_env
+from evaluation.common.worker_processes import kill_pool, worker_pool
 from evaluation.trials.guard import error_result, guarded
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
@@ -51,10 +53,16 @@ class Executor(Protocol):
         ...
 
 
+WINDOW_PER_WORKER = 2
+"""Trials submitted at once per worker (running or queued): enough to keep every worker busy,
+few enough that a batch of any length takes the same memory and that a stop has little to
+cancel."""
+
+
 class LocalExecutor:
     """``workers`` = 1: the trials run one after the other in this process; more: in a pool
-    of that many worker processes (spawned, one BLAS/OpenMP thread each, SIGINT left to
-    this process)."""
+    of that many worker processes (``evaluation.common.worker_processes``: spawned, one
+    BLAS/OpenMP thread each, signals left to this process, killed with it)."""
 
     name = "local"
 
@@ -67,9 +75,7 @@ class LocalExecutor:
     def __enter__(self) -> LocalExecutor:
         if self.workers > 1:
             one_thread_env()
-            self._pool = ProcessPoolExecutor(
-                self.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
-            )
+            self._pool = worker_pool(self.workers)
         return self
 
     def __exit__(
@@ -84,7 +90,7 @@ class LocalExecutor:
         if kind is None:
             pool.shutdown(wait=True)
             return
-        terminate_pool(pool)
+        kill_pool(pool)
 
     def run(
         self, function: TrialFunction, specs: Iterable[TrialSpec]
@@ -93,41 +99,24 @@ class LocalExecutor:
             for spec in specs:
                 yield spec, guarded(function, spec)
             return
-        pending: dict[Future[TrialResult], TrialSpec] = {
-            self._pool.submit(guarded, function, spec): spec for spec in specs
-        }
+        queued = iter(specs)
+        pending: dict[Future[TrialResult], TrialSpec] = {}
         began = time.perf_counter()
-        try:
-            while pending:
-                done, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for future in done:
-                    spec = pending.pop(future)
-                    try:
-                        result = future.result()
-                    except BrokenProcessPool:
-                        result = error_result(
-                            spec, "a worker process died", time.perf_counter() - began
-                        )
-                    yield spec, result
-        finally:
-            for future in pending:
-                future.cancel()
-
-
-def terminate_pool(pool: ProcessPoolExecutor) -> None:
-    """Cancel the pool's queued trials and stop its worker processes now (their running
-    trials are abandoned). Python 3.14 has ``terminate_workers``; before it, the processes
-    are only reachable as ``_processes``, which ``shutdown`` clears: taken first."""
-    terminate = getattr(pool, "terminate_workers", None)
-    if terminate is not None:
-        terminate()
-        return
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
-        process.terminate()
-    for process in processes:
-        process.join(timeout=5)
+        while True:
+            for spec in islice(queued, WINDOW_PER_WORKER * self.workers - len(pending)):
+                pending[self._pool.submit(guarded, function, spec)] = spec
+            if not pending:
+                return
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                spec = pending.pop(future)
+                try:
+                    result = future.result()
+                except BrokenProcessPool:
+                    result = error_result(
+                        spec, "a worker process died", time.perf_counter() - began
+                    )
+                yield spec, result
 
 
 def open_executor(name: str, workers: int = 1, address: str | None = None) -> Executor:
@@ -140,5 +129,5 @@ def open_executor(name: str, workers: int = 1, address: str | None = None) -> Ex
     if name == "ray":
         from evaluation.trials.ray_executor import RayExecutor
 
-        return RayExecutor(workers, address)
+        return RayExecutor(workers, address, WINDOW_PER_WORKER)
     raise ValueError(f"executor {name!r}: expected one of {', '.join(EXECUTORS)}")

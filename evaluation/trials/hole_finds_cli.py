@@ -12,15 +12,13 @@ Bad arguments, an unknown task or key: one line and exit code 2.
 from __future__ import annotations
 
 import argparse
-from concurrent.futures import ProcessPoolExecutor
 from functools import partial
-from multiprocessing import get_context
 
 from controller.run.task import load_task
-from evaluation.common.cli_support import ignore_interrupts_in_worker, integer, run_tool
+from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import one_thread_env
+from evaluation.common.worker_processes import kill_pool, worker_pool
 from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
-from evaluation.trials.executors import terminate_pool
 from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds
 
 
@@ -49,13 +47,11 @@ def _run(args: argparse.Namespace) -> int:
         _report(map(job, args.seeds), len(args.seeds))
         return 0
     one_thread_env()
-    pool = ProcessPoolExecutor(
-        args.workers, get_context("spawn"), initializer=ignore_interrupts_in_worker
-    )
+    pool = worker_pool(args.workers)
     try:
         _report(pool.map(job, args.seeds), len(args.seeds))
     except BaseException:  # Ctrl-C, SIGTERM, a failed trial: stop the queued trials now
-        terminate_pool(pool)
+        kill_pool(pool)
         raise
     pool.shutdown()
     return 0

@@ -4,8 +4,10 @@
 
 Each trial is one Ray task of one CPU running ``guard.guarded``, so a trial's exception
 is a failed result exactly as with the local executor, and the batch's summary is the same
-for the same seeds. The trial function and this package must be importable on the workers
-(on a cluster: the same installation on every node, or a ``runtime_env``).
+for the same seeds. The tasks are submitted a few at a time (``window_per_cpu`` per CPU of
+the instance or cluster), so a batch of any length takes the same memory. The trial
+function and this package must be importable on the workers (on a cluster: the same
+installation on every node, or a ``runtime_env``).
 """
 
 from __future__ import annotations
@@ -14,6 +16,7 @@ import logging
 import socket
 import time
 from collections.abc import Iterable, Iterator
+from itertools import islice
 from types import TracebackType
 from typing import Any
 
@@ -57,15 +60,20 @@ def check_reachable(address: str) -> None:
 class RayExecutor:
     """Runs trials as Ray tasks. ``address`` None starts a local Ray instance with
     ``workers`` CPUs (shut down on exit); an address (``auto``, ``ray://host:10001``) joins
-    that cluster, whose own CPUs set the parallelism (disconnected on exit)."""
+    that cluster, whose own CPUs set the parallelism (disconnected on exit). At most
+    ``window_per_cpu`` tasks per CPU are submitted at once (``open_executor`` passes the
+    local executor's ``WINDOW_PER_WORKER``)."""
 
     name = "ray"
 
-    def __init__(self, workers: int = 1, address: str | None = None) -> None:
+    def __init__(
+        self, workers: int = 1, address: str | None = None, window_per_cpu: int = 2
+    ) -> None:
         if workers < 1:
             raise ValueError(f"workers {workers}: expected at least 1")
         self.workers = workers
         self.address = address
+        self.window_per_cpu = window_per_cpu
         self._pending: list[Any] = []
 
     def __enter__(self) -> RayExecutor:
@@ -100,13 +108,21 @@ class RayExecutor:
         self, function: TrialFunction, specs: Iterable[TrialSpec]
     ) -> Iterator[tuple[TrialSpec, TrialResult]]:
         task = ray.remote(num_cpus=1, max_retries=0)(guarded)
-        by_ref = {task.remote(function, spec): spec for spec in specs}
-        self._pending = list(by_ref)
+        cpus = max(self.workers, int(ray.cluster_resources().get("CPU", 1)))
+        window = self.window_per_cpu * cpus
+        queued = iter(specs)
+        by_ref: dict[Any, TrialSpec] = {}
         began = time.perf_counter()
-        while self._pending:
+        while True:
+            for spec in islice(queued, window - len(self._pending)):
+                ref = task.remote(function, spec)
+                by_ref[ref] = spec
+                self._pending.append(ref)
+            if not self._pending:
+                return
             done, self._pending = ray.wait(self._pending, num_returns=1)
             for ref in done:
-                spec = by_ref[ref]
+                spec = by_ref.pop(ref)
                 try:
                     result = ray.get(ref)
                 except ray.exceptions.RayError as exc:  # a worker died, a task was lost

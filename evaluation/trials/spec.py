@@ -14,12 +14,14 @@ one error and exit code 2, not a batch of error trials.
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import overload
 
 from evaluation.common.cli_support import ToolError
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
+from evaluation.trials.records import unfinished_record
 from evaluation.trials.result import TrialResult
 
 MAX_SEED = 2**32 - 1
@@ -54,6 +56,44 @@ class TrialSpec:
 
 
 TrialFunction = Callable[[TrialSpec], TrialResult]
+
+
+class SeedSpecs(Sequence[TrialSpec]):
+    """The trials of one batch: ``controller`` on ``task`` with ``overrides``, one per seed
+    of ``seeds``, each made only when asked for, so a batch of any length takes the same
+    memory. With ``records`` (a folder), each trial writes its record in its unfinished
+    folder under it (``evaluation.trials.records``)."""
+
+    def __init__(
+        self,
+        task: str,
+        controller: str,
+        seeds: range,
+        overrides: tuple[str, ...] = (),
+        records: Path | None = None,
+    ) -> None:
+        self.task, self.controller, self.seeds = task, controller, seeds
+        self.overrides, self.records = tuple(overrides), records
+
+    def __len__(self) -> int:
+        return len(self.seeds)
+
+    @overload
+    def __getitem__(self, index: int) -> TrialSpec: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> SeedSpecs: ...
+
+    def __getitem__(self, index: int | slice) -> TrialSpec | SeedSpecs:
+        if isinstance(index, slice):
+            return SeedSpecs(
+                self.task, self.controller, self.seeds[index], self.overrides, self.records
+            )
+        seed = self.seeds[index]
+        out_dir = None
+        if self.records is not None:
+            out_dir = unfinished_record(self.records, self.controller, seed)
+        return TrialSpec(self.task, self.controller, seed, self.overrides, out_dir)
 
 
 def parse_seeds(text: str) -> range:

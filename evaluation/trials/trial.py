@@ -26,6 +26,7 @@ from evaluation.common.cli_support import Terminated
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
+from evaluation.trials.trial_chart import write_trial_chart
 
 
 @dataclass(frozen=True)
@@ -45,12 +46,15 @@ def check_spec(spec: TrialSpec) -> None:
 
 
 def run_trial(spec: TrialSpec) -> TrialResult:
-    """The batch's trial function: one simulated trial, as fast as possible. A signal that
+    """The batch's trial function: one simulated trial, as fast as possible; with
+    ``spec.out_dir``, its record and its chart (``summary.png``) go there. A signal that
     stopped the trial's loop (after its safe stop) stops the batch too, as KeyboardInterrupt
     (SIGINT) or Terminated (SIGTERM): an interrupted trial is not a failed one."""
     task = load_task(spec.task, spec.overrides)
     outcome = run(task, spec.controller, spec.seed, out_dir=spec.out_dir)
     raise_if_interrupted(outcome)
+    if spec.out_dir is not None:
+        write_trial_chart(spec.out_dir, outcome.result)
     return outcome.result
 
 

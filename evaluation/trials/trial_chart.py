@@ -1,5 +1,6 @@
 """The PNG summary of one simulated trial: the estimated torques with the phases as bands,
-the wrist's true force, and the plug tip's true path over the hole (matplotlib, Agg)."""
+the wrist's true force, and the plug tip's true path over the hole (matplotlib, Agg);
+``write_trial_chart`` puts it in the trial's record as ``summary.png``."""
 
 from __future__ import annotations
 
@@ -13,6 +14,9 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from evaluation.common.outputs import atomic_file  # noqa: E402
+from evaluation.trials.result import TrialResult  # noqa: E402
+
+CHART_NAME = "summary.png"
 
 PHASE_COLOURS = {
     "grasp": "#dddddd", "approach": "#cfe2f3", "search": "#fff2cc", "align": "#d9ead3",
@@ -73,3 +77,14 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
     with atomic_file(path) as temporary:
         fig.savefig(temporary, dpi=90, format="png")
     plt.close(fig)
+
+
+def write_trial_chart(folder: Path, result: TrialResult) -> Path:
+    """The chart of the trial recorded in ``folder``, titled with its ``result``, as
+    ``folder/summary.png``; its path."""
+    title = f"{result.task} seed {result.seed} ({result.controller}): " + (
+        "inserted" if result.success else f"failed: {result.failure_reason}"
+    )
+    path = folder / CHART_NAME
+    trial_chart(folder, path, title)
+    return path

@@ -25,7 +25,7 @@ from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED
 from evaluation.trials.trial import TrialOutcome, run
-from evaluation.trials.trial_chart import trial_chart
+from evaluation.trials.trial_chart import write_trial_chart
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -65,11 +65,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     print(timeline(outcome))
     if outcome.truth is not None:
-        result = outcome.result
-        title = f"{result.task} seed {result.seed} ({result.controller}): " + (
-            "inserted" if result.success else f"failed: {result.failure_reason}"
-        )
-        trial_chart(args.out, args.out / "summary.png", title)
+        write_trial_chart(args.out, outcome.result)
     print(f"run_trial: wrote {args.out}")
     if outcome.loop.reason == "signal":
         return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT

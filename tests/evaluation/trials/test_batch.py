@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from core.config import ConfigError
+from core.config import CONFIG_ROOT, ConfigError
 from evaluation.common.cli_support import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
 from evaluation.trials.batch_cli import TRIAL_FUNCTION
@@ -20,6 +20,7 @@ from evaluation.trials.batch_cli import main as batch_main
 from evaluation.trials.charts import speed_success_chart, time_histogram
 from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
+from evaluation.trials.records import keep_record, unfinished_record
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import SpecError, TrialSpec, format_seeds, parse_seeds
 from evaluation.trials.summary import summarize, wilson_ci
@@ -345,6 +346,49 @@ def test_records_give_each_trial_its_own_folder(tmp_path):
                    "--trial-function", f"{__name__}:recording_trial") == 0
     text = (tmp_path / "out" / "records" / "blind-1" / "spec.txt").read_text()
     assert "seed=1" in text and "controller='blind'" in text
+
+
+@pytest.mark.parametrize(
+    "content", [{"usb_c.yaml": (CONFIG_ROOT / "tasks" / "usb_c.yaml").read_text()},
+                {"trial.json": "{}", "summary.png": "inserted"}, {".hidden": ""}],
+    ids=["a task file", "a trial's record", "a hidden file"],
+)  # fmt: skip
+def test_an_out_that_is_not_empty_and_holds_no_batch_is_refused(tmp_path, capsys, content):
+    out = tmp_path / "out"
+    out.mkdir()
+    for name, text in content.items():
+        (out / name).write_text(text)
+    assert run_cli(tmp_path, "--seeds", "0:2", "--records") == 2
+    assert capsys.readouterr().err == (
+        f"run_trials: error: --out '{out}' is not empty and holds no batch; "
+        "expected a new or empty folder\n"
+    )
+    assert sorted(p.name for p in out.iterdir()) == sorted(content)
+
+
+def test_an_empty_out_is_accepted(tmp_path):
+    (tmp_path / "out").mkdir()
+    assert run_cli(tmp_path, "--seeds", "0:2") == 0
+
+
+def test_a_record_is_never_written_over(tmp_path):
+    unfinished = unfinished_record(tmp_path, "dipole", 3)
+    unfinished.mkdir()
+    (tmp_path / "dipole-3").mkdir()
+    with pytest.raises(ToolError, match=r"dipole-3' exists already; a trial's record is never"):
+        keep_record(unfinished)
+    assert unfinished.is_dir() and not any((tmp_path / "dipole-3").iterdir())
+
+
+def test_a_real_batch_keeps_each_trials_record_with_its_chart(tmp_path):
+    out = tmp_path / "out"
+    code = batch_main(["--task", "usb_c", "--seeds", "4:5", "--records", "--out", str(out),
+                       "--set", "machine.timeouts.total_s=6.0"])  # fmt: skip
+    assert code == 0
+    assert [p.name for p in (out / "records").iterdir()] == ["dipole-4"]
+    record = out / "records" / "dipole-4"
+    assert json.loads((record / "trial.json").read_text())["seed"] == 4
+    assert (record / "summary.png").stat().st_size > 10000
 
 
 def test_default_trial_function_is_the_real_runner():
