@@ -66,10 +66,11 @@ def sequence_specs(
     seed: int,
     lighting: float = 0.0,
     shading: str = "moves",
+    contact: str = "centred",
 ) -> list[SequenceSpec]:
     """Tilt about x and about y, alone and with pushing, at each amplitude, on each texture,
     under a lighting drift of ``lighting``, with the LED ``shading`` moving with the gel or
-    fixed (sequences.SequenceSpec).
+    fixed, on a ``contact`` centred or varied in aspect and position (sequences.SequenceSpec).
 
     The mechanics (contact, signals, push amplitude in [0.3, 0.5]) and the noise sigma (in
     [2, 4] grey levels) of a (amplitude, axis, push) combination are the same on every
@@ -97,6 +98,7 @@ def sequence_specs(
                         frames,
                         lighting,
                         shading,
+                        contact,
                     )
                     for texture in textures
                 )
@@ -151,10 +153,15 @@ def _not_run(common: dict, note: str) -> Row:
 
 
 def run_one(
-    sequence: RenderedSequence, name: str, config: EstimatorConfig, oracle: bool = False
+    sequence: RenderedSequence,
+    name: str,
+    config: EstimatorConfig,
+    oracle: bool = False,
+    open_gel: bool = True,
 ) -> Row:
     """Score ``config`` on one rendered sequence; with ``oracle`` its flow is replaced by the
-    true field (TruthGridFlow)."""
+    true field (TruthGridFlow); without ``open_gel`` the estimator is zeroed on the grasp
+    without being shown the open gel (an old recording)."""
     spec = sequence.spec
     texture = TEXTURES[spec.texture]
     common = dict(
@@ -176,7 +183,8 @@ def run_one(
     estimator = TactileEstimator(config, profile, flow=flow)
     fps = profile.fps_hz
     try:
-        estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
+        if open_gel:
+            estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
         estimator.set_reference(sequence.references[: config.reference_frames])
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])
@@ -212,11 +220,13 @@ def run_one(
 
 @dataclass(frozen=True)
 class Entry:
-    """A configuration to score, under the label ``name``; ``oracle``: on the true field."""
+    """A configuration to score, under the label ``name``; ``oracle``: on the true field;
+    ``open_gel``: shown the open gel before the grasp (False: an old recording without)."""
 
     name: str
     config: EstimatorConfig
     oracle: bool = False
+    open_gel: bool = True
 
 
 def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=None) -> list[Row]:
@@ -227,7 +237,9 @@ def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=
     for spec in specs:
         sequence = render(spec, references)
         for entry in entries:
-            rows.append(run_one(sequence, entry.name, entry.config, entry.oracle))
+            rows.append(
+                run_one(sequence, entry.name, entry.config, entry.oracle, entry.open_gel)
+            )
             if progress is not None:
                 progress(rows[-1])
     return rows
