@@ -357,6 +357,14 @@ class TactileEstimator:
         return self._pipeline is not None and self._pipeline.noise_gate is not None
 
     @property
+    def noise_gate_latched(self) -> bool:
+        """True once the no-contact gate has seen a contact since the reference was set (the
+        field above the noise on ``noise_gate.CONTACT_FRAMES`` frames in a row, or clearly):
+        it then stays open until the next reference. False without a gate."""
+        gate = None if self._pipeline is None else self._pipeline.noise_gate
+        return gate is not None and gate.contact
+
+    @property
     def last_slip_status(self) -> SlipStatus | None:
         """The slip detector's verdict on the latest frame (None: disabled or no frame yet)."""
         return self._last_slip
