@@ -11,7 +11,10 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 (a included, b excluded) are averaged into the zeroing reference. ``--open`` names frames
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
-(without, it falls back to the centroid midpoint). ``--method`` names an
+(without, it falls back to the centroid midpoint behind the no-contact gate; when that gate
+never sees a contact in the whole recording, the recording was zeroed in the grasp on a tilt
+near the camera noise, and the tool estimates it again without the gate, says so in one
+line and records the choice in ``OUT.fallback.json``). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
