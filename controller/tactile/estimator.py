@@ -357,12 +357,12 @@ class TactileEstimator:
         return self._pipeline is not None and self._pipeline.noise_gate is not None
 
     @property
-    def noise_gate_latched(self) -> bool:
-        """True once the no-contact gate has seen a contact since the reference was set (the
-        field above the noise on ``noise_gate.CONTACT_FRAMES`` frames in a row, or clearly):
-        it then stays open until the next reference. False without a gate."""
+    def noise_gate_peak(self) -> float:
+        """The largest statistic the no-contact gate has seen since the reference was set,
+        relative to its threshold q (a noise-only field stays below about 1, a grasp's press
+        is hundreds); 0 without a gate."""
         gate = None if self._pipeline is None else self._pipeline.noise_gate
-        return gate is not None and gate.contact
+        return 0.0 if gate is None else gate.peak
 
     @property
     def last_slip_status(self) -> SlipStatus | None:

@@ -62,6 +62,7 @@ class NoiseGate:
         self._z = np.empty(self.rank)
         self.contact = False  # until_contact's latch
         self._run = 0
+        self.peak = 0.0
 
     def statistic(self, div: np.ndarray) -> float:
         """chi2 = d^T C^+ d of ``div`` (any shape with k values)."""
@@ -76,10 +77,12 @@ class NoiseGate:
         """The gate for one frame of a sequence, until a contact is established: once the
         statistic has passed ``threshold`` on ``CONTACT_FRAMES`` frames in a row, or the gate
         has opened fully, it stays open (1) for the rest of the sequence (the estimator
-        forms a gate per reference)."""
+        forms a gate per reference). ``peak`` keeps the largest statistic seen, relative to
+        the threshold."""
+        statistic = self.statistic(div)
+        self.peak = max(self.peak, statistic / self.threshold)
         if self.contact:
             return 1.0
-        statistic = self.statistic(div)
         self._run = self._run + 1 if statistic >= self.threshold else 0
         gate = self._gate(statistic)
         self.contact = gate >= 1.0 or self._run >= CONTACT_FRAMES

@@ -12,9 +12,9 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
 (without, it falls back to the centroid midpoint behind the no-contact gate; when that gate
-never sees a contact in the whole recording, the recording was zeroed in the grasp on a tilt
-near the camera noise, and the tool estimates it again without the gate, says so in one
-line and records the choice in ``OUT.fallback.json``). ``--method`` names an
+never sees a press from the open gel in the whole recording, the recording was zeroed in the
+grasp, and the tool estimates it again without the gate, says so in one line and records the
+choice in ``OUT.fallback.json``). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -78,10 +78,12 @@ FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_
 CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, *FLAG_FIELDS, "latency_ms")
 PROGRESS_MIN_FRAMES = 100
 MIN_RATE_HZ, MAX_RATE_HZ = 0.1, 10_000.0
-# Without --open, a recording whose field never left the camera noise was zeroed in contact
-# (or never touched): the no-contact gate would only zero its tilt (docs/ARCHITECTURE.md,
-# "Quiet before contact").
-UNGATED_REASON = "no open gel given and no frame's field left the camera noise"
+# Without --open, a recording whose field never reached PRESS_RATIO times the no-contact gate's
+# threshold saw no press from the open gel (hundreds of times the threshold): it was zeroed in
+# the grasp (or never touched), and the gate would only cut into its tilt (docs/ARCHITECTURE.md,
+# "Without open frames").
+PRESS_RATIO = 10.0
+UNGATED_REASON = "no open gel given and no press from the open gel in the recording"
 
 
 class InputError(ToolError):
@@ -259,9 +261,10 @@ def fallback_sidecar(out_csv: Path) -> Path:
 
 def ungated_fallback(estimator: TactileEstimator, open_given: bool) -> TactileEstimator | None:
     """After a pass over a recording: the estimator to estimate it again with, without the
-    no-contact gate, when no open gel was given (``open_given``) and the gate never saw a
-    contact (``UNGATED_REASON``); None to keep the pass. Its reference is not set."""
-    if open_given or not estimator.noise_gated or estimator.noise_gate_latched:
+    no-contact gate, when no open gel was given (``open_given``) and the gate's statistic
+    never reached ``PRESS_RATIO`` times its threshold (``UNGATED_REASON``); None to keep the
+    pass. Its reference is not set."""
+    if open_given or not estimator.noise_gated or estimator.noise_gate_peak >= PRESS_RATIO:
         return None
     return TactileEstimator(
         replace(estimator.config, noise_gate=None),

@@ -192,7 +192,7 @@ def run_one(
     axis = 0 if spec.axis == "x" else 1
     pushes = _push_all(estimator, sequence, axis, fps)
     # Without the open gel, the offline tool's choice (scripts/estimate.py): estimated again
-    # without the no-contact gate if the gate never saw a contact.
+    # without the no-contact gate if the gate never saw a press from the open gel.
     ungated = ungated_fallback(estimator, open_gel)
     if ungated is not None:
         ungated.set_reference(sequence.references[: config.reference_frames])
@@ -211,7 +211,7 @@ def run_one(
         degenerate=degenerate / n,
         zero_tilt=zero / n,
         slip=slip / n,
-        note="ungated (no contact seen)" if ungated is not None else "",
+        note="ungated (no press seen)" if ungated is not None else "",
     )
 
 
