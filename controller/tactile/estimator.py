@@ -383,6 +383,14 @@ class TactileEstimator:
         return self._pipeline is not None and self._pipeline.noise_gate is not None
 
     @property
+    def noise_gate_peak(self) -> float:
+        """The largest statistic the no-contact gate has seen since the reference was set,
+        relative to its threshold q (a noise-only field stays below about 1, a grasp's press
+        is hundreds); 0 without a gate."""
+        gate = None if self._pipeline is None else self._pipeline.noise_gate
+        return 0.0 if gate is None else gate.peak
+
+    @property
     def last_slip_status(self) -> SlipStatus | None:
         """The slip detector's verdict on the latest frame (None: disabled or no frame yet)."""
         return self._last_slip

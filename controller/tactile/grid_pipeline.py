@@ -144,7 +144,7 @@ class GridPipeline:
         else:
             div = self.divergence(self._u, self._v, decomposition)
             if self.noise_gate is not None:
-                gate = self.noise_gate(div)
+                gate = self.noise_gate.until_contact(div)
                 if gate < 1.0:  # not in place: the buffer may be the decomposition's
                     div = div * gate
             dipole = self.dipole(div)

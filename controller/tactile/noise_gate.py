@@ -22,6 +22,13 @@ against "it is not". The gate is
 ``degenerate``), and any contact whose field is clearly above the noise passes unchanged
 (a grasp's press is hundreds of q). The centroid-midpoint rule is homogeneous in ``d``, so
 this scales the tilt by g.
+
+Once a contact is established (the statistic above q on ``CONTACT_FRAMES`` frames in a row,
+or the gate fully open once), the gate stays open until the next reference
+(``NoiseGate.until_contact``): zeroed on a grasp, a tilt passing through zero is not a
+return to noise, and gating it would cut a dead band into the tilt (issue 23,
+docs/ARCHITECTURE.md, "Quiet before contact"). Under noise alone a run of three frames above
+q has a probability of about 1e-6 per frame.
 """
 
 from __future__ import annotations
@@ -32,6 +39,9 @@ from scipy.stats import chi2
 # Eigenvalues of C below this fraction of the largest are directions noise does not reach
 # (C is rank-deficient: the curl-free projection and the grid's borders tie values).
 _RANK_TOLERANCE = 1e-9
+# Frames in a row on which the field must differ from noise (statistic above the threshold)
+# before a contact counts as established (NoiseGate.until_contact).
+CONTACT_FRAMES = 3
 
 
 class NoiseGate:
@@ -50,6 +60,9 @@ class NoiseGate:
         self._whiten = vectors[:, keep] / np.sqrt(values[keep])
         self.threshold = float(chi2.isf(false_alarm, self.rank))
         self._z = np.empty(self.rank)
+        self.contact = False  # until_contact's latch
+        self._run = 0
+        self.peak = 0.0
 
     def statistic(self, div: np.ndarray) -> float:
         """chi2 = d^T C^+ d of ``div`` (any shape with k values)."""
@@ -58,7 +71,25 @@ class NoiseGate:
 
     def __call__(self, div: np.ndarray) -> float:
         """The gate g in [0, 1] for ``div``."""
-        t = (self.statistic(div) - self.threshold) / self.threshold
+        return self._gate(self.statistic(div))
+
+    def until_contact(self, div: np.ndarray) -> float:
+        """The gate for one frame of a sequence, until a contact is established: once the
+        statistic has passed ``threshold`` on ``CONTACT_FRAMES`` frames in a row, or the gate
+        has opened fully, it stays open (1) for the rest of the sequence (the estimator
+        forms a gate per reference). ``peak`` keeps the largest statistic seen, relative to
+        the threshold."""
+        statistic = self.statistic(div)
+        self.peak = max(self.peak, statistic / self.threshold)
+        if self.contact:
+            return 1.0
+        self._run = self._run + 1 if statistic >= self.threshold else 0
+        gate = self._gate(statistic)
+        self.contact = gate >= 1.0 or self._run >= CONTACT_FRAMES
+        return 1.0 if self.contact else gate
+
+    def _gate(self, statistic: float) -> float:
+        t = (statistic - self.threshold) / self.threshold
         if t <= 0.0:
             return 0.0
         if t >= 1.0:

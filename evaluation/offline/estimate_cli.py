@@ -11,10 +11,13 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 (a included, b excluded) are averaged into the zeroing reference. ``--open`` names frames
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
-(without, it falls back to the centroid midpoint). The open frames must end before the
-reference begins (overlapping or later ranges are refused); open frames that differ from each
-other or from the recording's first frame far beyond the camera noise are used with one
-warning (evaluation/offline/open_gel.py). ``--method`` names an
+(without, it falls back to the centroid midpoint behind the no-contact gate; when that gate
+never sees a press from the open gel in the whole recording, the recording was zeroed in the
+grasp, and the tool estimates it again without the gate, says so in one line and records the
+choice in ``OUT.fallback.json``). The open frames must end before the reference begins
+(overlapping or later ranges are refused); open frames that differ from each other or from
+the recording's first frame far beyond the camera noise are used with one warning
+(evaluation/offline/open_gel.py). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -43,17 +46,25 @@ from __future__ import annotations
 
 import argparse
 import csv
+import json
 import re
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import TextIO
 
 import numpy as np
 from tqdm import tqdm
 
-from controller.tactile import Calibration, EstimatorConfig, WrenchEstimate, estimator_for_sensor
+from controller.tactile import (
+    Calibration,
+    EstimatorConfig,
+    TactileEstimator,
+    WrenchEstimate,
+    estimator_for_sensor,
+)
 from controller.tactile.wrench import VALUE_FIELDS
 from core.sensor_profile import sensor_profile
 from evaluation.common.cli_support import (
@@ -71,6 +82,12 @@ FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_
 CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, *FLAG_FIELDS, "latency_ms")
 PROGRESS_MIN_FRAMES = 100
 MIN_RATE_HZ, MAX_RATE_HZ = 0.1, 10_000.0
+# Without --open, a recording whose field never reached PRESS_RATIO times the no-contact gate's
+# threshold saw no press from the open gel (hundreds of times the threshold): it was zeroed in
+# the grasp (or never touched), and the gate would only cut into its tilt (docs/ARCHITECTURE.md,
+# "Without open frames").
+PRESS_RATIO = 10.0
+UNGATED_REASON = "no open gel given and no press from the open gel in the recording"
 
 
 class InputError(ToolError):
@@ -257,6 +274,62 @@ def load_calibration(
     return calibration
 
 
+def fallback_sidecar(out_csv: Path) -> Path:
+    """Where the tool records a configuration it chose by itself for ``out_csv``."""
+    return out_csv.with_name(out_csv.stem + ".fallback.json")
+
+
+def ungated_fallback(estimator: TactileEstimator, open_given: bool) -> TactileEstimator | None:
+    """After a pass over a recording: the estimator to estimate it again with, without the
+    no-contact gate, when no open gel was given (``open_given``) and the gate's statistic
+    never reached ``PRESS_RATIO`` times its threshold (``UNGATED_REASON``); None to keep the
+    pass. Its reference is not set."""
+    if open_given or not estimator.noise_gated or estimator.noise_gate_peak >= PRESS_RATIO:
+        return None
+    return TactileEstimator(
+        replace(estimator.config, noise_gate=None),
+        estimator.profile,
+        estimator.calibration,
+        config_name=estimator.config_name,
+    )
+
+
+def _write_rows(
+    estimator: TactileEstimator, source: FrameSource, rate_hz: float, handle: TextIO
+) -> tuple[int, list[str]]:
+    """Write the CSV (header and a row per frame that decodes) of ``source`` to ``handle``;
+    returns the rows written and what the pass lost."""
+    show_progress = source.frame_count is None or source.frame_count >= PROGRESS_MIN_FRAMES
+    log = ReadLog()
+    writer = csv.writer(handle)
+    writer.writerow(CSV_COLUMNS)
+    count = 0
+    frames = tqdm(
+        source.frames(log),
+        total=source.frame_count,
+        unit="frame",
+        disable=not show_progress,
+        file=sys.stderr,
+        leave=False,
+    )
+    for number, frame in frames:
+        t_s = number / rate_hz
+        began = time.perf_counter()
+        try:
+            estimate = estimator.push(frame, t_s)
+        except ValueError as exc:
+            hint = (
+                "; a recording's frames share one size: give the images of one sensor"
+                if source.images is not None and "does not match" in str(exc)
+                else ""
+            )
+            raise InputError(f"{source.describe(number)}: {exc}{hint}; nothing written") from None
+        latency_ms = (time.perf_counter() - began) * 1e3
+        writer.writerow(_row(number, t_s, estimate, latency_ms))
+        count += 1
+    return count, source.damage(log)
+
+
 def estimate_file(
     input_path: Path | Sequence[Path],
     out_csv: Path,
@@ -312,43 +385,30 @@ def estimate_file(
     except ValueError as exc:
         raise InputError(f"reference frames {start}:{stop}: {exc}") from None
 
-    show_progress = source.frame_count is None or source.frame_count >= PROGRESS_MIN_FRAMES
-    count = 0
-    log = ReadLog()
+    sidecar = fallback_sidecar(out_csv)
+    choice = None
     with atomic_text(out_csv, newline="") as handle:
-        writer = csv.writer(handle)
-        writer.writerow(CSV_COLUMNS)
-        frames = tqdm(
-            source.frames(log),
-            total=source.frame_count,
-            unit="frame",
-            disable=not show_progress,
-            file=sys.stderr,
-            leave=False,
-        )
-        for number, frame in frames:
-            t_s = number / rate_hz
-            began = time.perf_counter()
-            try:
-                estimate = estimator.push(frame, t_s)
-            except ValueError as exc:
-                hint = (
-                    "; a recording's frames share one size: give the images of one sensor"
-                    if source.images is not None and "does not match" in str(exc)
-                    else ""
-                )
-                raise InputError(
-                    f"{source.describe(number)}: {exc}{hint}; nothing written"
-                ) from None
-            latency_ms = (time.perf_counter() - began) * 1e3
-            writer.writerow(_row(number, t_s, estimate, latency_ms))
-            count += 1
-        problems = source.damage(log)
+        count, problems = _write_rows(estimator, source, rate_hz, handle)
         if problems and not allow_damaged:
             raise InputError(
                 "; ".join(problems) + "; nothing written (pass --allow-damaged to estimate "
                 "the frames that decoded)"
             )
+        ungated = ungated_fallback(estimator, open_range is not None)
+        if ungated is not None:
+            warn(f"{UNGATED_REASON}: re-estimating without the no-contact gate ({sidecar})")
+            estimator = ungated
+            estimator.set_reference(reference_frames)
+            handle.seek(0)
+            handle.truncate()
+            count, problems = _write_rows(estimator, source, rate_hz, handle)
+            choice = {"estimator": estimator.config_name, "noise_gate": None}
+            choice["reason"] = UNGATED_REASON
+    if choice is None:
+        sidecar.unlink(missing_ok=True)  # a previous run's choice, not this one's
+    else:
+        with atomic_text(sidecar) as handle:
+            json.dump(choice, handle, indent=1)
     for problem in problems:
         warn(problem)
     return count

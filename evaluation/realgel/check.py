@@ -23,6 +23,7 @@ from controller.tactile.estimator import GridFlowFactory, TactileEstimator
 from controller.tactile.flow import make_grid_flow
 from controller.tactile.settings import EstimatorConfig
 from core.sensor_profile import sensor_profile
+from evaluation.offline.estimate_cli import ungated_fallback
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import TEXTURES
@@ -66,10 +67,11 @@ def sequence_specs(
     seed: int,
     lighting: float = 0.0,
     shading: str = "moves",
+    contact: str = "centred",
 ) -> list[SequenceSpec]:
     """Tilt about x and about y, alone and with pushing, at each amplitude, on each texture,
     under a lighting drift of ``lighting``, with the LED ``shading`` moving with the gel or
-    fixed (sequences.SequenceSpec).
+    fixed, on a ``contact`` centred or varied in aspect and position (sequences.SequenceSpec).
 
     The mechanics (contact, signals, push amplitude in [0.3, 0.5]) and the noise sigma (in
     [2, 4] grey levels) of a (amplitude, axis, push) combination are the same on every
@@ -97,6 +99,7 @@ def sequence_specs(
                         frames,
                         lighting,
                         shading,
+                        contact,
                     )
                     for texture in textures
                 )
@@ -151,10 +154,15 @@ def _not_run(common: dict, note: str) -> Row:
 
 
 def run_one(
-    sequence: RenderedSequence, name: str, config: EstimatorConfig, oracle: bool = False
+    sequence: RenderedSequence,
+    name: str,
+    config: EstimatorConfig,
+    oracle: bool = False,
+    open_gel: bool = True,
 ) -> Row:
     """Score ``config`` on one rendered sequence; with ``oracle`` its flow is replaced by the
-    true field (TruthGridFlow)."""
+    true field (TruthGridFlow); without ``open_gel`` the estimator is zeroed on the grasp
+    without being shown the open gel (an old recording)."""
     spec = sequence.spec
     texture = TEXTURES[spec.texture]
     common = dict(
@@ -176,11 +184,42 @@ def run_one(
     estimator = TactileEstimator(config, profile, flow=flow)
     fps = profile.fps_hz
     try:
-        estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
+        if open_gel:
+            estimator.set_open_reference(sequence.open_frames[: config.reference_frames])
         estimator.set_reference(sequence.references[: config.reference_frames])
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])
     axis = 0 if spec.axis == "x" else 1
+    pushes = _push_all(estimator, sequence, axis, fps)
+    # Without the open gel, the offline tool's choice (scripts/estimate.py): estimated again
+    # without the no-contact gate if the gate never saw a press from the open gel.
+    ungated = ungated_fallback(estimator, open_gel)
+    if ungated is not None:
+        ungated.set_reference(sequence.references[: config.reference_frames])
+        pushes = _push_all(ungated, sequence, axis, fps)
+    tilt, fv, seconds, degenerate, zero, slip = pushes
+    n = len(sequence.frames)
+    truth = sequence.mechanics.truth[:, axis]
+    fit = held_out_fit(tilt, truth)
+    return Row(
+        **common,
+        r2=fit.r2,
+        rmse_rel=fit.rmse_rel,
+        gain=fit.gain,
+        fv_r2=held_out_fit(fv, truth).r2,
+        ms_per_frame=1e3 * float(np.median(seconds)),
+        degenerate=degenerate / n,
+        zero_tilt=zero / n,
+        slip=slip / n,
+        note="ungated (no press seen)" if ungated is not None else "",
+    )
+
+
+def _push_all(
+    estimator: TactileEstimator, sequence: RenderedSequence, axis: int, fps: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
+    """Push every frame of ``sequence``: the tilt and the baseline's on ``axis``, the seconds
+    of each push, and the counts of degenerate, zero-tilt and slip-flagged frames."""
     n = len(sequence.frames)
     tilt = np.empty(n)
     fv = np.empty(n)
@@ -195,28 +234,18 @@ def run_one(
         degenerate += estimate.degenerate
         zero += estimate.tau_x == 0.0 and estimate.tau_y == 0.0
         slip += estimate.slip_suspected or estimate.slip_gross
-    truth = sequence.mechanics.truth[:, axis]
-    fit = held_out_fit(tilt, truth)
-    return Row(
-        **common,
-        r2=fit.r2,
-        rmse_rel=fit.rmse_rel,
-        gain=fit.gain,
-        fv_r2=held_out_fit(fv, truth).r2,
-        ms_per_frame=1e3 * float(np.median(seconds)),
-        degenerate=degenerate / n,
-        zero_tilt=zero / n,
-        slip=slip / n,
-    )
+    return tilt, fv, seconds, degenerate, zero, slip
 
 
 @dataclass(frozen=True)
 class Entry:
-    """A configuration to score, under the label ``name``; ``oracle``: on the true field."""
+    """A configuration to score, under the label ``name``; ``oracle``: on the true field;
+    ``open_gel``: shown the open gel before the grasp (False: an old recording without)."""
 
     name: str
     config: EstimatorConfig
     oracle: bool = False
+    open_gel: bool = True
 
 
 def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=None) -> list[Row]:
@@ -227,7 +256,9 @@ def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=
     for spec in specs:
         sequence = render(spec, references)
         for entry in entries:
-            rows.append(run_one(sequence, entry.name, entry.config, entry.oracle))
+            rows.append(
+                run_one(sequence, entry.name, entry.config, entry.oracle, entry.open_gel)
+            )
             if progress is not None:
                 progress(rows[-1])
     return rows

@@ -2,8 +2,8 @@
 
     python scripts/realgel_check.py [--estimators default,paper,dis_ultrafast,markers]
         [--textures all|NAME,...] [--amplitudes 0.4] [--frames 160] [--seed 0]
-        [--lighting 0] [--shading moves|fixed] [--oracle] [--quick] [--out REPORT.md]
-        [--json ROWS.json]
+        [--lighting 0] [--shading moves|fixed] [--contact centred|varied]
+        [--open-gel both|with|without] [--oracle] [--quick] [--out REPORT.md] [--json ROWS.json]
 
 Each real capture of drivers/sim/render/real_gels/ is warped by the in-plane surface
 displacement of a half-space (Boussinesq) under a tilted flat contact (evaluation/realgel/:
@@ -16,6 +16,10 @@ and scored on the second half (R², RMSE relative to the range); also ms per fra
 thread), the fractions of frames flagged degenerate, with exactly zero tilt, and flagged as
 slipping (all sequences are slip-free). ``--oracle`` adds each estimator's pipeline run
 on the true field (its flow replaced), which separates the flow's error from the dipole's.
+``--contact varied`` draws the contact's aspect and position over a wider range (a plug's
+face in any pose). A configuration that uses the open gel (``dipole_origin:
+grasp_centroid``) is run with and without being shown it (``--open-gel``; "no open gel" rows:
+an old recording zeroed on the grasp); the others ignore it and are run once.
 """
 
 from __future__ import annotations
@@ -30,7 +34,8 @@ from controller.tactile.settings import estimator_config
 from core.config import ConfigError
 from evaluation.common.machine_info import cpu_model, git_revision
 from evaluation.realgel.check import Entry, run_check, sequence_specs
-from evaluation.realgel.check_tables import rows_table, summary_table
+from evaluation.realgel.check_tables import axis_table, rows_table, summary_table
+from evaluation.realgel.sequences import CONTACTS
 from evaluation.realgel.textures import TEXTURES
 
 DEFAULT_ESTIMATORS = "default,paper,dis_ultrafast,markers"
@@ -75,6 +80,18 @@ def main(argv: list[str] | None = None) -> int:
         help="the capture's LED shading moves with the gel, or stays with the camera",
     )
     parser.add_argument(
+        "--contact",
+        choices=CONTACTS,
+        default="centred",
+        help="a near-centred contact, or one varied in aspect and position",
+    )
+    parser.add_argument(
+        "--open-gel",
+        choices=("both", "with", "without"),
+        default="both",
+        help="show the open gel to configurations that use it, or not, or run both",
+    )
+    parser.add_argument(
         "--oracle", action="store_true", help="also run each estimator's pipeline on the true field"
     )
     parser.add_argument(
@@ -108,11 +125,20 @@ def main(argv: list[str] | None = None) -> int:
         except ConfigError as error:
             parser.error(f"--estimators: {error}")
         label = Path(name).stem if name.endswith((".yaml", ".yml")) else name
-        entries.append(Entry(label, config))
-        if args.oracle:
-            entries.append(Entry(f"{label} on the true field", config, oracle=True))
+        cases = [True]
+        if config.dipole_origin == "grasp_centroid":
+            cases = {"both": [True, False], "with": [True], "without": [False]}[args.open_gel]
+        for open_gel in cases:
+            case = label if open_gel else f"{label}, no open gel"
+            entries.append(Entry(case, config, open_gel=open_gel))
+            if args.oracle:
+                entries.append(
+                    Entry(f"{case} on the true field", config, oracle=True, open_gel=open_gel)
+                )
 
-    specs = sequence_specs(textures, amplitudes, frames, args.seed, args.lighting, args.shading)
+    specs = sequence_specs(
+        textures, amplitudes, frames, args.seed, args.lighting, args.shading, args.contact
+    )
     began = time.perf_counter()
     rows = run_check(specs, entries)
     seconds = time.perf_counter() - began
@@ -130,6 +156,10 @@ def main(argv: list[str] | None = None) -> int:
             "scored on the second); fractions are of all frames after zeroing.",
             "",
             *summary_table(rows),
+            "",
+            "Worst held-out R² over the textures, per tilt axis, without and with pushing:",
+            "",
+            *axis_table(rows),
             "",
             "## Every sequence",
             "",

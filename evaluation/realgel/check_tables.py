@@ -61,6 +61,23 @@ def summary_table(rows: Sequence[Row]) -> list[str]:
     return lines
 
 
+def axis_table(rows: Sequence[Row]) -> list[str]:
+    """One line per estimator and tilt amplitude: the worst held-out R^2 over the textures of
+    each sequence kind (tilt about x, about y, each without and with pushing)."""
+    kinds = [(axis, pushed) for pushed in (False, True) for axis in ("x", "y")]
+    header = " | ".join(f"tilt {axis}{', push' if pushed else ''}" for axis, pushed in kinds)
+    lines = [f"| estimator | tilt px | {header} |", "|---|---|" + "---|" * len(kinds)]
+    keys = dict.fromkeys((row.estimator, row.tilt_px) for row in rows)
+    for estimator, tilt_px in keys:
+        group = [r for r in rows if r.estimator == estimator and r.tilt_px == tilt_px]
+        cells = [
+            _r2(_min([r.r2 for r in group if r.axis == axis and (r.push > 0) == pushed]))
+            for axis, pushed in kinds
+        ]
+        lines.append(f"| {estimator} | {tilt_px:g} | {' | '.join(cells)} |")
+    return lines
+
+
 def rows_table(rows: Sequence[Row]) -> list[str]:
     """Every estimator on every sequence."""
     lines = [

@@ -39,6 +39,7 @@ from evaluation.realgel.textures import SIZE_HW, TEXTURES, load_texture, split_i
 
 TILT_RATIO = 0.5
 INVERSE_ITERATIONS = 4
+CONTACTS = ("centred", "varied")
 
 
 @dataclass(frozen=True)
@@ -50,7 +51,9 @@ class SequenceSpec:
     ``noise_grey``: camera noise sigma, grey levels. ``frames``: frames after the reference.
     ``lighting``: amplitude of a lighting drift (``lighting_drift``), relative; 0: steady.
     ``shading``: whether the capture's LED shading moves with the gel or stays (module
-    docstring).
+    docstring). ``contact``: "centred" (a near-centred contact of moderate aspect) or
+    "varied" (any aspect from tall to flat, anywhere in the middle of the gel;
+    ``random_patch``).
     """
 
     texture: str
@@ -62,6 +65,7 @@ class SequenceSpec:
     frames: int = 160
     lighting: float = 0.0
     shading: Literal["moves", "fixed"] = "moves"
+    contact: Literal["centred", "varied"] = "centred"
 
     def __post_init__(self) -> None:
         if self.texture not in TEXTURES:
@@ -74,6 +78,10 @@ class SequenceSpec:
             raise ValueError(f"push must be in [0, {1.0 - TILT_RATIO}], got {self.push}")
         if self.shading not in ("moves", "fixed"):
             raise ValueError(f"shading must be 'moves' or 'fixed', got {self.shading!r}")
+        if self.contact not in CONTACTS:
+            raise ValueError(
+                f"contact must be one of {', '.join(CONTACTS)}, got {self.contact!r}"
+            )
         if not 0.0 <= self.lighting < 1.0:
             raise ValueError(f"lighting drift must be in [0, 1), got {self.lighting}")
         if self.frames < 4:
@@ -84,12 +92,31 @@ class SequenceSpec:
         push = f", push ±{self.push:.0%}" if self.push else ""
         lighting = f", light ±{self.lighting:.0%}" if self.lighting else ""
         shading = ", fixed shading" if self.shading == "fixed" else ""
-        return f"tilt {self.axis}{push}{lighting}{shading}"
+        contact = ", varied contact" if self.contact == "varied" else ""
+        return f"tilt {self.axis}{push}{lighting}{shading}{contact}"
 
 
-def random_patch(rng: np.random.Generator, height: int, width: int) -> ContactPatch:
-    """A contact covering 35-65% of the width and 45-80% of the height, its centre within
-    8% of the image centre."""
+def random_patch(
+    rng: np.random.Generator, height: int, width: int, contact: str = "centred"
+) -> ContactPatch:
+    """With ``contact`` "centred": a contact covering 35-65% of the width and 45-80% of the
+    height, its centre within 8% of the image centre. "varied": the face of a grasped plug in
+    any pose, an aspect (width / height) log-uniform in [1/4, 4] and 6-30% of the image's
+    area, its centre up to 20% of the image's size from the image centre, and at least 4% of
+    the image's size from every border."""
+    if contact == "varied":
+        aspect = float(np.exp(rng.uniform(np.log(0.25), np.log(4.0))))
+        area = rng.uniform(0.06, 0.30) * height * width
+        half_w = min(0.5 * np.sqrt(area * aspect), 0.46 * width)
+        half_h = min(0.5 * np.sqrt(area / aspect), 0.46 * height)
+        room_x = min(0.2 * width, 0.46 * width - half_w)
+        room_y = min(0.2 * height, 0.46 * height - half_h)
+        return ContactPatch(
+            cx=width / 2 + rng.uniform(-room_x, room_x),
+            cy=height / 2 + rng.uniform(-room_y, room_y),
+            half_w=float(half_w),
+            half_h=float(half_h),
+        )
     return ContactPatch(
         cx=width / 2 + rng.uniform(-0.08, 0.08) * width,
         cy=height / 2 + rng.uniform(-0.08, 0.08) * height,
@@ -160,12 +187,15 @@ def add_noise(image: np.ndarray, sigma: float, rng: np.random.Generator) -> np.n
 class Mechanics:
     """The deformation of a sequence: the field of each frame is ``field(i)`` (H, W, 2) px;
     ``truth`` (frames, 2) the applied tilt torque (tau_x, tau_y) per frame, arbitrary units
-    (px^3 times pressure); ``tilt`` and ``grip`` the signals."""
+    (px^3 times pressure); ``tilt`` and ``grip`` the signals; ``tilt_weight`` the tilt's
+    pressure map's weight (1, or below 1 for a tilt across a varied contact's shorter side,
+    ``mechanics``)."""
 
     basis: PressureBasis
     scale: float
     grip_weight: float
     tilt_index: int
+    tilt_weight: float
     tilt: np.ndarray
     grip: np.ndarray
     truth: np.ndarray
@@ -173,7 +203,8 @@ class Mechanics:
     def field(self, tilt: float, grip: float) -> np.ndarray:
         fields = self.basis.fields
         return self.scale * (
-            grip * self.grip_weight * fields[0] + tilt * fields[1 + self.tilt_index]
+            grip * self.grip_weight * fields[0]
+            + tilt * self.tilt_weight * fields[1 + self.tilt_index]
         )
 
     def relative_field(self, index: int) -> np.ndarray:
@@ -192,20 +223,33 @@ class Mechanics:
 
     def tilt_field(self) -> np.ndarray:
         """The tilt's own part of the field at full tilt (peaks at tilt_px)."""
-        return self.scale * self.basis.fields[1 + self.tilt_index]
+        return self.scale * self.tilt_weight * self.basis.fields[1 + self.tilt_index]
 
 
 def mechanics(spec: SequenceSpec) -> Mechanics:
-    """The contact, signals and truth of ``spec`` (independent of its texture and noise)."""
+    """The contact, signals and truth of ``spec`` (independent of its texture and noise).
+
+    On the "centred" contact the tilt's own field peaks at ``tilt_px`` whatever the axis. On
+    a "varied" contact the object's face tilts by the same angle about either axis: the
+    pressure's slope per px is the same, so the edge pressures change by ``TILT_RATIO`` of
+    the grip across the contact's longer side and proportionally less across its shorter
+    side, and ``tilt_px`` is the peak of the field of a full tilt across the longer side: a
+    tilt across a narrow contact moves the gel less for the same angle."""
     rng = np.random.default_rng([spec.seed, 0])
     height, width = SIZE_HW
-    basis = PressureBasis.for_patch(random_patch(rng, height, width), height, width)
+    patch = random_patch(rng, height, width, spec.contact)
+    basis = PressureBasis.for_patch(patch, height, width)
     tilt, grip = signals(rng, spec.frames, spec.push)
     index = 0 if spec.axis == "x" else 1
-    peak = float(np.hypot(*np.moveaxis(basis.fields[1 + index], -1, 0)).max())
+    weight, widest = 1.0, index
+    if spec.contact == "varied":  # half sizes across which tilt x and tilt y vary
+        across = (patch.half_h, patch.half_w)
+        widest = int(np.argmax(across))
+        weight = across[index] / across[widest]
+    peak = float(np.hypot(*np.moveaxis(basis.fields[1 + widest], -1, 0)).max())
     scale = spec.tilt_px / peak
-    truth = tilt[:, None] * basis.tilt_moments[index][None, :] * scale
-    return Mechanics(basis, scale, 1.0 / TILT_RATIO, index, tilt, grip, truth)
+    truth = tilt[:, None] * basis.tilt_moments[index][None, :] * (scale * weight)
+    return Mechanics(basis, scale, 1.0 / TILT_RATIO, index, weight, tilt, grip, truth)
 
 
 @dataclass(frozen=True)

@@ -47,6 +47,28 @@ def test_a_field_well_above_the_noise_passes_unchanged_and_the_gate_is_continuou
     assert np.max(np.diff(values) / np.diff(statistic)) <= 1.5 / gate.threshold + 1e-9
 
 
+def test_the_gate_stays_open_once_a_contact_is_established():
+    covariance = _covariance(16, 12)
+    gate = NoiseGate(covariance, false_alarm=0.01)
+    draws = np.random.default_rng(3).multivariate_normal(np.zeros(16), covariance, 2000)
+    assert [gate.until_contact(d) for d in draws] == [gate(d) for d in draws]
+    assert not gate.contact  # noise alone: no run of three frames above the threshold
+    direction = covariance @ np.random.default_rng(4).normal(size=16)
+    unit = direction / np.sqrt(gate.statistic(direction))
+    q = gate.threshold
+    weak = np.sqrt(1.2 * q) * unit  # above the threshold, gate partly open
+    assert 0.0 < gate(weak) < 1.0
+    assert gate.until_contact(weak) == gate(weak) and gate.until_contact(weak) == gate(weak)
+    assert gate.until_contact(0.0 * unit) == 0.0  # the run is broken
+    assert [gate.until_contact(weak) for _ in range(3)] == [gate(weak), gate(weak), 1.0]
+    assert gate.contact and gate.until_contact(0.0 * unit) == 1.0  # latched
+    assert gate.peak == pytest.approx(max(gate.statistic(d) for d in [*draws, weak]) / q)
+    gate.until_contact(3.0 * weak)  # the peak is kept after the latch too
+    assert gate.peak == pytest.approx(9.0 * 1.2)
+    once = NoiseGate(covariance, false_alarm=0.01)
+    assert once.until_contact(2.0 * weak) == 1.0 and once.until_contact(0.0 * unit) == 1.0
+
+
 def test_bad_gates_are_refused():
     with pytest.raises(ValueError, match="false_alarm"):
         NoiseGate(np.eye(3), 0.0)

@@ -1,6 +1,7 @@
 """The offline estimator as a user runs it: python scripts/estimate.py ..."""
 
 import csv
+import json
 import os
 import resource
 import signal
@@ -542,3 +543,58 @@ def test_the_decoders_own_messages_never_reach_the_terminal(folder, tmp_path):
         err = result.stderr.strip()
         assert result.returncode == 2 and err.startswith("estimate: error:"), err
         assert "\n" not in err, err
+
+
+def _tilt_x_columns(path: Path) -> tuple[np.ndarray, np.ndarray]:
+    with path.open() as handle:
+        rows = list(csv.DictReader(handle))
+    return (
+        np.array([float(r["tau_x"]) for r in rows]),
+        np.array([int(r["degenerate"]) for r in rows]),
+    )
+
+
+def test_without_open_frames_a_recording_that_never_leaves_the_noise_is_estimated_ungated(
+    tmp_path, capsys
+):
+    """Issue 23: zeroed on a grasp (no --open), a weak tilt never establishes a contact, and
+    the no-contact gate would zero most of it; the tool then re-estimates without the gate,
+    says so in one line and records the choice beside the CSV. With --open, or once a
+    contact is established, it does not."""
+    from dataclasses import replace
+
+    from evaluation.offline.estimate_cli import UNGATED_REASON, fallback_sidecar
+    from evaluation.realgel.sequences import SequenceSpec, render
+
+    spec = SequenceSpec("gelsight_background", "x", 0.0, 0.4, 3.0, 314, 20, contact="varied")
+    sequence = render(spec, 4)
+    frames = [*sequence.references, *sequence.frames]  # an old recording, in the grasp
+    folders = {}
+    for name, recorded in (("grasped", frames), ("opened", [*sequence.open_frames, *frames])):
+        folders[name] = tmp_path / name
+        folders[name].mkdir()
+        for index, frame in enumerate(recorded):
+            cv2.imwrite(str(folders[name] / f"f{index:03d}.png"), frame)
+    out = tmp_path / "x.csv"
+    sidecar = fallback_sidecar(out)
+    assert main([str(folders["grasped"]), "--reference", "0:4", "--out", str(out)]) == 0
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and UNGATED_REASON in err and sidecar.name in err
+    assert json.loads(sidecar.read_text()) == {
+        "estimator": "default",
+        "noise_gate": None,
+        "reason": UNGATED_REASON,
+    }
+    tau_x, degenerate = _tilt_x_columns(out)
+    ungated = TactileEstimator(
+        replace(sensor_estimator(sensor_profile("gelsight_mini"))[1], noise_gate=None),
+        sensor_profile("gelsight_mini"),
+    )
+    ungated.set_reference(sequence.references)
+    expected = [ungated.push(frame, 0.0).tau_x for frame in frames]
+    np.testing.assert_allclose(tau_x, expected, rtol=1e-8, atol=1e-12)
+    assert not degenerate.any()
+    # with the open gel the tool keeps the configuration, and the old record goes
+    args = [str(folders["opened"]), "--reference", "4:8", "--open", "0:4", "--out", str(out)]
+    assert main(args) == 0
+    assert capsys.readouterr().err == "" and not sidecar.exists()
