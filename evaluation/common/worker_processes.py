@@ -12,6 +12,8 @@ at once when the parent stops.
   either would print a worker's traceback.
 * ``kill_pool(pool)``: SIGKILL the workers now (their running and queued tasks are
   abandoned), then wait for them to be gone.
+* ``ordered_map(pool, fn, items, window)``: ``pool.map`` that submits at most ``window``
+  tasks ahead of the result it yields, so a stream of any length takes the same memory.
 """
 
 from __future__ import annotations
@@ -20,7 +22,8 @@ import ctypes
 import os
 import signal
 import sys
-from collections.abc import Callable, Iterator
+from collections import deque
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from multiprocessing import get_context
@@ -96,3 +99,22 @@ def kill_pool(pool: ProcessPoolExecutor) -> None:
     for process in processes:
         process.join(timeout=JOIN_TIMEOUT_S)
     pool.shutdown(wait=False)
+
+
+def ordered_map(
+    pool: ProcessPoolExecutor, fn: Callable[[Any], T], items: Iterable[Any], window: int
+) -> Iterator[T]:
+    """``fn`` of each item, in the items' order, computed by ``pool`` with at most
+    ``window`` tasks submitted and not yet yielded (``pool.map`` submits every item first)."""
+    if window < 1:
+        raise ValueError(f"window {window}: expected at least 1")
+    queued = iter(items)
+    pending: deque[Future[T]] = deque()
+    while True:
+        for item in queued:
+            pending.append(pool.submit(fn, item))
+            if len(pending) >= window:
+                break
+        if not pending:
+            return
+        yield pending.popleft().result()

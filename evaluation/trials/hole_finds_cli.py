@@ -17,7 +17,7 @@ from functools import partial
 from controller.run.task import load_task
 from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import one_thread_env
-from evaluation.common.worker_processes import kill_pool, worker_pool
+from evaluation.common.worker_processes import kill_pool, ordered_map, worker_pool
 from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
 from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds
 
@@ -49,7 +49,7 @@ def _run(args: argparse.Namespace) -> int:
     one_thread_env()
     pool = worker_pool(args.workers)
     try:
-        _report(pool.map(job, args.seeds), len(args.seeds))
+        _report(ordered_map(pool, job, args.seeds, 2 * args.workers), len(args.seeds))
     except BaseException:  # Ctrl-C, SIGTERM, a failed trial: stop the queued trials now
         kill_pool(pool)
         raise
