@@ -9,7 +9,10 @@
 * ``sensor_profile``: a visuotactile sensor's image geometry;
 * ``spatial``: rotations and tilts with their frames in the names;
 * ``envelope``: the workspace box, the tilt limit and the speed limits with their clamps,
-  one geometry for the arm driver's envelope and the controller's limiter.
+  one geometry for the arm driver's envelope and the controller's limiter;
+* ``atomic_files``: a result replaces its destination only when complete;
+* ``entry_point``: how a script or an installed command runs its tool (Ctrl-C and SIGTERM
+  end it with one line at any moment, imports included).
 
 Import rule: ``core`` imports only the standard library, NumPy, SciPy and PyYAML; it never
 imports ``controller``, ``drivers`` or ``evaluation`` (tests/test_layers.py).
