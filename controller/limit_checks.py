@@ -26,14 +26,11 @@ naming the file and the key.
 
 from __future__ import annotations
 
-from pathlib import Path
-
 from controller.insertion.machine_config import Limits
 from controller.safety import LimitsConfig
 from core.config import ConfigError
 from core.envelope import Envelope
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.registry import load_device_config
 
 PRESS_MARGIN_M = 0.002
 """How far below the fully inserted height the TCP may have to go (m): the compliant wrist's
@@ -45,15 +42,16 @@ def check_task_limits(
     source: str,
     machine_limits: Limits,
     limits: LimitsConfig,
-    arm_file: Path,
+    arm_file: str,
+    arm_envelope: Envelope,
     plug: PlugGeometry,
     hole: HolePose,
     tip_depth_m: float,
     search_half_width_m: float,
 ) -> None:
     """ConfigError (one line) unless the task's limits agree (module doc). ``source``: the
-    task file; ``arm_file``: the robot file its ``devices.arm`` names."""
-    arm_envelope = load_device_config(arm_file, backend="real", kind="arm").config.envelope
+    task file; ``arm_file``: the robot file its ``devices.arm`` names, and ``arm_envelope``
+    the envelope that file holds."""
     for name, envelope, where in (
         ("limits.max_tilt_rad", limits, "the loop's limiter"),
         (f"envelope.max_tilt_rad of {arm_file}", arm_envelope, "the arm's envelope"),
@@ -65,9 +63,9 @@ def check_task_limits(
                 f"the tool within {envelope.max_tilt_rad} rad, so this limit could never trip"
             )
     lowest_m = inserted_tcp_z_m(plug, hole, tip_depth_m) - PRESS_MARGIN_M
-    _check_reaches(str(arm_file), "envelope.z_min_m", arm_envelope, lowest_m, source)
+    _check_reaches(arm_file, "envelope.z_min_m", arm_envelope, lowest_m, source)
     _check_reaches(source, "limits.z_min_m", limits, lowest_m, source)
-    _check_holds_search(str(arm_file), "envelope.", arm_envelope, hole, search_half_width_m)
+    _check_holds_search(arm_file, "envelope.", arm_envelope, hole, search_half_width_m)
     _check_holds_search(source, "limits.", limits, hole, search_half_width_m)
 
 

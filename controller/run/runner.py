@@ -100,7 +100,7 @@ def run_task(
     device_set = registry.build_device_set(task.device_files, backend, world)
     if prepare is not None:
         prepare(device_set)
-    estimator = estimator_for_sensor(task.tactile_model(backend), config.estimator)
+    estimator = estimator_for_sensor(task.tactile_model, config.estimator)
     source = entry.wrench_source(estimator, device_set.world)
     machine = entry.machine(config)
     with ExitStack() as stack:

@@ -90,23 +90,25 @@ class TaskConfig(Config):
 class Task:
     """A loaded task: its ``config``, the simulator's checked ``scene`` configuration (None
     when loaded for the real backend), the file it came from, the overrides applied and the
-    resolved raw mapping (what a run records)."""
+    resolved raw mapping (what a run records), and each device file as read for the backend
+    it was loaded for (``registry.DeviceSpec``, by kind)."""
 
     config: TaskConfig
     scene: Any
     path: Path
     overrides: tuple[str, ...]
     raw: Mapping[str, Any]
+    devices: Mapping[str, registry.DeviceSpec]
 
     @property
     def device_files(self) -> dict[str, Path]:
         """Device kind -> its YAML path (``devices:``)."""
         return self.config.devices.paths()
 
-    def tactile_model(self, backend: str) -> str:
+    @property
+    def tactile_model(self) -> str:
         """The tactile sensor's model (its profile's name), from its device file."""
-        tactile = registry.load_device_config(self.device_files["tactile"], backend, "tactile")
-        return tactile.config.model
+        return str(self.devices["tactile"].config.model)
 
 
 def task_path(name_or_path: str) -> Path:
@@ -127,26 +129,29 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
         raise ConfigError(f"{source}: missing key '{SCENE_KEY}'")
     sections = {key: value for key, value in raw.items() if key != SCENE_KEY}
     config = build(TaskConfig, sections, source)
-    _check_devices_and_estimator(config, source, backend)
+    devices = _checked_devices(config, source, backend)
     check_task_limits(
         source=source,
         machine_limits=config.machine.limits,
         limits=config.limits,
-        arm_file=config.devices.paths()["arm"],
+        arm_file=devices["arm"].path,
+        arm_envelope=devices["arm"].config.envelope,
         plug=config.plug,
         hole=config.hole,
         tip_depth_m=max(config.machine.insert.depth_m, config.blind.push_depth_m),
         search_half_width_m=max(config.machine.search.uncertainty_xy_m, config.blind.half_width_m),
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
-    return Task(config, scene, path, tuple(overrides), raw)
+    return Task(config, scene, path, tuple(overrides), raw, devices)
 
 
-def _check_devices_and_estimator(config: TaskConfig, source: str, backend: str) -> None:
-    """Each device file holds a device of its kind (content and ``type:`` checked by the
-    registry), and the estimator configuration exists and suits the tactile sensor; a
-    ConfigError naming ``source`` and the key otherwise, so every tool refuses the task when
-    it loads, not at a trial's start."""
+def _checked_devices(
+    config: TaskConfig, source: str, backend: str
+) -> dict[str, registry.DeviceSpec]:
+    """Each device file read for ``backend``: it holds a device of its kind (content and
+    ``type:`` checked by the registry), and the estimator configuration exists and suits the
+    tactile sensor; a ConfigError naming ``source`` and the key otherwise, so every tool
+    refuses the task when it loads, not at a trial's start."""
     specs = {}
     for kind, device in config.devices.paths().items():
         if not device.is_file():
@@ -160,3 +165,4 @@ def _check_devices_and_estimator(config: TaskConfig, source: str, backend: str) 
         sensor_estimator(sensor_profile(specs["tactile"].config.model), config.estimator)
     except ConfigError as exc:
         raise ConfigError(f"{source}: key 'estimator': {exc}") from None
+    return specs

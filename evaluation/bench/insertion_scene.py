@@ -109,7 +109,7 @@ def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
     loaded = load_task(task)
     world = WorldSpec(loaded.scene, loaded.config.plug, loaded.config.hole, seed)
     sim = build_device_set(loaded.device_files, "sim", world).world
-    estimator = estimator_for_sensor(loaded.tactile_model("sim")) if estimate else None
+    estimator = estimator_for_sensor(loaded.tactile_model) if estimate else None
     clock, arm, gripper, tactile = sim.clock, sim.arm, sim.gripper, sim.tactile
     for device in (arm, gripper, tactile):
         device.connect()
