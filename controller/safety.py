@@ -33,6 +33,7 @@ lost while the operator holds control.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections import deque
 from collections.abc import Mapping
@@ -116,8 +117,7 @@ class CommandLimiter:
             if budget is not None:
                 twist = self._unloading_twist(twist)
                 limited.append(f"budget:{budget}")
-            out = Command(twist=twist, gripper=command.gripper,
-                          rezero_tactile=command.rezero_tactile)  # fmt: skip
+            out = dataclasses.replace(command, twist=twist)
         elif command.pose is not None:
             reference = self._last_target if self._last_target is not None else tcp
             pose = self._limit_pose(command.pose, reference, limited)
@@ -125,8 +125,7 @@ class CommandLimiter:
                 pose = self._unloading_pose(pose, reference)
                 limited.append(f"budget:{budget}")
             self._last_target = pose
-            out = Command(pose=pose, gripper=command.gripper,
-                          rezero_tactile=command.rezero_tactile)  # fmt: skip
+            out = dataclasses.replace(command, pose=pose)
         else:
             self._last_target = None
             out = command

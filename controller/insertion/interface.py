@@ -96,7 +96,10 @@ class Command:
     loop has the estimator take the next frames as the open gel (fingers open, nothing
     touching: before a grasp), against which the grasp's contact is measured.
     ``rezero_tactile``: the loop re-zeroes the estimator's reference from the next frames
-    (after a grasp or a re-grasp).
+    (after a grasp or a re-grasp). ``rule``: the machine's rule that decided this command,
+    ``phase.rule`` (e.g. ``search.drag``, ``search.torque_catch``, ``align.torque_servo``;
+    docs/ARCHITECTURE.md lists them), recorded with every tick; empty when the machine names
+    none.
     """
 
     twist: Twist | None = None
@@ -104,6 +107,7 @@ class Command:
     gripper: GripperTarget | None = None
     capture_open_tactile: bool = False
     rezero_tactile: bool = False
+    rule: str = ""
 
     def __post_init__(self) -> None:
         if self.twist is not None and self.pose is not None:
@@ -112,12 +116,15 @@ class Command:
 
 @dataclass(frozen=True)
 class Transition:
-    """A phase change at ``t_s``, with its reason (a FailureReason's value for FAILED)."""
+    """A phase change at ``t_s``, with its reason (the guard: a FailureReason's value for
+    FAILED) and the ``rule`` that fired it where a guard has several (``hole_found``:
+    ``torque_catch``, ``load_drop`` or both joined by ``+``, or ``probe``; else empty)."""
 
     t_s: float
     source: Phase
     target: Phase
     reason: str
+    rule: str = ""
 
 
 class Machine(Protocol):

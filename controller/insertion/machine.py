@@ -10,6 +10,7 @@ current phase's handler computes the command and may move on.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -134,6 +135,7 @@ class InsertionMachine:
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
+        self._rule = ""  # the rule deciding this tick's command (Command.rule)
 
     # -- the Machine protocol ------------------------------------------------------------
 
@@ -151,8 +153,13 @@ class InsertionMachine:
         return self._retries
 
     def step(self, observation: Observation) -> Command:
-        """One tick: the command for ``observation`` (see the module doc for the order)."""
-        obs = observation
+        """One tick: the command for ``observation`` (see the module doc for the order),
+        naming the rule that decided it (``Command.rule``)."""
+        self._rule = ""
+        command = self._decide(observation)
+        return dataclasses.replace(command, rule=self._rule)
+
+    def _decide(self, obs: Observation) -> Command:
         dt = 0.0 if self._last_t_s is None else max(obs.t_s - self._last_t_s, 0.0)
         self._last_t_s = obs.t_s
         self._tick_s = dt
@@ -162,6 +169,7 @@ class InsertionMachine:
             self._autonomous_s += dt
         new = self.signals.update(obs.wrench)
         if self._phase in TERMINAL:
+            self._fire("hold")
             return _hold()
         if _has_fault(obs):
             return self._fail(obs, FailureReason.DEVICE_FAULT)
@@ -189,11 +197,17 @@ class InsertionMachine:
 
     # -- transitions -----------------------------------------------------------------------
 
-    def _go(self, obs: Observation, target: Phase, guard: str) -> None:
+    def _fire(self, rule: str) -> None:
+        """Name the rule deciding this tick's command: ``phase.rule``."""
+        self._rule = f"{self._phase.value}.{rule}"
+
+    def _go(self, obs: Observation, target: Phase, guard: str, rule: str = "") -> None:
+        """Move to ``target`` under ``guard`` (``rule``: which of the guard's rules fired)."""
         if not self.definition.allows(self._phase, target, guard):
             raise RuntimeError(f"transition {self._phase.name} -> {target.name} ({guard}) "
                                "is not in the machine's definition")
-        self._transitions.append(Transition(obs.t_s, self._phase, target, guard))
+        self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
+        self._fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target
         self._stage_or_none = _Stage.entered(obs)
         if target is Phase.RELEASE:
@@ -277,6 +291,8 @@ class InsertionMachine:
         if not teleop.estop and teleop.estop_ack:
             target = Phase.TELEOP if teleop.in_control else self._resume_phase(obs)
             self._go(obs, target, "estop_acknowledged")
+        else:
+            self._fire("hold")
         return _hold()
 
     def _teleop(self, obs: Observation) -> Command:
@@ -284,6 +300,7 @@ class InsertionMachine:
         if teleop.hand_back:
             self._go(obs, self._resume_phase(obs), "hand_back")
             return _hold()
+        self._fire("operator")
         limits = self.config.limits
         twist = bounded_twist(
             np.asarray(teleop.twist.linear_m_s),
@@ -305,6 +322,7 @@ class InsertionMachine:
         fingers travel fast to just above the plug's thickness, close, settle, re-zero,
         baseline."""
         stage, settings = self._stage, self.config.gripper
+        self._fire(stage.name or ("lift" if self._regrasp else "capture"))
         if stage.name == "":
             stage.name = "lift" if self._regrasp else "capture"
             stage.since_t_s = obs.t_s
@@ -371,6 +389,7 @@ class InsertionMachine:
             ):
                 self._next_stage(obs, "descend")
             else:
+                self._fire("pose_servo")
                 v = clamp_norm(settings.pose_gain_1_s * error, settings.move_speed_m_s)
                 w = clamp_norm(settings.pose_gain_1_s * turn, settings.rotate_speed_rad_s)
                 return self._command(v, w)
@@ -380,6 +399,7 @@ class InsertionMachine:
         if stage.count >= settings.contact_frames:
             self._go(obs, Phase.SEARCH, "surface_contact")
             return _hold()
+        self._fire("descend")
         v_tip = np.array([0.0, 0.0, -settings.descend_speed_m_s])
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
@@ -405,11 +425,13 @@ class InsertionMachine:
                 self._next_stage(obs, "probe")
                 return _hold()
             elapsed = obs.t_s - stage.entered_t_s
-            if stage.detector.update(self.signals, rotation, stage.v_tip, elapsed):
+            fired = stage.detector.update(self.signals, rotation, stage.v_tip, elapsed)
+            if fired:
                 if stage.detector.load_reference is not None:
                     self._preload = max(stage.detector.load_reference, 1.0)
-                self._go(obs, Phase.ALIGN, "hole_found")
+                self._go(obs, Phase.ALIGN, "hole_found", fired)
                 return _hold()
+        self._fire("drag")
         v_tip = np.zeros(3)
         v_tip[:2] = settings.speed_m_s * tangent[:2] + gain * (
             self._hole_xyz[:2] + offset[:2] - tip[:2]
@@ -429,13 +451,15 @@ class InsertionMachine:
             stage.count = stage.count + 1 if contact else 0
         if stage.count >= approach.contact_frames:
             if tip_z <= self.hole.z_m - self.config.search.in_hole_depth_m:
-                self._go(obs, Phase.ALIGN, "hole_found")
+                self._go(obs, Phase.ALIGN, "hole_found", "probe")
             else:
+                self._fire("probe_surface")
                 self._next_stage(obs, "")
                 stage.z0_m = float(obs.arm.tcp.xyz_m[2])
             return _hold()
         if tip_z < self.hole.z_m - approach.overtravel_m:
             return self._fail(obs, FailureReason.CONTACT_LOST)
+        self._fire("probe")
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         v_tip = np.array([0.0, 0.0, -approach.descend_speed_m_s])
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
@@ -466,6 +490,7 @@ class InsertionMachine:
         if stage.count >= settings.frames:
             self._go(obs, Phase.INSERT, "aligned")
             return _hold()
+        self._fire("upright" if self._torques_within_tolerance() else "torque_servo")
         w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_speed_rad_s)
         v_edge = self.config.approach.pose_gain_1_s * (stage.point - edge)
         v_edge[2] = max(v_edge[2], -self._press_rate())  # never below where ALIGN began
@@ -514,6 +539,7 @@ class InsertionMachine:
             stage.count = stage.count + 1 if jammed else 0
         if stage.count >= settings.jam_frames:
             return self._back_off(obs, "jam")
+        self._fire("push")
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         w = clamp_norm(
             self._align_rate(rotation, settings.compliance_scale),
@@ -539,6 +565,7 @@ class InsertionMachine:
             self.signals.axial_force_n < 0.5 * target_load
         )
         if z_tcp <= reference - settings.engage_m or gave_way:
+            self._fire("engaged")
             self._next_stage(obs, "push")
             return _hold()
         w = np.zeros(3)
@@ -552,6 +579,7 @@ class InsertionMachine:
             if back_at_start:
                 return self._back_off(obs, "not_engaged")
             w[2] = stage.yaw_sign * settings.yaw_rate_rad_s
+        self._fire("press" if w[2] == 0.0 else "yaw_sweep")
         w[:2] = clamp_norm(self._align_rate(rotation, settings.compliance_scale),
                            self.config.align.max_angular_speed_rad_s)[:2]
         shortfall = (target_load - self.signals.axial_force_n) / target_load
@@ -578,11 +606,13 @@ class InsertionMachine:
             else:
                 self._go(obs, Phase.ALIGN, "backed_off")
             return _hold()
+        self._fire("lift")
         return self._tcp_twist(np.array([0.0, 0.0, settings.speed_m_s]))
 
     def _release(self, obs: Observation, new: bool) -> Command:
         """Open the gripper; wait until it has stopped."""
         stage = self._stage
+        self._fire("open")
         if stage.name == "":
             self._next_stage(obs, "opening")
             return Command(twist=Twist(), gripper=self._open_target(
@@ -597,6 +627,7 @@ class InsertionMachine:
         if obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.retract_distance_m:
             self._go(obs, Phase.DONE, "retracted")
             return _hold()
+        self._fire("lift")
         return self._tcp_twist(np.array([0.0, 0.0, settings.retract_speed_m_s]))
 
     _handlers = {
@@ -621,21 +652,22 @@ class InsertionMachine:
         """A (u, v) offset in the opening's frame as a vector in B."""
         return self._hole_yaw.apply([offset_uv[0], offset_uv[1], 0.0])
 
-    def _torques_within_tolerance(self) -> bool:
+    def _torque_tolerance(self) -> np.ndarray:
+        """ALIGN's tolerances on the normalised torques (tau_x, tau_y, tau_z), noise units."""
         settings = self.config.align
-        tolerance = np.array(
+        return np.array(
             [settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma]
         )
-        return bool(np.all(np.abs(self.signals.normalised[:3]) <= tolerance))
+
+    def _torques_within_tolerance(self) -> bool:
+        return bool(np.all(np.abs(self.signals.normalised[:3]) <= self._torque_tolerance()))
 
     def _align_rate(self, rotation: Rotation, scale: float) -> np.ndarray:
         """Angular velocity in B: yield to the torques outside tolerance (w_T = -R_S2T k n_S,
         scaled) plus turning T z toward straight down."""
         settings = self.config.align
         gains = np.array([settings.gain_tau_x, settings.gain_tau_y, settings.gain_tau_z])
-        tolerance = np.array(
-            [settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma]
-        )
+        tolerance = self._torque_tolerance()
         torque_s = self.signals.normalised[:3]
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
         w_t = -self.signals.s2t @ (gains * outside) * scale

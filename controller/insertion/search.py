@@ -110,14 +110,17 @@ class HoleDetector:
         rotation: Rotation,
         commanded: np.ndarray,
         elapsed_s: float,
-    ) -> bool:
-        """True when the rule holds after this estimate; ``commanded``: the tip velocity in B
-        last commanded, ``elapsed_s``: time since SEARCH began."""
-        found = self._judge(signals, rotation, commanded, elapsed_s)
-        found = self._dropped(signals.axial_force_n, elapsed_s) or found
+    ) -> str:
+        """The rules that hold after this estimate: ``torque_catch`` (the drag resistance's
+        rise), ``load_drop`` (the axial force's fall), both joined by ``+``, or "" for
+        none; ``commanded``: the tip velocity in B last commanded, ``elapsed_s``: time since
+        SEARCH began."""
+        caught = self._judge(signals, rotation, commanded, elapsed_s)
+        dropped = self._dropped(signals.axial_force_n, elapsed_s)
         horizontal = np.array([commanded[0], commanded[1], 0.0])
         self._drag = self._alpha * horizontal + (1.0 - self._alpha) * self._drag
-        return found
+        return "+".join(name for name, fired in (("torque_catch", caught),
+                                                  ("load_drop", dropped)) if fired)
 
     @property
     def load_reference(self) -> float | None:

@@ -54,6 +54,22 @@ def test_happy_path_reaches_done_through_every_phase(pattern, offset):
     )
 
 
+def test_every_command_names_its_rule_and_the_hole_find_names_its_detector():
+    world = ToyWorld(hole_offset_m=(0.0012, -0.0009))
+    machine = make_machine(world, config())
+    world.run_until(machine, Phase.DONE)
+    rules = [c.rule for c in world.commands]
+    assert all(rules), "a command without its rule"
+    assert {r.split(".")[0] for r in rules} == {src.lower() for src, _, _ in HAPPY}
+    assert "search.drag" in rules and "insert.push" in rules
+    found = next(t for t in machine.transitions if t.reason == "hole_found")
+    assert found.rule in {"torque_catch", "load_drop", "torque_catch+load_drop", "probe"}
+    assert f"search.hole_found:{found.rule}" in rules
+    aligned = rules.index("align.aligned")
+    align_rules = {r for r in rules[:aligned] if r.startswith("align.")}
+    assert align_rules <= {"align.torque_servo", "align.upright"}
+
+
 def test_commands_are_bounded_twists_and_hold_still_while_grasping():
     world = ToyWorld()
     cfg = toy_config()

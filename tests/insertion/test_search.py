@@ -14,7 +14,7 @@ UPRIGHT = Rotation.from_euler("x", np.pi)
 STILL = np.zeros(3)  # no drag: only the load-drop rule can fire
 
 
-def feed(detector: HoleDetector, loads: list[float], t0_s: float = 0.0) -> list[bool]:
+def feed(detector: HoleDetector, loads: list[float], t0_s: float = 0.0) -> list[str]:
     found = []
     for i, load in enumerate(loads):
         signals = SimpleNamespace(axial_force_n=load, torque_t=np.zeros(3))
@@ -28,7 +28,7 @@ def test_a_load_drop_is_the_hole_after_hole_frames_estimates():
     assert not any(feed(detector, [20.0] * 30))
     assert abs(detector.load_reference - 20.0) < 1e-9
     found = feed(detector, [8.0] * settings.hole_frames, t0_s=1.2)
-    assert found == [False] * (settings.hole_frames - 1) + [True]
+    assert found == [""] * (settings.hole_frames - 1) + ["load_drop"]
 
 
 def test_a_small_or_brief_drop_is_not_the_hole():
