@@ -101,6 +101,7 @@ class EpisodeWriter:
         self._sequence = itertools.count()
         self.dropped: Counter[str] = Counter()
         self._dropped_written = 0
+        self._last_ns = 0  # the newest log time written, ns
         self._flush_wanted = threading.Event()
         self._error: OSError | None = None
         self._closed = False
@@ -178,8 +179,6 @@ class EpisodeWriter:
         self.close({"error": f"{type(error).__name__}: {error}"} if error else None)
 
     # -- the logger thread -----------------------------------------------------------------
-
-    _last_ns = 0
 
     def _run(self) -> None:
         began = time.thread_time()
