@@ -5,11 +5,11 @@ observer and a tap on the wrench source; the state machine never imports it.
 
 * ``topics``: every topic, its schema, encoding, frame and units (the format's contract);
 * ``reader``: ``read_episode(path) -> Episode`` (finished or cut files alike);
-* ``episode_repair``: ``repair(path, out) -> RepairReport`` (finishes a killed run's file);
+* ``repair``: ``repair(path, out) -> RepairReport`` (finishes a killed run's file; import it
+  from ``controller.episode.repair``);
 * ``writer``, ``recorder``, ``session``: the writing side (``EpisodeRecording``).
 """
 
-from controller.episode.episode_repair import RepairReport, repair
 from controller.episode.reader import (
     Episode,
     EpisodeError,
@@ -25,10 +25,8 @@ __all__ = [
     "Episode",
     "EpisodeError",
     "EpisodeMessage",
-    "RepairReport",
     "Topic",
     "decode_image",
     "grid_arrays",
     "read_episode",
-    "repair",
 ]

@@ -7,7 +7,8 @@ import threading
 import pytest
 from mcap.writer import Writer
 
-from controller.episode import EpisodeError, read_episode, repair
+from controller.episode import EpisodeError, read_episode
+from controller.episode.repair import repair
 from controller.episode.topics import LOOP_TICK, TRANSITION
 from controller.episode.writer import EpisodeWriter, json_bytes
 

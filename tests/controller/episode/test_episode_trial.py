@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 from mcap.reader import make_reader
 
-from controller.episode import TOPICS, decode_image, grid_arrays, read_episode, repair
+from controller.episode import TOPICS, decode_image, grid_arrays, read_episode
+from controller.episode.repair import repair
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import load_task
 from controller.tactile import estimator_for_sensor
