@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from controller.episode.session import EpisodeRecording
 from controller.insertion import Machine, Transition
 from controller.loop import ControlLoop, LoopResult, Observer, TickRecord
 from controller.run.controllers import CONTROLLERS, Controller
@@ -84,12 +85,15 @@ def run_task(
     observers: Sequence[Observer] = (),
     controllers: Mapping[str, Controller] = CONTROLLERS,
     prepare: Callable[[registry.DeviceSet], Any] | None = None,
+    episode: EpisodeRecording | None = None,
 ) -> RunOutcome:
     """Run ``task`` with ``controller`` on ``backend`` (see the module doc). ``seed``: the
     simulated world's seed (recorded only on hardware); ``realtime``: pace the simulated
     world to the wall clock (hardware always is); ``out_dir``: where the run's record goes
     (``RunRecorder``); ``observers``: more tick observers; ``prepare``: called with the built
-    devices before they connect (e.g. a scripted gamepad)."""
+    devices before they connect (e.g. a scripted gamepad); ``episode``: the run's episode
+    (controller/episode), started once the devices are connected, that taps the wrench
+    source and observes every tick; the caller closes it with the outcome."""
     entry = controller_entry(controller, backend, controllers)
     if backend == "sim" and task.scene is None:
         raise ConfigError(f"{task.path}: the task was loaded without its scene (backend real)")
@@ -108,6 +112,10 @@ def run_task(
         recorder = RunRecorder(out_dir) if out_dir is not None else None  # once connected
         if recorder is not None:
             stack.callback(recorder.close)
+        if episode is not None:  # once connected too; the caller closes it
+            episode.start()
+            source = episode.tap(source, device_set.clock)
+            observers = [episode.observer(), *observers]
         ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])
         device_set.devices.gripper.activate()
         began = time.perf_counter()
