@@ -67,6 +67,7 @@ def command_json(tick: TickRecord) -> bytes:
             "capture_open_tactile": bool(command and command.capture_open_tactile),
             "rezero_tactile": bool(command and command.rezero_tactile),
             "limited": list(tick.limited),
+            "rule": command.rule if command is not None else "",
             "sent": command is not None,
             "fault": tick.fault,
         }
@@ -147,6 +148,7 @@ def transition_json(transition: Any) -> bytes:
             "from": transition.source.value,
             "to": transition.target.value,
             "reason": transition.reason,
+            "rule": transition.rule,
         }
     )
 

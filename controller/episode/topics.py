@@ -125,8 +125,10 @@ COMMAND = Topic(
     "(TCP twist in B) or null, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) or "
     "null, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
     "target) or null, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
-    "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``sent`` (false on a fault tick: "
-    "nothing was sent) and ``fault`` (the watchdog's trip message or null).",
+    "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``rule`` (the machine's rule that "
+    "decided it, 'phase.rule', e.g. 'search.drag', 'align.torque_servo'; '' when the machine "
+    "names none), ``sent`` (false on a fault tick: nothing was sent) and ``fault`` (the "
+    "watchdog's trip message or null).",
 )
 ARM_STATUS = Topic(
     "/arm/status",
@@ -164,8 +166,9 @@ TRANSITION = Topic(
     "json",
     "",
     "each phase change (the file is flushed at once)",
-    "``t_s``, ``from``, ``to`` (phases, controller.insertion.Phase values) and ``reason``: "
-    "the rule that fired (e.g. a detection rule's name and values, or a FailureReason).",
+    "``t_s``, ``from``, ``to`` (phases, controller.insertion.Phase values), ``reason`` (the "
+    "guard: e.g. 'hole_found', or a FailureReason's value) and ``rule`` (which of the "
+    "guard's rules fired, e.g. 'torque_catch', 'load_drop'; '' when it has one).",
 )
 LOOP_TICK = Topic(
     "/loop/tick",
@@ -292,6 +295,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "capture_open_tactile": _BOOL,
             "rezero_tactile": _BOOL,
             "limited": _STRS,
+            "rule": _STR,
             "sent": _BOOL,
             "fault": _STR_OR_NULL,
         },
@@ -337,7 +341,8 @@ JSON_SCHEMAS: Mapping[str, dict] = {
         ("in_control", "in_control_by"),
     ),
     TRANSITION.schema: _json_schema(
-        {"t_s": _NUM, "from": _STR, "to": _STR, "reason": _STR}, ("t_s", "from", "to", "reason")
+        {"t_s": _NUM, "from": _STR, "to": _STR, "reason": _STR, "rule": _STR},
+        ("t_s", "from", "to", "reason"),
     ),
     LOOP_TICK.schema: _json_schema(
         {

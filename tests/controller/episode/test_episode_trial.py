@@ -55,6 +55,8 @@ def test_every_stream_round_trips(trial):
     assert phases == [t["phase"] for t in ticks]
     commands = [m.value for m in ep.messages("/control/command")]
     assert [c["limited"] for c in commands] == [t["limited"] for t in ticks]
+    assert [c["rule"] for c in commands] == [t["rule"] for t in ticks]
+    assert "search.drag" in {c["rule"] for c in commands}
     twists = [
         c["twist_linear_m_s"] + c["twist_angular_rad_s"] for c in commands if c["twist_linear_m_s"]
     ]
@@ -64,8 +66,8 @@ def test_every_stream_round_trips(trial):
     assert all(m.value["in_control_by"] == "machine" for m in ep.messages("/teleop/input"))
 
     transitions = [m.value for m in ep.messages("/machine/transition")]
-    assert [(t["from"], t["to"], t["reason"]) for t in transitions] == [
-        (t.source.value, t.target.value, t.reason) for t in outcome.transitions
+    assert [(t["from"], t["to"], t["reason"], t["rule"]) for t in transitions] == [
+        (t.source.value, t.target.value, t.reason, t.rule) for t in outcome.transitions
     ]
 
     tf = [m.value.transforms[0] for m in ep.messages("/tf")]
