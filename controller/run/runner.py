@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from controller.episode.session import EpisodeRecording
 from controller.insertion import Machine, Transition
 from controller.loop import ControlLoop, LoopResult, Observer, TickRecord
 from controller.run.controllers import CONTROLLERS, Controller
@@ -84,12 +85,15 @@ def run_task(
     observers: Sequence[Observer] = (),
     controllers: Mapping[str, Controller] = CONTROLLERS,
     prepare: Callable[[registry.DeviceSet], Any] | None = None,
+    episode: EpisodeRecording | None = None,
 ) -> RunOutcome:
     """Run ``task`` with ``controller`` on ``backend`` (see the module doc). ``seed``: the
     simulated world's seed (recorded only on hardware); ``realtime``: pace the simulated
     world to the wall clock (hardware always is); ``out_dir``: where the run's record goes
     (``RunRecorder``); ``observers``: more tick observers; ``prepare``: called with the built
-    devices before they connect (e.g. a scripted gamepad)."""
+    devices before they connect (e.g. a scripted gamepad); ``episode``: an open episode
+    (controller/episode) that taps the wrench source and observes every tick; the caller
+    closes it with the outcome."""
     entry = controller_entry(controller, backend, controllers)
     if backend == "sim" and task.scene is None:
         raise ConfigError(f"{task.path}: the task was loaded without its scene (backend real)")
@@ -102,6 +106,9 @@ def run_task(
         prepare(device_set)
     estimator = estimator_for_sensor(task.tactile_model, config.estimator)
     source = entry.wrench_source(estimator, device_set.world)
+    if episode is not None:
+        source = episode.tap(source, device_set.clock)
+        observers = [episode.observer(), *observers]
     machine = entry.machine(config)
     with ExitStack() as stack:
         connect_all(device_set.devices, stack)

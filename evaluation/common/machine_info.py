@@ -8,8 +8,9 @@ from __future__ import annotations
 import datetime
 import os
 import platform
-import subprocess
 from pathlib import Path
+
+from core.provenance import git_revision
 
 THREAD_VARIABLES = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
@@ -31,20 +32,6 @@ def cpu_model() -> str:
         )
     except (OSError, StopIteration):
         return platform.processor() or platform.machine() or "unknown CPU"
-
-
-def git_revision() -> str:
-    """The short git revision of this checkout, or "unknown" outside one."""
-    try:
-        return subprocess.run(
-            ["git", "rev-parse", "--short", "HEAD"],
-            capture_output=True,
-            text=True,
-            check=True,
-            cwd=Path(__file__).resolve().parent,
-        ).stdout.strip()
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
 
 
 def describe_machine(measured_on: str) -> str:

@@ -1,0 +1,118 @@
+"""Foxglove's well-known messages (``foxglove-sdk``'s classes, protobuf-encoded): the
+tactile image, the displacement field as a grid, and frame transforms. Each ``*_bytes``
+function runs on the episode writer's thread."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import cv2
+import numpy as np
+from foxglove.messages import (
+    CompressedImage,
+    FrameTransform,
+    FrameTransforms,
+    Grid,
+    PackedElementField,
+    PackedElementFieldNumericType,
+    Pose,
+    Quaternion,
+    Timestamp,
+    Vector2,
+    Vector3,
+)
+
+from controller.tactile.field import VectorField
+
+_MESSAGES = {
+    "foxglove.CompressedImage": CompressedImage,
+    "foxglove.Grid": Grid,
+    "foxglove.FrameTransforms": FrameTransforms,
+}
+
+GRID_FIELDS = ("u_mm", "v_mm", "div")
+"""The ``/tactile/field`` grid's float32 fields, in cell order."""
+
+
+def schema(name: str) -> Any:
+    """The protobuf schema (a FileDescriptorSet) of the well-known message ``name``."""
+    return _MESSAGES[name].get_schema()
+
+
+def timestamp(t_s: float) -> Timestamp:
+    """``t_s`` (s, >= 0) as a protobuf timestamp."""
+    sec = math.floor(t_s)
+    return Timestamp(sec=int(sec), nsec=min(int(round((t_s - sec) * 1e9)), 999_999_999))
+
+
+def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> bytes:
+    """``image`` (uint8 BGR, BGRA or grey) as ``image_format`` ('jpeg' or 'png') bytes;
+    PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel."""
+    if image_format == "png":
+        ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    else:
+        if image.ndim == 3 and image.shape[2] == 4:
+            image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+        ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality])
+    if not ok:
+        raise ValueError(f"tactile image of shape {image.shape}: OpenCV cannot encode it")
+    return data.tobytes()
+
+
+def image_bytes(
+    capture_t_s: float, image: np.ndarray, image_format: str, jpeg_quality: int
+) -> bytes:
+    """A ``foxglove.CompressedImage`` of ``image`` captured at ``capture_t_s`` in frame S."""
+    data = encode_image(image, image_format, jpeg_quality)
+    return CompressedImage(
+        timestamp=timestamp(capture_t_s), frame_id="S", data=data, format=image_format
+    ).encode()
+
+
+def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
+    """A ``foxglove.Grid`` of ``field`` (u, v in mm and the divergence) in frame S: cells of
+    the field's spacing (m), the corner at the first cell's outer corner."""
+    dx_mm, dy_mm = field.spacing_mm
+    cells = np.stack([field.u_mm, field.v_mm, field.divergence()], axis=-1).astype("<f4")
+    cols = field.shape[1]
+    corner = Vector3(
+        x=(float(field.x_mm[0]) - dx_mm / 2) * 1e-3,
+        y=(float(field.y_mm[0]) - dy_mm / 2) * 1e-3,
+        z=0.0,
+    )
+    float32 = PackedElementFieldNumericType.Float32
+    return Grid(
+        timestamp=timestamp(capture_t_s),
+        frame_id="S",
+        pose=Pose(position=corner, orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)),
+        column_count=cols,
+        cell_size=Vector2(x=dx_mm * 1e-3, y=dy_mm * 1e-3),
+        row_stride=cols * 4 * len(GRID_FIELDS),
+        cell_stride=4 * len(GRID_FIELDS),
+        fields=[
+            PackedElementField(name=name, offset=4 * i, type=float32)
+            for i, name in enumerate(GRID_FIELDS)
+        ],
+        data=cells.tobytes(),
+    ).encode()
+
+
+def transforms_bytes(
+    t_s: float, frames: list[tuple[str, str, np.ndarray, np.ndarray]]
+) -> bytes:
+    """A ``foxglove.FrameTransforms`` at ``t_s``: each (parent, child, translation m (3),
+    quaternion (x, y, z, w))."""
+    stamp = timestamp(t_s)
+    return FrameTransforms(
+        transforms=[
+            FrameTransform(
+                timestamp=stamp,
+                parent_frame_id=parent,
+                child_frame_id=child,
+                translation=Vector3(x=float(p[0]), y=float(p[1]), z=float(p[2])),
+                rotation=Quaternion(x=float(q[0]), y=float(q[1]), z=float(q[2]), w=float(q[3])),
+            )
+            for parent, child, p, q in frames
+        ]
+    ).encode()

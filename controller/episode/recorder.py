@@ -1,0 +1,280 @@
+"""What feeds an episode during a run: ``TickLogger``, the control loop's observer (each
+tick's command, statuses, teleop, timing, TCP pose and phase changes), and
+``RecordingSource``, a tap on the wrench source (each frame as the estimator received it,
+the field, the estimate, and the calls that change the estimator's reference).
+
+Both only enqueue (``EpisodeWriter.log``): the payloads are the loop's own immutable records
+(and a copy of each frame), turned into bytes on the writer's thread by the functions here.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from controller.episode import foxglove_types, topics
+from controller.episode.writer import EpisodeWriter, json_bytes
+from controller.insertion.interface import TeleopInput
+from controller.loop import TickRecord
+from controller.tactile.estimator import TactileEstimator
+from controller.tactile.field import VectorField
+from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
+from controller.tactile.wrench_source import WrenchSource
+from core.clock import Clock
+from core.devices import ArmStatus, GripperStatus, Twist
+from core.spatial import rotation_from_rpy
+
+FLAG_FIELDS = (
+    "contact",
+    "degenerate",
+    "slip_suspected",
+    "slip_gross",
+    "rezero_recommended",
+    "zeroing",
+    "calibrated",
+)
+
+
+def finite_or_none(value: float) -> float | None:
+    """``value`` as a float, None (JSON null) if it is NaN or infinite."""
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _vec(values: Any) -> list[float | None]:
+    return [finite_or_none(v) for v in values]
+
+
+# -- the tick's messages (encoded on the writer's thread) ----------------------------------
+
+
+def command_json(tick: TickRecord) -> bytes:
+    command = tick.command
+    twist = command.twist if command is not None else None
+    pose = command.pose if command is not None else None
+    gripper = command.gripper if command is not None else None
+    return json_bytes(
+        {
+            "twist_linear_m_s": _vec(twist.linear_m_s) if twist else None,
+            "twist_angular_rad_s": _vec(twist.angular_rad_s) if twist else None,
+            "pose_xyz_m": _vec(pose.xyz_m) if pose else None,
+            "pose_rpy_rad": _vec(pose.rpy_rad) if pose else None,
+            "gripper_width_m": gripper.width_m if gripper else None,
+            "gripper_speed_m_s": gripper.speed_m_s if gripper else None,
+            "gripper_force_n": gripper.force_n if gripper else None,
+            "capture_open_tactile": bool(command and command.capture_open_tactile),
+            "rezero_tactile": bool(command and command.rezero_tactile),
+            "limited": list(tick.limited),
+            "sent": command is not None,
+            "fault": tick.fault,
+        }
+    )
+
+
+def arm_json(arm: ArmStatus) -> bytes:
+    return json_bytes(
+        {
+            "t_s": arm.t_s,
+            "tcp_xyz_m": _vec(arm.tcp.xyz_m),
+            "tcp_rpy_rad": _vec(arm.tcp.rpy_rad),
+            "joints_rad": _vec(arm.joints_rad),
+            "mode": arm.mode.name.lower(),
+            "state": arm.state.name.lower(),
+            "error_code": arm.error_code,
+            "warning_code": arm.warning_code,
+        }
+    )
+
+
+def gripper_json(gripper: GripperStatus) -> bytes:
+    return json_bytes(
+        {
+            "t_s": gripper.t_s,
+            "activated": gripper.activated,
+            "moving": gripper.moving,
+            "object": gripper.object.name.lower(),
+            "width_m": finite_or_none(gripper.width_m),
+            "fault_code": gripper.fault_code,
+            "fault_message": gripper.fault_message,
+        }
+    )
+
+
+def teleop_json(teleop: TeleopInput) -> bytes:
+    twist: Twist = teleop.twist
+    return json_bytes(
+        {
+            "connected": teleop.connected,
+            "in_control": teleop.in_control,
+            "in_control_by": "operator" if teleop.in_control else "machine",
+            "twist_linear_m_s": _vec(twist.linear_m_s),
+            "twist_angular_rad_s": _vec(twist.angular_rad_s),
+            "gripper_open": teleop.gripper_open,
+            "gripper_close": teleop.gripper_close,
+            "hand_back": teleop.hand_back,
+            "estop": teleop.estop,
+            "estop_ack": teleop.estop_ack,
+        }
+    )
+
+
+def tick_json(tick: TickRecord) -> bytes:
+    timing = tick.timing
+    return json_bytes(
+        {
+            "index": timing.index,
+            "deadline_s": timing.deadline_s,
+            "start_s": timing.start_s,
+            "end_s": timing.end_s,
+            "overran": timing.overran,
+            "phase": tick.phase.value,
+            "fault": tick.fault,
+        }
+    )
+
+
+def tcp_tf(arm: ArmStatus) -> bytes:
+    quaternion = rotation_from_rpy(arm.tcp.rpy_rad).as_quat()  # x, y, z, w
+    return foxglove_types.transforms_bytes(
+        arm.t_s, [("B", "T", np.asarray(arm.tcp.xyz_m), quaternion)]
+    )
+
+
+def transition_json(transition: Any) -> bytes:
+    return json_bytes(
+        {
+            "t_s": transition.t_s,
+            "from": transition.source.value,
+            "to": transition.target.value,
+            "reason": transition.reason,
+        }
+    )
+
+
+class TickLogger:
+    """The loop's observer: queues each tick's messages into ``writer``, and asks for a
+    flush at each phase change."""
+
+    def __init__(self, writer: EpisodeWriter) -> None:
+        self.writer = writer
+
+    def __call__(self, tick: TickRecord) -> None:
+        log, t = self.writer.log, tick.timing.start_s
+        obs = tick.observation
+        log(topics.COMMAND, t, command_json, tick)
+        log(topics.ARM_STATUS, t, arm_json, obs.arm)
+        log(topics.GRIPPER_STATUS, t, gripper_json, obs.gripper)
+        log(topics.TELEOP, t, teleop_json, obs.teleop)
+        log(topics.LOOP_TICK, t, tick_json, tick)
+        log(topics.TCP_TF, t, tcp_tf, obs.arm)
+        for transition in tick.transitions:
+            log(topics.TRANSITION, transition.t_s, transition_json, transition)
+        if tick.transitions:
+            self.writer.flush_soon()
+
+
+# -- the tactile tap -----------------------------------------------------------------------
+
+
+def wrench_json(item: tuple[int, WrenchEstimate]) -> bytes:
+    index, e = item
+    row: dict[str, Any] = {"t_s": e.t_s, "push_index": index}
+    row.update({k: finite_or_none(getattr(e, k)) for k in VALUE_FIELDS})
+    row.update({k: bool(getattr(e, k)) for k in FLAG_FIELDS})
+    return json_bytes(row)
+
+
+def call_json(row: dict[str, Any]) -> bytes:
+    return json_bytes(row)
+
+
+def estimator_of(source: Any) -> TactileEstimator | None:
+    """The ``TactileEstimator`` at the bottom of ``source`` (through wrappers' ``.estimator``,
+    as ``TransformedSource``), None if there is none."""
+    while not isinstance(source, TactileEstimator):
+        source = getattr(source, "estimator", None)
+        if source is None:
+            return None
+    return source
+
+
+def field_of(estimator: TactileEstimator | None) -> VectorField | None:
+    """``estimator``'s latest displacement field, None without one."""
+    if estimator is None:
+        return None
+    try:
+        return estimator.field
+    except RuntimeError:  # no reference yet
+        return None
+
+
+class RecordingSource:
+    """A ``WrenchSource`` that passes every call to ``source`` and queues into ``writer``:
+    each frame (a copy, encoded as ``image_format`` 'jpeg' or 'png' on the writer's thread),
+    the field after it (if the estimator has one), the estimate it gave, and the calls in
+    order (``/tactile/push``), each logged at ``clock.now()``."""
+
+    def __init__(
+        self,
+        source: WrenchSource,
+        writer: EpisodeWriter,
+        clock: Clock,
+        *,
+        image_format: str = "jpeg",
+        jpeg_quality: int = 90,
+    ) -> None:
+        if image_format not in ("jpeg", "png"):
+            raise ValueError(f"image_format: expected 'jpeg' or 'png', got {image_format!r}")
+        self.source = source
+        self.writer = writer
+        self.clock = clock
+        self.image_format = image_format
+        self.jpeg_quality = jpeg_quality
+        self._pushes = 0
+        self._estimator = estimator_of(source)
+
+    @property
+    def estimator(self) -> WrenchSource:
+        """The wrapped source (wrappers are walked through ``.estimator``)."""
+        return self.source
+
+    def push(self, frame: np.ndarray, t_s: float) -> WrenchEstimate:
+        estimate = self.source.push(frame, t_s)
+        index = self._pushes
+        self._pushes += 1
+        now = self.clock.now()
+        log = self.writer.log
+        log(
+            topics.TACTILE_PUSH,
+            now,
+            call_json,
+            {"call": "push", "push_index": index, "frame_t_s": float(t_s)},
+        )
+        log(topics.TACTILE_IMAGE, now, self._image_bytes, (float(t_s), frame.copy()))
+        field = field_of(self._estimator)
+        if field is not None and not estimate.zeroing:
+            log(topics.TACTILE_FIELD, now, _grid_bytes, (float(t_s), field))
+        log(topics.TACTILE_WRENCH, now, wrench_json, (index, estimate))
+        return estimate
+
+    def capture_open(self, n_frames: int | None = None) -> None:
+        self.source.capture_open(n_frames)
+        self._log_call("capture_open", n_frames)
+
+    def rezero(self, n_frames: int | None = None) -> None:
+        self.source.rezero(n_frames)
+        self._log_call("rezero", n_frames)
+
+    def _log_call(self, call: str, n_frames: int | None) -> None:
+        row = {"call": call, "push_index": self._pushes, "n_frames": n_frames}
+        self.writer.log(topics.TACTILE_PUSH, self.clock.now(), call_json, row)
+
+    def _image_bytes(self, item: tuple[float, np.ndarray]) -> bytes:
+        t_s, image = item
+        return foxglove_types.image_bytes(t_s, image, self.image_format, self.jpeg_quality)
+
+
+def _grid_bytes(item: tuple[float, VectorField]) -> bytes:
+    return foxglove_types.grid_bytes(*item)

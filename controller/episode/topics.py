@@ -1,0 +1,391 @@
+"""Every topic of an episode file: its name, schema, encoding, frame and units.
+
+This table is the episode format's contract (docs/EPISODES.md): the writer
+(``controller.episode.writer``) refuses a topic not listed here, and the reader
+(``controller.episode.reader``) decodes by it. Times: every message's MCAP ``log_time`` is
+the time on the **loop's clock** in integer nanoseconds (``t_s * 1e9``; in simulation the
+world's clock, on the robot ``time.monotonic``); a message's own ``t_s``/``timestamp`` field,
+where it has one, is when the value was measured (e.g. a frame's capture). Frames (docs/
+ARCHITECTURE.md): ``B`` the arm base, ``T`` the tool (TCP), ``S`` the tactile sensor, ``H``
+the hole. SI units unless a field's name says otherwise; the raw tactile estimate's units are
+the estimator's (mm, mm^2) unless ``calibrated``.
+
+Two encodings:
+
+* ``protobuf``: Foxglove's well-known schemas (``foxglove.CompressedImage``,
+  ``foxglove.Grid``, ``foxglove.FrameTransforms``), encoded by ``foxglove-sdk``'s message
+  classes, so Foxglove's image, plot and 3D panels show them without a converter;
+* ``json``: our messages, one JSON object each, with a JSON Schema (``jsonschema``)
+  registered in the file, named ``tactile_insertion.NAME``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any, Literal
+
+FORMAT_VERSION = "1"
+"""The episode format's version (metadata ``episode.format_version``); a reader refuses
+another major version."""
+
+PROFILE = "tactile-insertion"
+"""The MCAP header's profile string."""
+
+Encoding = Literal["protobuf", "json"]
+
+
+@dataclass(frozen=True)
+class Topic:
+    """One stream: ``name`` (the MCAP topic), ``schema`` (the schema's name), ``encoding``
+    (the message encoding), ``frame`` (the frame its values are expressed in, "" for none),
+    ``rate`` (when a message is written) and ``doc`` (fields and units)."""
+
+    name: str
+    schema: str
+    encoding: Encoding
+    frame: str
+    rate: str
+    doc: str
+
+
+def _json_schema(properties: Mapping[str, Any], required: tuple[str, ...] = ()) -> dict:
+    return {"type": "object", "properties": dict(properties), "required": list(required)}
+
+
+_NUM = {"type": "number"}
+_NUM_OR_NULL = {"type": ["number", "null"]}
+_BOOL = {"type": "boolean"}
+_STR = {"type": "string"}
+_STR_OR_NULL = {"type": ["string", "null"]}
+_INT = {"type": "integer"}
+_VEC3 = {"type": "array", "items": _NUM, "minItems": 3, "maxItems": 3}
+_VEC3_OR_NULL = {"anyOf": [_VEC3, {"type": "null"}]}
+_NUMS = {"type": "array", "items": _NUM_OR_NULL}
+_STRS = {"type": "array", "items": _STR}
+
+TACTILE_IMAGE = Topic(
+    "/tactile/image",
+    "foxglove.CompressedImage",
+    "protobuf",
+    "S",
+    "every frame pushed into the estimator (the camera's own rate)",
+    "The frame as the estimator received it. ``timestamp``: the frame's capture time on the "
+    "loop's clock; ``log_time``: when it was pushed; ``format``: 'jpeg' (default, lossy) or "
+    "'png' (lossless: re-estimation reproduces the logged estimates exactly); ``frame_id`` "
+    "'S'. Image rows down (S's y), columns right (S's x); colour order as any JPEG/PNG "
+    "(decoded by OpenCV: BGR, as the estimator takes it).",
+)
+TACTILE_FIELD = Topic(
+    "/tactile/field",
+    "foxglove.Grid",
+    "protobuf",
+    "S",
+    "each frame pushed once the estimator has a reference",
+    "The estimator's displacement field on its grid, row-major, row 0 at the smallest y "
+    "(image top): three float32 fields per cell, ``u_mm`` and ``v_mm`` (displacement along "
+    "S's x and y, mm) and ``div`` (du/dx + dv/dy, dimensionless). ``cell_size`` is in m, "
+    "``pose`` places the grid's corner (cell (0, 0)'s outer corner) in S, ``frame_id`` 'S'. "
+    "``timestamp``: the frame's capture time.",
+)
+TACTILE_WRENCH = Topic(
+    "/tactile/wrench",
+    "tactile_insertion.WrenchEstimate",
+    "json",
+    "S",
+    "each frame pushed (one estimate per frame)",
+    "The estimate the controller saw (``controller.tactile.WrenchEstimate``, after any "
+    "``TransformedSource``): ``t_s`` (the frame's capture time), tau_x, tau_y, tau_z, "
+    "shear_x, shear_y, normal and the FingerVision baseline's fv_tau_x/y/z (raw: mm, tau_z "
+    "and fv mm^2; N*m / N when ``calibrated``; a non-finite value is null), the flags "
+    "(contact, degenerate, slip_suspected, slip_gross, rezero_recommended, zeroing, "
+    "calibrated) and ``push_index``: the frame's index among the pushes (0-based; the image "
+    "of the same push has the same index in ``/tactile/push``).",
+)
+TACTILE_PUSH = Topic(
+    "/tactile/push",
+    "tactile_insertion.SourceCall",
+    "json",
+    "",
+    "each call into the wrench source, in the order made",
+    "The calls the loop made into the wrench source, so a re-estimation repeats them in the "
+    "same order: ``call`` 'push' (``push_index``, ``frame_t_s``: capture time, s), "
+    "'capture_open' or 'rezero' (``n_frames``: the frames asked for, null for the "
+    "source's default; ``push_index``: the index of the next push, which is the first frame "
+    "the call affects). Messages of one file are ordered by (log_time, sequence).",
+)
+COMMAND = Topic(
+    "/control/command",
+    "tactile_insertion.Command",
+    "json",
+    "B",
+    "every tick",
+    "The command as sent, after the limits: ``twist_linear_m_s`` and ``twist_angular_rad_s`` "
+    "(TCP twist in B) or null, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) or "
+    "null, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
+    "target) or null, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
+    "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``sent`` (false on a fault tick: "
+    "nothing was sent) and ``fault`` (the watchdog's trip message or null).",
+)
+ARM_STATUS = Topic(
+    "/arm/status",
+    "tactile_insertion.ArmStatus",
+    "json",
+    "B",
+    "every tick (the status the machine saw)",
+    "``t_s`` (read time), ``tcp_xyz_m``, ``tcp_rpy_rad`` (T2B, xArm rpy), ``joints_rad`` (6; "
+    "null where unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
+    "``warning_code``.",
+)
+GRIPPER_STATUS = Topic(
+    "/gripper/status",
+    "tactile_insertion.GripperStatus",
+    "json",
+    "",
+    "every tick",
+    "``t_s``, ``activated``, ``moving``, ``object`` (the Hand-E's object detection), "
+    "``width_m`` (finger opening), ``fault_code``, ``fault_message``.",
+)
+TELEOP = Topic(
+    "/teleop/input",
+    "tactile_insertion.TeleopInput",
+    "json",
+    "B",
+    "every tick",
+    "The gamepad after arbitration (``controller.teleop``): ``connected``, ``in_control`` "
+    "(true: the operator drives the arm; false: the machine), ``in_control_by`` ('operator' "
+    "or 'machine'), ``twist_linear_m_s``, ``twist_angular_rad_s`` (the operator's TCP twist "
+    "in B), ``gripper_open``, ``gripper_close``, ``hand_back``, ``estop``, ``estop_ack``.",
+)
+TRANSITION = Topic(
+    "/machine/transition",
+    "tactile_insertion.Transition",
+    "json",
+    "",
+    "each phase change (the file is flushed at once)",
+    "``t_s``, ``from``, ``to`` (phases, controller.insertion.Phase values) and ``reason``: "
+    "the rule that fired (e.g. a detection rule's name and values, or a FailureReason).",
+)
+LOOP_TICK = Topic(
+    "/loop/tick",
+    "tactile_insertion.LoopTick",
+    "json",
+    "",
+    "every tick",
+    "``index``, ``deadline_s``, ``start_s``, ``end_s`` (s on the loop's clock), ``overran``, "
+    "``phase`` (the machine's phase after its step) and ``fault`` (null or the trip).",
+)
+TCP_TF = Topic(
+    "/tf",
+    "foxglove.FrameTransforms",
+    "protobuf",
+    "B",
+    "every tick",
+    "The TCP pose: parent 'B', child 'T', translation in m, rotation a unit quaternion "
+    "(from the xArm rpy, core.spatial's 'xyz' convention). In simulation the truth adds, on "
+    "``/sim/tf``, the plug ('plug', S2B) and the hole ('H').",
+)
+DROPS = Topic(
+    "/episode/drops",
+    "tactile_insertion.Drops",
+    "json",
+    "",
+    "when the queue overflowed, at most every flush",
+    "Records the writer dropped because its queue was full: ``dropped_total`` (since the "
+    "start) and ``by_topic`` (topic -> count since the start).",
+)
+SIM_TRUTH = Topic(
+    "/sim/truth",
+    "tactile_insertion.SimTruth",
+    "json",
+    "",
+    "each row of the scene's truth (simulation only; never fed to the controller)",
+    "drivers/sim/scenes/insertion/truth.py's row: ``t_s``, ``gel_wrench_s`` (fx, fy, fz N; "
+    "tau_x, tau_y, tau_z N*m: the gel on the plug, in S), ``wrist_wrench_t`` (6, N and N*m), "
+    "``tip_xyz_b`` (m, B), ``plug_quat_b`` (w, x, y, z; S2B), ``depth_m`` (tip below the "
+    "board surface), ``contact_force_n``.",
+)
+SIM_TF = Topic(
+    "/sim/tf",
+    "foxglove.FrameTransforms",
+    "protobuf",
+    "B",
+    "with each truth row (simulation only)",
+    "The plug's true pose ('B' -> 'plug': origin at its tip, rotation S2B) and the true hole "
+    "('B' -> 'H', with each row, so a viewer joining late still sees it).",
+)
+
+TOPICS: Mapping[str, Topic] = {
+    t.name: t
+    for t in (
+        TACTILE_IMAGE,
+        TACTILE_FIELD,
+        TACTILE_WRENCH,
+        TACTILE_PUSH,
+        COMMAND,
+        ARM_STATUS,
+        GRIPPER_STATUS,
+        TELEOP,
+        TRANSITION,
+        LOOP_TICK,
+        TCP_TF,
+        DROPS,
+        SIM_TRUTH,
+        SIM_TF,
+    )
+}
+"""Every topic by name."""
+
+JSON_SCHEMAS: Mapping[str, dict] = {
+    TACTILE_WRENCH.schema: _json_schema(
+        {
+            "t_s": _NUM,
+            "push_index": _INT,
+            **{
+                k: _NUM_OR_NULL
+                for k in (
+                    "tau_x",
+                    "tau_y",
+                    "tau_z",
+                    "shear_x",
+                    "shear_y",
+                    "normal",
+                    "fv_tau_x",
+                    "fv_tau_y",
+                    "fv_tau_z",
+                )
+            },
+            **{
+                k: _BOOL
+                for k in (
+                    "contact",
+                    "degenerate",
+                    "slip_suspected",
+                    "slip_gross",
+                    "rezero_recommended",
+                    "zeroing",
+                    "calibrated",
+                )
+            },
+        },
+        ("t_s", "push_index", "tau_x", "tau_y", "tau_z"),
+    ),  # fmt: skip
+    TACTILE_PUSH.schema: _json_schema(
+        {
+            "call": {"enum": ["push", "capture_open", "rezero"]},
+            "push_index": _INT,
+            "frame_t_s": _NUM,
+            "n_frames": {"type": ["integer", "null"]},
+        },
+        ("call", "push_index"),
+    ),
+    COMMAND.schema: _json_schema(
+        {
+            "twist_linear_m_s": _VEC3_OR_NULL,
+            "twist_angular_rad_s": _VEC3_OR_NULL,
+            "pose_xyz_m": _VEC3_OR_NULL,
+            "pose_rpy_rad": _VEC3_OR_NULL,
+            "gripper_width_m": _NUM_OR_NULL,
+            "gripper_speed_m_s": _NUM_OR_NULL,
+            "gripper_force_n": _NUM_OR_NULL,
+            "capture_open_tactile": _BOOL,
+            "rezero_tactile": _BOOL,
+            "limited": _STRS,
+            "sent": _BOOL,
+            "fault": _STR_OR_NULL,
+        },
+        ("sent", "limited"),
+    ),
+    ARM_STATUS.schema: _json_schema(
+        {
+            "t_s": _NUM,
+            "tcp_xyz_m": _VEC3,
+            "tcp_rpy_rad": _VEC3,
+            "joints_rad": _NUMS,
+            "mode": _STR,
+            "state": _STR,
+            "error_code": _INT,
+            "warning_code": _INT,
+        },
+        ("t_s", "tcp_xyz_m", "tcp_rpy_rad"),
+    ),
+    GRIPPER_STATUS.schema: _json_schema(
+        {
+            "t_s": _NUM,
+            "activated": _BOOL,
+            "moving": _BOOL,
+            "object": _STR,
+            "width_m": _NUM,
+            "fault_code": _INT,
+            "fault_message": _STR,
+        },
+        ("t_s", "width_m"),
+    ),
+    TELEOP.schema: _json_schema(
+        {
+            "connected": _BOOL,
+            "in_control": _BOOL,
+            "in_control_by": {"enum": ["operator", "machine"]},
+            "twist_linear_m_s": _VEC3,
+            "twist_angular_rad_s": _VEC3,
+            **{
+                k: _BOOL
+                for k in ("gripper_open", "gripper_close", "hand_back", "estop", "estop_ack")
+            },
+        },
+        ("in_control", "in_control_by"),
+    ),
+    TRANSITION.schema: _json_schema(
+        {"t_s": _NUM, "from": _STR, "to": _STR, "reason": _STR}, ("t_s", "from", "to", "reason")
+    ),
+    LOOP_TICK.schema: _json_schema(
+        {
+            "index": _INT,
+            "deadline_s": _NUM,
+            "start_s": _NUM,
+            "end_s": _NUM,
+            "overran": _BOOL,
+            "phase": _STR,
+            "fault": _STR_OR_NULL,
+        },
+        ("index", "start_s", "phase"),
+    ),
+    DROPS.schema: _json_schema(
+        {"dropped_total": _INT, "by_topic": {"type": "object", "additionalProperties": _INT}},
+        ("dropped_total", "by_topic"),
+    ),
+    SIM_TRUTH.schema: _json_schema(
+        {
+            "t_s": _NUM,
+            "gel_wrench_s": _NUMS,
+            "wrist_wrench_t": _NUMS,
+            "tip_xyz_b": _NUMS,
+            "plug_quat_b": _NUMS,
+            "depth_m": _NUM,
+            "contact_force_n": _NUM,
+        },
+        ("t_s",),
+    ),
+}
+"""The JSON Schema of each ``json`` topic's schema name."""
+
+METADATA_EPISODE = "episode"
+"""The metadata record written at the start: ``format_version``, ``task``, ``task_file``,
+``overrides`` (JSON list), ``seed``, ``controller``, ``backend``, ``package_version``,
+``git_revision`` (or "unknown"), ``machine`` (host, CPU, OS, Python), ``started_utc`` (ISO
+8601 wall clock), ``tactile_image_format`` ('jpeg' or 'png'), ``jpeg_quality``,
+``queue_size``, ``flush_interval_s``."""
+
+METADATA_OUTCOME = "outcome"
+"""The metadata record written at the end (absent if the process was killed): ``reason``,
+``message``, ``phase`` (the loop's end), ``dropped_total``, ``dropped_by_topic`` (JSON),
+``result`` (JSON: the trial's result row where a trial tool ran it), ``error`` (an
+exception that ended the run, else "")."""
+
+METADATA_REPAIR = "repair"
+"""Written by ``repair``: ``complete`` "false", ``source_bytes`` (the killed file's size),
+``read_bytes`` (the bytes of it that held whole records), ``messages`` (recovered)."""
+
+ATTACHMENT_TASK = "task.yaml"
+"""The attachment holding the resolved task configuration (the merged, overridden task file
+as YAML; media type ``application/yaml``)."""

@@ -1,0 +1,247 @@
+"""Writing an episode file: ``EpisodeWriter``, a logger thread fed by a bounded queue.
+
+The control loop's thread only enqueues (``log``: the topic, the time, an encoder and its
+payload; no encoding, no I/O); the logger thread encodes each record, appends it to the
+MCAP file (``mcap``'s writer, zstd chunks) and flushes the file (finishing the chunk in
+progress) every ``flush_interval_s`` and whenever ``flush_soon`` asks (at each phase
+change). A process killed with SIGKILL therefore leaves every record up to the last flush
+readable (controller/episode/reader.py); ``repair`` finishes such a file.
+
+When the queue is full the record is dropped, not waited for: the drop is counted by topic,
+logged once per topic as a warning, written to ``/episode/drops`` at the next flush and to
+the ``outcome`` metadata at the end.
+
+``close(outcome)`` stops the thread after it has written everything queued, writes the
+``outcome`` metadata and the file's summary and footer. A failure to write (a full disk)
+stops the logger: later records are counted as dropped, and ``close`` raises OSError naming
+the file.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import logging
+import queue
+import threading
+import time
+from collections import Counter
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.writer import CompressionType, Writer
+
+from controller.episode.topics import (
+    DROPS,
+    JSON_SCHEMAS,
+    METADATA_EPISODE,
+    METADATA_OUTCOME,
+    PROFILE,
+    Topic,
+)
+
+log = logging.getLogger(__name__)
+
+NS_PER_S = 1_000_000_000
+QUEUE_SIZE = 4096
+"""Records the queue holds (about 4 s of a trial's records at the default rates)."""
+FLUSH_INTERVAL_S = 0.1
+CHUNK_SIZE_BYTES = 4 * 1024 * 1024
+"""A chunk is finished at this size or at the next flush, whichever comes first."""
+LIBRARY = "tactile-insertion episode writer"
+
+Encoder = Callable[[Any], bytes]
+"""Turns a payload into a message's bytes (run on the logger thread)."""
+
+
+def json_bytes(payload: Mapping[str, Any]) -> bytes:
+    """A JSON topic's message: ``payload`` as compact JSON (NaN and inf are not allowed:
+    the caller writes null)."""
+    return json.dumps(payload, separators=(",", ":"), allow_nan=False).encode()
+
+
+_STOP = object()
+
+
+class EpisodeWriter:
+    """Writes one episode to ``path`` (a new file; FileExistsError if it exists).
+
+    ``info``: the ``episode`` metadata (controller/episode/topics.py, METADATA_EPISODE);
+    ``attachments``: name -> (media type, bytes), e.g. the task file. ``queue_size``,
+    ``flush_interval_s``: see the module doc. Use it as a context manager, or call
+    ``close``.
+    """
+
+    def __init__(
+        self,
+        path: Path,
+        info: Mapping[str, str],
+        attachments: Mapping[str, tuple[str, bytes]] = {},
+        *,
+        queue_size: int = QUEUE_SIZE,
+        flush_interval_s: float = FLUSH_INTERVAL_S,
+    ) -> None:
+        self.path = Path(path)
+        self.flush_interval_s = flush_interval_s
+        self._stream: IO[bytes] = self.path.open("xb")
+        self._mcap = Writer(
+            self._stream, chunk_size=CHUNK_SIZE_BYTES, compression=CompressionType.ZSTD
+        )
+        self._mcap.start(profile=PROFILE, library=LIBRARY)
+        self._mcap.add_metadata(METADATA_EPISODE, dict(info))
+        for name, (media_type, data) in attachments.items():
+            self._mcap.add_attachment(0, 0, name, media_type, data)
+        self._mcap.flush()
+        self._channels: dict[str, int] = {}
+        self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_size)
+        self._sequence = itertools.count()
+        self.dropped: Counter[str] = Counter()
+        self._dropped_written = 0
+        self._flush_wanted = threading.Event()
+        self._error: OSError | None = None
+        self._closed = False
+        self.busy_s = 0.0
+        """CPU time the logger thread has used, s (``time.thread_time``)."""
+        self._thread = threading.Thread(target=self._run, name="episode-writer", daemon=True)
+        self._thread.start()
+
+    # -- the loop's side (never blocks) ----------------------------------------------------
+
+    def log(self, topic: Topic, t_s: float, encode: Encoder, payload: Any) -> None:
+        """Queue one record of ``topic`` logged at ``t_s`` (s on the loop's clock), encoded
+        on the logger thread by ``encode(payload)``; dropped and counted if the queue is
+        full or the writer has failed. ``payload`` must not change afterwards."""
+        sequence = next(self._sequence)
+        if self._error is None and not self._closed:
+            try:
+                self._queue.put_nowait((topic, round(t_s * NS_PER_S), sequence, encode, payload))
+                return
+            except queue.Full:
+                pass
+        if not self.dropped[topic.name]:
+            log.warning("episode %s: queue full, dropping %s records", self.path, topic.name)
+        self.dropped[topic.name] += 1
+
+    def flush_soon(self) -> None:
+        """Ask the logger thread to flush after the records queued so far (a phase change)."""
+        self._flush_wanted.set()
+
+    @property
+    def dropped_total(self) -> int:
+        return sum(self.dropped.values())
+
+    # -- the end ---------------------------------------------------------------------------
+
+    def close(self, outcome: Mapping[str, str] | None = None) -> None:
+        """Write everything queued, then the ``outcome`` metadata (with the drop counts),
+        the summary and the footer; close the file. Idempotent. OSError naming the file if
+        writing failed."""
+        if self._closed:
+            return
+        self._closed = True
+        while self._thread.is_alive():  # the thread writes what is queued before the stop
+            try:
+                self._queue.put(_STOP, timeout=0.1)
+                break
+            except queue.Full:
+                continue
+        self._thread.join()
+        try:
+            if self._error is None:
+                record = {
+                    **dict(outcome or {}),
+                    "dropped_total": str(self.dropped_total),
+                    "dropped_by_topic": json.dumps(dict(self.dropped), sort_keys=True),
+                }
+                self._write_drops(self._last_ns)
+                self._mcap.add_metadata(METADATA_OUTCOME, record)
+                self._mcap.finish()
+                self._stream.flush()
+        except OSError as error:
+            self._error = error
+        finally:
+            try:
+                self._stream.close()
+            except OSError as error:
+                self._error = self._error or error
+        if self._error is not None:
+            raise OSError(self._error.errno, self._error.strerror, str(self.path))
+
+    def __enter__(self) -> EpisodeWriter:
+        return self
+
+    def __exit__(self, kind: object, error: object, traceback: object) -> None:
+        self.close({"error": f"{type(error).__name__}: {error}"} if error else None)
+
+    # -- the logger thread -----------------------------------------------------------------
+
+    _last_ns = 0
+
+    def _run(self) -> None:
+        began = time.thread_time()
+        next_flush = time.monotonic() + self.flush_interval_s
+        try:
+            while True:
+                try:
+                    item = self._queue.get(timeout=max(0.0, next_flush - time.monotonic()))
+                except queue.Empty:
+                    item = None
+                if item is _STOP:
+                    return
+                if item is not None:
+                    self._write(item)
+                wanted = self._flush_wanted.is_set()
+                if wanted or time.monotonic() >= next_flush:
+                    if wanted:
+                        self._flush_wanted.clear()
+                        if self._drain():
+                            return
+                    self._write_drops(self._last_ns)
+                    self._mcap.flush()
+                    next_flush = time.monotonic() + self.flush_interval_s
+        except OSError as error:
+            self._error = error
+            log.error("episode %s: writing stopped: %s", self.path, error)
+        finally:
+            self.busy_s = time.thread_time() - began
+
+    def _drain(self) -> bool:
+        """Write what is queued now, without waiting for more; True if it met the stop."""
+        while True:
+            try:
+                item = self._queue.get_nowait()
+            except queue.Empty:
+                return False
+            if item is _STOP:
+                return True
+            self._write(item)
+
+    def _write(self, item: tuple[Topic, int, int, Encoder, Any]) -> None:
+        topic, t_ns, sequence, encode, payload = item
+        channel = self._channels.get(topic.name)
+        if channel is None:
+            channel = self._register(topic)
+        self._mcap.add_message(channel, t_ns, encode(payload), t_ns, sequence % 2**32)
+        self._last_ns = max(self._last_ns, t_ns)
+
+    def _write_drops(self, t_ns: int) -> None:
+        total = self.dropped_total
+        if total == self._dropped_written:
+            return
+        self._dropped_written = total
+        payload = {"dropped_total": total, "by_topic": dict(self.dropped)}
+        self._write((DROPS, t_ns, next(self._sequence), json_bytes, payload))
+
+    def _register(self, topic: Topic) -> int:
+        if topic.encoding == "json":
+            schema = json.dumps(JSON_SCHEMAS[topic.schema]).encode()
+            schema_id = self._mcap.register_schema(topic.schema, "jsonschema", schema)
+        else:
+            from controller.episode import foxglove_types
+
+            found = foxglove_types.schema(topic.schema)
+            schema_id = self._mcap.register_schema(found.name, found.encoding, found.data)
+        channel = self._mcap.register_channel(topic.name, topic.encoding, schema_id)
+        self._channels[topic.name] = channel
+        return channel
