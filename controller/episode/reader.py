@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import math
+import struct
 from collections import Counter
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -126,6 +127,11 @@ class Episode:
                 self._decoder(channel)(record.data),
             )
 
+    def records(self) -> tuple[dict[int, Schema], dict[int, Channel], list[Message]]:
+        """The raw MCAP schemas and channels by id and the messages in file order (what
+        ``repair`` copies)."""
+        return self._schemas, self._channels, self._messages
+
     def _decoder(self, channel: Channel) -> Callable[[bytes], Any]:
         decoder = self._decoders.get(channel.id)
         if decoder is None:
@@ -164,7 +170,7 @@ def read_episode(path: str | Path) -> Episode:
         except McapError as error:
             if state.header is None:
                 raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
-        except (ValueError, UnicodeDecodeError, EOFError) as error:  # a record cut or garbled
+        except (ValueError, EOFError, struct.error) as error:  # a record cut or garbled
             if state.header is None:
                 raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
     return state.episode(size)

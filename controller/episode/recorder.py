@@ -223,7 +223,7 @@ class RecordingSource:
         clock: Clock,
         *,
         image_format: str = "jpeg",
-        jpeg_quality: int = 90,
+        jpeg_quality: int = 80,
     ) -> None:
         if image_format not in ("jpeg", "png"):
             raise ValueError(f"image_format: expected 'jpeg' or 'png', got {image_format!r}")

@@ -38,7 +38,7 @@ class EpisodeOptions:
     ``flush_interval_s``."""
 
     image_format: str = "jpeg"
-    jpeg_quality: int = 90
+    jpeg_quality: int = 80
     queue_size: int = QUEUE_SIZE
     flush_interval_s: float = FLUSH_INTERVAL_S
 

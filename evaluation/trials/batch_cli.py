@@ -2,7 +2,7 @@
 
     python scripts/run_trials.py --task usb_c --seeds 0:200 --out out/trials/usb_c
         [--controller dipole|fingervision|blind|oracle] [--workers N]
-        [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records]
+        [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records] [--episodes]
 
 Seeds run from A up to B, B excluded. ``--set`` overrides a task or scene configuration key
 by dotted path (``--set scene.friction=0.5``), validated like the YAML. ``--workers`` is the
@@ -10,7 +10,8 @@ number of trials run at once (1: in this process); with ``--executor ray`` the t
 Ray tasks on a local Ray instance of that many CPUs, or on the cluster at ``--ray-address``
 (then its CPUs set the parallelism). ``--records`` lets each trial write its own record and
 chart (``summary.png``) under OUT/records/<controller>-<seed>/, kept there once its row is in
-trials.csv (``evaluation.trials.records``).
+trials.csv (``evaluation.trials.records``); ``--episodes`` adds each trial's episode
+(``episode.mcap``, docs/EPISODES.md) to its record.
 
 OUT must be a new or empty folder. OUT/trials.csv gets one row per trial as it finishes;
 OUT/summary.json (keys: docs/EVALUATION.md, ``evaluation.trials.summary``) is written at the
@@ -195,6 +196,11 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="each trial writes its record and chart under OUT/records/<controller>-<seed>/",
     )
+    parser.add_argument(
+        "--episodes",
+        action="store_true",
+        help="each trial also writes its episode.mcap into its record (implies --records)",
+    )
     return parser
 
 
@@ -208,8 +214,10 @@ def main(argv: list[str] | None = None) -> int:
 def _run(args: argparse.Namespace) -> int:
     check_batch_folder(args.out)
     function, check = load_trial_function(args.trial_function)
-    records = args.out / RECORDS if args.records else None
-    specs = SeedSpecs(args.task, args.controller, args.seeds, tuple(args.overrides), records)
+    records = args.out / RECORDS if args.records or args.episodes else None
+    specs = SeedSpecs(
+        args.task, args.controller, args.seeds, tuple(args.overrides), records, args.episodes
+    )
     context = {
         "task": args.task,
         "controller": args.controller,

@@ -37,15 +37,19 @@ class TrialSpec:
     ``controller`` (a name of ``TRIAL_CONTROLLERS``), ``seed`` (the scene's seed), ``overrides``
     (``"KEY=VALUE"`` strings applied in order to the task configuration by dotted path, see
     ``core.config.apply_overrides``) and ``out_dir`` (where the trial writes its own
-    record and charts; None: it writes nothing)."""
+    record and charts; None: it writes nothing); ``episode``: the trial also writes its
+    episode (``episode.mcap``) in ``out_dir``."""
 
     task: str
     controller: str
     seed: int
     overrides: tuple[str, ...] = ()
     out_dir: Path | None = None
+    episode: bool = False
 
     def __post_init__(self) -> None:
+        if self.episode and self.out_dir is None:
+            raise SpecError("episode: a trial writes its episode into its out_dir; give one")
         if self.controller not in TRIAL_CONTROLLERS:
             raise SpecError(
                 f"controller {self.controller!r}: expected one of {', '.join(TRIAL_CONTROLLERS)}"
@@ -62,7 +66,7 @@ class SeedSpecs(Sequence[TrialSpec]):
     """The trials of one batch: ``controller`` on ``task`` with ``overrides``, one per seed
     of ``seeds``, each made only when asked for, so a batch of any length takes the same
     memory. With ``records`` (a folder), each trial writes its record in its unfinished
-    folder under it (``evaluation.trials.records``)."""
+    folder under it (``evaluation.trials.records``), and with ``episodes`` its episode too."""
 
     def __init__(
         self,
@@ -71,9 +75,12 @@ class SeedSpecs(Sequence[TrialSpec]):
         seeds: range,
         overrides: tuple[str, ...] = (),
         records: Path | None = None,
+        episodes: bool = False,
     ) -> None:
+        if episodes and records is None:
+            raise SpecError("episodes: each trial's episode goes into its record; give records")
         self.task, self.controller, self.seeds = task, controller, seeds
-        self.overrides, self.records = tuple(overrides), records
+        self.overrides, self.records, self.episodes = tuple(overrides), records, episodes
 
     def __len__(self) -> int:
         return len(self.seeds)
@@ -87,13 +94,20 @@ class SeedSpecs(Sequence[TrialSpec]):
     def __getitem__(self, index: int | slice) -> TrialSpec | SeedSpecs:
         if isinstance(index, slice):
             return SeedSpecs(
-                self.task, self.controller, self.seeds[index], self.overrides, self.records
+                self.task,
+                self.controller,
+                self.seeds[index],
+                self.overrides,
+                self.records,
+                self.episodes,
             )
         seed = self.seeds[index]
         out_dir = None
         if self.records is not None:
             out_dir = unfinished_record(self.records, self.controller, seed)
-        return TrialSpec(self.task, self.controller, seed, self.overrides, out_dir)
+        return TrialSpec(
+            self.task, self.controller, seed, self.overrides, out_dir, self.episodes
+        )
 
 
 def parse_seeds(text: str) -> range:

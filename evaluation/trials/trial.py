@@ -12,17 +12,20 @@ on the robot, and the outcome is the machine's (no truth).
 from __future__ import annotations
 
 import dataclasses
+import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from controller.episode.session import EPISODE_FILE, EpisodeOptions, EpisodeRecording
 from controller.insertion import Phase
 from controller.loop import LoopResult
 from controller.run import RunOutcome, Task, load_task, run_task
 from core.atomic_files import atomic_file
 from evaluation.common.cli_support import Terminated
+from evaluation.trials.episode_truth import SimTruthLogger
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
@@ -51,7 +54,8 @@ def run_trial(spec: TrialSpec) -> TrialResult:
     stopped the trial's loop (after its safe stop) stops the batch too, as KeyboardInterrupt
     (SIGINT) or Terminated (SIGTERM): an interrupted trial is not a failed one."""
     task = load_task(spec.task, spec.overrides)
-    outcome = run(task, spec.controller, spec.seed, out_dir=spec.out_dir)
+    episode = EpisodeOptions() if spec.episode else None
+    outcome = run(task, spec.controller, spec.seed, out_dir=spec.out_dir, episode=episode)
     raise_if_interrupted(outcome)
     if spec.out_dir is not None:
         write_trial_chart(spec.out_dir, outcome.result)
@@ -66,15 +70,88 @@ def raise_if_interrupted(outcome: TrialOutcome) -> None:
 
 
 def run(
-    task: Task, controller: str, seed: int, *, out_dir: Path | None = None, **run_options: Any
+    task: Task,
+    controller: str,
+    seed: int,
+    *,
+    out_dir: Path | None = None,
+    episode: EpisodeOptions | None = None,
+    **run_options: Any,
 ) -> TrialOutcome:
     """Run one trial of ``task`` with ``controller`` (see the module doc): the product's
     ``run_task`` with the trial tools' controllers (the oracle too) and the same
     ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored against
     the simulated world's truth; ``out_dir``: the run's record, with ``truth.npz`` and the
-    trial's summary in ``trial.json``."""
+    trial's summary in ``trial.json``; ``episode``: also write ``out_dir/episode.mcap``
+    (docs/EPISODES.md) with these options, the truth on ``/sim/`` topics in simulation and
+    the trial's result in its outcome."""
+    if episode is None:
+        return _run(task, controller, seed, out_dir, None, run_options)
+    if out_dir is None:
+        raise ValueError("episode: a trial writes its episode into out_dir; give one")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    recording = EpisodeRecording.open(
+        out_dir / EPISODE_FILE,
+        task.raw,
+        task=task.config.task,
+        task_file=task.path,
+        overrides=task.overrides,
+        seed=seed,
+        controller=controller,
+        backend=run_options.get("backend", "sim"),
+        options=episode,
+    )
+    try:
+        outcome = _run(task, controller, seed, out_dir, recording, run_options)
+    except BaseException as error:
+        recording.close({"error": f"{type(error).__name__}: {error}"})
+        raise
+    recording.close(episode_outcome(outcome))
+    return outcome
+
+
+def episode_outcome(outcome: TrialOutcome) -> dict[str, str]:
+    """The episode's ``outcome`` metadata of a finished trial."""
+    loop = outcome.loop
+    return {
+        "reason": loop.reason,
+        "message": loop.message,
+        "phase": loop.phase.value,
+        "result": json.dumps(outcome.result.as_row(), default=str),
+        "error": "",
+    }
+
+
+def _run(
+    task: Task,
+    controller: str,
+    seed: int,
+    out_dir: Path | None,
+    recording: EpisodeRecording | None,
+    run_options: dict[str, Any],
+) -> TrialOutcome:
+    truth_logger = SimTruthLogger(recording.writer) if recording is not None else None
+    if truth_logger is not None:
+        prepare = run_options.pop("prepare", None)
+
+        def prepare_and_attach(device_set: Any) -> None:
+            truth_logger.attach(device_set.world)
+            if prepare is not None:
+                prepare(device_set)
+
+        run_options = {
+            **run_options,
+            "prepare": prepare_and_attach,
+            "observers": [*run_options.get("observers", ()), truth_logger],
+        }
     ran = run_task(
-        task, controller, seed, out_dir=out_dir, controllers=TRIAL_CONTROLLERS, **run_options
+        task,
+        controller,
+        seed,
+        out_dir=out_dir,
+        controllers=TRIAL_CONTROLLERS,
+        episode=recording,
+        **run_options,
     )
     world = ran.devices.world
     if world is None:
@@ -84,6 +161,8 @@ def run(
         world.sync()
         truth = world.truth.arrays()
         result = _result(task, controller, seed, ran, truth)
+        if truth_logger is not None:
+            truth_logger.drain()
         if out_dir is not None:
             write_truth(out_dir, truth, dataclasses.asdict(world.truth.hole))
     if ran.recorder is not None:

@@ -2,10 +2,12 @@
 
     run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
                  [--controller dipole|fingervision|oracle|blind] [--realtime] [--set KEY=VALUE ...]
+                 [--episode-images jpeg|png]
 
-It prints the phase timeline and the outcome, and writes into DIR the trial's record
-(controller/run/record.py: ticks.jsonl, transitions.jsonl, truth.npz, trial.json) and
-``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
+It prints the phase timeline and the outcome, and writes into DIR the trial's episode
+(``episode.mcap``: every stream, docs/EPISODES.md; its tactile frames as JPEG, or losslessly
+as PNG with ``--episode-images png``), its record (controller/run/record.py: ticks.jsonl,
+transitions.jsonl, truth.npz, trial.json) and ``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
 possible. Exit codes as every tool's (evaluation/common/cli_support.py); a trial that fails
@@ -18,6 +20,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run.task import load_task
 from evaluation.common.cli_support import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
 from evaluation.common.outputs import check_output_folder
@@ -37,6 +40,12 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--realtime", action="store_true", help="pace to the wall clock")
     add_override_argument(
         parser, "override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)"
+    )
+    parser.add_argument(
+        "--episode-images",
+        choices=("jpeg", "png"),
+        default="jpeg",
+        help="the episode's tactile frames: jpeg (small) or png (lossless, exact re-estimation)",
     )
     parser.add_argument("--out", type=Path, required=True, help="output folder (new or empty)")
     return parser
@@ -62,11 +71,15 @@ def _run(args: argparse.Namespace) -> int:
         backend=args.backend,
         realtime=args.realtime,
         out_dir=args.out,
+        episode=EpisodeOptions(image_format=args.episode_images),
     )
     print(timeline(outcome))
     if outcome.truth is not None:
         write_trial_chart(args.out, outcome.result)
     print(f"run_trial: wrote {args.out}")
+    episode = args.out / EPISODE_FILE
+    print(f"run_trial: episode {episode}; summarise it with:")
+    print(f"  .venv/bin/python scripts/replay.py summary {episode}")
     if outcome.loop.reason == "signal":
         return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
     return 0

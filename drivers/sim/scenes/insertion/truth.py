@@ -57,6 +57,11 @@ class TruthLog:
     def __len__(self) -> int:
         return len(self._rows)
 
+    def rows_since(self, start: int) -> list[np.ndarray]:
+        """The rows from index ``start`` on, each in ``COLUMNS`` order (a recorder reads
+        what is new since its last read)."""
+        return self._rows[start:]
+
     def arrays(self) -> dict[str, np.ndarray]:
         """Every column as an array: (n,) for one number, (n, k) for k."""
         table = np.array(self._rows).reshape(-1, _WIDTH)

@@ -1,0 +1,103 @@
+"""The episode writer's queue overflow, and the reader on bad, foreign and truncated files."""
+
+from __future__ import annotations
+
+import threading
+
+import pytest
+from mcap.writer import Writer
+
+from controller.episode import EpisodeError, read_episode
+from controller.episode.repair import repair
+from controller.episode.topics import LOOP_TICK, TRANSITION
+from controller.episode.writer import EpisodeWriter, json_bytes
+
+
+def _writer(path, **options):
+    return EpisodeWriter(path, {"format_version": "1", "seed": "0"}, **options)
+
+
+def test_a_full_queue_drops_counts_and_records_what_it_dropped(tmp_path):
+    started, release = threading.Event(), threading.Event()
+
+    def slow(payload):  # the logger thread stalls on its first record
+        started.set()
+        release.wait(10.0)
+        return json_bytes(payload)
+
+    writer = _writer(tmp_path / "e.mcap", queue_size=3)
+    for i in range(20):
+        writer.log(LOOP_TICK, i * 0.01, slow, {"index": i, "start_s": i * 0.01, "phase": "grasp"})
+        if i == 0:
+            assert started.wait(10.0)
+    writer.log(TRANSITION, 0.5, json_bytes, {"t_s": 0.5, "from": "a", "to": "b", "reason": "r"})
+    dropped = writer.dropped_total
+    release.set()
+    writer.close({"reason": "done"})
+
+    assert dropped == 17  # of 21: one in the thread's hands, three queued
+    ep = read_episode(tmp_path / "e.mcap")
+    assert ep.counts["/loop/tick"] + writer.dropped["/loop/tick"] == 20
+    assert ep.counts.get("/machine/transition", 0) + writer.dropped["/machine/transition"] == 1
+    assert ep.outcome["dropped_total"] == str(dropped)
+    drops = [m.value for m in ep.messages("/episode/drops")]
+    assert drops[-1]["dropped_total"] == dropped
+    assert drops[-1]["by_topic"] == dict(writer.dropped)
+    indices = [m.value["index"] for m in ep.messages("/loop/tick")]
+    assert indices == sorted(indices)
+
+
+def test_a_missing_file_is_one_line_naming_it(tmp_path):
+    with pytest.raises(EpisodeError, match=r"episode '.*nope.mcap': cannot open") as error:
+        read_episode(tmp_path / "nope.mcap")
+    assert "\n" not in str(error.value)
+
+
+def test_a_foreign_file_is_refused(tmp_path):
+    foreign = tmp_path / "notes.mcap"
+    foreign.write_bytes(b"this is not an MCAP file at all")
+    with pytest.raises(EpisodeError, match="not an MCAP file"):
+        read_episode(foreign)
+    other = tmp_path / "other.mcap"
+    with other.open("wb") as handle:
+        mcap = Writer(handle)
+        mcap.start(profile="ros2", library="test")
+        mcap.finish()
+    with pytest.raises(EpisodeError, match="not an episode .profile 'ros2'"):
+        read_episode(other)
+
+
+def test_a_truncated_file_reads_to_its_last_whole_record_and_says_how_much(tmp_path):
+    path = tmp_path / "e.mcap"
+    writer = _writer(path, flush_interval_s=0.01)
+    for i in range(200):
+        writer.log(LOOP_TICK, i * 0.01, json_bytes, {"index": i, "start_s": i * 0.01, "phase": "x"})
+        if i % 50 == 49:
+            threading.Event().wait(0.05)  # flushed by then (every 0.01 s)
+    writer.close({"reason": "done"})
+    whole = path.read_bytes()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(whole[: len(whole) // 2])
+
+    ep = read_episode(cut)
+    assert not ep.finished and not ep.complete
+    assert 0 < ep.read_bytes < ep.size_bytes == len(whole) // 2
+    indices = [m.value["index"] for m in ep.messages("/loop/tick")]
+    assert 0 < len(indices) < 200 and indices == list(range(len(indices)))
+
+    report = repair(cut, tmp_path / "fixed.mcap")
+    assert (report.read_bytes, report.source_bytes) == (ep.read_bytes, ep.size_bytes)
+    assert read_episode(tmp_path / "fixed.mcap").counts == ep.counts
+    with pytest.raises(EpisodeError, match="already finished"):
+        repair(path, tmp_path / "again.mcap")
+    with pytest.raises(EpisodeError, match="is the episode itself"):
+        repair(cut, cut)
+
+
+def test_a_file_cut_inside_its_header_is_not_an_episode(tmp_path):
+    path = tmp_path / "e.mcap"
+    _writer(path).close()
+    cut = tmp_path / "cut.mcap"
+    cut.write_bytes(path.read_bytes()[:12])
+    with pytest.raises(EpisodeError, match="not an MCAP file"):
+        read_episode(cut)
