@@ -4,13 +4,20 @@ the episode has it)."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 
 from controller.episode import Episode
 from evaluation.episodes import episode_streams
-from evaluation.trials.trial_chart import TORQUES, TrialSeries, draw_trial_chart
+from evaluation.trials.trial_chart import (
+    TORQUES,
+    TrialSeries,
+    chart_title,
+    draw_trial_chart,
+    result_text,
+)
 
 
 def episode_series(episode: Episode) -> TrialSeries:
@@ -32,16 +39,19 @@ def episode_series(episode: Episode) -> TrialSeries:
 
 
 def episode_title(episode: Episode) -> str:
-    """``TASK seed N (CONTROLLER): OUTCOME`` from the episode's metadata."""
+    """The trial chart's title from the episode's metadata: how the trial ended (its
+    result, when a trial tool wrote one), else how the loop ended."""
     info = episode.info
     outcome = episode.outcome
     if outcome is None:
-        ended = "no outcome (the run did not finish writing)"
+        ended = "no outcome (the run did not finish its file)"
     else:
-        ended = outcome.get("reason", "?")
-        if outcome.get("message") and outcome.get("message") != ended:
-            ended += f": {outcome['message']}"
-    return f"{info.get('task', '?')} seed {info.get('seed', '?')} ({info.get('controller', '?')}): {ended}"
+        result = json.loads(outcome.get("result") or "null")
+        if isinstance(result, dict) and "success" in result:
+            ended = result_text(bool(result["success"]), result.get("failure_reason"))
+        else:
+            ended = outcome.get("reason", "?")
+    return chart_title(info.get("task"), info.get("seed"), info.get("controller"), ended)
 
 
 def write_episode_chart(episode: Episode, path: Path) -> None:

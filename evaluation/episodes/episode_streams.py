@@ -63,11 +63,11 @@ class Ticks:
 
 
 def ticks(episode: Episode) -> Ticks:
-    """The episode's ticks: times and phases from ``/loop/tick``, the state and command of
-    the same log time from ``/arm/status``, ``/gripper/status`` and ``/control/command``
-    (a tick whose message is missing, e.g. dropped, holds the previous value)."""
-    loop = [(m.t_s, m.value["phase"]) for m in episode.messages(LOOP_TICK.name)]
-    t = np.array([t for t, _ in loop], dtype=float)
+    """The episode's ticks: times (each tick's start) and phases from ``/loop/tick``, the
+    state and command of the same log time from ``/arm/status``, ``/gripper/status`` and
+    ``/control/command`` (a tick whose message is missing, e.g. dropped, holds the previous
+    value)."""
+    loop = [(m.t_s, m.value) for m in episode.messages(LOOP_TICK.name)]
     arm = {m.t_s: m.value for m in episode.messages(ARM_STATUS.name)}
     gripper = {m.t_s: m.value for m in episode.messages(GRIPPER_STATUS.name)}
     command = {m.t_s: m.value for m in episode.messages(COMMAND.name)}
@@ -75,7 +75,7 @@ def ticks(episode: Episode) -> Ticks:
     last_arm: dict = {"tcp_xyz_m": None, "tcp_rpy_rad": None}
     last_gripper: dict = {"width_m": None}
     held_target = np.nan
-    for time_s in t:
+    for time_s, _ in loop:
         last_arm = arm.get(time_s, last_arm)
         last_gripper = gripper.get(time_s, last_gripper)
         sent = command.get(time_s, {})
@@ -92,8 +92,8 @@ def ticks(episode: Episode) -> Ticks:
         target.append(held_target)
         limited.append(list(sent.get("limited", [])))
     return Ticks(
-        t,
-        [phase for _, phase in loop],
+        np.array([tick["start_s"] for _, tick in loop], dtype=float),
+        [tick["phase"] for _, tick in loop],
         np.array(xyz, dtype=float).reshape(-1, 3),
         np.array(rpy, dtype=float).reshape(-1, 3),
         np.array(width, dtype=float),

@@ -30,8 +30,7 @@ def _state(episode: Episode) -> str:
     if episode.finished:
         return "finished without an outcome"
     return (
-        f"truncated: read {episode.read_bytes} of {episode.size_bytes} bytes "
-        "(up to the last flush)"
+        f"truncated: read {episode.read_bytes} of {episode.size_bytes} bytes (up to the last flush)"
     )
 
 
@@ -85,7 +84,9 @@ def summary_lines(episode: Episode) -> list[str]:
     else:
         ended = outcome.get("reason", "?")
         message = outcome.get("message", "")
-        lines.append(f"outcome: {ended}" + (f" ({message})" if message and message != ended else ""))
+        lines.append(
+            f"outcome: {ended}" + (f" ({message})" if message and message != ended else "")
+        )
         if outcome.get("error"):
             lines.append(f"error: {outcome['error']}")
     lines.append(f"dropped: {_drops(episode)}")

@@ -100,8 +100,7 @@ class DatasetEpisode:
         for feature in self.features:
             if len(feature.values) != self.length:
                 raise ValueError(
-                    f"feature {feature.key!r}: {len(feature.values)} rows for "
-                    f"{self.length} frames"
+                    f"feature {feature.key!r}: {len(feature.values)} rows for {self.length} frames"
                 )
 
 

@@ -11,9 +11,12 @@ the estimator saw, by the compression.
 Scores, per torque axis (tau_x, tau_y, tau_z):
 
 * against the simulator's truth (``/sim/truth``, the gel's torque on the plug in S, N*m)
-  where the episode has it: ``truth ~= slope * estimate`` fitted over the frames in contact
-  with a reference (``controller.tactile.calibration.fit_axis``: truth interpolated to the
-  frames' times), its R^2 and RMSE (N*m) -- what the calibration would reach;
+  where the episode has it: ``truth ~= slope * estimate + offset`` fitted over every frame
+  estimated against a reference (not while zeroing;
+  ``controller.tactile.calibration.fit_axis``: truth interpolated to the frames' times), its
+  R^2 and RMSE (N*m) -- what a calibration would reach. The offset is there because the
+  estimator is zeroed in the grasp: the grasp's own torque is in the truth, not in the
+  estimate;
 * against the logged estimates (always, when logged): R^2 of the logged series explained by
   the new one without any fit, RMSE in raw units, and how many frames agree exactly.
 """
@@ -32,7 +35,6 @@ from controller.episode import Episode
 from controller.episode.topics import ATTACHMENT_TASK
 from controller.tactile import TactileEstimator, WrenchEstimate, estimator_for_sensor
 from controller.tactile.calibration import fit_axis
-from controller.tactile.wrench import VALUE_FIELDS
 from core.config import CONFIG_ROOT, ConfigError
 from drivers import registry
 from evaluation.episodes import episode_streams
@@ -139,17 +141,16 @@ class AxisScore:
 
 
 def against_truth(new: Reestimate, truth: episode_streams.Truth) -> list[AxisScore]:
-    """Per axis: the fit of the truth on the new estimates over the frames that have a
-    finite estimate in contact (see the module doc); NaN scores where too few do."""
-    contact = np.array([e.contact and not e.zeroing for e in new.estimates], dtype=bool)
+    """Per axis: the fit of the truth on the new estimates over the frames estimated against
+    a reference (see the module doc); NaN scores where too few are."""
+    referenced = np.array([not e.zeroing for e in new.estimates], dtype=bool)
     scores = []
     for axis in AXES:
         values = new.column(axis)
-        use = contact & np.isfinite(values)
+        use = referenced & np.isfinite(values)
+        column = truth.gel_wrench_s[:, TRUTH_COLUMNS[axis]]
         try:
-            fit = fit_axis(
-                new.t_s[use], values[use], truth.t_s, truth.gel_wrench_s[:, TRUTH_COLUMNS[axis]]
-            )
+            fit = fit_axis(new.t_s[use], values[use], truth.t_s, column, with_offset=True)
         except ValueError:
             scores.append(AxisScore(axis, math.nan, math.nan, int(use.sum())))
             continue

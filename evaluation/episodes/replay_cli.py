@@ -32,6 +32,7 @@ import time
 from pathlib import Path
 
 from controller.episode import Episode, EpisodeError, read_episode
+from controller.episode.repair import repair as repair_file
 from controller.tactile import estimator_for_sensor
 from core.sensor_profile import sensor_profile
 from evaluation.common.cli_support import ToolError, distinct, resolved_config_path, run_tool
@@ -121,7 +122,7 @@ def reestimate(args: argparse.Namespace) -> int:
     if truth is not None:
         lines += _score_lines(
             "against the truth (/sim/truth, the gel's torque on the plug; fit truth ~ slope * "
-            "estimate over the frames in contact):",
+            "estimate + offset over the frames estimated against a reference):",
             reestimation.against_truth(new, truth),
             "N*m",
         )
@@ -179,20 +180,17 @@ def export(args: argparse.Namespace) -> int:
 
 
 def repair(args: argparse.Namespace) -> int:
-    from controller.episode import repair as repair_file
-
     out = args.out or args.episode.with_name(args.episode.stem + ".repaired.mcap")
     check_output_file(out, [args.episode], "--out")
-    if out.exists():
-        raise ToolError(f"--out '{out}' already exists; choose another path (or remove it)")
-    episode = open_episode(args.episode, allow_truncated=True)
-    if episode.finished:
-        raise ToolError(f"episode '{args.episode}' is finished (it has its footer): no repair needed")
     try:
-        result = repair_file(args.episode, out)
+        report = repair_file(args.episode, out)
     except EpisodeError as exc:
         raise ToolError(str(exc)) from None
-    print(f"{PROG}: repaired '{args.episode}' into {out}: {result}")
+    print(
+        f"{PROG}: wrote {out}: {report.messages} messages from the {report.read_bytes} of "
+        f"{report.source_bytes} bytes of '{args.episode}' that held whole records, marked "
+        "incomplete"
+    )
     return 0
 
 
@@ -214,7 +212,9 @@ def build_parser() -> argparse.ArgumentParser:
                 help="read a file cut short (no footer) up to its last whole record",
             )
 
-    sub = command("summary", "topics, counts, rates, duration, outcome, transitions, drops", summary)
+    sub = command(
+        "summary", "topics, counts, rates, duration, outcome, transitions, drops", summary
+    )
     episode_argument(sub)
     sub = command("plot", "the trial summary's chart of the episode (PNG)", plot)
     episode_argument(sub)

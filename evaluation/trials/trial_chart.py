@@ -141,8 +141,10 @@ def trial_series(folder: Path) -> TrialSeries:
     ticks = [json.loads(line) for line in (folder / "ticks.jsonl").read_text().splitlines()]
     estimated = [tick for tick in ticks if "estimate" in tick]
     torques = np.array(
-        [[np.nan if tick["estimate"][k] is None else tick["estimate"][k] for k in TORQUES]
-         for tick in estimated]  # fmt: skip
+        [
+            [np.nan if tick["estimate"][k] is None else tick["estimate"][k] for k in TORQUES]
+            for tick in estimated
+        ]  # fmt: skip
     ).reshape(-1, 3)
     twists = np.array([tick.get("twist", [np.nan] * 6) for tick in ticks]).reshape(-1, 6)
     truth = None
@@ -173,12 +175,21 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
     draw_trial_chart(trial_series(folder), path, title)
 
 
+def chart_title(task: object, seed: object, controller: object, ended: str) -> str:
+    """``TASK seed N (CONTROLLER): ENDED``."""
+    return f"{task} seed {seed} ({controller}): {ended}"
+
+
+def result_text(success: bool, failure_reason: object) -> str:
+    """How a trial ended, in the chart's words."""
+    return "inserted" if success else f"failed: {failure_reason}"
+
+
 def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     """The chart of the trial recorded in ``folder``, titled with its ``result``, as
     ``folder/summary.png``; its path."""
-    title = f"{result.task} seed {result.seed} ({result.controller}): " + (
-        "inserted" if result.success else f"failed: {result.failure_reason}"
-    )
+    ended = result_text(result.success, result.failure_reason)
+    title = chart_title(result.task, result.seed, result.controller, ended)
     path = folder / CHART_NAME
     trial_chart(folder, path, title)
     return path

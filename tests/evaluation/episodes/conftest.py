@@ -7,30 +7,17 @@ from pathlib import Path
 
 import pytest
 
-from controller.episode.session import EpisodeOptions, EpisodeRecording
+from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import load_task
 from evaluation.trials.trial import run
 
 
 @pytest.fixture(scope="session")
 def episode_path(tmp_path_factory) -> Path:
-    path = tmp_path_factory.mktemp("episode") / "episode.mcap"
-    task = load_task("usb_c")
-    recording = EpisodeRecording.open(
-        path,
-        task.raw,
-        task=task.config.task,
-        task_file=task.path,
-        overrides=(),
-        seed=0,
-        controller="dipole",
-        backend="sim",
-        options=EpisodeOptions(image_format="png"),
-    )
-    try:
-        outcome = run(task, "dipole", 0, episode=recording)
-    finally:
-        recording.close({"reason": "done"})
+    folder = tmp_path_factory.mktemp("trial")
+    episode = EpisodeOptions(image_format="png")
+    outcome = run(load_task("usb_c"), "dipole", 0, out_dir=folder, episode=episode)
     assert outcome.result.success
+    path = folder / EPISODE_FILE
     path.chmod(0o444)  # the tools never write over their input
     return path

@@ -176,7 +176,9 @@ def test_the_video_decodes_to_the_logged_frames_at_their_timestamps(dataset, epi
     )
     logged = [f.image()[:, :, ::-1] for f in episode_streams.frames(read_episode(episode_path))]
     with av.open(str(path)) as container:
-        decoded = [(frame.time, frame.to_ndarray(format="rgb24")) for frame in container.decode(video=0)]
+        decoded = [
+            (frame.time, frame.to_ndarray(format="rgb24")) for frame in container.decode(video=0)
+        ]
     assert len(decoded) == info["total_frames"] == 2 * len(logged)
     times = np.array([t for t, _ in decoded])
     np.testing.assert_allclose(times, np.arange(len(decoded)) / info["fps"], atol=1e-9)

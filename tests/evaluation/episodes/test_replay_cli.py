@@ -88,10 +88,14 @@ def test_reestimate_reports_and_writes_the_csv(episode_path, tmp_path, capsys):
 def test_another_configuration_is_scored_against_the_logged_estimates(episode_path, capsys):
     assert main(["reestimate", str(episode_path), "--method", "dis_half"]) == 0
     report = capsys.readouterr().out
-    lines = [line for line in report.splitlines() if line.strip().startswith("tau_")]
-    assert len(lines) == 3
-    r2 = [float(line.split("R^2 ")[1].split(",")[0]) for line in lines]
+    truth, logged = report.split("against the logged estimates")
+    assert "against the truth (/sim/truth" in truth
+    for part, unit in ((truth, "N*m"), (logged, "(raw)")):
+        lines = [line for line in part.splitlines() if line.strip().startswith("tau_")]
+        assert len(lines) == 3 and all(unit in line for line in lines)
+    r2 = [float(line.split("R^2 ")[1].split(",")[0]) for line in logged.splitlines()[1:]]
     assert all(math.isfinite(v) for v in r2) and min(r2) < 0.999999  # not the same estimates
+    assert "321 of 321 frames identical" not in logged
 
 
 def test_reestimate_refuses_an_unknown_configuration(episode_path, capsys):
@@ -185,3 +189,21 @@ def test_the_copy_of_an_episode_reads_alike(episode_path, tmp_path):
     copy = tmp_path / "copy.mcap"
     shutil.copyfile(episode_path, copy)
     assert read_episode(copy).counts == read_episode(episode_path).counts
+
+
+def test_repair_finishes_a_truncated_file_that_the_tools_then_read(truncated, tmp_path, capsys):
+    out = tmp_path / "repaired.mcap"
+    assert main(["repair", str(truncated), "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert f"of {truncated.stat().st_size} bytes" in said and "marked incomplete" in said
+    assert main(["summary", str(out)]) == 0
+    summary = capsys.readouterr().out
+    assert "file: incomplete: repaired from a file cut short" in summary
+    assert main(["repair", str(truncated), "--out", str(out)]) == 2  # never over a file
+    assert "exists" in one_error_line(capsys)
+
+
+def test_repair_refuses_a_finished_file(episode_path, tmp_path, capsys):
+    assert main(["repair", str(episode_path), "--out", str(tmp_path / "r.mcap")]) == 2
+    assert "already finished" in one_error_line(capsys)
+    assert not (tmp_path / "r.mcap").exists()
