@@ -72,6 +72,15 @@ def camera_fps(push_t_s: np.ndarray) -> int:
     return max(1, round(1.0 / float(np.median(np.diff(push_t_s)))))
 
 
+def frame_rows(push_t_s: np.ndarray, fps: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows' times ``T_k = t_0 + k / fps`` (s, from the first push to the last) and,
+    for each, the index of the newest frame pushed at or before it."""
+    rows = math.floor((push_t_s[-1] - push_t_s[0]) * fps + 0.5) + 1
+    row_t = push_t_s[0] + np.arange(rows) / fps
+    source = np.searchsorted(push_t_s, row_t + HOLD_TOLERANCE_S, side="right") - 1
+    return row_t, source
+
+
 def _state(ticks: Ticks) -> np.ndarray:
     return np.column_stack([ticks.tcp_xyz_m, ticks.tcp_rpy_rad, ticks.gripper_width_m])
 
@@ -83,7 +92,7 @@ def _action(ticks: Ticks) -> np.ndarray:
     return np.column_stack([twist, held])
 
 
-def _windows(values: np.ndarray, ends: np.ndarray, width: int, forward: bool) -> np.ndarray:
+def windows(values: np.ndarray, ends: np.ndarray, width: int, forward: bool) -> np.ndarray:
     """For each row index in ``ends``: ``width`` rows of ``values`` ending there (or
     starting there, ``forward``), clipped to the table, flattened."""
     steps = np.arange(width) if forward else np.arange(-width + 1, 1)
@@ -105,9 +114,8 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
         raise AlignmentError("no control ticks (/loop/tick) to take the robot's state from")
     push_t = np.array([frame.t_s for frame in logged])
     fps = camera_fps(push_t)
-    rows = math.floor((push_t[-1] - push_t[0]) * fps + 0.5) + 1
-    row_t = push_t[0] + np.arange(rows) / fps
-    source = np.searchsorted(push_t, row_t + HOLD_TOLERANCE_S, side="right") - 1
+    row_t, source = frame_rows(push_t, fps)
+    rows = len(row_t)
     tick = np.clip(np.searchsorted(ticks.t_s, row_t + HOLD_TOLERANCE_S, side="right") - 1, 0, None)
     loop_rate = 1.0 / float(np.median(np.diff(ticks.t_s))) if len(ticks) > 1 else fps
     window = max(1, round(loop_rate / fps))
@@ -117,7 +125,7 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
         VectorFeature(
             "observation.state.window",
             _window_names(STATE_NAMES, window, forward=False),
-            _windows(state, tick, window, forward=False),
+            windows(state, tick, window, forward=False),
         ),
         VectorFeature("observation.wrench", WRENCH_NAMES, _wrench(episode, logged, source)),
         VectorFeature(
@@ -127,7 +135,7 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
         VectorFeature(
             "action.window",
             _window_names(ACTION_NAMES, window, forward=True),
-            _windows(action, tick, window, forward=True),
+            windows(action, tick, window, forward=True),
         ),
     )
     first = logged[0].image()
