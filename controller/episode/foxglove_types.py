@@ -98,9 +98,7 @@ def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
     ).encode()
 
 
-def transforms_bytes(
-    t_s: float, frames: list[tuple[str, str, np.ndarray, np.ndarray]]
-) -> bytes:
+def transforms_bytes(t_s: float, frames: list[tuple[str, str, np.ndarray, np.ndarray]]) -> bytes:
     """A ``foxglove.FrameTransforms`` at ``t_s``: each (parent, child, translation m (3),
     quaternion (x, y, z, w))."""
     stamp = timestamp(t_s)

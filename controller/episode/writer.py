@@ -46,7 +46,10 @@ log = logging.getLogger(__name__)
 NS_PER_S = 1_000_000_000
 QUEUE_SIZE = 4096
 """Records the queue holds (about 4 s of a trial's records at the default rates)."""
-FLUSH_INTERVAL_S = 0.1
+FLUSH_INTERVAL_S = 0.08
+"""About every 0.1 s ("flush about every 100 ms"), a little less so that a SIGKILL, which
+comes on average half an interval after a flush and at worst a whole one plus the writer's
+latency, loses at most 0.1 s (docs/BENCHMARKS.md, "Episodes")."""
 CHUNK_SIZE_BYTES = 4 * 1024 * 1024
 """A chunk is finished at this size or at the next flush, whichever comes first."""
 LIBRARY = "tactile-insertion episode writer"

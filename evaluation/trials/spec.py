@@ -105,9 +105,7 @@ class SeedSpecs(Sequence[TrialSpec]):
         out_dir = None
         if self.records is not None:
             out_dir = unfinished_record(self.records, self.controller, seed)
-        return TrialSpec(
-            self.task, self.controller, seed, self.overrides, out_dir, self.episodes
-        )
+        return TrialSpec(self.task, self.controller, seed, self.overrides, out_dir, self.episodes)
 
 
 def parse_seeds(text: str) -> range:

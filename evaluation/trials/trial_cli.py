@@ -7,7 +7,8 @@
 It prints the phase timeline and the outcome, and writes into DIR the trial's episode
 (``episode.mcap``: every stream, docs/EPISODES.md; its tactile frames as JPEG, or losslessly
 as PNG with ``--episode-images png``), its record (controller/run/record.py: ticks.jsonl,
-transitions.jsonl, truth.npz, trial.json) and ``summary.png`` (estimated torques with phase bands, the wrist's true force, the tip's true
+transitions.jsonl, truth.npz, trial.json) and ``summary.png`` (estimated torques with
+phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
 possible. Exit codes as every tool's (evaluation/common/cli_support.py); a trial that fails

@@ -55,7 +55,9 @@ def test_every_stream_round_trips(trial):
     assert phases == [t["phase"] for t in ticks]
     commands = [m.value for m in ep.messages("/control/command")]
     assert [c["limited"] for c in commands] == [t["limited"] for t in ticks]
-    twists = [c["twist_linear_m_s"] + c["twist_angular_rad_s"] for c in commands if c["twist_linear_m_s"]]
+    twists = [
+        c["twist_linear_m_s"] + c["twist_angular_rad_s"] for c in commands if c["twist_linear_m_s"]
+    ]
     assert twists == [t["twist"] for t in ticks if "twist" in t]
     widths = [m.value["width_m"] for m in ep.messages("/gripper/status")]
     assert widths == [t["gripper_width_m"] for t in ticks]

@@ -1,0 +1,261 @@
+"""The episode writer's targets (docs/EPISODES.md, docs/BENCHMARKS.md "Episodes"):
+
+1. **SIGKILL loss**: ``--kills`` times, a real-time simulated trial (``scripts/run_trial.py
+   --realtime``, the watchdog's overrun policy relaxed so a shared machine's hiccups do not
+   end it) is killed with SIGKILL at a uniformly random time 2..10 s after its episode
+   file appears; the loss is the kill's time on the loop's clock (the real-time trial's
+   clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus the newest record the
+   reader finds in the killed file;
+2. **cost**: one long simulated trial in this process (as fast as possible, the search made
+   to fail so it runs about 60 s of loop time): every ``EpisodeWriter.log`` call is timed
+   (median, p99), and the writer thread's CPU time is divided by the trial's loop time (the
+   fraction of a core it takes at real-time rates);
+3. **size**: that trial's file size, and its size per topic;
+4. **decoding**: the file opened with ``mcap``'s own seeking reader, and every message
+   decoded with Foxglove's schemas (``mcap-protobuf-support``) or as JSON;
+5. **libraries**: the same messages written again through ``mcap``'s writer and through
+   ``foxglove-sdk``'s (``open_mcap``, raw channels with the same schemas), both flushed every
+   0.1 s of loop time: CPU time, size, and the messages a reader recovers from the file as
+   it stands after the last flush before ``close`` (what a SIGKILL would leave).
+
+    python scripts/bench_episode.py [--kills 20] [--seed 0]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import random
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+from controller.episode import read_episode
+from controller.episode.session import EPISODE_FILE, EpisodeOptions
+from controller.episode.writer import EpisodeWriter
+from controller.run import load_task
+from evaluation.common.machine_info import describe_machine
+from evaluation.trials.trial import run
+
+ROOT = Path(__file__).resolve().parents[2]
+RELAXED_OVERRUNS = (
+    "loop.max_consecutive_overruns=100000",
+    "loop.max_overruns_in_window=100000",
+    "loop.overrun_window_ticks=100000",
+)
+LONG_TRIAL = (
+    "machine.timeouts.search_s=58.0",
+    "machine.timeouts.total_s=58.0",
+    "machine.search.uncertainty_xy_m=0.0003",
+)
+"""The search looks only 0.3 mm around the nominal hole, so the run lasts its 58 s budget
+(plus the grasp's start-up: about 60 s of loop time)."""
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="bench_episode", description=__doc__.splitlines()[0])
+    parser.add_argument("--kills", type=int, default=20)
+    parser.add_argument("--seed", type=int, default=0)
+    args = parser.parse_args(argv)
+    work = Path(tempfile.mkdtemp(prefix="bench_episode_"))
+    try:
+        print(f"Machine: {describe_machine('the trial in one process, its writer thread')}\n")
+        episode = cost_and_size(work, args.seed)
+        decode_all(episode)
+        compare_libraries(episode, work)
+        kill_losses(work, args.kills, args.seed)
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return 0
+
+
+def kill_losses(work: Path, kills: int, seed: int) -> None:
+    rng = random.Random(seed)
+    losses = []
+    for i in range(kills):
+        out = work / f"kill{i}"
+        command = [sys.executable, str(ROOT / "scripts" / "run_trial.py"), "--task", "usb_c",
+                   "--seed", str(seed * 1000 + i), "--realtime", "--out", str(out)]  # fmt: skip
+        for override in RELAXED_OVERRUNS:
+            command += ["--set", override]
+        process = subprocess.Popen(
+            command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+            env=dict(os.environ, MPLBACKEND="Agg"),
+        )  # fmt: skip
+        episode = out / EPISODE_FILE
+        while not episode.exists():
+            time.sleep(0.01)
+        time.sleep(rng.uniform(2.0, 10.0))
+        killed_at = time.monotonic()
+        process.send_signal(signal.SIGKILL)
+        process.wait()
+        ep = read_episode(episode)
+        last = ep.time_range_s()[1]
+        losses.append(killed_at - last)
+        print(f"kill {i}: at {killed_at:.3f} s, newest record {last:.3f} s, "
+              f"lost {killed_at - last:.3f} s; read {ep.read_bytes} of "
+              f"{ep.size_bytes} B")  # fmt: skip
+    print(
+        f"\nSIGKILL loss over {kills} kills: median {statistics.median(losses):.3f} s, "
+        f"worst {max(losses):.3f} s\n"
+    )
+
+
+def cost_and_size(work: Path, seed: int) -> Path:
+    out = work / "long"
+    task = load_task("usb_c", LONG_TRIAL)
+    times: list[float] = []
+    original = EpisodeWriter.log
+
+    def timed(self, topic, t_s, encode, payload):  # type: ignore[no-untyped-def]
+        began = time.perf_counter()
+        original(self, topic, t_s, encode, payload)
+        times.append(time.perf_counter() - began)
+
+    busy: list[float] = []
+    close = EpisodeWriter.close
+
+    def closing(self, outcome=None):  # type: ignore[no-untyped-def]
+        close(self, outcome)
+        busy.append(self.busy_s)
+
+    EpisodeWriter.log, EpisodeWriter.close = timed, closing  # type: ignore[method-assign]
+    try:
+        outcome = run(task, "dipole", seed, out_dir=out, episode=EpisodeOptions())
+    finally:
+        EpisodeWriter.log, EpisodeWriter.close = original, close  # type: ignore[method-assign]
+    path = out / EPISODE_FILE
+    ep = read_episode(path)
+    first, last = ep.time_range_s()
+    duration = last - first
+    enqueue = np.array(times) * 1e6
+    print(f"Long trial: {outcome.result.status} ({outcome.result.failure_reason}), "
+          f"{duration:.1f} s of loop time, {sum(ep.counts.values())} records, "
+          f"{ep.outcome['dropped_total']} dropped")  # fmt: skip
+    print(f"enqueue per record: median {np.median(enqueue):.1f} us, "
+          f"p99 {np.percentile(enqueue, 99):.1f} us, max {enqueue.max():.0f} us "
+          f"({len(times)} records)")  # fmt: skip
+    print(
+        "loop thread's enqueue time per s of loop time: "
+        f"{enqueue.sum() / 1e6 / duration * 100:.2f} % of a core"
+    )
+    print(f"writer thread CPU: {busy[0]:.2f} s for {duration:.1f} s of loop time = "
+          f"{busy[0] / duration * 100:.2f} % of a core at real-time rates")  # fmt: skip
+    size = path.stat().st_size
+    print(f"file size: {size / 1e6:.2f} MB for {duration:.1f} s "
+          f"({size / 1e6 / duration * 60:.2f} MB per 60 s)\n")  # fmt: skip
+    return path
+
+
+def decode_all(path: Path) -> None:
+    import json
+
+    from mcap.reader import make_reader
+    from mcap_protobuf.decoder import DecoderFactory
+
+    counts: Counter[str] = Counter()
+    with path.open("rb") as handle:
+        reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+        summary = reader.get_summary()
+        assert summary is not None
+        for schema, channel, message in reader.iter_messages():
+            if channel.message_encoding == "json":
+                json.loads(message.data)
+            else:
+                reader_decoder = DecoderFactory().decoder_for(channel.message_encoding, schema)
+                assert reader_decoder is not None
+                reader_decoder(message.data)
+            counts[f"{channel.topic} ({schema.name if schema else '-'})"] += 1
+    print(f"Opened with mcap's seeking reader: {summary.statistics.message_count} messages, "
+          f"{summary.statistics.chunk_count} chunks; every message decoded:")  # fmt: skip
+    for name, n in sorted(counts.items()):
+        print(f"  {name}: {n}")
+    print()
+
+
+def compare_libraries(path: Path, work: Path) -> None:
+    import foxglove
+    from foxglove import Channel, Context, Schema
+    from foxglove.mcap import MCAPWriteOptions
+    from mcap.writer import CompressionType, Writer
+
+    ep = read_episode(path)
+    schemas, channels, messages = ep.records()
+    messages = sorted(messages, key=lambda m: (m.log_time, m.sequence))
+    flush_ns = 100_000_000
+
+    def with_mcap(target: Path) -> Path | None:
+        snapshot = None
+        with target.open("wb") as stream:
+            writer = Writer(stream, chunk_size=4 * 1024 * 1024, compression=CompressionType.ZSTD)
+            writer.start(profile="tactile-insertion", library="bench")
+            sids = {
+                i: writer.register_schema(s.name, s.encoding, s.data) for i, s in schemas.items()
+            }
+            cids = {i: writer.register_channel(c.topic, c.message_encoding, sids[c.schema_id])
+                    for i, c in channels.items()}  # fmt: skip
+            next_flush = messages[0].log_time + flush_ns
+            for m in messages:
+                writer.add_message(cids[m.channel_id], m.log_time, m.data, m.log_time, m.sequence)
+                if m.log_time >= next_flush:
+                    writer.flush()
+                    next_flush += flush_ns
+            writer.flush()
+            snapshot = target.with_suffix(".killed.mcap")
+            shutil.copyfile(target, snapshot)
+            writer.finish()
+        return snapshot
+
+    def with_foxglove(target: Path) -> Path | None:
+        context = Context()
+        options = MCAPWriteOptions(profile="tactile-insertion", chunk_size=4 * 1024 * 1024)
+        writer = foxglove.open_mcap(target, context=context, writer_options=options)
+        made = {
+            i: Channel(
+                c.topic,
+                message_encoding=c.message_encoding,
+                schema=Schema(name=schemas[c.schema_id].name,
+                              encoding=schemas[c.schema_id].encoding,
+                              data=schemas[c.schema_id].data),
+                context=context,
+            )
+            for i, c in channels.items()
+        }  # fmt: skip
+        next_flush = messages[0].log_time + flush_ns
+        for m in messages:
+            made[m.channel_id].log(m.data, log_time=m.log_time)
+            if m.log_time >= next_flush:
+                writer.flush()
+                next_flush += flush_ns
+        writer.flush()
+        snapshot = target.with_suffix(".killed.mcap")
+        shutil.copyfile(target, snapshot)
+        writer.close()
+        return snapshot
+
+    print("Library comparison (the long trial's messages written again, flushed every 0.1 s):")
+    print(
+        "| writer | CPU time, s | file size, MB | messages read back from the file as a "
+        "SIGKILL after the last flush leaves it |"
+    )
+    print("|---|---|---|---|")
+    for name, write in (
+        ("mcap 1.6 (Python)", with_mcap),
+        ("foxglove-sdk 0.30 (Rust)", with_foxglove),
+    ):
+        target = work / f"lib_{name.split()[0]}.mcap"
+        began = time.process_time()
+        snapshot = write(target)
+        cpu = time.process_time() - began
+        killed = read_episode(snapshot)
+        print(f"| {name} | {cpu:.2f} | {target.stat().st_size / 1e6:.2f} | "
+              f"{sum(killed.counts.values())} of {len(messages)} |")  # fmt: skip
+    print()
