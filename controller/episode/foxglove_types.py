@@ -25,7 +25,7 @@ from foxglove.messages import (
 
 from controller.tactile.field import VectorField
 
-_MESSAGES = {
+_MESSAGES: dict[str, Any] = {
     "foxglove.CompressedImage": CompressedImage,
     "foxglove.Grid": Grid,
     "foxglove.FrameTransforms": FrameTransforms,
