@@ -15,7 +15,7 @@ from controller.episode.topics import DROPS, METADATA_REPAIR
 from evaluation.episodes import episode_streams
 
 RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_revision",
-            "tactile_image_format", "started_utc", "machine")  # fmt: skip
+            "tactile_image_format", "jpeg_quality", "started_utc", "machine")  # fmt: skip
 
 
 def _state(episode: Episode) -> str:
