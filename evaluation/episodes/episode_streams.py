@@ -7,6 +7,7 @@ frame's capture time (``t_s``). Missing numbers (a null in the file) are NaN.
 
 from __future__ import annotations
 
+import json
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -16,6 +17,7 @@ from controller.episode import Episode, decode_image
 from controller.episode.topics import (
     ARM_STATUS,
     COMMAND,
+    DROPS,
     GRIPPER_STATUS,
     LOOP_TICK,
     SIM_TF,
@@ -224,3 +226,16 @@ def truth(episode: Episode) -> Truth | None:
         hole,
     )
     return Truth(t, column("gel_wrench_s", 6), chart)
+
+
+def drops(episode: Episode) -> tuple[int, dict[str, int]]:
+    """The records the writer dropped: the total and the count by topic, from the outcome,
+    else (a file cut short) from the last ``/episode/drops`` message; (0, {}) if none."""
+    outcome = episode.outcome
+    if outcome is not None and "dropped_total" in outcome:
+        by_topic = json.loads(outcome.get("dropped_by_topic") or "{}")
+        return int(outcome["dropped_total"]), {k: int(v) for k, v in by_topic.items()}
+    last = [m.value for m in episode.messages(DROPS.name)]
+    if not last:
+        return 0, {}
+    return int(last[-1]["dropped_total"]), {k: int(v) for k, v in last[-1]["by_topic"].items()}

@@ -4,14 +4,13 @@ transitions with their reasons, the outcome and what the writer dropped."""
 
 from __future__ import annotations
 
-import json
 import math
 from collections import defaultdict
 
 import numpy as np
 
 from controller.episode import Episode
-from controller.episode.topics import DROPS, METADATA_REPAIR
+from controller.episode.topics import METADATA_REPAIR
 from evaluation.episodes import episode_streams
 
 RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_revision",
@@ -47,17 +46,10 @@ def topic_rates(episode: Episode) -> dict[str, float]:
 
 
 def _drops(episode: Episode) -> str:
-    outcome = episode.outcome
-    if outcome is not None and "dropped_total" in outcome:
-        total = int(outcome["dropped_total"])
-        by_topic = json.loads(outcome.get("dropped_by_topic") or "{}")
-    else:
-        last = [m.value for m in episode.messages(DROPS.name)]
-        if not last:
-            return "0 records" + (" (until the cut)" if outcome is None else "")
-        total, by_topic = int(last[-1]["dropped_total"]), last[-1]["by_topic"]
+    total, by_topic = episode_streams.drops(episode)
     detail = ", ".join(f"{topic} {count}" for topic, count in sorted(by_topic.items()))
-    return f"{total} records" + (f" ({detail})" if detail else "")
+    cut = " (until the cut)" if episode.outcome is None else ""
+    return f"{total} records" + (f" ({detail})" if detail else "") + cut
 
 
 def summary_lines(episode: Episode) -> list[str]:

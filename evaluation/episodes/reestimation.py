@@ -32,7 +32,7 @@ import numpy as np
 import yaml
 
 from controller.episode import Episode
-from controller.episode.topics import ATTACHMENT_TASK
+from controller.episode.topics import ATTACHMENT_TASK, TACTILE_IMAGE, TACTILE_PUSH
 from controller.tactile import TactileEstimator, WrenchEstimate, estimator_for_sensor
 from controller.tactile.calibration import fit_axis
 from core.config import CONFIG_ROOT, ConfigError
@@ -99,11 +99,20 @@ def reestimate(
     episode: Episode, estimator: TactileEstimator, clock: Callable[[], float]
 ) -> Reestimate:
     """Repeat the episode's calls into the wrench source on ``estimator`` (see the module
-    doc); ``clock`` (s) times each push. ReestimationError if the episode logged no calls or
-    a push has no frame."""
+    doc); ``clock`` (s) times each push. In a file cut short the calls end with the last
+    logged frame. ReestimationError if the episode logged no calls, or the writer dropped
+    frames or calls (the frames could no longer be matched to their pushes)."""
     calls = episode_streams.source_calls(episode)
     if not calls:
         raise ReestimationError("no calls into the wrench source (/tactile/push) were logged")
+    _, dropped = episode_streams.drops(episode)
+    lost = {t: dropped[t] for t in (TACTILE_IMAGE.name, TACTILE_PUSH.name) if dropped.get(t)}
+    if lost:
+        counts = ", ".join(f"{count} on {topic}" for topic, count in lost.items())
+        raise ReestimationError(
+            f"the writer dropped records ({counts}): the frames cannot be matched to the "
+            "estimator's calls"
+        )
     logged = list(episode_streams.frames(episode))
     pushes, times, found, latency = [], [], [], []
     for call in calls:
@@ -112,10 +121,8 @@ def reestimate(
         elif call.call == "rezero":
             estimator.rezero(call.n_frames)
         else:
-            if call.push_index >= len(logged):
-                raise ReestimationError(
-                    f"push {call.push_index} has no logged frame ({len(logged)} frames)"
-                )
+            if call.push_index >= len(logged):  # cut short after this call
+                break
             frame = logged[call.push_index]
             t_s = frame.capture_t_s if call.frame_t_s is None else call.frame_t_s
             image = frame.image()

@@ -207,3 +207,11 @@ def test_repair_refuses_a_finished_file(episode_path, tmp_path, capsys):
     assert main(["repair", str(episode_path), "--out", str(tmp_path / "r.mcap")]) == 2
     assert "already finished" in one_error_line(capsys)
     assert not (tmp_path / "r.mcap").exists()
+
+
+def test_a_truncated_file_reestimates_exactly_up_to_its_cut(truncated, capsys):
+    assert main(["reestimate", str(truncated), "--method", "default", "--allow-truncated"]) == 0
+    report = capsys.readouterr().out
+    frames = read_episode(truncated).counts["/tactile/image"]
+    assert frames > 20
+    assert f"{frames} of {frames} frames identical" in report
