@@ -108,13 +108,14 @@ def ticks(episode: Episode) -> Ticks:
 @dataclass(frozen=True)
 class Estimates:
     """The logged estimates, one per frame pushed: ``push_index`` (n,), ``t_s`` (n,: the
-    frame's capture time), ``values`` (n, len(VALUE_FIELDS): raw, NaN where null) and the
-    ``contact`` flags (n,)."""
+    frame's capture time), ``values`` (n, len(VALUE_FIELDS): raw, NaN where null), the
+    ``contact`` flags and the ``zeroing`` flags (n,: no reference yet, values all 0)."""
 
     push_index: np.ndarray
     t_s: np.ndarray
     values: np.ndarray
     contact: np.ndarray
+    zeroing: np.ndarray
 
     def column(self, name: str) -> np.ndarray:
         return self.values[:, VALUE_FIELDS.index(name)]
@@ -130,6 +131,7 @@ def estimates(episode: Episode) -> Estimates:
             -1, len(VALUE_FIELDS)
         ),
         np.array([bool(r.get("contact", False)) for r in rows]),
+        np.array([bool(r.get("zeroing", False)) for r in rows]),
     )
 
 

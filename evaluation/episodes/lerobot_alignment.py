@@ -146,13 +146,14 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
 
 
 def _wrench(episode: Episode, logged: list[LoggedFrame], source: np.ndarray) -> np.ndarray:
-    """The estimate of each row's frame (matched by push order), its flags last."""
+    """The estimate of each row's frame (matched by push order), its flags last; zeros and
+    ``valid`` 0 while the estimator zeroed or where nothing finite was logged."""
     found = episode_streams.estimates(episode)
     by_push = {int(p): i for i, p in enumerate(found.push_index)}
     table = np.zeros((len(logged), len(WRENCH_NAMES)))
     for push in range(len(logged)):
         i = by_push.get(push)
-        if i is None or not np.isfinite(found.values[i]).all():
+        if i is None or found.zeroing[i] or not np.isfinite(found.values[i]).all():
             continue
         table[push, : len(VALUE_FIELDS)] = found.values[i]
         table[push, -2:] = (float(found.contact[i]), 1.0)

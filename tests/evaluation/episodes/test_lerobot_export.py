@@ -121,8 +121,10 @@ def test_the_rows_hold_the_episodes_state_at_each_frame(dataset, episode_path):
         expected = [*ticks.tcp_xyz_m[tick], *ticks.tcp_rpy_rad[tick], ticks.gripper_width_m[tick]]
         np.testing.assert_allclose(state[row], expected, rtol=1e-6)
     estimates = episode_streams.estimates(episode)
-    wrench = np.array(table.column("observation.wrench").to_pylist())
-    np.testing.assert_allclose(wrench[: len(pushed), 2], estimates.column("tau_z"), rtol=1e-6)
+    wrench = np.array(table.column("observation.wrench").to_pylist())[: len(pushed)]
+    np.testing.assert_allclose(wrench[:, 2], estimates.column("tau_z"), rtol=1e-6)
+    np.testing.assert_array_equal(wrench[:, -1], ~estimates.zeroing)  # valid
+    assert estimates.zeroing.sum() > 10 and (~estimates.zeroing).sum() > 200
 
 
 def test_the_episodes_file_says_where_each_episodes_rows_and_frames_are(dataset):
