@@ -10,5 +10,6 @@ controller; the product (core, drivers, controller) never imports this package. 
 * ``real_recordings``: real-texture recordings rendered, and estimators checked on them;
 * ``realgel``: the independent real-gel check (real textures, a half-space elastic model);
 * ``bench``: speed benchmarks (docs/BENCHMARKS.md);
-* ``trials``: simulated insertion trials, their batches, comparisons and charts.
+* ``trials``: simulated insertion trials, their batches, comparisons and charts;
+* ``episodes``: the episode tools (summary, chart, re-estimation, LeRobot export, repair).
 """

@@ -58,6 +58,14 @@ def test_a_one_seed_trial_runs_from_outside_the_checkout(installed, tmp_path):
                 "--out", str(out)], cwd=tmp_path)  # fmt: skip
     assert "outcome: INSERTED" in done.stdout
     assert (out / "trial.json").is_file() and (out / "ticks.jsonl").stat().st_size > 0
+    episode = str(out / "episode.mcap")
+    summary = run([str(installed / "tactile-replay"), "summary", episode], cwd=tmp_path)
+    assert "file: complete" in summary.stdout and "/tactile/image" in summary.stdout
+    dataset = tmp_path / "lerobot"
+    run([str(installed / "tactile-replay"), "export", episode, "--lerobot", str(dataset)],
+        cwd=tmp_path)  # fmt: skip
+    assert (dataset / "videos" / "observation.images.tactile" / "chunk-000").is_dir()
+    assert (dataset / "meta" / "info.json").is_file()
 
 
 def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path):
@@ -79,7 +87,7 @@ def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path)
 def test_every_console_script_answers_help(installed, tmp_path):
     scripts = [
         "tactile-run-trial", "tactile-run-trials", "tactile-compare-trials",
-        "tactile-estimate", "tactile-calibrate", "tactile-check-hardware",
+        "tactile-estimate", "tactile-calibrate", "tactile-check-hardware", "tactile-replay",
     ]  # fmt: skip
     for name in scripts:
         done = run([str(installed / name), "--help"], cwd=tmp_path, timeout_s=120.0)

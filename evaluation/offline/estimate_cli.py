@@ -252,7 +252,7 @@ def read_reference(
     return frames
 
 
-def _row(index: int, t_s: float, estimate: WrenchEstimate, latency_ms: float) -> list[object]:
+def csv_row(index: int, t_s: float, estimate: WrenchEstimate, latency_ms: float) -> list[object]:
     values = (f"{getattr(estimate, name):.9g}" for name in VALUE_FIELDS)
     flags = (int(getattr(estimate, name)) for name in FLAG_FIELDS)
     return [index, f"{t_s:.6f}", *values, *flags, f"{latency_ms:.3f}"]
@@ -325,7 +325,7 @@ def _write_rows(
             )
             raise InputError(f"{source.describe(number)}: {exc}{hint}; nothing written") from None
         latency_ms = (time.perf_counter() - began) * 1e3
-        writer.writerow(_row(number, t_s, estimate, latency_ms))
+        writer.writerow(csv_row(number, t_s, estimate, latency_ms))
         count += 1
     return count, source.damage(log)
 

@@ -1,20 +1,26 @@
-"""The PNG summary of one simulated trial: the estimated torques with the phases as bands,
-the wrist's true force, and the plug tip's true path over the hole (matplotlib, Agg);
-``write_trial_chart`` puts it in the trial's record as ``summary.png``."""
+"""The PNG summary of one run: the estimated torques and the commands with the phases as
+bands, and, in simulation, the wrist's true force and the plug tip's true path over the hole
+(matplotlib, Agg).
+
+``draw_trial_chart(series, path, title)`` draws a ``TrialSeries`` (plain arrays); a trial's
+record (``trial_series(folder)``: ticks.jsonl, truth.npz) and an episode file
+(evaluation/episodes/episode_chart.py) both give one, so both charts are the same chart.
+``write_trial_chart`` puts a trial's in its record as ``summary.png``.
+"""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from evaluation.common.outputs import atomic_file  # noqa: E402
-from evaluation.trials.result import TrialResult  # noqa: E402
+from evaluation.common.outputs import atomic_file
+from evaluation.trials.result import TrialResult
 
 CHART_NAME = "summary.png"
 
@@ -23,68 +29,167 @@ PHASE_COLOURS = {
     "insert": "#b6d7a8", "backoff": "#f4cccc", "release": "#e6e0f8", "retract": "#eeeeee",
     "teleop": "#ffe599", "estop": "#ea9999",
 }  # fmt: skip
+TORQUES = ("tau_x", "tau_y", "tau_z")
 
 
-def _phase_spans(ticks: list[dict]) -> list[tuple[float, float, str]]:
+@dataclass(frozen=True)
+class ChartTruth:
+    """The simulator's truth for the chart, one row per truth sample: ``t_s`` (n,),
+    ``wrist_wrench_t`` (n, 6: N, N*m), ``contact_force_n`` (n,), ``tip_xyz_b`` (n, 3: m, B),
+    ``depth_m`` (n,: tip below the surface) and the true hole's ``hole_xy_m`` (2: m, B)."""
+
+    t_s: np.ndarray
+    wrist_wrench_t: np.ndarray
+    contact_force_n: np.ndarray
+    tip_xyz_b: np.ndarray
+    depth_m: np.ndarray
+    hole_xy_m: np.ndarray
+
+
+@dataclass(frozen=True)
+class TrialSeries:
+    """What the chart draws, s on the loop's clock: each tick's time and the ``phases``
+    after its step; the raw estimates' times and ``torques`` (n, 3: tau_x, tau_y, tau_z; NaN
+    where none); the commands' times and ``twists`` (n, 6: linear m/s, angular rad/s in B;
+    NaN where no twist was sent); the ``truth`` (None on hardware)."""
+
+    tick_t_s: np.ndarray
+    phases: Sequence[str]
+    estimate_t_s: np.ndarray
+    torques: np.ndarray
+    command_t_s: np.ndarray
+    twists: np.ndarray
+    truth: ChartTruth | None
+
+
+def phase_spans(t_s: np.ndarray, phases: Sequence[str]) -> list[tuple[float, float, str]]:
+    """(start s, end s, phase) of each run of equal phases."""
     spans: list[tuple[float, float, str]] = []
-    for tick in ticks:
-        t, phase = tick["t_s"], tick["phase"]
+    for t, phase in zip(t_s, phases, strict=True):
         if spans and spans[-1][2] == phase:
-            spans[-1] = (spans[-1][0], t, phase)
+            spans[-1] = (spans[-1][0], float(t), phase)
         else:
-            spans.append((t, t, phase))
+            spans.append((float(t), float(t), phase))
     return spans
 
 
-def trial_chart(folder: Path, path: Path, title: str) -> None:
-    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``."""
-    ticks = [json.loads(line) for line in (folder / "ticks.jsonl").read_text().splitlines()]
-    truth = np.load(folder / "truth.npz")
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), constrained_layout=True)
-    torque_ax, force_ax, path_ax = axes
-    for ax in (torque_ax, force_ax):
-        for start, end, phase in _phase_spans(ticks):
-            ax.axvspan(start, end, color=PHASE_COLOURS.get(phase, "white"), lw=0)
+def _bands(ax: Axes, spans: list[tuple[float, float, str]], labels: bool) -> None:
+    for start, end, phase in spans:
+        ax.axvspan(start, end, color=PHASE_COLOURS.get(phase, "white"), lw=0)
+        if labels:
             ax.text((start + end) / 2, 1.0, phase, transform=ax.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize=7, rotation=30)
-    estimated = [tick for tick in ticks if "estimate" in tick]
-    t_est = np.array([tick["t_s"] for tick in estimated])
-    for key, label in (("tau_x", "tau_x"), ("tau_y", "tau_y"), ("tau_z", "tau_z / 10")):
+                    ha="center", va="bottom", fontsize=7, rotation=30)  # fmt: skip
+
+
+def draw_trial_chart(series: TrialSeries, path: Path, title: str) -> None:
+    """Draw ``series`` to the PNG ``path`` (atomically), titled ``title``: torques and
+    commands over the phase bands, then, with the truth, the forces and the tip's path."""
+    truth = series.truth
+    panels = 4 if truth is not None else 2
+    fig = Figure(figsize=(9, 2.6 * panels + 1), layout="constrained")
+    axes = fig.subplots(panels, 1)
+    spans = phase_spans(series.tick_t_s, series.phases)
+    time_axes = axes[:3] if truth is not None else axes
+    for index, ax in enumerate(time_axes):
+        _bands(ax, spans, labels=index == 0)
+        if index:
+            ax.sharex(time_axes[0])
+    torque_ax, command_ax = axes[0], axes[1]
+    for column, key in enumerate(TORQUES):
         scale = 0.1 if key == "tau_z" else 1.0
-        values = np.array([tick["estimate"][key] or np.nan for tick in estimated]) * scale
-        torque_ax.plot(t_est, values, lw=1, label=label)
+        label = "tau_z / 10" if key == "tau_z" else key
+        torque_ax.plot(series.estimate_t_s, series.torques[:, column] * scale, lw=1, label=label)
     torque_ax.set_ylabel("estimated torque (raw)")
     torque_ax.legend(loc="upper left", fontsize=8)
-    t = truth["t_s"]
-    force = np.linalg.norm(truth["wrist_wrench_t"][:, :3], axis=1)
-    force_ax.plot(t, force, color="k", lw=1, label="|wrist force| (truth)")
-    force_ax.plot(t, truth["contact_force_n"], color="tab:red", lw=0.6, alpha=0.6,
-                  label="plug contact force (truth)")
+    for column, axis in enumerate("xyz"):
+        command_ax.plot(series.command_t_s, series.twists[:, column] * 1e3, lw=1,
+                        label=f"v_{axis} (mm/s)")  # fmt: skip
+    for column, axis in enumerate("xyz"):
+        command_ax.plot(series.command_t_s, np.degrees(series.twists[:, 3 + column]), lw=0.8,
+                        ls="--", label=f"w_{axis} (deg/s)")  # fmt: skip
+    command_ax.set_ylabel("command (TCP twist, B)")
+    command_ax.legend(loc="upper left", fontsize=7, ncol=2)
+    if truth is None:
+        command_ax.set_xlabel("time (s)")
+    else:
+        _truth_panels(fig, axes[2], axes[3], truth)
+    fig.suptitle(title)
+    with atomic_file(path) as temporary:
+        fig.savefig(temporary, dpi=90, format="png")
+
+
+def _truth_panels(fig: Figure, force_ax: Axes, path_ax: Axes, truth: ChartTruth) -> None:
+    force = np.linalg.norm(truth.wrist_wrench_t[:, :3], axis=1)
+    force_ax.plot(truth.t_s, force, color="k", lw=1, label="|wrist force| (truth)")
+    force_ax.plot(truth.t_s, truth.contact_force_n, color="tab:red", lw=0.6, alpha=0.6,
+                  label="plug contact force (truth)")  # fmt: skip
     force_ax.set_ylabel("N")
     force_ax.set_xlabel("time (s)")
     force_ax.legend(loc="upper left", fontsize=8)
-    hole = np.array([float(truth["hole_x_m"]), float(truth["hole_y_m"])])
-    tip = (truth["tip_xyz_b"][:, :2] - hole) * 1e3
-    depth = truth["depth_m"] * 1e3
-    scatter = path_ax.scatter(tip[:, 0], tip[:, 1], c=depth, s=2, cmap="viridis")
+    tip = (truth.tip_xyz_b[:, :2] - truth.hole_xy_m) * 1e3
+    scatter = path_ax.scatter(tip[:, 0], tip[:, 1], c=truth.depth_m * 1e3, s=2, cmap="viridis")
     path_ax.plot(0, 0, "r+", ms=12, label="true hole")
     path_ax.set_aspect("equal")
     path_ax.set_xlabel("tip x - hole x (mm, B)")
     path_ax.set_ylabel("tip y - hole y (mm, B)")
     path_ax.legend(loc="upper left", fontsize=8)
     fig.colorbar(scatter, ax=path_ax, label="tip depth below the surface (mm)")
-    fig.suptitle(title)
-    with atomic_file(path) as temporary:
-        fig.savefig(temporary, dpi=90, format="png")
-    plt.close(fig)
+
+
+def trial_series(folder: Path) -> TrialSeries:
+    """The series of the trial recorded in ``folder`` (ticks.jsonl, and truth.npz if there)."""
+    ticks = [json.loads(line) for line in (folder / "ticks.jsonl").read_text().splitlines()]
+    estimated = [tick for tick in ticks if "estimate" in tick]
+    torques = np.array(
+        [
+            [np.nan if tick["estimate"][k] is None else tick["estimate"][k] for k in TORQUES]
+            for tick in estimated
+        ]  # fmt: skip
+    ).reshape(-1, 3)
+    twists = np.array([tick.get("twist", [np.nan] * 6) for tick in ticks]).reshape(-1, 6)
+    truth = None
+    if (folder / "truth.npz").is_file():
+        arrays = np.load(folder / "truth.npz")
+        truth = ChartTruth(
+            arrays["t_s"],
+            arrays["wrist_wrench_t"],
+            arrays["contact_force_n"],
+            arrays["tip_xyz_b"],
+            arrays["depth_m"],
+            np.array([float(arrays["hole_x_m"]), float(arrays["hole_y_m"])]),
+        )
+    tick_t = np.array([tick["t_s"] for tick in ticks])
+    return TrialSeries(
+        tick_t,
+        [tick["phase"] for tick in ticks],
+        np.array([tick["t_s"] for tick in estimated]),
+        torques,
+        tick_t,
+        twists,
+        truth,
+    )
+
+
+def trial_chart(folder: Path, path: Path, title: str) -> None:
+    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``."""
+    draw_trial_chart(trial_series(folder), path, title)
+
+
+def chart_title(task: object, seed: object, controller: object, ended: str) -> str:
+    """``TASK seed N (CONTROLLER): ENDED``."""
+    return f"{task} seed {seed} ({controller}): {ended}"
+
+
+def result_text(success: bool, failure_reason: object) -> str:
+    """How a trial ended, in the chart's words."""
+    return "inserted" if success else f"failed: {failure_reason}"
 
 
 def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     """The chart of the trial recorded in ``folder``, titled with its ``result``, as
     ``folder/summary.png``; its path."""
-    title = f"{result.task} seed {result.seed} ({result.controller}): " + (
-        "inserted" if result.success else f"failed: {result.failure_reason}"
-    )
+    ended = result_text(result.success, result.failure_reason)
+    title = chart_title(result.task, result.seed, result.controller, ended)
     path = folder / CHART_NAME
     trial_chart(folder, path, title)
     return path

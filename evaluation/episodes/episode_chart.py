@@ -1,0 +1,59 @@
+"""An episode's chart: the trial summary's chart (evaluation/trials/trial_chart.py) drawn
+from the episode's streams (torques with the phase bands, the commands, and the truth where
+the episode has it)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from controller.episode import Episode
+from evaluation.episodes import episode_streams
+from evaluation.trials.trial_chart import (
+    TORQUES,
+    TrialSeries,
+    chart_title,
+    draw_trial_chart,
+    result_text,
+)
+
+
+def episode_series(episode: Episode) -> TrialSeries:
+    """The chart's series of ``episode``: ticks from ``/loop/tick`` and ``/control/command``,
+    torques from ``/tactile/wrench`` at their frames' times, the truth from ``/sim/``."""
+    ticks = episode_streams.ticks(episode)
+    found = episode_streams.estimates(episode)
+    torques = np.column_stack([found.column(axis) for axis in TORQUES]).reshape(-1, 3)
+    truth = episode_streams.truth(episode)
+    return TrialSeries(
+        ticks.t_s,
+        ticks.phase,
+        found.t_s,
+        torques,
+        ticks.t_s,
+        ticks.twist,
+        None if truth is None else truth.chart,
+    )
+
+
+def episode_title(episode: Episode) -> str:
+    """The trial chart's title from the episode's metadata: how the trial ended (its
+    result, when a trial tool wrote one), else how the loop ended."""
+    info = episode.info
+    outcome = episode.outcome
+    if outcome is None:
+        ended = "no outcome (the run did not finish its file)"
+    else:
+        result = json.loads(outcome.get("result") or "null")
+        if isinstance(result, dict) and "success" in result:
+            ended = result_text(bool(result["success"]), result.get("failure_reason"))
+        else:
+            ended = outcome.get("reason", "?")
+    return chart_title(info.get("task"), info.get("seed"), info.get("controller"), ended)
+
+
+def write_episode_chart(episode: Episode, path: Path) -> None:
+    """Draw ``episode``'s chart to the PNG ``path`` (atomically)."""
+    draw_trial_chart(episode_series(episode), path, episode_title(episode))

@@ -1,0 +1,335 @@
+"""A LeRobot v3.0 dataset written from episodes held as plain arrays: pyarrow for the
+parquet files, PyAV for the video, no ``lerobot`` package (it pulls in torch and needs
+Python 3.12).
+
+The layout (LeRobot v3.0, ``CODEBASE_VERSION = "v3.0"``; docs/EPISODES.md, "Export to
+LeRobot")::
+
+    DIR/meta/info.json                       codebase_version, fps, features, path templates,
+                                             totals, splits
+    DIR/meta/stats.json                      per feature: min, max, mean, std, count, q01..q99
+    DIR/meta/tasks.parquet                   task string (the index) -> task_index
+    DIR/meta/episodes/chunk-000/file-000.parquet   one row per episode: its tasks, length,
+                                             where its rows and video frames are, its stats
+    DIR/data/chunk-000/file-000.parquet      one row per frame: the numeric features,
+                                             timestamp, frame_index, episode_index, index,
+                                             task_index
+    DIR/videos/observation.images.tactile/chunk-000/file-000.mp4   every episode's frames,
+                                             one after the other
+
+Every episode goes into chunk 0, file 0 (one export is far below LeRobot's 100 MB data and
+200 MB video file sizes). Statistics are exact over the numeric features; over the video
+they are taken, as LeRobot does, on up to ``IMAGE_STAT_FRAMES`` evenly spaced frames per
+episode, per RGB channel, scaled to [0, 1], shape (3, 1, 1).
+
+The dataset is built in a hidden folder beside DIR and renamed to DIR only when complete
+(``evaluation.common.outputs``): an error or an interruption leaves no DIR.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
+from evaluation.episodes.lerobot_video import open_video, video_info
+
+CODEBASE_VERSION = "v3.0"
+CHUNKS_SIZE = 1000
+DATA_FILES_SIZE_IN_MB = 100
+VIDEO_FILES_SIZE_IN_MB = 200
+CHUNK_FILE = "chunk-{chunk_index:03d}/file-{file_index:03d}"
+DATA_PATH = "data/" + CHUNK_FILE + ".parquet"
+VIDEO_PATH = "videos/{video_key}/" + CHUNK_FILE + ".mp4"
+EPISODES_PATH = "meta/episodes/" + CHUNK_FILE + ".parquet"
+TASKS_PATH = "meta/tasks.parquet"
+IMAGE_KEY = "observation.images.tactile"
+INDEX_FEATURES = {
+    "timestamp": "float32",
+    "frame_index": "int64",
+    "episode_index": "int64",
+    "index": "int64",
+    "task_index": "int64",
+}
+"""The columns every LeRobot v3.0 data file has, with their dtypes."""
+QUANTILES = (0.01, 0.10, 0.50, 0.90, 0.99)
+IMAGE_STAT_FRAMES = 100
+
+
+@dataclass(frozen=True)
+class VectorFeature:
+    """A numeric feature: ``key`` (e.g. ``observation.state``), the ``names`` of its
+    components (units in the names), and ``values``, one row per dataset frame, float32."""
+
+    key: str
+    names: tuple[str, ...]
+    values: np.ndarray
+
+    def __post_init__(self) -> None:
+        values = np.asarray(self.values, dtype=np.float32)
+        if values.ndim != 2 or values.shape[1] != len(self.names):
+            raise ValueError(
+                f"feature {self.key!r}: expected values of shape (frames, {len(self.names)}), "
+                f"got {values.shape}"
+            )
+        object.__setattr__(self, "values", values)
+
+
+@dataclass(frozen=True)
+class DatasetEpisode:
+    """One episode as the dataset stores it: its ``task`` (a sentence), its tactile
+    ``frames`` (RGB uint8, H x W x 3, one per dataset frame, read once, in order: a
+    generator is fine) and its numeric ``features`` (each with one row per frame)."""
+
+    task: str
+    length: int
+    frames: Iterable[np.ndarray]
+    features: tuple[VectorFeature, ...]
+
+    def __post_init__(self) -> None:
+        if self.length < 1:
+            raise ValueError("an episode needs at least one frame")
+        for feature in self.features:
+            if len(feature.values) != self.length:
+                raise ValueError(
+                    f"feature {feature.key!r}: {len(feature.values)} rows for {self.length} frames"
+                )
+
+
+@dataclass(frozen=True)
+class WrittenDataset:
+    """What ``write_dataset`` wrote: its folder, episodes, frames and fps."""
+
+    root: Path
+    episodes: int
+    frames: int
+    fps: int
+
+
+def write_dataset(
+    episodes: Sequence[DatasetEpisode],
+    root: Path,
+    fps: int,
+    frame_hw: tuple[int, int],
+    robot_type: str | None = None,
+) -> WrittenDataset:
+    """Write ``episodes`` (frames of ``frame_hw`` = (height, width) px, at ``fps`` frames
+    per second, sharing their features' keys and names) as a LeRobot v3.0 dataset at
+    ``root``, which must not exist. ValueError (naming the episode) on a mismatch."""
+    if not episodes:
+        raise ValueError("no episodes to write")
+    layout = [(f.key, f.names) for f in episodes[0].features]
+    for number, episode in enumerate(episodes):
+        if [(f.key, f.names) for f in episode.features] != layout:
+            raise ValueError(f"episode {number}: its features differ from episode 0's")
+    partial = partial_folder(root)
+    try:
+        _write(episodes, partial, fps, frame_hw, robot_type)
+        publish_folder(partial, root, replace=False)
+    except BaseException:
+        discard_folder(partial)
+        raise
+    return WrittenDataset(root, len(episodes), sum(e.length for e in episodes), fps)
+
+
+def _location(template: str, **keys: Any) -> str:
+    return template.format(chunk_index=0, file_index=0, **keys)
+
+
+def _write(
+    episodes: Sequence[DatasetEpisode],
+    root: Path,
+    fps: int,
+    frame_hw: tuple[int, int],
+    robot_type: str | None,
+) -> None:
+    tasks = list(dict.fromkeys(e.task for e in episodes))
+    height, width = frame_hw
+    video_path = root / _location(VIDEO_PATH, video_key=IMAGE_KEY)
+    video_path.parent.mkdir(parents=True)
+    rows: list[pa.Table] = []
+    samples: list[list[np.ndarray]] = []
+    first = 0
+    with open_video(video_path, fps, width, height) as video:
+        for number, episode in enumerate(episodes):
+            samples.append(_encode_frames(episode, number, video))
+            rows.append(_data_table(episode, number, first, tasks.index(episode.task), fps))
+            first += episode.length
+    data_path = root / _location(DATA_PATH)
+    data_path.parent.mkdir(parents=True)
+    table = pa.concat_tables(rows)
+    pq.write_table(table, data_path, compression="snappy")
+    features = _features_info(episodes[0], frame_hw, video_info(video_path))
+    _write_episodes(root, episodes, rows, samples, fps)
+    pd.DataFrame({"task_index": range(len(tasks))}, index=tasks).to_parquet(root / TASKS_PATH)
+    stats = _stats(table, episodes[0], [s for episode in samples for s in episode])
+    _write_json(root / "meta" / "stats.json", stats)
+    info = {
+        "codebase_version": CODEBASE_VERSION,
+        "robot_type": robot_type,
+        "total_episodes": len(episodes),
+        "total_frames": int(table.num_rows),
+        "total_tasks": len(tasks),
+        "chunks_size": CHUNKS_SIZE,
+        "data_files_size_in_mb": DATA_FILES_SIZE_IN_MB,
+        "video_files_size_in_mb": VIDEO_FILES_SIZE_IN_MB,
+        "fps": fps,
+        "splits": {"train": f"0:{len(episodes)}"},
+        "data_path": DATA_PATH,
+        "video_path": VIDEO_PATH,
+        "features": features,
+    }
+    _write_json(root / "meta" / "info.json", info)
+
+
+def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> list[np.ndarray]:
+    """Encode the episode's frames; the evenly spaced ones kept for the image statistics."""
+    keep = set(np.linspace(0, episode.length - 1, IMAGE_STAT_FRAMES).round().astype(int))
+    kept = []
+    count = 0
+    for frame in episode.frames:
+        if count >= episode.length:
+            break
+        try:
+            video.write(frame)
+        except ValueError as exc:
+            raise ValueError(f"episode {number}, frame {count}: {exc}") from None
+        if count in keep:
+            kept.append(frame)
+        count += 1
+    if count != episode.length:
+        raise ValueError(f"episode {number}: {count} frames for a length of {episode.length}")
+    return kept
+
+
+def _data_table(
+    episode: DatasetEpisode, number: int, first: int, task_index: int, fps: int
+) -> pa.Table:
+    n = episode.length
+    columns: dict[str, pa.Array] = {}
+    for feature in episode.features:
+        columns[feature.key] = _column(feature.values)
+    frame_index = np.arange(n, dtype=np.int64)
+    columns["timestamp"] = pa.array((frame_index / fps).astype(np.float32))
+    columns["frame_index"] = pa.array(frame_index)
+    columns["episode_index"] = pa.array(np.full(n, number, dtype=np.int64))
+    columns["index"] = pa.array(first + frame_index)
+    columns["task_index"] = pa.array(np.full(n, task_index, dtype=np.int64))
+    return pa.table(columns)
+
+
+def _column(values: np.ndarray) -> pa.Array:
+    """A float32 column: a scalar for one component, else a fixed-size list (LeRobot's
+    ``Sequence(length=k)``)."""
+    if values.shape[1] == 1:
+        return pa.array(values[:, 0])
+    return pa.FixedSizeListArray.from_arrays(pa.array(values.reshape(-1)), values.shape[1])
+
+
+def _features_info(
+    episode: DatasetEpisode, frame_hw: tuple[int, int], video: dict[str, object]
+) -> dict[str, dict[str, Any]]:
+    features: dict[str, dict[str, Any]] = {
+        IMAGE_KEY: {
+            "dtype": "video",
+            "shape": [*frame_hw, 3],
+            "names": ["height", "width", "channels"],
+            "info": video,
+        }
+    }
+    for feature in episode.features:
+        features[feature.key] = {
+            "dtype": "float32",
+            "shape": [len(feature.names)],
+            "names": list(feature.names),
+        }
+    for key, dtype in INDEX_FEATURES.items():
+        features[key] = {"dtype": dtype, "shape": [1], "names": None}
+    return features
+
+
+def _numeric_stats(values: np.ndarray) -> dict[str, np.ndarray]:
+    """min, max, mean, std, count and the quantiles over the rows of ``values`` (n, k)."""
+    stats = {
+        "min": values.min(axis=0),
+        "max": values.max(axis=0),
+        "mean": values.mean(axis=0, dtype=np.float64),
+        "std": values.std(axis=0, dtype=np.float64),
+        "count": np.array([len(values)]),
+    }
+    for q, value in zip(QUANTILES, np.quantile(values, QUANTILES, axis=0), strict=True):
+        stats[f"q{round(q * 100):02d}"] = value
+    return stats
+
+
+def _image_stats(frames: list[np.ndarray]) -> dict[str, np.ndarray]:
+    """Per-channel statistics of RGB frames in [0, 1], each of shape (3, 1, 1)."""
+    stats = _numeric_stats(np.stack(frames).reshape(-1, 3) / 255.0)
+    stats = {k: v.reshape(3, 1, 1) for k, v in stats.items() if k != "count"}
+    return stats | {"count": np.array([len(frames)])}
+
+
+def _table_values(table: pa.Table, key: str) -> np.ndarray:
+    """The column ``key`` as an (n, k) array."""
+    column = table.column(key).combine_chunks()
+    if pa.types.is_fixed_size_list(column.type):
+        return column.flatten().to_numpy().reshape(len(column), column.type.list_size)
+    return column.to_numpy().reshape(-1, 1)
+
+
+def _stats(
+    table: pa.Table, layout: DatasetEpisode, frames: list[np.ndarray]
+) -> dict[str, dict[str, Any]]:
+    keys = [f.key for f in layout.features] + list(INDEX_FEATURES)
+    stats = {key: _numeric_stats(_table_values(table, key)) for key in keys}
+    stats[IMAGE_KEY] = _image_stats(frames)
+    return {key: {k: v.tolist() for k, v in values.items()} for key, values in stats.items()}
+
+
+def _write_episodes(
+    root: Path,
+    episodes: Sequence[DatasetEpisode],
+    tables: list[pa.Table],
+    samples: list[list[np.ndarray]],
+    fps: int,
+) -> None:
+    rows: list[dict[str, Any]] = []
+    first = 0
+    for number, (episode, table, frames) in enumerate(zip(episodes, tables, samples, strict=True)):
+        video = f"videos/{IMAGE_KEY}/"
+        row: dict[str, Any] = {
+            "episode_index": number,
+            "tasks": [episode.task],
+            "length": episode.length,
+            "data/chunk_index": 0,
+            "data/file_index": 0,
+            "dataset_from_index": first,
+            "dataset_to_index": first + episode.length,
+            video + "chunk_index": 0,
+            video + "file_index": 0,
+            video + "from_timestamp": first / fps,
+            video + "to_timestamp": (first + episode.length) / fps,
+            "meta/episodes/chunk_index": 0,
+            "meta/episodes/file_index": 0,
+        }
+        for key, values in _stats(table, episode, frames).items():
+            for name, value in values.items():
+                row[f"stats/{key}/{name}"] = value
+        rows.append(row)
+        first += episode.length
+    path = root / _location(EPISODES_PATH)
+    path.parent.mkdir(parents=True)
+    pq.write_table(pa.Table.from_pylist(rows), path)
+
+
+def _write_json(path: Path, value: object) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(value, indent=4) + "\n")

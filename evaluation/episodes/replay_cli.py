@@ -1,0 +1,255 @@
+"""The episode tools: ``replay SUBCOMMAND EP ...`` (scripts/replay.py, the installed
+``tactile-replay``; docs/EPISODES.md, "Tools").
+
+    replay summary EP                      topics, counts, rates, duration, outcome,
+                                           transitions, drops
+    replay plot EP --out PNG               the trial summary's chart, made from the episode
+    replay reestimate EP --method NAME|PATH [--out CSV]
+                                           re-run an estimator configuration on the logged
+                                           frames; R^2 and RMSE per axis against the truth
+                                           (simulation) and against the logged estimates
+    replay export EP [EP ...] --lerobot DIR [--task TEXT]
+                                           a LeRobot v3.0 dataset of the episodes
+    replay repair EP [--out OUT]           finish a file left by a killed process
+
+EP is an episode file (MCAP, ``episode.mcap`` in a run's folder). A file cut short by a
+killed process (no footer) is refused, saying how much of it holds whole records, unless
+``--allow-truncated`` (then what was read is used, with one warning line); ``repair`` makes
+a finished copy. Outputs are checked before any work, never written over an input, and
+written atomically (a temporary file or folder renamed into place when complete). Expected
+failures (a missing, foreign or truncated file, a bad configuration, an output that cannot
+be written) print one line ``replay: error: ...`` and exit with code 2; SIGINT and SIGTERM
+exit with 130 and 143 (evaluation/common/cli_support.py).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import math
+import sys
+import time
+from pathlib import Path
+
+from controller.episode import Episode, EpisodeError, read_episode
+from controller.episode.repair import repair as repair_file
+from controller.tactile import estimator_for_sensor
+from core.sensor_profile import sensor_profile
+from evaluation.common.cli_support import ToolError, distinct, resolved_config_path, run_tool
+from evaluation.common.outputs import atomic_text, check_output_file, check_output_folder
+from evaluation.episodes import episode_streams, reestimation
+from evaluation.episodes.episode_chart import write_episode_chart
+from evaluation.episodes.episode_summary import summary_lines
+from evaluation.episodes.lerobot_alignment import AlignmentError, align
+from evaluation.episodes.lerobot_dataset import write_dataset
+from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
+
+PROG = "replay"
+
+
+def _warn(message: str) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+def open_episode(path: Path, allow_truncated: bool = False) -> Episode:
+    """The episode at ``path``; ToolError (one line) if it is missing, not an episode, or
+    cut short (unless ``allow_truncated``: then one warning line)."""
+    if path.is_dir():
+        raise ToolError(f"episode '{path}' is a folder; expected an episode file (.mcap)")
+    try:
+        episode = read_episode(path)
+    except EpisodeError as exc:
+        raise ToolError(str(exc)) from None
+    if not episode.finished:
+        messages = sum(episode.counts.values())
+        _, last = episode.time_range_s()
+        until = f", up to {last:.3f} s on the loop clock" if math.isfinite(last) else ""
+        problem = (
+            f"episode '{path}' is truncated (no footer: the process writing it was killed?): "
+            f"read {episode.read_bytes} of {episode.size_bytes} bytes, {messages} messages"
+            f"{until}"
+        )
+        if not allow_truncated:
+            raise ToolError(
+                f"{problem}; finish it with 'replay repair {path}', or pass --allow-truncated"
+            )
+        _warn(problem)
+    return episode
+
+
+def summary(args: argparse.Namespace) -> int:
+    print("\n".join(summary_lines(open_episode(args.episode, args.allow_truncated))))
+    return 0
+
+
+def plot(args: argparse.Namespace) -> int:
+    check_output_file(args.out, [args.episode])
+    write_episode_chart(open_episode(args.episode, args.allow_truncated), args.out)
+    print(f"{PROG}: wrote {args.out}")
+    return 0
+
+
+def _score_lines(title: str, scores: list[reestimation.AxisScore], unit: str) -> list[str]:
+    lines = [title]
+    for s in scores:
+        exact = f", {s.exact} of {s.samples} frames identical" if s.exact is not None else ""
+        lines.append(
+            f"  {s.axis}: R^2 {s.r2:.6f}, RMSE {s.rmse:.6g} {unit} over {s.samples} frames{exact}"
+        )
+    return lines
+
+
+def reestimate(args: argparse.Namespace) -> int:
+    method_file = resolved_config_path(args.method, "estimators")
+    if args.out is not None:
+        check_output_file(args.out, [args.episode, method_file])
+    episode = open_episode(args.episode, args.allow_truncated)
+    try:
+        run = reestimation.run_estimator(episode)
+        estimator = estimator_for_sensor(sensor_profile(run.sensor), args.method)
+        new = reestimation.reestimate(episode, estimator, time.perf_counter)
+    except reestimation.ReestimationError as exc:
+        raise ToolError(f"episode '{args.episode}': {exc}") from None
+    except ValueError as exc:  # a frame the estimator refuses (its size, its type)
+        raise ToolError(f"episode '{args.episode}': re-estimation failed: {exc}") from None
+    image_format = episode.info.get("tactile_image_format", "unknown")
+    lines = [
+        f"re-estimated {len(new.estimates)} frames of '{args.episode}' with "
+        f"'{estimator.config_name}' (the run's: '{run.estimator}', sensor {run.sensor}; "
+        f"frames logged as {image_format})"
+    ]
+    truth = episode_streams.truth(episode)
+    if truth is not None:
+        lines += _score_lines(
+            "against the truth (/sim/truth, the gel's torque on the plug; fit truth ~ slope * "
+            "estimate + offset over the frames estimated against a reference):",
+            reestimation.against_truth(new, truth),
+            "N*m",
+        )
+    logged = episode_streams.estimates(episode)
+    if len(logged.push_index):
+        lines += _score_lines(
+            "against the logged estimates (/tactile/wrench; no fit):",
+            reestimation.against_logged(new, logged),
+            "(raw)",
+        )
+    if args.out is not None:
+        with atomic_text(args.out, newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(CSV_COLUMNS)
+            for push, t_s, found, ms in zip(
+                new.push_index, new.t_s, new.estimates, new.latency_ms, strict=True
+            ):
+                writer.writerow(csv_row(int(push), float(t_s), found, float(ms)))
+        lines.append(f"wrote {len(new.estimates)} rows to {args.out}")
+    print("\n".join(lines))
+    return 0
+
+
+def _task_sentence(episode: Episode, given: str | None) -> str:
+    return given if given is not None else f"insert the {episode.info.get('task', 'usb')} plug"
+
+
+def export(args: argparse.Namespace) -> int:
+    distinct(build_parser(), "EP", [str(p.resolve()) for p in args.episodes])
+    check_output_folder(args.lerobot, args.episodes, "--lerobot", must_not_exist=True)
+    aligned = []
+    for path in args.episodes:
+        episode = open_episode(path, args.allow_truncated)
+        try:
+            aligned.append(align(episode, _task_sentence(episode, args.task)))
+        except AlignmentError as exc:
+            raise ToolError(f"episode '{path}': {exc}") from None
+        first = aligned[0]
+        if (aligned[-1].fps, aligned[-1].frame_hw) != (first.fps, first.frame_hw):
+            raise ToolError(
+                f"episode '{path}': {aligned[-1].fps} fps, frames {aligned[-1].frame_hw}; the "
+                f"first episode has {first.fps} fps, frames {first.frame_hw}: one dataset "
+                "holds one rate and one frame size"
+            )
+    written = write_dataset(
+        [a.dataset for a in aligned], args.lerobot, aligned[0].fps, aligned[0].frame_hw
+    )
+    repeated = sum(a.repeated for a in aligned)
+    print(
+        f"{PROG}: wrote a LeRobot v3.0 dataset of {written.episodes} episodes, "
+        f"{written.frames} frames at {written.fps} fps ({aligned[0].window} control ticks "
+        f"per frame; {repeated} rows repeat an older frame) to {args.lerobot}"
+    )
+    return 0
+
+
+def repair(args: argparse.Namespace) -> int:
+    out = args.out or args.episode.with_name(args.episode.stem + ".repaired.mcap")
+    check_output_file(out, [args.episode], "--out")
+    try:
+        report = repair_file(args.episode, out)
+    except EpisodeError as exc:
+        raise ToolError(str(exc)) from None
+    print(
+        f"{PROG}: wrote {out}: {report.messages} messages from the {report.read_bytes} of "
+        f"{report.source_bytes} bytes of '{args.episode}' that held whole records, marked "
+        "incomplete"
+    )
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=PROG, description="Tools for episode files (MCAP).")
+    commands = parser.add_subparsers(dest="command", required=True, metavar="SUBCOMMAND")
+
+    def command(name: str, help_text: str, run) -> argparse.ArgumentParser:
+        sub = commands.add_parser(name, help=help_text, description=help_text)
+        sub.set_defaults(run=run)
+        return sub
+
+    def episode_argument(sub: argparse.ArgumentParser, truncated: bool = True) -> None:
+        sub.add_argument("episode", type=Path, metavar="EP", help="episode file (.mcap)")
+        if truncated:
+            sub.add_argument(
+                "--allow-truncated",
+                action="store_true",
+                help="read a file cut short (no footer) up to its last whole record",
+            )
+
+    sub = command(
+        "summary", "topics, counts, rates, duration, outcome, transitions, drops", summary
+    )
+    episode_argument(sub)
+    sub = command("plot", "the trial summary's chart of the episode (PNG)", plot)
+    episode_argument(sub)
+    sub.add_argument("--out", type=Path, required=True, help="output PNG path")
+    sub = command(
+        "reestimate", "re-run an estimator configuration on the logged frames", reestimate
+    )
+    episode_argument(sub)
+    sub.add_argument(
+        "--method",
+        required=True,
+        help="estimator configuration: a name in configs/estimators or a YAML path",
+    )
+    sub.add_argument("--out", type=Path, default=None, help="CSV of the new estimates")
+    sub = command("export", "export episodes as a LeRobot v3.0 dataset", export)
+    sub.add_argument("episodes", type=Path, nargs="+", metavar="EP", help="episode files")
+    sub.add_argument(
+        "--allow-truncated",
+        action="store_true",
+        help="read files cut short (no footer) up to their last whole record",
+    )
+    sub.add_argument("--lerobot", type=Path, required=True, help="new dataset folder")
+    sub.add_argument(
+        "--task",
+        default=None,
+        help="the task sentence of every episode (default: 'insert the TASK plug')",
+    )
+    sub = command("repair", "finish a file left by a killed process", repair)
+    episode_argument(sub, truncated=False)
+    sub.add_argument(
+        "--out", type=Path, default=None, help="the finished copy (default: EP.repaired.mcap)"
+    )
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return run_tool(PROG, lambda: args.run(args))

@@ -1,0 +1,33 @@
+"""``replay plot`` draws the trial summary's chart from the episode: the same series as the
+trial's own record (ticks.jsonl, truth.npz) of the same run."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.episode import read_episode
+from evaluation.episodes.episode_chart import episode_series, episode_title
+from evaluation.trials.trial_chart import trial_series
+
+
+def test_the_episode_gives_the_trial_records_series(episode_path):
+    episode = episode_series(read_episode(episode_path))
+    record = trial_series(episode_path.parent)  # the same run's ticks.jsonl and truth.npz
+    np.testing.assert_array_equal(episode.tick_t_s, record.tick_t_s)
+    assert list(episode.phases) == list(record.phases) and "insert" in episode.phases
+    np.testing.assert_array_equal(episode.twists, record.twists)
+    assert np.isfinite(episode.twists).any()
+    # the record holds the estimate each tick saw; the episode each frame's, at its capture
+    seen = {t: row for t, row in zip(record.estimate_t_s, record.torques, strict=True)}
+    for t, row in zip(episode.estimate_t_s, episode.torques, strict=True):
+        if t in seen:
+            np.testing.assert_array_equal(row, seen[t])
+    assert episode.truth is not None and record.truth is not None
+    for name in ("t_s", "wrist_wrench_t", "contact_force_n", "tip_xyz_b", "depth_m", "hole_xy_m"):
+        np.testing.assert_allclose(
+            getattr(episode.truth, name), getattr(record.truth, name), err_msg=name
+        )
+
+
+def test_the_title_says_how_the_trial_ended(episode_path):
+    assert episode_title(read_episode(episode_path)) == "usb_c seed 0 (dipole): inserted"

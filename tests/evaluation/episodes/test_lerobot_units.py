@@ -1,0 +1,80 @@
+"""The LeRobot export's parts on made-up data: the rows at the camera's rate, the windows of
+control ticks, and a dataset written whole or not at all."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evaluation.episodes.lerobot_alignment import (
+    AlignmentError,
+    camera_fps,
+    frame_rows,
+    windows,
+)
+from evaluation.episodes.lerobot_dataset import DatasetEpisode, VectorFeature, write_dataset
+
+
+def test_rows_follow_the_camera_and_hold_the_last_frame_over_a_drop():
+    pushed = 1.0 + np.array([0.0, 0.04, 0.12, 0.16])  # the frame at 1.08 s was lost
+    fps = camera_fps(pushed)
+    row_t, source = frame_rows(pushed, fps)
+    assert fps == 25
+    np.testing.assert_allclose(row_t, 1.0 + np.arange(5) * 0.04)
+    assert list(source) == [0, 1, 1, 2, 3]
+
+
+def test_a_slightly_late_frame_stays_on_its_row():
+    pushed = np.array([0.0, 0.0400004, 0.08, 0.1199996])
+    assert list(frame_rows(pushed, 25)[1]) == [0, 1, 2, 3]
+
+
+def test_one_frame_is_too_few_to_tell_the_rate():
+    with pytest.raises(AlignmentError, match="1 tactile frame"):
+        camera_fps(np.array([3.0]))
+
+
+def test_windows_look_back_for_the_state_and_ahead_for_the_actions():
+    values = np.arange(10.0)[:, None] * np.array([[1.0, 10.0]])
+    back = windows(values, np.array([0, 5]), 3, forward=False)
+    ahead = windows(values, np.array([5, 9]), 3, forward=True)
+    np.testing.assert_array_equal(back[0], [0, 0, 0, 0, 0, 0])  # clipped at the start
+    np.testing.assert_array_equal(back[1], [3, 30, 4, 40, 5, 50])
+    np.testing.assert_array_equal(ahead[0], [5, 50, 6, 60, 7, 70])
+    np.testing.assert_array_equal(ahead[1], [9, 90, 9, 90, 9, 90])  # clipped at the end
+
+
+def _episode(n: int, shape=(8, 16, 3), bad_frame: int | None = None) -> DatasetEpisode:
+    def frames():
+        for i in range(n):
+            yield np.zeros((4, 4, 3) if i == bad_frame else shape, np.uint8) + i
+
+    state = VectorFeature("observation.state", ("x_m", "y_m"), np.ones((n, 2)))
+    return DatasetEpisode("task", n, frames(), (state,))
+
+
+def test_a_bad_frame_leaves_no_dataset_and_no_partial_folder(tmp_path):
+    root = tmp_path / "dataset"
+    with pytest.raises(ValueError, match="episode 1, frame 3"):
+        write_dataset([_episode(5), _episode(5, bad_frame=3)], root, 25, (8, 16))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_generator_shorter_than_the_episode_is_refused(tmp_path):
+    short = DatasetEpisode("task", 6, iter([np.zeros((8, 16, 3), np.uint8)] * 4), ())
+    with pytest.raises(ValueError, match="4 frames for a length of 6"):
+        write_dataset([short], tmp_path / "d", 25, (8, 16))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_episodes_must_share_their_features():
+    with pytest.raises(ValueError, match="differ from episode 0"):
+        other = DatasetEpisode("task", 3, iter(()), ())
+        write_dataset([_episode(3), other], None, 25, (8, 16))  # type: ignore[arg-type]
+
+
+def test_a_feature_needs_a_row_per_frame_and_a_name_per_column():
+    with pytest.raises(ValueError, match=r"shape \(frames, 2\)"):
+        VectorFeature("action", ("a", "b"), np.ones((4, 3)))
+    with pytest.raises(ValueError, match="3 rows for 4 frames"):
+        DatasetEpisode("task", 4, iter(()), (VectorFeature("action", ("a",), np.ones((3, 1))),))

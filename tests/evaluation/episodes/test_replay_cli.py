@@ -1,0 +1,219 @@
+"""The replay tools on a real recorded episode: summary, plot, reestimate, and the errors
+(missing, foreign and truncated files: one line, exit code 2)."""
+
+from __future__ import annotations
+
+import csv
+import math
+import shutil
+import time
+
+import numpy as np
+import pytest
+
+from controller.episode import read_episode
+from controller.tactile import estimator_for_sensor
+from controller.tactile.wrench import VALUE_FIELDS
+from evaluation.episodes import episode_streams, reestimation
+from evaluation.episodes.replay_cli import main
+
+
+def one_error_line(capsys) -> str:
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("replay: error: ") and "\n" not in err and "Traceback" not in err
+    return err
+
+
+def test_summary_names_every_topic_with_its_count_and_the_run(episode_path, capsys):
+    episode = read_episode(episode_path)
+    assert main(["summary", str(episode_path)]) == 0
+    out = capsys.readouterr().out
+    assert "file: complete" in out and "task: usb_c" in out and "controller: dipole" in out
+    for topic, count in episode.counts.items():
+        assert any(line.split()[:2] == [topic, str(count)] for line in out.splitlines())
+    assert "/tactile/image" in out and "25.00 Hz" in out and "100.00 Hz" in out
+    changes = episode_streams.transitions(episode)
+    assert f"transitions: {len(changes)}" in out and len(changes) >= 5
+    assert "grasp -> approach: grasped_and_zeroed" in out
+    assert "outcome: done" in out and "dropped: 0 records" in out
+
+
+def test_plot_draws_the_chart_and_never_writes_over_the_episode(episode_path, tmp_path, capsys):
+    out = tmp_path / "chart.png"
+    assert main(["plot", str(episode_path), "--out", str(out)]) == 0
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000
+    before = episode_path.read_bytes()
+    capsys.readouterr()
+    assert main(["plot", str(episode_path), "--out", str(episode_path)]) == 2
+    assert "never writes over its inputs" in one_error_line(capsys)
+    assert episode_path.read_bytes() == before
+
+
+def test_reestimate_with_the_runs_configuration_reproduces_the_logged_estimates_exactly(
+    episode_path,
+):
+    episode = read_episode(episode_path)
+    run = reestimation.run_estimator(episode)
+    assert (run.sensor, run.estimator) == ("gelsight_mini", "default")
+    new = reestimation.reestimate(
+        episode, estimator_for_sensor(run.sensor, run.estimator), time.perf_counter
+    )
+    logged = episode_streams.estimates(episode)
+    np.testing.assert_array_equal(new.push_index, logged.push_index)
+    np.testing.assert_array_equal(new.t_s, logged.t_s)
+    for column, name in enumerate(VALUE_FIELDS):
+        # NaN (logged as null) equals NaN; every other value bit for bit
+        np.testing.assert_array_equal(new.column(name), logged.values[:, column])
+    assert np.array_equal(np.array([e.contact for e in new.estimates]), logged.contact)
+    assert logged.contact.sum() > 50  # the comparison covers frames in contact
+    assert np.abs(logged.column("tau_z")).max() > 1e-3  # and non-zero torques
+
+
+def test_reestimate_reports_and_writes_the_csv(episode_path, tmp_path, capsys):
+    out = tmp_path / "new.csv"
+    assert main(["reestimate", str(episode_path), "--method", "default", "--out", str(out)]) == 0
+    report = capsys.readouterr().out
+    frames = read_episode(episode_path).counts["/tactile/image"]
+    for axis in ("tau_x", "tau_y", "tau_z"):
+        assert f"{axis}: R^2 1.000000, RMSE 0 (raw) over {frames} frames, {frames} of " \
+               f"{frames} frames identical" in report  # fmt: skip
+    with out.open() as handle:
+        rows = list(csv.DictReader(handle))
+    assert len(rows) == frames and rows[0]["frame"] == "0"
+    assert float(rows[-1]["time_s"]) == pytest.approx(
+        episode_streams.estimates(read_episode(episode_path)).t_s[-1], abs=1e-6
+    )
+
+
+def test_another_configuration_is_scored_against_the_logged_estimates(episode_path, capsys):
+    assert main(["reestimate", str(episode_path), "--method", "dis_half"]) == 0
+    report = capsys.readouterr().out
+    truth, logged = report.split("against the logged estimates")
+    assert "against the truth (/sim/truth" in truth
+    for part, unit in ((truth, "N*m"), (logged, "(raw)")):
+        lines = [line for line in part.splitlines() if line.strip().startswith("tau_")]
+        assert len(lines) == 3 and all(unit in line for line in lines)
+    r2 = [float(line.split("R^2 ")[1].split(",")[0]) for line in logged.splitlines()[1:]]
+    assert all(math.isfinite(v) for v in r2) and min(r2) < 0.999999  # not the same estimates
+    assert "321 of 321 frames identical" not in logged
+
+
+def test_reestimate_refuses_an_unknown_configuration(episode_path, capsys):
+    assert main(["reestimate", str(episode_path), "--method", "no_such_method"]) == 2
+    assert "no_such_method" in one_error_line(capsys)
+
+
+# -- errors: a missing, a foreign and a truncated file ---------------------------------------
+
+
+@pytest.mark.parametrize(
+    "command", [["summary"], ["plot", "--out", "x.png"], ["reestimate", "--method", "default"]]
+)
+def test_a_missing_file_is_one_line_and_exit_2(command, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    missing = tmp_path / "missing.mcap"
+    assert main([command[0], str(missing), *command[1:]]) == 2
+    err = one_error_line(capsys)
+    assert str(missing) in err and "No such file" in err
+
+
+@pytest.mark.parametrize("content", [b"", b"ticks,phase\n1,grasp\n", b"\x89PNG\r\n\x1a\n" * 40])
+def test_a_foreign_file_is_one_line_and_exit_2(content, tmp_path, capsys):
+    foreign = tmp_path / "foreign.mcap"
+    foreign.write_bytes(content)
+    assert main(["summary", str(foreign)]) == 2
+    err = one_error_line(capsys)
+    assert str(foreign) in err and "not an MCAP file" in err
+
+
+def test_a_folder_is_one_line_and_exit_2(tmp_path, capsys):
+    assert main(["summary", str(tmp_path)]) == 2
+    assert "is a folder" in one_error_line(capsys)
+
+
+@pytest.fixture(scope="module")
+def truncated(episode_path, tmp_path_factory):
+    """The episode cut at 40 % of its size, as a killed writer leaves it."""
+    cut = tmp_path_factory.mktemp("cut") / "cut.mcap"
+    data = episode_path.read_bytes()
+    cut.write_bytes(data[: int(len(data) * 0.4)])
+    return cut
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["summary"],
+        ["plot", "--out", "x.png"],
+        ["reestimate", "--method", "default"],
+        ["export", "--lerobot", "dataset"],
+    ],
+)
+def test_a_truncated_file_says_how_much_it_read(command, truncated, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main([command[0], str(truncated), *command[1:]]) == 2
+    err = one_error_line(capsys)
+    size = truncated.stat().st_size
+    assert "is truncated" in err and f"of {size} bytes" in err and "read " in err
+    read = int(err.split("read ")[1].split(" of ")[0])
+    assert 0 < read <= size
+    assert "--allow-truncated" in err and "replay repair" in err
+    assert not (tmp_path / "x.png").exists() and not (tmp_path / "dataset").exists()
+
+
+def test_a_truncated_file_is_read_up_to_its_cut_when_allowed(truncated, capsys):
+    assert main(["summary", str(truncated), "--allow-truncated"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.startswith("replay: warning: ") and captured.err.count("\n") == 1
+    assert "file: truncated: read " in captured.out
+    assert "outcome: none written" in captured.out
+
+
+def test_a_missing_subcommand_or_argument_is_a_usage_error(episode_path, capsys):
+    for argv in ([], ["plot", str(episode_path)], ["reestimate", str(episode_path)]):
+        with pytest.raises(SystemExit) as stop:
+            main(argv)
+        assert stop.value.code == 2
+    capsys.readouterr()
+
+
+def test_an_episode_given_twice_is_refused(episode_path, tmp_path, capsys):
+    with pytest.raises(SystemExit) as stop:
+        main(["export", str(episode_path), str(episode_path), "--lerobot", str(tmp_path / "d")])
+    assert stop.value.code == 2
+    assert "given twice" in capsys.readouterr().err
+    assert not (tmp_path / "d").exists()
+
+
+def test_the_copy_of_an_episode_reads_alike(episode_path, tmp_path):
+    copy = tmp_path / "copy.mcap"
+    shutil.copyfile(episode_path, copy)
+    assert read_episode(copy).counts == read_episode(episode_path).counts
+
+
+def test_repair_finishes_a_truncated_file_that_the_tools_then_read(truncated, tmp_path, capsys):
+    out = tmp_path / "repaired.mcap"
+    assert main(["repair", str(truncated), "--out", str(out)]) == 0
+    said = capsys.readouterr().out
+    assert f"of {truncated.stat().st_size} bytes" in said and "marked incomplete" in said
+    assert main(["summary", str(out)]) == 0
+    summary = capsys.readouterr().out
+    assert "file: incomplete: repaired from a file cut short" in summary
+    assert main(["repair", str(truncated), "--out", str(out)]) == 2  # never over a file
+    assert "exists" in one_error_line(capsys)
+
+
+def test_repair_refuses_a_finished_file(episode_path, tmp_path, capsys):
+    assert main(["repair", str(episode_path), "--out", str(tmp_path / "r.mcap")]) == 2
+    assert "already finished" in one_error_line(capsys)
+    assert not (tmp_path / "r.mcap").exists()
+
+
+def test_a_truncated_file_reestimates_exactly_up_to_its_cut(truncated, capsys):
+    assert main(["reestimate", str(truncated), "--method", "default", "--allow-truncated"]) == 0
+    report = capsys.readouterr().out
+    counts = read_episode(truncated).counts
+    frames, logged = counts["/tactile/image"], counts["/tactile/wrench"]
+    assert logged > 20 and frames - logged in (0, 1)  # the cut may fall between the two
+    assert f"re-estimated {frames} frames" in report
+    assert f"over {logged} frames, {logged} of {logged} frames identical" in report
