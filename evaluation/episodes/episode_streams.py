@@ -184,12 +184,13 @@ class Transition:
     source: str
     target: str
     reason: str
+    rule: str = ""  # which of the guard's rules fired ("" in files from before the field)
 
 
 def transitions(episode: Episode) -> list[Transition]:
-    """The machine's phase changes with their reasons."""
+    """The machine's phase changes with their reasons and rules."""
     return [
-        Transition(v["t_s"], v["from"], v["to"], v["reason"])
+        Transition(v["t_s"], v["from"], v["to"], v["reason"], v.get("rule", ""))
         for v in (m.value for m in episode.messages(TRANSITION.name))
     ]
 

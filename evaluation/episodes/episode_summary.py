@@ -69,7 +69,11 @@ def summary_lines(episode: Episode) -> list[str]:
         lines.append(f"  {topic:<{width}}  {episode.counts[topic]:7d}  {shown}")
     changes = episode_streams.transitions(episode)
     lines.append(f"transitions: {len(changes)}")
-    lines += [f"  {c.t_s:8.3f} s  {c.source} -> {c.target}: {c.reason}" for c in changes]
+    lines += [
+        f"  {c.t_s:8.3f} s  {c.source} -> {c.target}: {c.reason}"
+        + (f" ({c.rule})" if c.rule else "")
+        for c in changes
+    ]
     outcome = episode.outcome
     if outcome is None:
         lines.append("outcome: none written (the run did not finish the file)")
