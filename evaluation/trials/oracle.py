@@ -64,7 +64,9 @@ class TrueWrench:
             return dataclasses.replace(e, calibrated=True)
         values = wrench - self._zero + self._rng.normal(0.0, 1.0, 6) * self._noise_std
         return dataclasses.replace(
-            e, calibrated=True, **{name: float(v) for name, v in zip(TRUE_AXES, values, strict=True)}
+            e,
+            calibrated=True,
+            **{name: float(v) for name, v in zip(TRUE_AXES, values, strict=True)},
         )
 
 

@@ -43,7 +43,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles),
     ``contact_force_limit_n``, ``contact_force_violations`` (summed) and
     ``contact_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
-    is the simulated time over the wall time of the trials that ran to an outcome (error trials have no simulated time).
+    is the simulated time over the wall time of the trials that ran to an outcome (error
+    trials have no simulated time).
     """
     ordered = sorted(results, key=lambda r: (r.controller, r.seed))
     n = len(ordered)
