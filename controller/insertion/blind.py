@@ -55,7 +55,8 @@ class BlindConfig(Config):
     ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
     ``press_m``: the tip target below the board surface while sweeping (the wrist's spring
     takes it up on the board: the press; in the opening: the push to the depth);
-    ``sweep_speed_m_s``: along the path; ``yaw_step_rad``, ``yaw_range_rad``: the yaw offsets
+    ``sweep_speed_m_s``: along the path; ``descend_speed_m_s``: down to the press, from
+    the hover height (slow: the tip meets the board on the way); ``yaw_step_rad``, ``yaw_range_rad``: the yaw offsets
     of the passes (``yaw_offsets``); ``hover_m``: tip height above the board between passes;
     ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
     x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
@@ -67,6 +68,7 @@ class BlindConfig(Config):
     half_width_m: float = number(0.0, 0.05, default=0.003)
     press_m: float = number(0.0, 0.05, default=0.006)
     sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)
+    descend_speed_m_s: float = number(1e-4, 0.1, default=0.005)
     yaw_step_rad: float = number(1e-4, 0.5, default=0.02)
     yaw_range_rad: float = number(0.0, 0.5, default=0.0524)
     hover_m: float = number(0.0, 0.05, default=0.002)
@@ -93,8 +95,15 @@ TURN_TOL_RAD = 0.002  # a pass's yaw is reached within this, rad
 
 F = FailureReason
 BLIND = Definition(
-    phases=(Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.RELEASE, Phase.RETRACT,
-            Phase.DONE, Phase.FAILED),  # fmt: skip
+    phases=(
+        Phase.GRASP,
+        Phase.APPROACH,
+        Phase.SEARCH,
+        Phase.RELEASE,
+        Phase.RETRACT,
+        Phase.DONE,
+        Phase.FAILED,
+    ),  # fmt: skip
     initial=Phase.GRASP,
     terminal=(Phase.DONE, Phase.FAILED),
     edges=(
@@ -105,8 +114,13 @@ BLIND = Definition(
         Edge(Phase.RETRACT, Phase.DONE, "retracted"),
         *(
             Edge(source, Phase.FAILED, reason.value)
-            for source in (Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.RELEASE,
-                           Phase.RETRACT)  # fmt: skip
+            for source in (
+                Phase.GRASP,
+                Phase.APPROACH,
+                Phase.SEARCH,
+                Phase.RELEASE,
+                Phase.RETRACT,
+            )  # fmt: skip
             for reason in (F.TIMEOUT, F.DEVICE_FAULT)
         ),
     ),
@@ -187,7 +201,7 @@ class BlindMachine:
             target = self._tip_target(0.0, -cfg.press_m)
             if self._reach(obs, target):
                 self._stage, self._since_t_s = "sweep", obs.t_s
-            return self._servo(obs, target)
+            return self._servo(obs, target, cfg.descend_speed_m_s)
         if self._stage == "sweep":
             s_m = cfg.sweep_speed_m_s * (obs.t_s - self._since_t_s)
             if s_m >= self._pattern.length_m:
@@ -265,10 +279,10 @@ class BlindMachine:
         v = (ahead - now) / LEAD_S + cfg.pose_gain_1_s * (now - np.asarray(obs.arm.tcp.xyz_m))
         return self._command(obs, v, cfg.move_speed_m_s)
 
-    def _servo(self, obs: Observation, tip: np.ndarray) -> Command:
+    def _servo(self, obs: Observation, tip: np.ndarray, speed_m_s: float | None = None) -> Command:
         cfg = self.config
         error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
-        return self._command(obs, cfg.pose_gain_1_s * error, cfg.move_speed_m_s)
+        return self._command(obs, cfg.pose_gain_1_s * error, speed_m_s or cfg.move_speed_m_s)
 
     def _command(self, obs: Observation, v: np.ndarray, speed_m_s: float) -> Command:
         cfg = self.config
