@@ -56,8 +56,9 @@ class BlindConfig(Config):
     ``press_m``: the tip target below the board surface while sweeping (the wrist's spring
     takes it up on the board: the press; in the opening: the push to the depth);
     ``sweep_speed_m_s``: along the path; ``descend_speed_m_s``: down to the press, from
-    the hover height (slow: the tip meets the board on the way); ``yaw_step_rad``, ``yaw_range_rad``: the yaw offsets
-    of the passes (``yaw_offsets``); ``hover_m``: tip height above the board between passes;
+    the hover height (slow: the tip meets the board on the way); ``yaw_step_rad``,
+    ``yaw_range_rad``: the yaw offsets of the passes (``yaw_offsets``); ``hover_m``: tip
+    height above the board between passes;
     ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
     x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
     ``timeout_s``: the whole run."""

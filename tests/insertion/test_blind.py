@@ -17,7 +17,8 @@ from core.config import ConfigError
 from tests.insertion.world import ToyWorld
 
 SMALL = BlindConfig(GripperSettings(), pitch_m=0.001, half_width_m=0.001, press_m=0.004,
-                    sweep_speed_m_s=0.005, descend_speed_m_s=0.005, yaw_step_rad=0.02, yaw_range_rad=0.02,
+                    sweep_speed_m_s=0.005, descend_speed_m_s=0.005, yaw_step_rad=0.02,
+                    yaw_range_rad=0.02,
                     timeout_s=60.0)  # fmt: skip
 
 
