@@ -84,13 +84,15 @@ def load_task_calibration(
     except ConfigError as exc:
         raise ConfigError(f"{source}: key 'calibration': {exc}") from None
     problem = calibration.mismatch(sensor, estimator)
-    if problem is None and scene_sha256 is not None and calibration.scene_sha256 is None:
-        problem = "it was not fitted in a task's scene"
-    elif problem is None and scene_sha256 is not None and calibration.scene_sha256 != scene_sha256:
-        problem = (
-            f"it was fitted in another scene (grasp fingerprint {calibration.scene_sha256[:12]}, "
-            f"this task's {scene_sha256[:12]})"
-        )
+    fitted = calibration.scene_sha256
+    if problem is None and scene_sha256 is not None:
+        if fitted is None:
+            problem = "it was not fitted in a task's scene"
+        elif fitted != scene_sha256:
+            problem = (
+                f"it was fitted in another scene (grasp fingerprint {fitted[:12]}, "
+                f"this task's {scene_sha256[:12]})"
+            )
     if problem is not None:
         raise ConfigError(f"{source}: key 'calibration': {path}: {problem}; {refit}")
     return calibration

@@ -50,7 +50,9 @@ HEADER = [
     "`oracle` reads the simulator's true gel wrench with the sensor's measured noise "
     "instead of the estimate (a reference, not an upper bound by construction), "
     "`zero_torque` and `torque_only` are the machine with the torques, or the forces, "
-    "zeroed, `blind` has no tactile feedback.",
+    "zeroed, `blind` has no tactile feedback. A trial fails when the plug's true contact "
+    "force exceeds the connector's insertion-force specification (USB-C 20 N, USB-A 35 N; "
+    "sources in docs/SIMULATION.md, \"Contact-force limits\").",
     "",
 ]
 
