@@ -1,5 +1,6 @@
-"""The PNG summary of one simulated trial: the estimated torques with the phases as bands,
-the wrist's true force, and the plug tip's true path over the hole (matplotlib, Agg);
+"""The PNG summary of one simulated trial: the estimated torques with the phases as bands
+(N*mm when calibrated), the plug's true contact force with its limit beside the wrist's true
+force, and the plug tip's true path over the hole (matplotlib, Agg);
 ``write_trial_chart`` puts it in the trial's record as ``summary.png``."""
 
 from __future__ import annotations
@@ -36,8 +37,11 @@ def _phase_spans(ticks: list[dict]) -> list[tuple[float, float, str]]:
     return spans
 
 
-def trial_chart(folder: Path, path: Path, title: str) -> None:
-    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``."""
+def trial_chart(
+    folder: Path, path: Path, title: str, contact_force_limit_n: float | None = None
+) -> None:
+    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``, with the
+    plug's ``contact_force_limit_n`` (N) as a line when given."""
     ticks = [json.loads(line) for line in (folder / "ticks.jsonl").read_text().splitlines()]
     truth = np.load(folder / "truth.npz")
     fig, axes = plt.subplots(3, 1, figsize=(9, 9), constrained_layout=True)
@@ -45,21 +49,45 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
     for ax in (torque_ax, force_ax):
         for start, end, phase in _phase_spans(ticks):
             ax.axvspan(start, end, color=PHASE_COLOURS.get(phase, "white"), lw=0)
-            ax.text((start + end) / 2, 1.0, phase, transform=ax.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize=7, rotation=30)
+            ax.text(
+                (start + end) / 2,
+                1.0,
+                phase,
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=7,
+                rotation=30,
+            )
     estimated = [tick for tick in ticks if "estimate" in tick]
     t_est = np.array([tick["t_s"] for tick in estimated])
-    for key, label in (("tau_x", "tau_x"), ("tau_y", "tau_y"), ("tau_z", "tau_z / 10")):
-        scale = 0.1 if key == "tau_z" else 1.0
+    calibrated = bool(estimated) and all(tick.get("calibrated", False) for tick in estimated)
+    for key in ("tau_x", "tau_y", "tau_z"):
+        scale = 1e3 if calibrated else (0.1 if key == "tau_z" else 1.0)
         values = np.array([tick["estimate"][key] or np.nan for tick in estimated]) * scale
+        label = key if calibrated or key != "tau_z" else "tau_z / 10"
         torque_ax.plot(t_est, values, lw=1, label=label)
-    torque_ax.set_ylabel("estimated torque (raw)")
+    torque_ax.set_ylabel("estimated torque (N*mm)" if calibrated else "estimated torque (raw)")
     torque_ax.legend(loc="upper left", fontsize=8)
     t = truth["t_s"]
     force = np.linalg.norm(truth["wrist_wrench_t"][:, :3], axis=1)
     force_ax.plot(t, force, color="k", lw=1, label="|wrist force| (truth)")
-    force_ax.plot(t, truth["contact_force_n"], color="tab:red", lw=0.6, alpha=0.6,
-                  label="plug contact force (truth)")
+    force_ax.plot(
+        t,
+        truth["contact_force_n"],
+        color="tab:red",
+        lw=0.6,
+        alpha=0.6,
+        label="plug contact force (truth)",
+    )
+    if contact_force_limit_n is not None and np.isfinite(contact_force_limit_n):
+        force_ax.axhline(
+            contact_force_limit_n,
+            color="tab:red",
+            ls="--",
+            lw=0.8,
+            label=f"contact-force limit {contact_force_limit_n:g} N",
+        )
     force_ax.set_ylabel("N")
     force_ax.set_xlabel("time (s)")
     force_ax.legend(loc="upper left", fontsize=8)
@@ -82,9 +110,12 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
 def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     """The chart of the trial recorded in ``folder``, titled with its ``result``, as
     ``folder/summary.png``; its path."""
-    title = f"{result.task} seed {result.seed} ({result.controller}): " + (
-        "inserted" if result.success else f"failed: {result.failure_reason}"
+    title = (
+        f"{result.task} seed {result.seed} ({result.controller}): "
+        + ("inserted" if result.success else f"failed: {result.failure_reason}")
+        + f"; plug contact force max {result.max_contact_force_n:.1f} N, "
+        f"p99 {result.p99_contact_force_n:.1f} N"
     )
     path = folder / CHART_NAME
-    trial_chart(folder, path, title)
+    trial_chart(folder, path, title, result.contact_force_limit_n)
     return path
