@@ -6,7 +6,7 @@ import pytest
 from controller.insertion.machine_config import NoiseFloor, SignalSettings
 from controller.insertion.signals import TactileSignals
 from controller.tactile.wrench import WrenchEstimate
-from tests.insertion.world import estimate
+from tests.insertion.world import TOY_FLOOR, estimate
 
 
 def zeroing(t_s):
@@ -14,9 +14,7 @@ def zeroing(t_s):
 
 
 def settings(**kw):
-    kw.setdefault(
-        "noise_floor", NoiseFloor(shear_x=0.002, shear_y=0.002)
-    )  # the figures below assume it
+    kw.setdefault("noise_floor", TOY_FLOOR)  # the figures below assume it
     return SignalSettings(baseline_frames=4, ema_alpha=1.0, **kw)
 
 
@@ -57,9 +55,7 @@ def test_noise_floor_bounds_the_noise_and_units_follow_the_channel():
 
 def test_moving_average_weights_new_samples_by_alpha():
     signals = TactileSignals(
-        SignalSettings(
-            baseline_frames=2, ema_alpha=0.25, noise_floor=NoiseFloor(shear_x=0.002, shear_y=0.002)
-        )
+        SignalSettings(baseline_frames=2, ema_alpha=0.25, noise_floor=TOY_FLOOR)
     )
     signals.update(estimate(0.0))
     signals.update(estimate(0.1))

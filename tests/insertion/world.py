@@ -256,15 +256,24 @@ class ToyWorld:
         return machine.phase
 
 
+TOY_FLOOR = NoiseFloor(
+    tilt_x=0.0002, tilt_y=0.0002, inplane=0.005, shear_x=0.002, shear_y=0.002, normal=0.002
+)
+"""The noise floors in the toy world's own units (its torques and forces are not the
+calibrated N*m and N the task files use; its shear noise is well below the shear floor)."""
+
+
 def toy_config() -> MachineConfig:
-    """The machine's defaults with the force and shear scales the toy world's units assume
-    (its axial force is ``k_board`` per m, its shear noise well below the shear floor)."""
+    """The machine's defaults with the floors, budgets and limits in the toy world's units
+    (``TOY_FLOOR``; its axial force is ``k_board`` per m)."""
     defaults = MachineConfig()
     return replace(
         defaults,
-        signals=replace(defaults.signals, noise_floor=NoiseFloor(shear_x=0.002, shear_y=0.002)),
+        signals=replace(defaults.signals, noise_floor=TOY_FLOOR),
         insert=replace(defaults.insert, force_budget=0.2),
-        limits=replace(defaults.limits, force_limit=0.5),
+        limits=replace(
+            defaults.limits, force_limit=0.5, tilt_torque_limit=0.05, inplane_torque_limit=2.5
+        ),
     )
 
 
