@@ -5,7 +5,7 @@ BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 SEEDS  ?= 200
 
-.PHONY: install demo estimator-demo test typecheck bench evaluate trials lint clean
+.PHONY: install demo estimator-demo test typecheck bench evaluate trials calibrations lint clean
 
 install: $(STAMP)
 
@@ -33,6 +33,10 @@ bench: $(STAMP)
 
 evaluate: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python scripts/evaluate.py --docs docs --work out/evaluate
+
+calibrations: $(STAMP)
+	$(BIN)/python scripts/calibrate_task.py --task usb_c --out configs/calibrations/usb_c.yaml
+	$(BIN)/python scripts/calibrate_task.py --task usb_a --out configs/calibrations/usb_a.yaml
 
 trials: $(STAMP)
 	rm -rf out/trials

@@ -33,6 +33,8 @@ def script_main(name: str):
         ("bench_insertion_scene", ["--runs", "0"], "--runs"),
         ("bench_insertion_scene", ["--seed", "-3"], "--seed"),
         ("bench_insertion_scene", ["--task", "usb_b"], "--task"),
+        ("calibrate_task", ["--task", "usb_c", "--seed", "-3", "--out", "c.yaml"], "--seed"),
+        ("calibrate_task", ["--task", "usb_c"], "--out"),
     ],
 )
 def test_nonsense_counts_are_usage_errors(name, args, message, capsys):

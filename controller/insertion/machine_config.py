@@ -7,9 +7,12 @@ Units are SI and in the key names. Tactile thresholds come in two kinds:
   per-run baseline divided by that channel's noise, both measured on the first
   ``signals.baseline_frames`` contact-free estimates after zeroing (``signals.py``). They do
   not depend on whether the estimate is calibrated;
-* **estimate units** (keys ``noise_floor.*``, ``limits.*_limit``, ``insert.force_budget``):
-  the ``WrenchEstimate``'s own units -- raw (uncalibrated): tilt torques, shear and normal in
-  mm, the in-plane torque in mm^2; calibrated: N*m and N. A budget or limit cannot be relative.
+* **calibrated units** (keys ``noise_floor.*``, ``limits.*_limit``, ``insert.force_budget``):
+  N*m for torques, N for forces, the units of the estimate calibrated for the task's grasp
+  (the task file's ``calibration:``, fitted in the scene by scripts/calibrate_task.py;
+  controller/run/task_calibration.py). A budget or limit cannot be relative. The noise
+  units above are then derived from them: a channel's noise is at least its floor in N*m
+  or N.
 
 Frames: ``B`` the arm base, ``T`` the tool (TCP at the grasp point, z along the plug toward its
 tip), ``S`` the tactile sensor. ``signals.torque_axes`` says which axis of T each of S's axes
@@ -64,14 +67,17 @@ class GripperSettings(Config):
 
 @config_dataclass
 class NoiseFloor(Config):
-    """Lowest noise level each channel group is credited with, in estimate units, so a
-    noise-free (simulated) signal does not make every departure infinitely significant:
-    ``tilt`` (tau_x, tau_y), ``inplane`` (tau_z), ``shear`` (shear_x, shear_y), ``normal``."""
+    """Lowest noise level each channel is credited with, in calibrated units, so a quiet
+    (simulated) signal does not make every departure infinitely significant: ``tilt_x``
+    (tau_x), ``tilt_y`` (tau_y), ``inplane`` (tau_z), in N*m; ``shear_x``, ``shear_y``,
+    ``normal``, in N. The defaults are the USB-C task's."""
 
-    tilt: float = number(1e-9, 1e3, default=0.0002)
-    inplane: float = number(1e-9, 1e3, default=0.005)
-    shear: float = number(1e-9, 1e3, default=0.0002)
-    normal: float = number(1e-9, 1e3, default=0.002)
+    tilt_x: float = number(1e-9, 1e3, default=0.0008662)
+    tilt_y: float = number(1e-9, 1e3, default=0.0005886)
+    inplane: float = number(1e-9, 1e3, default=0.000114)
+    shear_x: float = number(1e-9, 1e3, default=0.004923)
+    shear_y: float = number(1e-9, 1e3, default=0.00533)
+    normal: float = number(1e-9, 1e3, default=0.03795)
 
 
 @config_dataclass
@@ -227,6 +233,7 @@ class InsertSettings(Config):
     estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
     torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
     INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF, then ALIGN).
+    ``force_budget`` in N.
 
     Success (either stage): the tip ``depth_m`` below the board surface, by the arm's TCP,
     with the axial load below the press load (so a compressed wrist is not taken for
@@ -235,7 +242,7 @@ class InsertSettings(Config):
     speed_m_s: float = number(1e-4, 0.05, default=0.004)
     depth_m: float = number(1e-4, 0.05, default=0.005)
     compliance_scale: float = number(0.0, 1.0, default=0.5)
-    force_budget: float = number(1e-6, 1e4, default=0.05)
+    force_budget: float = number(1e-6, 1e4, default=1.333)
     jam_rise_sigma: float = number(0.5, 1e4, default=15.0)
     jam_frames: int = number(1, 100, default=3)
     press_load_ratio: float = number(0.1, 100.0, default=1.0)
@@ -280,16 +287,16 @@ class SlipSettings(Config):
 
 @config_dataclass
 class Limits(Config):
-    """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in estimate units on the
-    baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|),
-    ``inplane_torque_limit`` (|tau_z|), ``force_limit`` (axial force). ``max_tilt_rad``: the
+    """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in calibrated units on
+    the baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|, N*m),
+    ``inplane_torque_limit`` (|tau_z|, N*m), ``force_limit`` (axial force, N). ``max_tilt_rad``: the
     TCP's tilt from straight down (below the loop's and the arm's tilt limits, or it could
     never trip: controller/limit_checks.py). Every command's twist is bounded by
     ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` (norms)."""
 
-    tilt_torque_limit: float = number(1e-6, 1e4, default=0.05)
-    inplane_torque_limit: float = number(1e-6, 1e6, default=2.5)
-    force_limit: float = number(1e-6, 1e4, default=0.2)
+    tilt_torque_limit: float = number(1e-6, 1e4, default=0.2166)
+    inplane_torque_limit: float = number(1e-6, 1e6, default=0.05702)
+    force_limit: float = number(1e-6, 1e4, default=5.33)
     max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=0.30)
     max_linear_speed_m_s: float = number(1e-4, 0.5, default=0.05)
     max_angular_speed_rad_s: float = number(1e-3, 3.0, default=0.6)
@@ -354,7 +361,5 @@ def s2t_matrix(axes: tuple[str, str, str]) -> np.ndarray:
             raise ValueError(f"expected signed axes like '+x', got {name!r}")
         matrix[_AXIS_INDEX[name[1]], column] = 1.0 if name[0] == "+" else -1.0
     if not np.allclose(matrix @ matrix.T, np.eye(3)) or np.linalg.det(matrix) < 0:
-        raise ValueError(
-            f"expected each tool axis once and a right-handed frame, got {list(axes)}"
-        )
+        raise ValueError(f"expected each tool axis once and a right-handed frame, got {list(axes)}")
     return matrix

@@ -30,7 +30,7 @@ class TactileSignals:
         self._settings = settings
         floor = settings.noise_floor
         self._floor = np.array(
-            [floor.tilt, floor.tilt, floor.inplane, floor.shear, floor.shear, floor.normal]
+            [floor.tilt_x, floor.tilt_y, floor.inplane, floor.shear_x, floor.shear_y, floor.normal]
         )
         self.s2t = s2t_matrix(settings.torque_axes)
         self._armed = True
@@ -95,7 +95,8 @@ class TactileSignals:
 
     @property
     def deviation(self) -> np.ndarray:
-        """Filtered deviations from the baseline in estimate units (six channels)."""
+        """Filtered deviations from the baseline in the estimate's units (N*m, N when
+        calibrated; six channels)."""
         if self._sigma is None:
             return np.zeros(len(CHANNELS))
         return self._filtered * self._sigma
@@ -107,7 +108,8 @@ class TactileSignals:
 
     @property
     def axial_force(self) -> float:
-        """The filtered force along T z (toward the plug's tip), estimate units: the force
+        """The filtered force along T z (toward the plug's tip), in the estimate's units (N
+        when calibrated): the force
         vector (shear_x, shear_y, normal) of S, relative to its baseline, rotated into T.
         Positive when the board pushes the plug into the grasp."""
         return float((self.s2t @ self.deviation[3:])[2])

@@ -5,9 +5,15 @@ keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
 * ``dipole``: the insertion machine on the estimator as it is (dipole tilt, NHHD in-plane
   torque): the product;
 * ``fingervision``: the same machine on the FingerVision baseline's torques
-  (``fv_tau_*``, ``fingervision_torques``);
-* ``blind``: a spiral of pushes without tactile feedback (``BlindMachine``); the estimator
-  still runs, and its estimates are recorded, never used.
+  (``fv_tau_*``, ``fingervision_torques``), calibrated by their own per-axis fit in the
+  task's calibration and in the machine's sign convention;
+* ``zero_torque`` (ablation): the same machine with tau_x, tau_y and tau_z forced to zero,
+  the forces kept (``zero_torques``): what the machine does without the torques;
+* ``torque_only`` (ablation): the same machine with the shear and the normal force forced
+  to zero, the torques kept (``torques_only``);
+* ``blind``: the strongest search without touch (``BlindMachine``: a pressed spiral with
+  yaw steps on the arm's own status); the estimator still runs, and its estimates are
+  recorded, never used.
 """
 
 from __future__ import annotations
@@ -30,15 +36,26 @@ def fingervision_torques(estimate: WrenchEstimate) -> WrenchEstimate:
     return dataclasses.replace(e, tau_x=e.fv_tau_x, tau_y=e.fv_tau_y, tau_z=e.fv_tau_z)
 
 
+def zero_torques(estimate: WrenchEstimate) -> WrenchEstimate:
+    """``estimate`` with tau_x, tau_y and tau_z zero (the forces and the flags kept)."""
+    return dataclasses.replace(estimate, tau_x=0.0, tau_y=0.0, tau_z=0.0)
+
+
+def torques_only(estimate: WrenchEstimate) -> WrenchEstimate:
+    """``estimate`` with shear_x, shear_y and normal zero (the torques and the flags kept)."""
+    return dataclasses.replace(estimate, shear_x=0.0, shear_y=0.0, normal=0.0)
+
+
 @dataclass(frozen=True)
 class Controller:
     """A named controller: ``machine(task_config)`` builds its state machine;
-    ``wrench_source(estimator, world)`` the source of the estimates it sees (``world``: the
-    simulated world, None on hardware; only simulation-only controllers may read it).
-    ``sim_only``: refused on the real backend."""
+    ``wrench_source(estimator, world, seed)`` the source of the estimates it sees (``world``:
+    the simulated world, None on hardware; only simulation-only controllers may read it;
+    ``seed``: the run's seed, for a source's own randomness). ``sim_only``: refused on the
+    real backend."""
 
     machine: Callable[[TaskConfig], Machine]
-    wrench_source: Callable[[TactileEstimator, Any], WrenchSource]
+    wrench_source: Callable[[TactileEstimator, Any, int], WrenchSource]
     sim_only: bool = False
 
 
@@ -50,16 +67,25 @@ def _blind_machine(config: TaskConfig) -> Machine:
     return BlindMachine(config.blind, config.plug, config.hole)
 
 
-def _the_estimator(estimator: TactileEstimator, world: Any) -> TactileEstimator:
+def _the_estimator(estimator: TactileEstimator, world: Any, seed: int) -> TactileEstimator:
     return estimator
 
 
-def _baseline(estimator: TactileEstimator, world: Any) -> WrenchSource:
-    return TransformedSource(estimator, fingervision_torques)
+def _transformed(
+    transform: Callable[[WrenchEstimate], WrenchEstimate],
+) -> Callable[[TactileEstimator, Any, int], WrenchSource]:
+    """The wrench source factory of the estimator with each estimate through ``transform``."""
+
+    def source(estimator: TactileEstimator, world: Any, seed: int) -> WrenchSource:
+        return TransformedSource(estimator, transform)
+
+    return source
 
 
 CONTROLLERS: Mapping[str, Controller] = {
     "dipole": Controller(_insertion_machine, _the_estimator),
-    "fingervision": Controller(_insertion_machine, _baseline),
+    "fingervision": Controller(_insertion_machine, _transformed(fingervision_torques)),
+    "zero_torque": Controller(_insertion_machine, _transformed(zero_torques)),
+    "torque_only": Controller(_insertion_machine, _transformed(torques_only)),
     "blind": Controller(_blind_machine, _the_estimator),
 }

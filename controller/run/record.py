@@ -102,6 +102,7 @@ class RunRecorder:
         if obs.wrench is not None:
             row["estimate"] = {k: _finite(getattr(obs.wrench, k)) for k in VALUE_FIELDS}
             row["estimate_t_s"] = obs.wrench.t_s
+            row["calibrated"] = obs.wrench.calibrated
             row["contact"] = obs.wrench.contact
             row["slip"] = obs.wrench.slip_suspected
         if command is not None:

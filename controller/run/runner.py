@@ -6,7 +6,8 @@
    drivers; ``backend: sim``: the simulated world behind the same Protocols, seeded by
    ``seed``);
 2. picks the controller by name from ``CONTROLLERS`` (a machine and the wrench source that
-   feeds it; a caller may pass a table extended with its own entries);
+   feeds it; a caller may pass a table extended with its own entries); the estimator
+   applies the task's calibration (``Task.calibration``), so the machine sees N*m and N;
 3. connects the devices (all of them are tried; ``DevicesNotReady`` names each that
    failed), activates the gripper, and runs the control loop until the machine
    ends, a trip, a signal or the task's time budget, with every tick handed to the
@@ -104,8 +105,8 @@ def run_task(
     device_set = registry.build_device_set(task.device_files, backend, world)
     if prepare is not None:
         prepare(device_set)
-    estimator = estimator_for_sensor(task.tactile_model, config.estimator)
-    source = entry.wrench_source(estimator, device_set.world)
+    estimator = estimator_for_sensor(task.tactile_model, config.estimator, task.calibration)
+    source = entry.wrench_source(estimator, device_set.world, seed)
     machine = entry.machine(config)
     with ExitStack() as stack:
         connect_all(device_set.devices, stack)

@@ -2,7 +2,8 @@
 
 A task file holds the controller's sections (``machine:``, ``blind:``, ``loop:``,
 ``limits:``, ``teleop:``), the task's geometry (``plug:``, the nominal ``hole:``), the device
-files (``devices:``), the estimator and the simulated scene (``scene:``). A task file may build
+files (``devices:``), the estimator, its calibration for the grasped plug (``calibration:``,
+controller/run/task_calibration.py) and the simulated scene (``scene:``). A task file may build
 on a base file (``extends: base/usb.yaml``, ``core.config.load_yaml_extending``), holding only
 what differs: configs/tasks/usb_a.yaml and usb_c.yaml share configs/tasks/base/usb.yaml.
 ``--set KEY=VALUE`` overrides are applied to the merged mapping before it is checked, so an
@@ -15,6 +16,7 @@ run never loads the simulator.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -24,7 +26,9 @@ from controller.insertion import MachineConfig
 from controller.insertion.blind import BlindConfig
 from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
+from controller.run.task_calibration import grasp_scene_sha256, load_task_calibration
 from controller.safety import LimitsConfig
+from controller.tactile.calibration import Calibration
 from controller.tactile.settings import sensor_estimator
 from controller.teleop import TeleopConfig
 from core.config import (
@@ -71,11 +75,18 @@ class TaskConfig(Config):
     """A task file but its ``scene:`` (see the module doc). ``force_limit_n``: the largest
     true force (N) the compliant wrist may pass to the plug; a simulated trial over it counts
     against the controller (judged on the simulator's truth, never seen by the controller).
-    ``estimator``: the estimator configuration (None: the tactile sensor's own)."""
+    ``contact_force_limit_n``: the largest true contact force (N) between the plug and the
+    board or the receptacle, from the connector's specified insertion force
+    (docs/TRIALS.md); a simulated trial over it fails (``contact_force_exceeded``).
+    ``estimator``: the estimator configuration (None: the tactile sensor's own);
+    ``calibration``: its calibration file for this task's grasp, relative to configs/ (None:
+    raw estimates; controller/run/task_calibration.py)."""
 
     task: str
     estimator: str | None
+    calibration: str | None
     force_limit_n: float = number(0.1, 1000.0)
+    contact_force_limit_n: float = number(0.1, 1000.0)
     devices: DeviceFiles
     plug: PlugGeometry
     hole: HolePose
@@ -90,8 +101,9 @@ class TaskConfig(Config):
 class Task:
     """A loaded task: its ``config``, the simulator's checked ``scene`` configuration (None
     when loaded for the real backend), the file it came from, the overrides applied and the
-    resolved raw mapping (what a run records), and each device file as read for the backend
-    it was loaded for (``registry.DeviceSpec``, by kind)."""
+    resolved raw mapping (what a run records), each device file as read for the backend
+    it was loaded for (``registry.DeviceSpec``, by kind), and the estimator's checked
+    ``calibration`` (None: the task names none, or it was loaded without it)."""
 
     config: TaskConfig
     scene: Any
@@ -99,6 +111,7 @@ class Task:
     overrides: tuple[str, ...]
     raw: Mapping[str, Any]
     devices: Mapping[str, registry.DeviceSpec]
+    calibration: Calibration | None = None
 
     @property
     def device_files(self) -> dict[str, Path]:
@@ -110,16 +123,30 @@ class Task:
         """The tactile sensor's model (its profile's name), from its device file."""
         return str(self.devices["tactile"].config.model)
 
+    @property
+    def grasp_scene_sha256(self) -> str:
+        """The fingerprint of the grasp's scene a calibration is fitted for
+        (``task_calibration.grasp_scene_sha256``)."""
+        return grasp_scene_sha256(self.raw, self.devices["tactile"].config)
+
 
 def task_path(name_or_path: str) -> Path:
     """configs/tasks/NAME.yaml for a task name, or the YAML path given."""
     return resolve_config_path(name_or_path, "tasks")
 
 
-def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "sim") -> Task:
+def load_task(
+    name_or_path: str,
+    overrides: Sequence[str] = (),
+    backend: str = "sim",
+    *,
+    with_calibration: bool = True,
+) -> Task:
     """The task ``name_or_path`` with ``overrides`` (``KEY=VALUE``, dotted keys) applied,
-    checked for ``backend`` (``sim`` also checks ``scene:``); ConfigError (one line, naming
-    the file and the key) for anything wrong."""
+    checked for ``backend`` (``sim`` also checks ``scene:``) and, ``with_calibration``, with
+    its calibration file loaded and checked against the sensor, the estimator and the
+    grasp's scene (``scripts/calibrate_task.py`` loads the task without it, to fit it);
+    ConfigError (one line, naming the file and the key) for anything wrong."""
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r}: expected one of {', '.join(BACKENDS)}")
     path = task_path(name_or_path)
@@ -138,11 +165,22 @@ def load_task(name_or_path: str, overrides: Sequence[str] = (), backend: str = "
         arm_envelope=devices["arm"].config.envelope,
         plug=config.plug,
         hole=config.hole,
-        tip_depth_m=max(config.machine.insert.depth_m, config.blind.push_depth_m),
+        tip_depth_m=max(config.machine.insert.depth_m, config.blind.press_m),
         search_half_width_m=max(config.machine.search.uncertainty_xy_m, config.blind.half_width_m),
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
-    return Task(config, scene, path, tuple(overrides), raw, devices)
+    task = Task(config, scene, path, tuple(overrides), raw, devices)
+    if not with_calibration or config.calibration is None:
+        return task
+    profile = sensor_profile(task.tactile_model)
+    _, estimator = sensor_estimator(profile, config.estimator)
+    # The grasp's scene is the simulator's: on hardware the file must be the cell's own
+    # (docs/ARCHITECTURE.md, "Calibrated units"), checked for its sensor and estimator.
+    scene_sha256 = task.grasp_scene_sha256 if backend == "sim" else None
+    calibration = load_task_calibration(
+        source, config.calibration, profile.name, estimator, scene_sha256, config.task
+    )
+    return dataclasses.replace(task, calibration=calibration)
 
 
 def _checked_devices(

@@ -11,10 +11,13 @@ fits of several axes (``tau_x``, ``tau_y``, ..., and the baseline's ``fv_tau_x``
 is applied to WrenchEstimates; axes absent from the file stay raw.
 
 A calibration file records what it was fitted for: the sensor profile's name and the
-estimator configuration's name and fingerprint (``estimator_sha256``). ``mismatch`` says
-why a calibration does not fit another sensor or configuration; the tools refuse to apply
-it then (``scripts/estimate.py --force`` overrides). Files load through the configuration
-loader (``core.config``) into these frozen dataclasses.
+estimator configuration's name and fingerprint (``estimator_sha256``); a calibration fitted
+in a task's simulated scene (``scripts/calibrate_task.py``) also records the task and the
+fingerprint of the scene it was fitted in (``scene``, ``scene_sha256``; None for the offline
+calibration on a dataset), and each axis's noise at rest (``AxisFit.rest_std``, truth
+units). ``mismatch`` says why a calibration does not fit another sensor or configuration;
+the tools refuse to apply it then (``scripts/estimate.py --force`` overrides). Files load
+through the configuration loader (``core.config``) into these frozen dataclasses.
 """
 
 from __future__ import annotations
@@ -44,13 +47,16 @@ _MIN_SAMPLES = 3
 @config_dataclass
 class AxisFit(Config):
     """One axis: ``truth ~= slope * raw + intercept``, with the fit's RMSE (truth units), R^2
-    and the number of samples used."""
+    and the number of samples used; ``rest_std``: the standard deviation of the calibrated
+    estimate with no load change (truth units: N*m or N), where it was measured (None
+    otherwise)."""
 
     slope: float
     intercept: float
     rmse: float = number(0.0, math.inf)
     r2: float
     samples: int = number(1, 2**62)
+    rest_std: float | None = number(0.0, math.inf, default=None)
 
     def apply(self, raw: float) -> float:
         return self.slope * raw + self.intercept
@@ -119,6 +125,8 @@ class Calibration(Config):
     estimator: str
     axes: Mapping[str, AxisFit]
     estimator_sha256: str | None = None
+    scene: str | None = None
+    scene_sha256: str | None = None
 
     def __post_init__(self) -> None:
         unknown = sorted(set(self.axes) - set(AXES))
@@ -127,11 +135,10 @@ class Calibration(Config):
                 f"unknown key 'axes.{unknown[0]}'; expected calibration axes among: "
                 + ", ".join(AXES)
             )
-        digest = self.estimator_sha256
-        if digest is not None and not re.fullmatch(r"[0-9a-f]{64}", digest):
-            raise ValueError(
-                f"key 'estimator_sha256': expected 64 hexadecimal digits, got {digest!r}"
-            )
+        for key in ("estimator_sha256", "scene_sha256"):
+            digest = getattr(self, key)
+            if digest is not None and not re.fullmatch(r"[0-9a-f]{64}", digest):
+                raise ValueError(f"key '{key}': expected 64 hexadecimal digits, got {digest!r}")
 
     def mismatch(self, sensor: str, config: EstimatorConfig) -> str | None:
         """Why this calibration does not fit the sensor profile named ``sensor`` with the
@@ -164,9 +171,22 @@ class Calibration(Config):
             "sensor": self.sensor,
             "estimator": self.estimator,
             "estimator_sha256": self.estimator_sha256,
-            "axes": {axis: dataclasses.asdict(fit) for axis, fit in self.axes.items()},
+            **({"scene": self.scene} if self.scene is not None else {}),
+            **({"scene_sha256": self.scene_sha256} if self.scene_sha256 is not None else {}),
+            "axes": {axis: _axis_document(fit) for axis, fit in self.axes.items()},
         }
         return yaml.safe_dump(document, sort_keys=False)
+
+    def rest_std(self, axis: str) -> float:
+        """The calibrated noise at rest of ``axis`` (truth units); ValueError when the file
+        does not record it (only a calibration fitted in a scene does)."""
+        fit = self.axes.get(axis)
+        if fit is None or fit.rest_std is None:
+            raise ValueError(
+                f"the calibration records no noise at rest for '{axis}' "
+                "(re-run scripts/calibrate_task.py)"
+            )
+        return fit.rest_std
 
     @classmethod
     def load(cls, path: Path | str) -> Calibration:
@@ -177,9 +197,12 @@ class Calibration(Config):
         if found not in (FORMAT, FORMAT_V1):
             raise ConfigError(f"{path}: key 'format': expected '{FORMAT}', got {found!r}")
         if found == FORMAT_V1:
-            if "estimator_sha256" in data:
-                raise ConfigError(f"{path}: unknown key 'estimator_sha256' in format {found}")
+            for key in ("estimator_sha256", "scene", "scene_sha256"):
+                if key in data:
+                    raise ConfigError(f"{path}: unknown key '{key}' in format {found}")
             data["estimator_sha256"] = None
+        data.setdefault("scene", None)  # optional: only a calibration fitted in a scene
+        data.setdefault("scene_sha256", None)
         axes = data.get("axes")
         if isinstance(axes, Mapping):
             for axis in axes:
@@ -188,4 +211,16 @@ class Calibration(Config):
                         f"{path}: unknown key 'axes.{axis}'; expected calibration axes among: "
                         + ", ".join(AXES)
                     )
+            data["axes"] = {
+                axis: {"rest_std": None, **fit} if isinstance(fit, Mapping) else fit
+                for axis, fit in axes.items()
+            }
         return build(cls, data, source=str(path))
+
+
+def _axis_document(fit: AxisFit) -> dict[str, Any]:
+    """One axis as written: ``rest_std`` only where it was measured (older readers)."""
+    document = dataclasses.asdict(fit)
+    if fit.rest_std is None:
+        del document["rest_std"]
+    return document

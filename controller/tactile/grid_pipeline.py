@@ -169,7 +169,9 @@ class GridPipeline:
             normal=decomposition.normal,
             fv_tau_x=fv_x,
             fv_tau_y=fv_y,
-            fv_tau_z=fv_z,
+            # The baseline's in-plane torque is the field's curl too: negated like tau_z,
+            # so both methods give one sign for one twist (tests/tactile/test_fv_sign.py).
+            fv_tau_z=-fv_z,
             contact=contact,
             degenerate=dipole.degenerate,
             slip_suspected=slip,

@@ -8,6 +8,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+import yaml
 
 from controller.episode import Episode
 from evaluation.episodes import episode_streams
@@ -35,6 +36,7 @@ def episode_series(episode: Episode) -> TrialSeries:
         ticks.t_s,
         ticks.twist,
         None if truth is None else truth.chart,
+        found.calibrated,
     )
 
 
@@ -56,4 +58,6 @@ def episode_title(episode: Episode) -> str:
 
 def write_episode_chart(episode: Episode, path: Path) -> None:
     """Draw ``episode``'s chart to the PNG ``path`` (atomically)."""
-    draw_trial_chart(episode_series(episode), path, episode_title(episode))
+    task = yaml.safe_load(episode.attachments.get("task.yaml", b"")) or {}
+    limit = task.get("contact_force_limit_n") if isinstance(task, dict) else None
+    draw_trial_chart(episode_series(episode), path, episode_title(episode), limit)

@@ -109,13 +109,15 @@ def ticks(episode: Episode) -> Ticks:
 class Estimates:
     """The logged estimates, one per frame pushed: ``push_index`` (n,), ``t_s`` (n,: the
     frame's capture time), ``values`` (n, len(VALUE_FIELDS): raw, NaN where null), the
-    ``contact`` flags and the ``zeroing`` flags (n,: no reference yet, values all 0)."""
+    ``contact`` flags and the ``zeroing`` flags (n,: no reference yet, values all 0);
+    ``calibrated``: every estimate after zeroing is in N*m and N."""
 
     push_index: np.ndarray
     t_s: np.ndarray
     values: np.ndarray
     contact: np.ndarray
     zeroing: np.ndarray
+    calibrated: bool = False
 
     def column(self, name: str) -> np.ndarray:
         return self.values[:, VALUE_FIELDS.index(name)]
@@ -132,6 +134,8 @@ def estimates(episode: Episode) -> Estimates:
         ),
         np.array([bool(r.get("contact", False)) for r in rows]),
         np.array([bool(r.get("zeroing", False)) for r in rows]),
+        any(not r.get("zeroing") for r in rows)
+        and all(r.get("calibrated", False) for r in rows if not r.get("zeroing")),
     )
 
 

@@ -1,7 +1,7 @@
 """A batch of simulated insertion trials on consecutive seeds, locally or on Ray.
 
     python scripts/run_trials.py --task usb_c --seeds 0:200 --out out/trials/usb_c
-        [--controller dipole|fingervision|blind|oracle] [--workers N]
+        [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle] [--workers N]
         [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records] [--episodes]
 
 Seeds run from A up to B, B excluded. ``--set`` overrides a task or scene configuration key
@@ -177,8 +177,9 @@ def describe(summary: dict[str, Any]) -> str:
     if summary["median_time_s"] is not None:
         parts.append(f"median {summary['median_time_s']:.2f} s, p90 {summary['p90_time_s']:.2f} s")
     parts.append(
-        f"max true force {summary['max_true_force_n']:.2f} N "
-        f"({summary['over_force_trials']} over the limit)"
+        f"plug contact force max {summary['max_contact_force_n']:.2f} N "
+        f"({summary['contact_force_violation_trials']} trials over the limit), max wrist "
+        f"force {summary['max_wrist_force_n']:.2f} N ({summary['over_force_trials']} over)"
     )
     if summary["sim_speed_x_realtime"] is not None:
         parts.append(f"{summary['sim_speed_x_realtime']:.1f}x real time")

@@ -28,8 +28,9 @@ def _save(fig: Figure, path: Path) -> None:
 
 
 def controller_label(controller: str) -> str:
-    """The controller's name in charts and tables; the oracle is marked as an upper bound."""
-    return "oracle (true wrench: upper bound)" if controller == "oracle" else controller
+    """The controller's name in charts and tables; the oracle is marked as the true wrench
+    (a reference, not an upper bound by construction: evaluation/trials/oracle.py)."""
+    return "oracle (true wrench + sensor noise)" if controller == "oracle" else controller
 
 
 def speed_success_chart(

@@ -24,7 +24,7 @@ def error_result(spec: TrialSpec, reason: str, wall_time_s: float) -> TrialResul
         failure_reason=f"error: {one_line(reason)}",
         time_to_insert_s=None,
         duration_s=0.0,
-        max_true_force_n=0.0,
+        max_wrist_force_n=0.0,
         force_limit_n=math.nan,
         wall_time_s=wall_time_s,
     )

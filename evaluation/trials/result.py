@@ -24,9 +24,14 @@ class TrialResult:
     transition's reason, or the error's (None on success); ``time_to_insert_s``: simulated time
     from the controller's first tick (the devices' start-up, such as the gripper's activation,
     comes before it) to reaching the depth (None when it never did); ``duration_s``: simulated
-    time of the whole run; ``max_true_force_n``: the largest true contact force between plug and
-    board or receptacle (ground truth, N); ``force_limit_n``: the task's limit on it;
-    ``wall_time_s``: the wall-clock time the trial took.
+    time of the whole run; ``max_wrist_force_n``: the largest true force of the compliant
+    wrist's springs (ground truth, N); ``force_limit_n``: the task's limit on it;
+    ``wall_time_s``: the wall-clock time the trial took; ``max_contact_force_n`` and
+    ``p99_contact_force_n``: the largest and the 99th percentile of the plug's true contact
+    force with the board and the receptacle (the sum of the contacts' normal forces, N,
+    peak per truth row); ``contact_force_limit_n``: the task's limit on it (the connector's
+    specified insertion force); ``contact_force_violations``: how many times the contact
+    force rose above that limit (a violation fails the trial: ``contact_force_exceeded``).
     """
 
     task: str
@@ -37,9 +42,13 @@ class TrialResult:
     failure_reason: str | None
     time_to_insert_s: float | None
     duration_s: float
-    max_true_force_n: float
+    max_wrist_force_n: float
     force_limit_n: float
     wall_time_s: float
+    max_contact_force_n: float = 0.0
+    p99_contact_force_n: float = 0.0
+    contact_force_limit_n: float = float("nan")
+    contact_force_violations: int = 0
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:

@@ -37,10 +37,14 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     ``context`` (task, controller, seeds, overrides, executor, workers, ...) merged in first.
 
     Times are simulated seconds from the controller's start to the depth
-    (``TrialResult.time_to_insert_s``), over the successful trials; ``max_true_force_n`` is over
-    every trial; a trial is over force when its ``max_true_force_n`` exceeds its own
-    ``force_limit_n``; ``sim_speed_x_realtime`` is the simulated time over the wall time of
-    the trials that ran to an outcome (error trials have no simulated time).
+    (``TrialResult.time_to_insert_s``), over the successful trials; ``max_wrist_force_n`` is over
+    every trial; a trial is over force when its ``max_wrist_force_n`` exceeds its own
+    ``force_limit_n``; the plug's true contact force: ``max_contact_force_n`` (over every
+    trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles),
+    ``contact_force_limit_n``, ``contact_force_violations`` (summed) and
+    ``contact_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
+    is the simulated time over the wall time of the trials that ran to an outcome (error
+    trials have no simulated time).
     """
     ordered = sorted(results, key=lambda r: (r.controller, r.seed))
     n = len(ordered)
@@ -50,6 +54,9 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     ran = [r for r in ordered if r.status != "error"]
     wall_s = sum(r.wall_time_s for r in ran)
     limits = sorted({r.force_limit_n for r in ran if math.isfinite(r.force_limit_n)})
+    contact_limits = sorted(
+        {r.contact_force_limit_n for r in ran if math.isfinite(r.contact_force_limit_n)}
+    )
     summary = dict(context)
     summary.update(
         n=n,
@@ -58,9 +65,16 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         success_ci95=wilson_ci(successes, n),
         median_time_s=float(np.median(times)) if times else None,
         p90_time_s=float(np.percentile(times, 90)) if times else None,
-        max_true_force_n=max((r.max_true_force_n for r in ordered), default=None),
+        max_wrist_force_n=max((r.max_wrist_force_n for r in ordered), default=None),
         force_limit_n=limits[0] if len(limits) == 1 else limits or None,
-        over_force_trials=sum(r.max_true_force_n > r.force_limit_n for r in ordered),
+        over_force_trials=sum(r.max_wrist_force_n > r.force_limit_n for r in ordered),
+        max_contact_force_n=max((r.max_contact_force_n for r in ran), default=None),
+        p99_contact_force_n=max((r.p99_contact_force_n for r in ran), default=None),
+        contact_force_limit_n=contact_limits[0]
+        if len(contact_limits) == 1
+        else contact_limits or None,
+        contact_force_violations=sum(r.contact_force_violations for r in ordered),
+        contact_force_violation_trials=sum(r.contact_force_violations > 0 for r in ordered),
         failures=dict(sorted(Counter(r.failure_reason or "unknown" for r in failed).items())),
         failed_seeds=sorted({r.seed for r in failed}),
         errors=sum(r.status == "error" for r in ordered),
@@ -71,4 +85,3 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         else None,
     )
     return summary
-

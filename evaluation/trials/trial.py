@@ -176,6 +176,18 @@ def write_truth(folder: Path, truth: dict[str, np.ndarray], hole: dict[str, floa
         np.savez_compressed(handle, **truth, **{f"hole_{k}": v for k, v in hole.items()})
 
 
+CONTACT_FORCE_EXCEEDED = "contact_force_exceeded"
+"""The failure reason of a trial whose plug's true contact force rose above the task's
+``contact_force_limit_n`` (even if it reached the depth)."""
+
+
+def contact_force_violations(contact_force_n: np.ndarray, limit_n: float) -> int:
+    """How many times ``contact_force_n`` (a series, N) rose above ``limit_n``: the number
+    of runs of successive samples over it."""
+    over = np.asarray(contact_force_n) > limit_n
+    return int(np.count_nonzero(over[1:] & ~over[:-1]) + (1 if over.size and over[0] else 0))
+
+
 def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
     config = task.config
     depth = truth["depth_m"]
@@ -185,11 +197,15 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
     started = ran.loop.stats.first_tick_s  # after the devices' start-up (activation)
     time_to_insert = float(t[reached[0]] - started) if reached.size else None
     done = ran.machine.phase is Phase.DONE
-    success = done and reached.size > 0
+    contact = truth["contact_force_n"]
+    violations = contact_force_violations(contact, config.contact_force_limit_n)
+    success = done and reached.size > 0 and violations == 0
     failure = None
     if not success:
         failed = [tr for tr in ran.transitions if tr.target is Phase.FAILED]
-        if failed:
+        if violations:
+            failure = CONTACT_FORCE_EXCEEDED
+        elif failed:
             failure = failed[-1].reason
         elif done:
             failure = "done without reaching the depth"
@@ -206,9 +222,13 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         failure_reason=failure,
         time_to_insert_s=time_to_insert if success else None,
         duration_s=float(t[-1] - t[0]) if len(t) else 0.0,
-        max_true_force_n=max_force,
+        max_wrist_force_n=max_force,
         force_limit_n=config.force_limit_n,
         wall_time_s=ran.wall_s,
+        max_contact_force_n=float(contact.max()) if len(contact) else 0.0,
+        p99_contact_force_n=float(np.percentile(contact, 99)) if len(contact) else 0.0,
+        contact_force_limit_n=config.contact_force_limit_n,
+        contact_force_violations=violations,
     )
 
 
@@ -225,9 +245,12 @@ def _result_on_hardware(task, controller, seed, ran: RunOutcome) -> TrialResult:
         failure_reason=None if success else (failed[-1] if failed else ran.loop.reason),
         time_to_insert_s=None,
         duration_s=ran.wall_s,
-        max_true_force_n=float("nan"),
+        max_wrist_force_n=float("nan"),
         force_limit_n=task.config.force_limit_n,
         wall_time_s=ran.wall_s,
+        max_contact_force_n=float("nan"),
+        p99_contact_force_n=float("nan"),
+        contact_force_limit_n=task.config.contact_force_limit_n,
     )
 
 

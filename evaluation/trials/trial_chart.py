@@ -1,6 +1,7 @@
-"""The PNG summary of one run: the estimated torques and the commands with the phases as
-bands, and, in simulation, the wrist's true force and the plug tip's true path over the hole
-(matplotlib, Agg).
+"""The PNG summary of one run: the estimated torques (N*mm when calibrated) and the
+commands with the phases as bands, and, in simulation, the plug's true contact force with its
+limit beside the wrist's true force, and the plug tip's true path over the hole (matplotlib,
+Agg).
 
 ``draw_trial_chart(series, path, title)`` draws a ``TrialSeries`` (plain arrays); a trial's
 record (``trial_series(folder)``: ticks.jsonl, truth.npz) and an episode file
@@ -51,7 +52,8 @@ class TrialSeries:
     """What the chart draws, s on the loop's clock: each tick's time and the ``phases``
     after its step; the raw estimates' times and ``torques`` (n, 3: tau_x, tau_y, tau_z; NaN
     where none); the commands' times and ``twists`` (n, 6: linear m/s, angular rad/s in B;
-    NaN where no twist was sent); the ``truth`` (None on hardware)."""
+    NaN where no twist was sent); the ``truth`` (None on hardware); ``calibrated``: the
+    torques are N*m (else the estimator's raw units)."""
 
     tick_t_s: np.ndarray
     phases: Sequence[str]
@@ -60,6 +62,7 @@ class TrialSeries:
     command_t_s: np.ndarray
     twists: np.ndarray
     truth: ChartTruth | None
+    calibrated: bool = False
 
 
 def phase_spans(t_s: np.ndarray, phases: Sequence[str]) -> list[tuple[float, float, str]]:
@@ -81,9 +84,12 @@ def _bands(ax: Axes, spans: list[tuple[float, float, str]], labels: bool) -> Non
                     ha="center", va="bottom", fontsize=7, rotation=30)  # fmt: skip
 
 
-def draw_trial_chart(series: TrialSeries, path: Path, title: str) -> None:
+def draw_trial_chart(
+    series: TrialSeries, path: Path, title: str, contact_force_limit_n: float | None = None
+) -> None:
     """Draw ``series`` to the PNG ``path`` (atomically), titled ``title``: torques and
-    commands over the phase bands, then, with the truth, the forces and the tip's path."""
+    commands over the phase bands, then, with the truth, the forces (with the plug's
+    ``contact_force_limit_n``, N, as a line when given) and the tip's path."""
     truth = series.truth
     panels = 4 if truth is not None else 2
     fig = Figure(figsize=(9, 2.6 * panels + 1), layout="constrained")
@@ -96,10 +102,12 @@ def draw_trial_chart(series: TrialSeries, path: Path, title: str) -> None:
             ax.sharex(time_axes[0])
     torque_ax, command_ax = axes[0], axes[1]
     for column, key in enumerate(TORQUES):
-        scale = 0.1 if key == "tau_z" else 1.0
-        label = "tau_z / 10" if key == "tau_z" else key
+        raw_tau_z = key == "tau_z" and not series.calibrated
+        scale = 1e3 if series.calibrated else (0.1 if raw_tau_z else 1.0)
+        label = "tau_z / 10" if raw_tau_z else key
         torque_ax.plot(series.estimate_t_s, series.torques[:, column] * scale, lw=1, label=label)
-    torque_ax.set_ylabel("estimated torque (raw)")
+    unit = "N*mm" if series.calibrated else "raw"
+    torque_ax.set_ylabel(f"estimated torque ({unit})")
     torque_ax.legend(loc="upper left", fontsize=8)
     for column, axis in enumerate("xyz"):
         command_ax.plot(series.command_t_s, series.twists[:, column] * 1e3, lw=1,
@@ -112,17 +120,26 @@ def draw_trial_chart(series: TrialSeries, path: Path, title: str) -> None:
     if truth is None:
         command_ax.set_xlabel("time (s)")
     else:
-        _truth_panels(fig, axes[2], axes[3], truth)
+        _truth_panels(fig, axes[2], axes[3], truth, contact_force_limit_n)
     fig.suptitle(title)
     with atomic_file(path) as temporary:
         fig.savefig(temporary, dpi=90, format="png")
 
 
-def _truth_panels(fig: Figure, force_ax: Axes, path_ax: Axes, truth: ChartTruth) -> None:
+def _truth_panels(
+    fig: Figure,
+    force_ax: Axes,
+    path_ax: Axes,
+    truth: ChartTruth,
+    contact_force_limit_n: float | None,
+) -> None:
     force = np.linalg.norm(truth.wrist_wrench_t[:, :3], axis=1)
     force_ax.plot(truth.t_s, force, color="k", lw=1, label="|wrist force| (truth)")
     force_ax.plot(truth.t_s, truth.contact_force_n, color="tab:red", lw=0.6, alpha=0.6,
                   label="plug contact force (truth)")  # fmt: skip
+    if contact_force_limit_n is not None and np.isfinite(contact_force_limit_n):
+        force_ax.axhline(contact_force_limit_n, color="tab:red", ls="--", lw=0.8,
+                         label=f"contact-force limit {contact_force_limit_n:g} N")  # fmt: skip
     force_ax.set_ylabel("N")
     force_ax.set_xlabel("time (s)")
     force_ax.legend(loc="upper left", fontsize=8)
@@ -159,6 +176,7 @@ def trial_series(folder: Path) -> TrialSeries:
             np.array([float(arrays["hole_x_m"]), float(arrays["hole_y_m"])]),
         )
     tick_t = np.array([tick["t_s"] for tick in ticks])
+    calibrated = bool(estimated) and all(tick.get("calibrated", False) for tick in estimated)
     return TrialSeries(
         tick_t,
         [tick["phase"] for tick in ticks],
@@ -167,12 +185,16 @@ def trial_series(folder: Path) -> TrialSeries:
         tick_t,
         twists,
         truth,
+        calibrated,
     )
 
 
-def trial_chart(folder: Path, path: Path, title: str) -> None:
-    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``."""
-    draw_trial_chart(trial_series(folder), path, title)
+def trial_chart(
+    folder: Path, path: Path, title: str, contact_force_limit_n: float | None = None
+) -> None:
+    """Draw the trial recorded in ``folder`` (ticks.jsonl, truth.npz) to ``path``, with the
+    plug's ``contact_force_limit_n`` (N) when given."""
+    draw_trial_chart(trial_series(folder), path, title, contact_force_limit_n)
 
 
 def chart_title(task: object, seed: object, controller: object, ended: str) -> str:
@@ -189,7 +211,11 @@ def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     """The chart of the trial recorded in ``folder``, titled with its ``result``, as
     ``folder/summary.png``; its path."""
     ended = result_text(result.success, result.failure_reason)
-    title = chart_title(result.task, result.seed, result.controller, ended)
+    title = (
+        chart_title(result.task, result.seed, result.controller, ended)
+        + f"; plug contact force max {result.max_contact_force_n:.1f} N, "
+        f"p99 {result.p99_contact_force_n:.1f} N"
+    )
     path = folder / CHART_NAME
-    trial_chart(folder, path, title)
+    trial_chart(folder, path, title, result.contact_force_limit_n)
     return path

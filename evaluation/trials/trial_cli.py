@@ -1,8 +1,8 @@
 """``scripts/run_trial.py``: one insertion trial, simulated (default) or on the robot.
 
     run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
-                 [--controller dipole|fingervision|oracle|blind] [--realtime] [--set KEY=VALUE ...]
-                 [--episode-images jpeg|png]
+                 [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
+                 [--realtime] [--set KEY=VALUE ...] [--episode-images jpeg|png]
 
 It prints the phase timeline and the outcome, and writes into DIR the trial's episode
 (``episode.mcap``: every stream, docs/EPISODES.md; its tactile frames as JPEG, or losslessly
@@ -102,9 +102,11 @@ def timeline(outcome: TrialOutcome) -> str:
             else ""
         )
         + (
-            f"; max true wrist force {result.max_true_force_n:.2f} N "
-            f"(limit {result.force_limit_n:g} N)"
-            if result.max_true_force_n == result.max_true_force_n
+            f"; true plug contact force max {result.max_contact_force_n:.2f} N, p99 "
+            f"{result.p99_contact_force_n:.2f} N (limit {result.contact_force_limit_n:g} N, "
+            f"{result.contact_force_violations} violations); max true wrist force "
+            f"{result.max_wrist_force_n:.2f} N (limit {result.force_limit_n:g} N)"
+            if result.max_wrist_force_n == result.max_wrist_force_n
             else ""
         )
         + f"; {result.duration_s / max(result.wall_time_s, 1e-9):.1f}x real time"

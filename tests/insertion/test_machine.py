@@ -10,8 +10,6 @@ from controller.insertion.interface import Phase
 from controller.insertion.machine_config import (
     BackoffSettings,
     GripperSettings,
-    InsertSettings,
-    Limits,
     MachineConfig,
     SearchSettings,
     SlipSettings,
@@ -258,8 +256,8 @@ def test_limit_exceeded_without_a_board_overtravel():
 def test_limit_exceeded_on_the_force_limit():
     world = ToyWorld()
     cfg = config(
-        limits=replace(Limits(), force_limit=0.05),
-        insert=replace(InsertSettings(), force_budget=0.04),
+        limits=replace(toy_config().limits, force_limit=0.05),
+        insert=replace(toy_config().insert, force_budget=0.04),
     )
     machine = make_machine(world, cfg)
     world.run_until(machine, Phase.FAILED)

@@ -6,7 +6,7 @@ import pytest
 from controller.insertion.machine_config import NoiseFloor, SignalSettings
 from controller.insertion.signals import TactileSignals
 from controller.tactile.wrench import WrenchEstimate
-from tests.insertion.world import estimate
+from tests.insertion.world import TOY_FLOOR, estimate
 
 
 def zeroing(t_s):
@@ -14,7 +14,7 @@ def zeroing(t_s):
 
 
 def settings(**kw):
-    kw.setdefault("noise_floor", NoiseFloor(shear=0.002))  # the figures below assume it
+    kw.setdefault("noise_floor", TOY_FLOOR)  # the figures below assume it
     return SignalSettings(baseline_frames=4, ema_alpha=1.0, **kw)
 
 
@@ -41,7 +41,9 @@ def test_a_repeated_estimate_is_not_a_new_sample():
 
 
 def test_noise_floor_bounds_the_noise_and_units_follow_the_channel():
-    floor = NoiseFloor(tilt=0.001, inplane=0.01, shear=0.002, normal=0.004)
+    floor = NoiseFloor(
+        tilt_x=0.001, tilt_y=0.001, inplane=0.01, shear_x=0.002, shear_y=0.002, normal=0.004
+    )
     signals = TactileSignals(settings(noise_floor=floor))
     for i in range(4):
         signals.update(estimate(0.1 * i))  # noise-free baseline: the floors apply
@@ -53,7 +55,7 @@ def test_noise_floor_bounds_the_noise_and_units_follow_the_channel():
 
 def test_moving_average_weights_new_samples_by_alpha():
     signals = TactileSignals(
-        SignalSettings(baseline_frames=2, ema_alpha=0.25, noise_floor=NoiseFloor(shear=0.002))
+        SignalSettings(baseline_frames=2, ema_alpha=0.25, noise_floor=TOY_FLOOR)
     )
     signals.update(estimate(0.0))
     signals.update(estimate(0.1))

@@ -128,14 +128,23 @@ class ToyWorld:
             t_s=self.t_s,
             wrench=self.last_estimate,
             arm=ArmStatus(
-                self.t_s, self.pose(), (math.nan,) * 6, ArmMode.VELOCITY, ArmState.READY,
+                self.t_s,
+                self.pose(),
+                (math.nan,) * 6,
+                ArmMode.VELOCITY,
+                ArmState.READY,
                 self.arm_error,
             ),
             gripper=GripperStatus(
-                self.t_s, True, moving,
-                GripperObject.MOVING if moving else (
-                    GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET),
-                self.gripper_width, self.gripper_fault, "fault" if self.gripper_fault else "",
+                self.t_s,
+                True,
+                moving,
+                GripperObject.MOVING
+                if moving
+                else (GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET),
+                self.gripper_width,
+                self.gripper_fault,
+                "fault" if self.gripper_fault else "",
             ),
             teleop=self.teleop,
             fault=self.fault,
@@ -155,9 +164,7 @@ class ToyWorld:
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
         upright = float(np.dot(z_t, [0.0, 0.0, -1.0])) > math.cos(math.radians(2.0))
-        if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (
-            tip[2] < surface
-        ):
+        if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (tip[2] < surface):
             self.on_rim = True  # the upright plug stands on the rim: the board holds it
             in_region = False
             self.caught = False
@@ -249,15 +256,24 @@ class ToyWorld:
         return machine.phase
 
 
+TOY_FLOOR = NoiseFloor(
+    tilt_x=0.0002, tilt_y=0.0002, inplane=0.005, shear_x=0.002, shear_y=0.002, normal=0.002
+)
+"""The noise floors in the toy world's own units (its torques and forces are not the
+calibrated N*m and N the task files use; its shear noise is well below the shear floor)."""
+
+
 def toy_config() -> MachineConfig:
-    """The machine's defaults with the force and shear scales the toy world's units assume
-    (its axial force is ``k_board`` per m, its shear noise well below the shear floor)."""
+    """The machine's defaults with the floors, budgets and limits in the toy world's units
+    (``TOY_FLOOR``; its axial force is ``k_board`` per m)."""
     defaults = MachineConfig()
     return replace(
         defaults,
-        signals=replace(defaults.signals, noise_floor=NoiseFloor(shear=0.002)),
+        signals=replace(defaults.signals, noise_floor=TOY_FLOOR),
         insert=replace(defaults.insert, force_budget=0.2),
-        limits=replace(defaults.limits, force_limit=0.5),
+        limits=replace(
+            defaults.limits, force_limit=0.5, tilt_torque_limit=0.05, inplane_torque_limit=2.5
+        ),
     )
 
 

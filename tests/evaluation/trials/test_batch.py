@@ -50,7 +50,7 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
         failure_reason=None if success else "timeout",
         time_to_insert_s=time_s if success else None,
         duration_s=time_s + 1.0,
-        max_true_force_n=10.0 + spec.seed,
+        max_wrist_force_n=10.0 + spec.seed,
         force_limit_n=FORCE_LIMIT_N,
         wall_time_s=0.25,
     )
@@ -91,7 +91,10 @@ def test_bad_seeds_are_one_line_errors(text):
 
 
 def test_spec_refuses_an_unknown_controller():
-    with pytest.raises(SpecError, match="expected one of dipole, fingervision, blind, oracle"):
+    with pytest.raises(
+        SpecError,
+        match="expected one of dipole, fingervision, zero_torque, torque_only, blind, oracle",
+    ):
         TrialSpec("usb_c", "magic", 0)
 
 
@@ -115,11 +118,23 @@ def test_wilson_interval_known_values():
     assert wilson_ci(0, 0) is None
 
 
-def _result(seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0,
-            status=None):
+def _result(
+    seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0, status=None
+):
     status = status or ("inserted" if success else "failed")
-    return TrialResult("usb_c", "dipole", seed, success, status, reason, time_s, duration, force,
-                       FORCE_LIMIT_N, wall)
+    return TrialResult(
+        "usb_c",
+        "dipole",
+        seed,
+        success,
+        status,
+        reason,
+        time_s,
+        duration,
+        force,
+        FORCE_LIMIT_N,
+        wall,
+    )
 
 
 def test_summary_values():
@@ -138,7 +153,7 @@ def test_summary_values():
     assert summary["success_ci95"] == pytest.approx(_wilson_by_formula(3, 6))
     assert summary["median_time_s"] == 6.0
     assert summary["p90_time_s"] == pytest.approx(7.6)  # linear interpolation
-    assert summary["max_true_force_n"] == 25.0
+    assert summary["max_wrist_force_n"] == 25.0
     assert summary["over_force_trials"] == 2
     assert summary["failures"] == {"slip": 1, "timeout": 2}
     assert summary["failed_seeds"] == [3, 4, 5]
@@ -197,7 +212,7 @@ def test_batch_writes_summary_and_csv_and_turns_an_exception_into_an_error_trial
     assert summary["successes"] == 8  # 3, 7, 11 time out, 5 raises
     assert summary["failures"] == {"error: RuntimeError: boom second line": 1, "timeout": 3}
     assert summary["errors"] == 1
-    assert summary["max_true_force_n"] == 21.0 and summary["over_force_trials"] == 1
+    assert summary["max_wrist_force_n"] == 21.0 and summary["over_force_trials"] == 1
     rows = _read_csv(tmp_path / "batch" / CSV_NAME)
     assert tuple(rows[0]) == CSV_COLUMNS
     assert [int(r["seed"]) for r in rows] == list(range(12))
@@ -334,8 +349,21 @@ def test_bad_inputs_found_before_any_trial_exit_2(tmp_path, capsys, args, messag
 
 
 def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, capsys):
-    assert batch_main(["--task", "usb_x", "--seeds", "0:2", "--out", str(tmp_path / "a"),
-                       "--trial-function", FAKE]) == 2
+    assert (
+        batch_main(
+            [
+                "--task",
+                "usb_x",
+                "--seeds",
+                "0:2",
+                "--out",
+                str(tmp_path / "a"),
+                "--trial-function",
+                FAKE,
+            ]
+        )
+        == 2
+    )
     assert "unknown task configuration 'usb_x'" in capsys.readouterr().err
     assert run_cli(tmp_path, "--seeds", "0:2") == 0
     assert run_cli(tmp_path, "--seeds", "0:2") == 2
@@ -343,8 +371,19 @@ def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, caps
 
 
 def test_records_give_each_trial_its_own_folder(tmp_path):
-    assert run_cli(tmp_path, "--seeds", "0:2", "--controller", "blind", "--records",
-                   "--trial-function", f"{__name__}:recording_trial") == 0
+    assert (
+        run_cli(
+            tmp_path,
+            "--seeds",
+            "0:2",
+            "--controller",
+            "blind",
+            "--records",
+            "--trial-function",
+            f"{__name__}:recording_trial",
+        )
+        == 0
+    )
     text = (tmp_path / "out" / "records" / "blind-1" / "spec.txt").read_text()
     assert "seed=1" in text and "controller='blind'" in text
 
@@ -428,15 +467,27 @@ def test_ray_missing_is_a_one_line_error(monkeypatch):
 def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     out = tmp_path / "cmp"
     code = compare_main(
-        ["--task", "usb_c", "--seeds", "0:6", "--controllers", "dipole,blind,oracle",
-         "--speeds", "0.01,0.02", "--out", str(out), "--trial-function", FAKE]
+        [
+            "--task",
+            "usb_c",
+            "--seeds",
+            "0:6",
+            "--controllers",
+            "dipole,blind,oracle",
+            "--speeds",
+            "0.01,0.02",
+            "--out",
+            str(out),
+            "--trial-function",
+            FAKE,
+        ]
     )
     assert code == 0
     for name in ("speed_success.png", "time_to_insert_0.01.png", "time_to_insert_0.02.png"):
         assert (out / name).stat().st_size > 1000
     table = (out / "comparison.md").read_text()
     assert table.count("\n| ") == 1 + 6  # header and one row per cell
-    assert "oracle (true wrench: upper bound)" in table and "![success against" in table
+    assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6
@@ -449,16 +500,29 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
 
 def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
     with pytest.raises(SystemExit) as caught:
-        compare_main(["--task", "usb_c", "--seeds", "0:2", "--out", str(tmp_path),
-                      "--set", "machine.insert.speed_m_s=1", "--trial-function", FAKE])
+        compare_main(
+            [
+                "--task",
+                "usb_c",
+                "--seeds",
+                "0:2",
+                "--out",
+                str(tmp_path),
+                "--set",
+                "machine.insert.speed_m_s=1",
+                "--trial-function",
+                FAKE,
+            ]
+        )
     assert caught.value.code == 2
     assert "is the speed key" in capsys.readouterr().err
 
 
 def test_charts_with_an_empty_controller(tmp_path):
     summary = summarize([_result(0, True, 4.0), _result(1, False, reason="timeout")])
-    speed_success_chart({"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png",
-                        "speed", "t")
+    speed_success_chart(
+        {"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png", "speed", "t"
+    )
     time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
     assert (tmp_path / "a.png").stat().st_size > 1000
     assert (tmp_path / "b.png").stat().st_size > 1000
@@ -475,12 +539,23 @@ def test_an_unreachable_ray_address_is_a_quick_one_line_error(ray_available):
 
 def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
     out = tmp_path / "out"
-    code = (
-        "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
-    )
+    code = "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
     process = subprocess.Popen(
-        [sys.executable, "-c", code, "--task", "usb_c", "--seeds", "0:3", "--workers", "2",
-         "--out", str(out), "--trial-function", f"{__name__}:slow_trial"],
+        [
+            sys.executable,
+            "-c",
+            code,
+            "--task",
+            "usb_c",
+            "--seeds",
+            "0:3",
+            "--workers",
+            "2",
+            "--out",
+            str(out),
+            "--trial-function",
+            f"{__name__}:slow_trial",
+        ],
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
         stdout=subprocess.PIPE,

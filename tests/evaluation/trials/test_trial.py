@@ -18,6 +18,7 @@ from core.config import CONFIG_ROOT, ConfigError
 from drivers.sim.scenes.insertion import TruthLog
 from evaluation.common.cli_support import Terminated
 from evaluation.trials import trial
+from evaluation.trials.oracle import TrueWrench
 from evaluation.trials.spec import TrialSpec
 from evaluation.trials.trial_cli import main
 
@@ -96,8 +97,9 @@ def test_the_controller_never_reads_the_truth(monkeypatch, tmp_path):
     outcome = trial.run(load_task("usb_c", SHORT), "dipole", 3, out_dir=tmp_path / "d")
     assert outcome.truth is not None and len(outcome.truth["t_s"]) > 100
     assert reads == []
+    monkeypatch.setattr(TrueWrench, "__call__", spy("true_wrench", TrueWrench.__call__))
     trial.run(load_task("usb_c", SHORT), "oracle", 3)
-    assert reads  # the oracle does read it: the spy works
+    assert reads  # the oracle does read the truth: the spy works
 
 
 def test_a_short_trial_writes_its_record(tmp_path):

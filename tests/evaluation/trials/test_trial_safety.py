@@ -35,7 +35,7 @@ def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
     started_s = outcome.loop.stats.first_tick_s
     assert started_s > 0.0  # the gripper's activation came first
     assert outcome.result.time_to_insert_s == pytest.approx(reached_s - started_s)
-    assert outcome.result.max_true_force_n < outcome.result.force_limit_n
+    assert outcome.result.max_wrist_force_n < outcome.result.force_limit_n
     assert outcome.transitions[-1].target is Phase.DONE
 
 
