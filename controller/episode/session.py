@@ -1,6 +1,6 @@
-"""One run's episode: ``EpisodeRecording`` creates the file with the run's metadata and the
-resolved task attached when the run starts, gives the run path its tap and its observer, and
-closes the file with the outcome.
+"""One run's episode: ``EpisodeRecording`` creates the file with the run's metadata, the
+resolved task and the run's calibration attached when the run starts, gives the run path its
+tap and its observer, and closes the file with the outcome.
 
     recording = EpisodeRecording(path, task_raw, task=..., seed=..., ...)
     run_task(..., episode=recording)        # once the devices are connected: start(), then
@@ -23,8 +23,9 @@ from typing import Any
 import yaml
 
 from controller.episode.recorder import RecordingSource, TickLogger
-from controller.episode.topics import ATTACHMENT_TASK, FORMAT_VERSION
+from controller.episode.topics import ATTACHMENT_CALIBRATION, ATTACHMENT_TASK, FORMAT_VERSION
 from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter
+from controller.tactile.calibration import Calibration
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.provenance import git_revision, package_version
@@ -89,6 +90,7 @@ class EpisodeRecording:
         controller: str,
         backend: str,
         options: EpisodeOptions | None = None,
+        calibration: Calibration | None = None,
     ) -> None:
         options = options or EpisodeOptions()
         self.path = Path(path)
@@ -110,18 +112,29 @@ class EpisodeRecording:
             "queue_size": str(options.queue_size),
             "flush_interval_s": str(options.flush_interval_s),
         }
-        self._task_yaml = yaml.safe_dump(plain(task_raw), sort_keys=False).encode()
+        self._attachments = {
+            ATTACHMENT_TASK: (
+                "application/yaml",
+                yaml.safe_dump(plain(task_raw), sort_keys=False).encode(),
+            )
+        }
+        if calibration is not None:
+            self._attachments[ATTACHMENT_CALIBRATION] = (
+                "application/yaml",
+                calibration.to_yaml().encode(),
+            )
 
     def start(self) -> EpisodeWriter:
         """Create the episode file (FileExistsError if it exists) with the ``episode``
-        metadata (its ``started_utc`` now) and the resolved task attached as YAML."""
+        metadata (its ``started_utc`` now), the resolved task and the run's calibration (if
+        any) attached as YAML."""
         if self.writer is not None:
             raise RuntimeError(f"episode {self.path}: started already")
         started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
         self.writer = EpisodeWriter(
             self.path,
             {**self._info, "started_utc": started},
-            {ATTACHMENT_TASK: ("application/yaml", self._task_yaml)},
+            self._attachments,
             queue_size=self.options.queue_size,
             flush_interval_s=self.options.flush_interval_s,
         )

@@ -395,3 +395,7 @@ METADATA_REPAIR = "repair"
 ATTACHMENT_TASK = "task.yaml"
 """The attachment holding the resolved task configuration (the merged, overridden task file
 as YAML; media type ``application/yaml``)."""
+ATTACHMENT_CALIBRATION = "calibration.yaml"
+"""The attachment holding the calibration the run applied to the estimates (the task's
+``calibration:`` file's content, controller/tactile/calibration.py's format; absent when the
+run's estimates were raw), so a re-estimation can apply it again."""

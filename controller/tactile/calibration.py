@@ -192,7 +192,13 @@ class Calibration(Config):
     def load(cls, path: Path | str) -> Calibration:
         """Read a calibration file (format v2, or v1 without the estimator fingerprint)
         through the configuration loader; errors name the file and the offending key."""
-        data = dict(load_yaml(path))
+        return cls.from_document(load_yaml(path), str(path))
+
+    @classmethod
+    def from_document(cls, document: Mapping[str, Any], path: str) -> Calibration:
+        """The calibration of a file's parsed ``document`` (its mapping), read from ``path``
+        (a file's name, or where the text came from, for the errors)."""
+        data = dict(document)
         found = data.pop("format", None)
         if found not in (FORMAT, FORMAT_V1):
             raise ConfigError(f"{path}: key 'format': expected '{FORMAT}', got {found!r}")

@@ -32,9 +32,15 @@ import numpy as np
 import yaml
 
 from controller.episode import Episode
-from controller.episode.topics import ATTACHMENT_TASK, TACTILE_IMAGE, TACTILE_PUSH
+from controller.episode.topics import (
+    ATTACHMENT_CALIBRATION,
+    ATTACHMENT_TASK,
+    TACTILE_IMAGE,
+    TACTILE_PUSH,
+)
 from controller.tactile import TactileEstimator, WrenchEstimate, estimator_for_sensor
-from controller.tactile.calibration import fit_axis
+from controller.tactile.calibration import Calibration, fit_axis
+from controller.tactile.settings import EstimatorConfig
 from core.config import CONFIG_ROOT, ConfigError
 from drivers import registry
 from evaluation.episodes import episode_streams
@@ -50,11 +56,13 @@ class ReestimationError(ValueError):
 
 @dataclass(frozen=True)
 class RunEstimator:
-    """The sensor the episode was recorded with (its profile's name) and the estimator
-    configuration the run used (a name in configs/estimators/ or a path)."""
+    """The sensor the episode was recorded with (its profile's name), the estimator
+    configuration the run used (a name in configs/estimators/ or a path) and the calibration
+    it applied (None: its estimates were raw)."""
 
     sensor: str
     estimator: str
+    calibration: Calibration | None = None
 
 
 def run_estimator(episode: Episode) -> RunEstimator:
@@ -78,7 +86,27 @@ def run_estimator(episode: Episode) -> RunEstimator:
     estimator = task.get("estimator")
     if estimator is None:
         estimator = estimator_for_sensor(sensor).config_name
-    return RunEstimator(sensor, str(estimator))
+    return RunEstimator(sensor, str(estimator), run_calibration(episode))
+
+
+def run_calibration(episode: Episode) -> Calibration | None:
+    """The calibration the run applied (the ``calibration.yaml`` attachment), None if it
+    applied none; ReestimationError if the attachment cannot be read."""
+    text = episode.attachments.get(ATTACHMENT_CALIBRATION)
+    if text is None:
+        return None
+    try:
+        return Calibration.from_document(yaml.safe_load(text), ATTACHMENT_CALIBRATION)
+    except (yaml.YAMLError, ConfigError, ValueError) as exc:
+        raise ReestimationError(f"cannot read '{ATTACHMENT_CALIBRATION}': {exc}") from None
+
+
+def calibration_for(run: RunEstimator, config: EstimatorConfig) -> Calibration | None:
+    """The run's calibration if it fits the estimator configuration ``config`` on the
+    run's sensor (the same configuration's values), else None (the estimates stay raw)."""
+    if run.calibration is None or run.calibration.mismatch(run.sensor, config) is not None:
+        return None
+    return run.calibration
 
 
 @dataclass(frozen=True)

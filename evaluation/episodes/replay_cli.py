@@ -34,6 +34,7 @@ from pathlib import Path
 from controller.episode import Episode, EpisodeError, read_episode
 from controller.episode.repair import repair as repair_file
 from controller.tactile import estimator_for_sensor
+from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
 from evaluation.common.cli_support import ToolError, distinct, resolved_config_path, run_tool
 from evaluation.common.outputs import atomic_text, check_output_file, check_output_folder
@@ -106,7 +107,10 @@ def reestimate(args: argparse.Namespace) -> int:
     episode = open_episode(args.episode, args.allow_truncated)
     try:
         run = reestimation.run_estimator(episode)
-        estimator = estimator_for_sensor(sensor_profile(run.sensor), args.method)
+        profile = sensor_profile(run.sensor)
+        _, config = sensor_estimator(profile, str(args.method))
+        calibration = reestimation.calibration_for(run, config)
+        estimator = estimator_for_sensor(profile, args.method, calibration)
         new = reestimation.reestimate(episode, estimator, time.perf_counter)
     except reestimation.ReestimationError as exc:
         raise ToolError(f"episode '{args.episode}': {exc}") from None
@@ -116,7 +120,13 @@ def reestimate(args: argparse.Namespace) -> int:
     lines = [
         f"re-estimated {len(new.estimates)} frames of '{args.episode}' with "
         f"'{estimator.config_name}' (the run's: '{run.estimator}', sensor {run.sensor}; "
-        f"frames logged as {image_format})"
+        f"frames logged as {image_format}; "
+        + (
+            "with the run's calibration, N*m and N)"
+            if calibration is not None
+            else "raw: " + ("the run applied no calibration)" if run.calibration is None
+                            else "the run's calibration is for another configuration)")
+        )
     ]
     truth = episode_streams.truth(episode)
     if truth is not None:
@@ -127,11 +137,16 @@ def reestimate(args: argparse.Namespace) -> int:
             "N*m",
         )
     logged = episode_streams.estimates(episode)
-    if len(logged.push_index):
+    if len(logged.push_index) and logged.calibrated != (calibration is not None):
+        lines.append(
+            "against the logged estimates: not compared (they are "
+            + ("calibrated, N*m; these are raw)" if logged.calibrated else "raw; these are N*m)")
+        )
+    elif len(logged.push_index):
         lines += _score_lines(
             "against the logged estimates (/tactile/wrench; no fit):",
             reestimation.against_logged(new, logged),
-            "(raw)",
+            "(N*m)" if calibration is not None else "(raw)",
         )
     if args.out is not None:
         with atomic_text(args.out, newline="") as handle:

@@ -100,6 +100,7 @@ def run(
         controller=controller,
         backend=run_options.get("backend", "sim"),
         options=episode,
+        calibration=task.calibration,
     )
     try:
         outcome = _run(task, controller, seed, out_dir, recording, run_options)
