@@ -16,6 +16,7 @@ TOOLS = {
     "estimate": "evaluation.offline.estimate_cli",
     "calibrate": "evaluation.offline.calibrate_cli",
     "check_hardware": "drivers.check_hardware",
+    "teleop_demo": "evaluation.teleop.demo_cli",
 }
 """Script name (scripts/NAME.py, command ``tactile-NAME`` with dashes) -> the tool's module."""
 
@@ -42,3 +43,7 @@ def calibrate() -> NoReturn:
 
 def check_hardware() -> NoReturn:
     run_main(TOOLS["check_hardware"])
+
+
+def teleop_demo() -> NoReturn:
+    run_main(TOOLS["teleop_demo"])

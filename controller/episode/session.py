@@ -21,7 +21,7 @@ import yaml
 
 from controller.episode.recorder import RecordingSource, TickLogger
 from controller.episode.topics import ATTACHMENT_TASK, FORMAT_VERSION
-from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter
+from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter, Listener
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.provenance import git_revision, package_version
@@ -90,9 +90,11 @@ class EpisodeRecording:
         controller: str,
         backend: str,
         options: EpisodeOptions | None = None,
+        listeners: Sequence[Listener] = (),
     ) -> EpisodeRecording:
         """Create the episode file ``path`` (FileExistsError if it exists) with the
-        ``episode`` metadata and the resolved task (``task_raw``) attached as YAML."""
+        ``episode`` metadata and the resolved task (``task_raw``) attached as YAML;
+        ``listeners`` get every record as written (``EpisodeWriter``)."""
         options = options or EpisodeOptions()
         info = {
             "format_version": FORMAT_VERSION,
@@ -118,6 +120,7 @@ class EpisodeRecording:
             {ATTACHMENT_TASK: ("application/yaml", task_yaml)},
             queue_size=options.queue_size,
             flush_interval_s=options.flush_interval_s,
+            listeners=listeners,
         )
         return cls(writer, options)
 
