@@ -49,8 +49,10 @@ TELEOP_ONLY = Definition(
         Edge(Phase.TELEOP, Phase.DONE, "hand_back"),
         *(Edge(p, Phase.ESTOP, "estop") for p in (Phase.GRASP, Phase.TELEOP)),
         *(Edge(Phase.ESTOP, p, "estop_acknowledged") for p in (Phase.GRASP, Phase.TELEOP)),
-        *(Edge(p, Phase.FAILED, _F.DEVICE_FAULT.value)
-          for p in (Phase.GRASP, Phase.TELEOP, Phase.ESTOP)),
+        *(
+            Edge(p, Phase.FAILED, _F.DEVICE_FAULT.value)
+            for p in (Phase.GRASP, Phase.TELEOP, Phase.ESTOP)
+        ),
     ),  # fmt: skip
 )
 

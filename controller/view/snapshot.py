@@ -89,7 +89,8 @@ class ViewFeed:
             operator=bool(teleop and teleop.in_control),
             connected=bool(teleop and teleop.connected),
             deadman=bool(teleop and teleop.deadman),
-            estop=bool(teleop and teleop.estop) or (tick is not None and tick.phase.value == "estop"),
+            estop=bool(teleop and teleop.estop)
+            or (tick is not None and tick.phase.value == "estop"),
             mm_per_px=self.mm_per_px,
         )
 

@@ -9,7 +9,8 @@ twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realti
 * the SimArm, its configuration adapted to the scene through the config objects: it
   starts upright over the nominal hole, the plug's tip ``start_above_hole_m`` above the
   board, turned to the nominal yaw (or, with ``start_depth_m``, partly inserted in the
-  true hole, aligned with it: the teleoperated alignment demo's start); its envelope is the robot configuration's, unchanged
+  true hole, aligned with it: the teleoperated alignment demo's start); its envelope is
+  the robot configuration's, unchanged
   (a task whose insertion that envelope cannot reach is refused when it loads:
   ``core.envelope_checks``);
 * the SimGripper, its object width the plug's thickness;
