@@ -21,14 +21,20 @@ units (mm for tau_x, tau_y; mm^2 for tau_z), labelled "raw".
 from __future__ import annotations
 
 import math
+import os
 from collections import deque
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pygame
 
-from controller.view.snapshot import ViewSnapshot
+os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")  # no banner on stdout at import
+
+import pygame  # noqa: E402
+
+if TYPE_CHECKING:
+    from controller.view.snapshot import ViewSnapshot  # noqa: E402
 
 SIZE = (1000, 640)
 IMAGE = pygame.Rect(0, 0, 400, 300)
@@ -63,10 +69,17 @@ class ViewState:
     history: deque[tuple[float, float, float, float]]
     mapping: Sequence[str]
     note: str = ""
+    fonts: dict[int, pygame.font.Font] = field(default_factory=dict)
 
     @classmethod
     def new(cls, mapping: Sequence[str]) -> ViewState:
         return cls(deque(), tuple(mapping))
+
+    def font(self, size: int) -> pygame.font.Font:
+        """pygame's default font at ``size`` px, loaded once per view."""
+        if size not in self.fonts:
+            self.fonts[size] = pygame.font.Font(None, size)
+        return self.fonts[size]
 
     def add(self, snapshot: ViewSnapshot) -> None:
         """Append ``snapshot``'s torques and drop what is older than ``HISTORY_S``."""
@@ -78,7 +91,7 @@ class ViewState:
 def draw(surface: pygame.Surface, snapshot: ViewSnapshot, state: ViewState) -> None:
     """Draw the whole view for ``snapshot`` on ``surface`` (at least ``SIZE``)."""
     surface.fill(BACKGROUND)
-    font = pygame.font.Font(None, 22)
+    font = state.font(22)
     _image_panel(surface, snapshot)
     _divergence_panel(surface, snapshot)
     scales = _scales(state)
@@ -110,11 +123,12 @@ def _image_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
     cell_px = float(np.min(np.diff(xs))) if xs.size > 1 else 10.0
     largest = max(float(np.max(np.hypot(u, v))), 0.005)
     gain = 0.9 * cell_px / largest  # px per mm: the largest arrow spans most of a cell
-    for i, y in enumerate(ys):
-        for j, x in enumerate(xs):
-            end = (x + gain * u[i, j], y + gain * v[i, j])
+    ends_x, ends_y = xs[None, :] + gain * u, ys[:, None] + gain * v
+    for i, y in enumerate(ys.tolist()):
+        for j, x in enumerate(xs.tolist()):
+            end = (float(ends_x[i, j]), float(ends_y[i, j]))
             pygame.draw.line(surface, ARROW, (x, y), end, 2)
-            pygame.draw.circle(surface, ARROW, end, 2)
+            pygame.draw.rect(surface, ARROW, (end[0] - 2, end[1] - 2, 4, 4))
 
 
 def _divergence_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
@@ -125,14 +139,15 @@ def _divergence_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
     xs, ys = _grid_to_px(snapshot, DIVERGENCE)
     w = float(np.min(np.diff(xs))) if xs.size > 1 else 10.0
     h = float(np.min(np.diff(ys))) if ys.size > 1 else 10.0
-    peak = max(float(np.max(np.abs(div))), 1e-6)
-    for i, y in enumerate(ys):
-        for j, x in enumerate(xs):
-            level = min(1.0, abs(float(div[i, j])) / peak)
-            base = POSITIVE if div[i, j] > 0 else NEGATIVE
-            colour = tuple(int(40 + (c - 40) * level) for c in base)
-            pygame.draw.rect(surface, colour, pygame.Rect(x - w / 2, y - h / 2, w + 1, h + 1))
-    centroids = []
+    level = np.clip(np.abs(div) / max(float(np.max(np.abs(div))), 1e-6), 0.0, 1.0)
+    base = np.where((div > 0)[..., None], POSITIVE, NEGATIVE)
+    cells = (40 + (base - 40) * level[..., None]).astype(np.uint8)  # (rows, cols, 3)
+    heat = pygame.transform.scale(
+        pygame.surfarray.make_surface(cells.swapaxes(0, 1)),
+        (round(w * xs.size), round(h * ys.size)),
+    )
+    surface.blit(heat, (xs[0] - w / 2, ys[0] - h / 2))
+    centroids: list[tuple[float, float] | None] = []
     for sign, colour in ((1.0, POSITIVE), (-1.0, NEGATIVE)):
         mass = np.maximum(sign * div, 0.0)
         total = float(mass.sum())
@@ -220,8 +235,7 @@ def _status(surface: pygame.Surface, snapshot: ViewSnapshot, state: ViewState,
             font: pygame.font.Font) -> None:  # fmt: skip
     phase_colour = PHASE_COLOURS.get(snapshot.phase, AUTONOMY_COLOUR)
     pygame.draw.rect(surface, phase_colour, PHASE_LABEL, border_radius=6)
-    big = pygame.font.Font(None, 40)
-    surface.blit(big.render(snapshot.phase.upper(), True, BACKGROUND),
+    surface.blit(state.font(40).render(snapshot.phase.upper(), True, BACKGROUND),
                  (PHASE_LABEL.x + 10, PHASE_LABEL.y + 10))  # fmt: skip
     who = "operator" if snapshot.operator else "autonomy"
     lines = [

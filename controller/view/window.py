@@ -23,9 +23,10 @@ import queue
 import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from controller.view.snapshot import ViewSnapshot
+if TYPE_CHECKING:
+    from controller.view.snapshot import ViewSnapshot
 
 QUEUE_FRAMES = 2
 KEYS = ("z: re-zero", "p / space: pause", "s: screenshot", "q / Esc: quit")
@@ -48,6 +49,7 @@ class LiveView:
         )
         self.dropped = 0
         self.offered = 0
+        self._closing = False
         self._watcher: threading.Thread | None = None
 
     def start(self) -> None:
@@ -73,6 +75,8 @@ class LiveView:
                     if not self._process.is_alive():
                         return
                     continue
+                if self._closing:  # a terminated view reports SDL's quit: not the user's
+                    return
                 on_command(command)
                 if command == "quit":
                     return
@@ -86,6 +90,7 @@ class LiveView:
 
     def close(self) -> None:
         """Ask the view to end and wait for it (terminated after ``JOIN_S``)."""
+        self._closing = True
         if self._process.is_alive():
             try:
                 self._snapshots.put(None, timeout=1.0)

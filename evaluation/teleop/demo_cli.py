@@ -11,7 +11,8 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
 * ``--backend sim`` (default): the simulated world in real time; the pad is a real one if SDL
   sees a game controller, else the scripted twin playing ``--script FILE``
   (evaluation/teleop/pad_script.py) or the default script configs/teleop/alignment_demo.yaml.
-  ``--fast`` runs a scripted demo as fast as the simulation goes (no view).
+  ``--fast`` runs a scripted demo as fast as the simulation goes (the view, if open, shows
+  what it can and drops the rest).
 * ``--backend real``: the configured devices, the same code.
 * ``--autonomy``: the insertion machine from the trials' start; the pad overrides it at any
   moment and ``hand_back`` resumes autonomy from a phase fitting the contact state.
@@ -76,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="the longest the demo runs, s (default 600)")  # fmt: skip
     parser.add_argument("--seed", type=integer(0, 2**31 - 1), default=0)
     parser.add_argument("--fast", action="store_true",
-                        help="scripted sim only: as fast as possible (no view)")  # fmt: skip
+                        help="scripted sim only: as fast as the simulation goes")  # fmt: skip
     add_override_argument(parser, "override a task key by dotted path (repeatable)")
     parser.add_argument("--out", type=Path, required=True, help="output folder (new or empty)")
     return parser
@@ -85,8 +86,8 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.fast and (args.view or args.backend == "real"):
-        parser.error("argument --fast: only with --backend sim and --no-view")
+    if args.fast and args.backend == "real":
+        parser.error("argument --fast: only with --backend sim")
     if args.script is not None and args.backend == "real":
         parser.error("argument --script: the real backend reads the real pad")
     return run_tool("teleop_demo", lambda: _run(args))
@@ -109,7 +110,7 @@ def _run(args: argparse.Namespace) -> int:
     if task.config.devices.gamepad is None:
         raise ToolError(f"{task.path}: key 'devices.gamepad': the demo needs a gamepad")
     script = None
-    if args.backend == "sim" and (args.script is not None or not real_pad_attached()):
+    if args.backend == "sim" and (args.script or args.fast or not real_pad_attached()):
         script = load_pad_script(args.script or DEFAULT_SCRIPT)
     args.out.mkdir(parents=True, exist_ok=True)
     return run_demo(task, args, script)
@@ -129,12 +130,7 @@ def real_pad_attached() -> bool:
 def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     """Run the demo (see the module doc); the exit code."""
     machines: list[Any] = []
-
-    def teleop_machine(config: TaskConfig) -> Any:
-        machines.append(TeleopOnlyMachine(config.machine, config.plug, config.hole))
-        return machines[-1]
-
-    table = {**CONTROLLERS, TELEOP_CONTROLLER: Controller(teleop_machine, lambda e, w: e)}
+    table = controller_table(machines)
     controller = "dipole" if args.autonomy else TELEOP_CONTROLLER
     stream = None
     listeners: list[Any] = []
@@ -151,7 +147,7 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     view = None
     quit_asked: list[bool] = []
     if args.view:
-        from controller.view.snapshot import ViewFeed
+        from controller.view.feed import ViewFeed
         from controller.view.window import LiveView
 
         view = LiveView(mapping_lines(task), args.out)
@@ -195,6 +191,18 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     if outcome.loop.reason == "signal" and not quit_asked:
         return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
     return 0
+
+
+def controller_table(machines: list[Any]) -> dict[str, Controller]:
+    """The run path's controllers plus the demo's ``teleop`` (``TeleopOnlyMachine`` on the
+    estimator as it is); each machine built is appended to ``machines`` (the view's re-zero
+    key reaches it there)."""
+
+    def teleop_machine(config: TaskConfig) -> Any:
+        machines.append(TeleopOnlyMachine(config.machine, config.plug, config.hole))
+        return machines[-1]
+
+    return {**CONTROLLERS, TELEOP_CONTROLLER: Controller(teleop_machine, lambda e, w: e)}
 
 
 def _on_view_command(machines: list[Any], quit_asked: list[bool]) -> Callable[[str], None]:

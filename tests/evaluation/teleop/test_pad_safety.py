@@ -8,7 +8,6 @@ from pygame._sdl2 import controller as sdl_controller
 
 from controller.insertion import Phase
 from controller.run import load_task, run_task
-from controller.run.controllers import CONTROLLERS, Controller
 from drivers.gamepad.pad import init_sdl
 from evaluation.teleop import demo_cli
 from evaluation.teleop.demo_cli import TELEOP_CONTROLLER, _pad_preparation
@@ -46,10 +45,7 @@ def script_for(joystick):
 def test_deadman_estop_and_unplug_hold_on_a_virtual_joystick(sdl):
     task = load_task("usb_c", [*demo_cli.demo_overrides(demo_cli.build_parser().parse_args(
         ["--no-view", "--fast", "--out", "unused"])), "machine.timeouts.total_s=20"])  # fmt: skip
-    machine = Controller(
-        lambda c: demo_cli.TeleopOnlyMachine(c.machine, c.plug, c.hole), lambda e, w: e
-    )
-    table = {**CONTROLLERS, TELEOP_CONTROLLER: machine}
+    table = demo_cli.controller_table([])
     joystick = VirtualJoystick(sdl)
     joystick.attach()
     steps = script_for(joystick)
