@@ -142,4 +142,3 @@ def stop_latencies_ms(runs: int) -> np.ndarray:
             raise RuntimeError(f"run {k}: expected a trip on the unplug, got {outcome.loop}")
         latencies.append((noted["arm"].stopped_s - noted["start_s"] - unplug_s) * 1e3)
     return np.array(latencies)
-
