@@ -5,6 +5,9 @@ observer and a tap on the wrench source; the state machine never imports it.
 
 * ``topics``: every topic, its schema, encoding, frame and units (the format's contract);
 * ``reader``: ``read_episode(path) -> Episode`` (finished or cut files alike);
+* ``repair``: ``repair(path, out) -> RepairReport`` (finishes a killed run's file; import it
+  from ``controller.episode.repair``);
+* ``writer``, ``recorder``, ``session``: the writing side (``EpisodeRecording``).
 """
 
 from controller.episode.reader import (

@@ -5,6 +5,7 @@ function runs on the episode writer's thread."""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import cv2
@@ -25,7 +26,7 @@ from foxglove.messages import (
 
 from controller.tactile.field import VectorField
 
-_MESSAGES = {
+_MESSAGES: dict[str, Any] = {
     "foxglove.CompressedImage": CompressedImage,
     "foxglove.Grid": Grid,
     "foxglove.FrameTransforms": FrameTransforms,
@@ -98,7 +99,10 @@ def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
     ).encode()
 
 
-def transforms_bytes(t_s: float, frames: list[tuple[str, str, np.ndarray, np.ndarray]]) -> bytes:
+Vector = Sequence[float] | np.ndarray
+
+
+def transforms_bytes(t_s: float, frames: list[tuple[str, str, Vector, Vector]]) -> bytes:
     """A ``foxglove.FrameTransforms`` at ``t_s``: each (parent, child, translation m (3),
     quaternion (x, y, z, w))."""
     stamp = timestamp(t_s)

@@ -24,7 +24,7 @@ from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
-from core.spatial import rotation_from_rpy
+from core.spatial import quaternion_from_rpy
 
 FLAG_FIELDS = (
     "contact",
@@ -137,10 +137,8 @@ def tick_json(tick: TickRecord) -> bytes:
 
 
 def tcp_tf(arm: ArmStatus) -> bytes:
-    quaternion = rotation_from_rpy(arm.tcp.rpy_rad).as_quat()  # x, y, z, w
-    return foxglove_types.transforms_bytes(
-        arm.t_s, [("B", "T", np.asarray(arm.tcp.xyz_m), quaternion)]
-    )
+    quaternion = quaternion_from_rpy(arm.tcp.rpy_rad)
+    return foxglove_types.transforms_bytes(arm.t_s, [("B", "T", arm.tcp.xyz_m, quaternion)])
 
 
 def transition_json(transition: Any) -> bytes:

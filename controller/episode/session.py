@@ -1,10 +1,13 @@
-"""One run's episode: ``EpisodeRecording`` opens the file with the run's metadata and the
-resolved task attached, gives the run path its tap and its observer, and closes the file
-with the outcome.
+"""One run's episode: ``EpisodeRecording`` creates the file with the run's metadata and the
+resolved task attached when the run starts, gives the run path its tap and its observer, and
+closes the file with the outcome.
 
-    recording = EpisodeRecording.open(path, task_raw, task=..., seed=..., ...)
-    run_task(..., episode=recording)        # taps the wrench source, observes the ticks
+    recording = EpisodeRecording(path, task_raw, task=..., seed=..., ...)
+    run_task(..., episode=recording)        # once the devices are connected: start(), then
+                                            # it taps the wrench source and observes ticks
     recording.close({"reason": ..., ...})   # the outcome metadata, then the footer
+
+A run that never starts (a device that does not connect) leaves no file.
 """
 
 from __future__ import annotations
@@ -71,15 +74,12 @@ def machine_description() -> str:
 
 
 class EpisodeRecording:
-    """An open episode (see the module doc): ``writer`` and the ``options``."""
+    """One run's episode (see the module doc): ``path``, the ``options``, and once started
+    the ``writer``. ``listeners`` get every record as the writer writes it (``EpisodeWriter``;
+    the live view and the Foxglove live stream)."""
 
-    def __init__(self, writer: EpisodeWriter, options: EpisodeOptions) -> None:
-        self.writer = writer
-        self.options = options
-
-    @classmethod
-    def open(
-        cls,
+    def __init__(
+        self,
         path: Path,
         task_raw: Mapping[str, Any],
         *,
@@ -91,12 +91,13 @@ class EpisodeRecording:
         backend: str,
         options: EpisodeOptions | None = None,
         listeners: Sequence[Listener] = (),
-    ) -> EpisodeRecording:
-        """Create the episode file ``path`` (FileExistsError if it exists) with the
-        ``episode`` metadata and the resolved task (``task_raw``) attached as YAML;
-        ``listeners`` get every record as written (``EpisodeWriter``)."""
+    ) -> None:
         options = options or EpisodeOptions()
-        info = {
+        self.path = Path(path)
+        self.options = options
+        self.listeners = tuple(listeners)
+        self.writer: EpisodeWriter | None = None
+        self._info = {
             "format_version": FORMAT_VERSION,
             "task": task,
             "task_file": str(task_file),
@@ -107,28 +108,39 @@ class EpisodeRecording:
             "package_version": package_version(),
             "git_revision": git_revision(),
             "machine": machine_description(),
-            "started_utc": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
             "tactile_image_format": options.image_format,
             "jpeg_quality": str(options.jpeg_quality),
             "queue_size": str(options.queue_size),
             "flush_interval_s": str(options.flush_interval_s),
         }
-        task_yaml = yaml.safe_dump(plain(task_raw), sort_keys=False).encode()
-        writer = EpisodeWriter(
-            path,
-            info,
-            {ATTACHMENT_TASK: ("application/yaml", task_yaml)},
-            queue_size=options.queue_size,
-            flush_interval_s=options.flush_interval_s,
-            listeners=listeners,
+        self._task_yaml = yaml.safe_dump(plain(task_raw), sort_keys=False).encode()
+
+    def start(self) -> EpisodeWriter:
+        """Create the episode file (FileExistsError if it exists) with the ``episode``
+        metadata (its ``started_utc`` now) and the resolved task attached as YAML."""
+        if self.writer is not None:
+            raise RuntimeError(f"episode {self.path}: started already")
+        started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
+        self.writer = EpisodeWriter(
+            self.path,
+            {**self._info, "started_utc": started},
+            {ATTACHMENT_TASK: ("application/yaml", self._task_yaml)},
+            queue_size=self.options.queue_size,
+            flush_interval_s=self.options.flush_interval_s,
+            listeners=self.listeners,
         )
-        return cls(writer, options)
+        return self.writer
+
+    def _started(self) -> EpisodeWriter:
+        if self.writer is None:
+            raise RuntimeError(f"episode {self.path}: not started")
+        return self.writer
 
     def tap(self, source: WrenchSource, clock: Clock) -> RecordingSource:
         """``source`` wrapped so every frame, field, estimate and call is recorded."""
         return RecordingSource(
             source,
-            self.writer,
+            self._started(),
             clock,
             image_format=self.options.image_format,
             jpeg_quality=self.options.jpeg_quality,
@@ -136,8 +148,10 @@ class EpisodeRecording:
 
     def observer(self) -> TickLogger:
         """The loop's observer that records each tick."""
-        return TickLogger(self.writer)
+        return TickLogger(self._started())
 
     def close(self, outcome: Mapping[str, str] | None = None) -> None:
-        """Write the outcome metadata and finish the file (idempotent)."""
-        self.writer.close(outcome)
+        """Write the outcome metadata and finish the file (idempotent; nothing if the
+        recording never started)."""
+        if self.writer is not None:
+            self.writer.close(outcome)

@@ -1,14 +1,15 @@
 """Every topic of an episode file: its name, schema, encoding, frame and units.
 
 This table is the episode format's contract (docs/EPISODES.md): the writer
-(``controller.episode.writer``) refuses a topic not listed here, and the reader
-(``controller.episode.reader``) decodes by it. Times: every message's MCAP ``log_time`` is
-the time on the **loop's clock** in integer nanoseconds (``t_s * 1e9``; in simulation the
-world's clock, on the robot ``time.monotonic``); a message's own ``t_s``/``timestamp`` field,
-where it has one, is when the value was measured (e.g. a frame's capture). Frames (docs/
-ARCHITECTURE.md): ``B`` the arm base, ``T`` the tool (TCP), ``S`` the tactile sensor, ``H``
-the hole. SI units unless a field's name says otherwise; the raw tactile estimate's units are
-the estimator's (mm, mm^2) unless ``calibrated``.
+(``controller.episode.writer``) writes these ``Topic`` objects, with these schemas, and the
+reader (``controller.episode.reader``) decodes by the schemas the file carries. Times: every
+message's MCAP ``log_time`` is the time on the **loop's clock** in integer nanoseconds
+(``t_s * 1e9``; in simulation the world's clock, on the robot ``time.monotonic``); a
+message's own ``t_s``/``timestamp`` field, where it has one, is when the value was measured
+(e.g. a frame's capture). Frames (docs/ARCHITECTURE.md): ``B`` the arm base, ``T`` the tool
+(TCP), ``S`` the tactile sensor, ``H`` the hole. SI units unless a field's name says
+otherwise; the raw tactile estimate's units are the estimator's (mm, mm^2) unless
+``calibrated``.
 
 Two encodings:
 
@@ -192,8 +193,8 @@ DROPS = Topic(
     "json",
     "",
     "when the queue overflowed, at most every flush",
-    "Records the writer dropped because its queue was full: ``dropped_total`` (since the "
-    "start) and ``by_topic`` (topic -> count since the start).",
+    "Records the writer dropped (its queue was full, or it could not encode the payload): "
+    "``dropped_total`` (since the start) and ``by_topic`` (topic -> count since the start).",
 )
 SIM_TRUTH = Topic(
     "/sim/truth",

@@ -9,7 +9,9 @@ readable (controller/episode/reader.py); ``repair`` finishes such a file.
 
 When the queue is full the record is dropped, not waited for: the drop is counted by topic,
 logged once per topic as a warning, written to ``/episode/drops`` at the next flush and to
-the ``outcome`` metadata at the end.
+the ``outcome`` metadata at the end. A record whose payload its encoder refuses (ValueError,
+TypeError: e.g. a NaN where JSON wants a number) is dropped and counted the same way, and
+the writer goes on.
 
 ``close(outcome)`` stops the thread after it has written everything queued, writes the
 ``outcome`` metadata and the file's summary and footer. A failure to write (a full disk)
@@ -118,6 +120,7 @@ class EpisodeWriter:
         self._sequence = itertools.count()
         self.dropped: Counter[str] = Counter()
         self._dropped_written = 0
+        self._last_ns = 0  # the newest log time written, ns
         self._flush_wanted = threading.Event()
         self._error: OSError | None = None
         self._closed = False
@@ -140,7 +143,8 @@ class EpisodeWriter:
             except queue.Full:
                 pass
         if not self.dropped[topic.name]:
-            log.warning("episode %s: queue full, dropping %s records", self.path, topic.name)
+            why = "queue full" if self._error is None and not self._closed else "writer stopped"
+            log.warning("episode %s: %s, dropping %s records", self.path, why, topic.name)
         self.dropped[topic.name] += 1
 
     def flush_soon(self) -> None:
@@ -196,8 +200,6 @@ class EpisodeWriter:
 
     # -- the logger thread -----------------------------------------------------------------
 
-    _last_ns = 0
-
     def _run(self) -> None:
         began = time.thread_time()
         next_flush = time.monotonic() + self.flush_interval_s
@@ -211,6 +213,7 @@ class EpisodeWriter:
                     return
                 if item is not None:
                     self._write(item)
+                    time.sleep(0)  # let a waiting loop thread take the GIL now, not in 5 ms
                 wanted = self._flush_wanted.is_set()
                 if wanted or time.monotonic() >= next_flush:
                     if wanted:
@@ -239,10 +242,16 @@ class EpisodeWriter:
 
     def _write(self, item: tuple[Topic, int, int, Encoder, Any]) -> None:
         topic, t_ns, sequence, encode, payload = item
+        try:
+            data = encode(payload)
+        except (ValueError, TypeError, OverflowError) as error:  # e.g. a NaN in a JSON field
+            if not self.dropped[topic.name]:
+                log.error("episode %s: dropping a %s record: %s", self.path, topic.name, error)
+            self.dropped[topic.name] += 1
+            return
         channel = self._channels.get(topic.name)
         if channel is None:
             channel = self._register(topic)
-        data = encode(payload)
         self._mcap.add_message(channel, t_ns, data, t_ns, sequence % 2**32)
         self._last_ns = max(self._last_ns, t_ns)
         for listener in tuple(self._listeners):

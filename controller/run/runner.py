@@ -92,9 +92,9 @@ def run_task(
     world to the wall clock (hardware always is); ``out_dir``: where the run's record goes
     (``RunRecorder``); ``observers``: more tick observers; ``prepare``: called with the built
     devices before they connect (e.g. a scripted gamepad); a ``DeviceSet`` it returns
-    replaces them (e.g. a real gamepad in the simulated world); ``episode``: an open episode
-    (controller/episode) that taps the wrench source and observes every tick; the caller
-    closes it with the outcome."""
+    replaces them (e.g. a real gamepad in the simulated world); ``episode``: the run's episode
+    (controller/episode), started once the devices are connected, that taps the wrench
+    source and observes every tick; the caller closes it with the outcome."""
     entry = controller_entry(controller, backend, controllers)
     if backend == "sim" and task.scene is None:
         raise ConfigError(f"{task.path}: the task was loaded without its scene (backend real)")
@@ -109,15 +109,16 @@ def run_task(
             device_set = replaced
     estimator = estimator_for_sensor(task.tactile_model, config.estimator)
     source = entry.wrench_source(estimator, device_set.world)
-    if episode is not None:
-        source = episode.tap(source, device_set.clock)
-        observers = [episode.observer(), *observers]
     machine = entry.machine(config)
     with ExitStack() as stack:
         connect_all(device_set.devices, stack)
         recorder = RunRecorder(out_dir) if out_dir is not None else None  # once connected
         if recorder is not None:
             stack.callback(recorder.close)
+        if episode is not None:  # once connected too; the caller closes it
+            episode.start()
+            source = episode.tap(source, device_set.clock)
+            observers = [episode.observer(), *observers]
         ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])
         device_set.devices.gripper.activate()
         began = time.perf_counter()

@@ -3,7 +3,7 @@
 
 * ``snapshot``: ``ViewSnapshot``, what the view draws for one tactile frame;
 * ``feed``: ``ViewFeed``, the episode writer's listener that builds the snapshots;
-* ``render``: drawing a snapshot on a pygame Surface (imports pygame);
+* ``view_drawing``: drawing a snapshot on a pygame Surface (imports pygame);
 * ``window``: ``LiveView``, the view's own process, its keys and screenshots;
 * ``live_stream``: ``FoxgloveLiveStream``, the episode's streams served over Foxglove's
   WebSocket protocol (foxglove-sdk).

@@ -110,7 +110,7 @@ def run_window(snapshots: Any, commands: Any, mapping: Sequence[str], out_dir: s
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     import pygame
 
-    from controller.view.render import SIZE, ViewState, draw
+    from controller.view.view_drawing import SIZE, ViewState, draw
 
     pygame.display.init()
     pygame.font.init()

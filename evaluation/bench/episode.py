@@ -1,11 +1,13 @@
 """The episode writer's targets (docs/EPISODES.md, docs/BENCHMARKS.md "Episodes"):
 
-1. **SIGKILL loss**: ``--kills`` times, a real-time simulated trial (``scripts/run_trial.py
-   --realtime``, the watchdog's overrun policy relaxed so a shared machine's hiccups do not
-   end it) is killed with SIGKILL at a uniformly random time 2..10 s after its episode
-   file appears; the loss is the kill's time on the loop's clock (the real-time trial's
-   clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus the newest record the
-   reader finds in the killed file;
+1. **SIGKILL loss**: ``--kills`` times, a real-time simulated trial
+   (evaluation/bench/episode_child.py, the watchdog's overrun policy relaxed so a shared
+   machine's hiccups do not end it) is killed with SIGKILL at a uniformly random time 2..10 s
+   after its episode file appears. The loss of records is the newest tick the loop had made
+   (its start, which the child keeps in shared memory) minus the newest record the reader
+   finds in the killed file, both on the loop's clock; the kill's own time (the real-time
+   trial's clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus that record
+   adds how far the loop itself lagged;
 2. **cost**: one long simulated trial in this process (as fast as possible, the search made
    to fail so it runs about 60 s of loop time): every ``EpisodeWriter.log`` call is timed
    (median, p99), and the writer thread's CPU time is divided by the trial's loop time (the
@@ -29,11 +31,14 @@ import random
 import shutil
 import signal
 import statistics
+import struct
 import subprocess
 import sys
 import tempfile
 import time
 from collections import Counter
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -45,7 +50,6 @@ from controller.run import load_task
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
-ROOT = Path(__file__).resolve().parents[2]
 RELAXED_OVERRUNS = (
     "loop.max_consecutive_overruns=100000",
     "loop.max_overruns_in_window=100000",
@@ -68,6 +72,7 @@ def main(argv: list[str] | None = None) -> int:
     work = Path(tempfile.mkdtemp(prefix="bench_episode_"))
     try:
         print(f"Machine: {describe_machine('the trial in one process, its writer thread')}\n")
+        realtime_cost(work, args.seed)
         episode = cost_and_size(work, args.seed)
         decode_all(episode)
         compare_libraries(episode, work)
@@ -79,19 +84,21 @@ def main(argv: list[str] | None = None) -> int:
 
 def kill_losses(work: Path, kills: int, seed: int) -> None:
     rng = random.Random(seed)
-    losses = []
+    losses, since_kill = [], []
     for i in range(kills):
         out = work / f"kill{i}"
-        command = [sys.executable, str(ROOT / "scripts" / "run_trial.py"), "--task", "usb_c",
-                   "--seed", str(seed * 1000 + i), "--realtime", "--out", str(out)]  # fmt: skip
-        for override in RELAXED_OVERRUNS:
-            command += ["--set", override]
+        mark = work / f"mark{i}"
+        mark.write_bytes(bytes(8))
+        command = [sys.executable, "-m", "evaluation.bench.episode_child", str(out), str(mark),
+                   str(seed * 1000 + i), *RELAXED_OVERRUNS]  # fmt: skip
         process = subprocess.Popen(
             command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
             env=dict(os.environ, MPLBACKEND="Agg"),
         )  # fmt: skip
         episode = out / EPISODE_FILE
         while not episode.exists():
+            if process.poll() is not None:
+                raise RuntimeError(f"the trial to kill ended first (exit {process.returncode})")
             time.sleep(0.01)
         time.sleep(rng.uniform(2.0, 10.0))
         killed_at = time.monotonic()
@@ -99,29 +106,33 @@ def kill_losses(work: Path, kills: int, seed: int) -> None:
         process.wait()
         ep = read_episode(episode)
         last = ep.time_range_s()[1]
-        losses.append(killed_at - last)
-        print(f"kill {i}: at {killed_at:.3f} s, newest record {last:.3f} s, "
-              f"lost {killed_at - last:.3f} s; read {ep.read_bytes} of "
-              f"{ep.size_bytes} B")  # fmt: skip
+        (made,) = struct.unpack("<d", mark.read_bytes())
+        losses.append(made - last)
+        since_kill.append(killed_at - last)
+        print(f"kill {i}: at {killed_at:.3f} s, newest tick made {made:.3f} s, newest record "
+              f"{last:.3f} s: lost {made - last:.3f} s of records ({killed_at - last:.3f} s "
+              f"before the kill); read {ep.read_bytes} of {ep.size_bytes} B, "
+              f"finished {ep.finished}")  # fmt: skip
     print(
-        f"\nSIGKILL loss over {kills} kills: median {statistics.median(losses):.3f} s, "
-        f"worst {max(losses):.3f} s\n"
+        f"\nSIGKILL loss of records over {kills} kills: median "
+        f"{statistics.median(losses):.3f} s, worst {max(losses):.3f} s; kill time minus the "
+        f"newest record: median {statistics.median(since_kill):.3f} s, worst "
+        f"{max(since_kill):.3f} s\n"
     )
 
 
-def cost_and_size(work: Path, seed: int) -> Path:
-    out = work / "long"
-    task = load_task("usb_c", LONG_TRIAL)
+@contextmanager
+def timed_writer() -> Iterator[tuple[list[float], list[float]]]:
+    """Time every ``EpisodeWriter.log`` call (s) and collect each closed writer's thread CPU
+    (s) while the block runs."""
     times: list[float] = []
-    original = EpisodeWriter.log
+    busy: list[float] = []
+    original, close = EpisodeWriter.log, EpisodeWriter.close
 
     def timed(self, topic, t_s, encode, payload):  # type: ignore[no-untyped-def]
         began = time.perf_counter()
         original(self, topic, t_s, encode, payload)
         times.append(time.perf_counter() - began)
-
-    busy: list[float] = []
-    close = EpisodeWriter.close
 
     def closing(self, outcome=None):  # type: ignore[no-untyped-def]
         close(self, outcome)
@@ -129,9 +140,47 @@ def cost_and_size(work: Path, seed: int) -> Path:
 
     EpisodeWriter.log, EpisodeWriter.close = timed, closing  # type: ignore[method-assign]
     try:
-        outcome = run(task, "dipole", seed, out_dir=out, episode=EpisodeOptions())
+        yield times, busy
     finally:
         EpisodeWriter.log, EpisodeWriter.close = original, close  # type: ignore[method-assign]
+
+
+def realtime_cost(work: Path, seed: int) -> None:
+    """A real-time trial with and without its episode: the enqueue times and the loop's
+    tick work and lateness."""
+    task = load_task("usb_c", RELAXED_OVERRUNS)
+    print(f"Real-time usb_c trial (seed {seed}), with and without the episode:")
+    print(
+        "| episode | ticks | tick work p50 / p99 / max, ms | tick lateness p99 / max, ms "
+        "| enqueue per record median / p99 / max, us | writer thread CPU per s of loop time |"
+    )
+    print("|---|---|---|---|---|---|")  # fmt: skip
+    for with_episode in (False, True):
+        out = work / f"realtime_{with_episode}"
+        with timed_writer() as (times, busy):
+            outcome = run(task, "dipole", seed, out_dir=out, realtime=True,
+                          episode=EpisodeOptions() if with_episode else None)  # fmt: skip
+        s = outcome.loop.stats
+        duration = s.ticks / task.config.loop.rate_hz
+        enqueue = np.array(times) * 1e6
+        enqueue_text = (
+            f"{np.median(enqueue):.1f} / {np.percentile(enqueue, 99):.1f} / {enqueue.max():.0f}"
+            if times
+            else "-"
+        )
+        cpu = f"{busy[0] / duration * 100:.2f} %" if busy else "-"
+        print(f"| {'yes' if with_episode else 'no'} | {s.ticks} | {s.work_p50_s * 1e3:.2f} / "
+              f"{s.work_p99_s * 1e3:.2f} / {s.work_max_s * 1e3:.2f} | "
+              f"{s.lateness_p99_s * 1e3:.2f} / {s.lateness_max_s * 1e3:.2f} | {enqueue_text} "
+              f"| {cpu} |")  # fmt: skip
+    print()
+
+
+def cost_and_size(work: Path, seed: int) -> Path:
+    out = work / "long"
+    task = load_task("usb_c", LONG_TRIAL)
+    with timed_writer() as (times, busy):
+        outcome = run(task, "dipole", seed, out_dir=out, episode=EpisodeOptions())
     path = out / EPISODE_FILE
     ep = read_episode(path)
     first, last = ep.time_range_s()

@@ -94,7 +94,7 @@ def bench(
             stack.callback(live.close)
         if episode:
             listeners = [] if live is None else [ViewFeed(live.offer, MINI_MM_PER_PX)]
-            recording = EpisodeRecording.open(
+            recording = EpisodeRecording(
                 Path(folder) / "episode.mcap", {}, task="bench", task_file="", overrides=(),
                 seed=0, controller="hold_still", backend="sim", listeners=listeners,
             )  # fmt: skip
@@ -130,6 +130,7 @@ def _run(
     source: WrenchSource = estimator_for_sensor("gelsight_mini")
     observer: Callable[[TickRecord], None] = records.append
     if recording is not None:
+        recording.start()
         source = recording.tap(source, clock)
         logger = recording.observer()
 

@@ -152,7 +152,7 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
 
         view = LiveView(mapping_lines(task), args.out)
         listeners.append(ViewFeed(view.offer, sensor_profile(task.tactile_model).mm_per_px))
-    recording = EpisodeRecording.open(
+    recording = EpisodeRecording(
         args.out / EPISODE_FILE,
         task.raw,
         task=task.config.task,

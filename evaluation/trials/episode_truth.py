@@ -5,6 +5,7 @@ world only (never ``sync``, so recording does not change the run)."""
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
@@ -12,47 +13,49 @@ import numpy as np
 from controller.episode import topics
 from controller.episode.foxglove_types import transforms_bytes
 from controller.episode.recorder import finite_or_none
-from controller.episode.writer import EpisodeWriter, json_bytes
+from controller.episode.session import EpisodeRecording
+from controller.episode.writer import json_bytes
 from controller.loop import TickRecord
 from drivers.sim.scenes.insertion.truth import COLUMNS
+
+_SLICES = {
+    name: slice(start, start + width)
+    for name, width, start in zip(
+        COLUMNS, COLUMNS.values(), np.cumsum([0, *COLUMNS.values()])[:-1], strict=True
+    )
+}
+"""Each column's place in a truth row."""
 
 
 def truth_json(row: np.ndarray) -> bytes:
     out: dict[str, Any] = {}
-    start = 0
-    for name, width in COLUMNS.items():
-        values = [finite_or_none(v) for v in row[start : start + width]]
-        out[name] = values[0] if width == 1 else values
-        start += width
+    values = [finite_or_none(v) for v in row.tolist()]
+    for name, where in _SLICES.items():
+        out[name] = values[where] if COLUMNS[name] > 1 else values[where.start]
     return json_bytes(out)
 
 
 def _truth_tf(item: tuple[np.ndarray, Any]) -> bytes:
     row, hole = item
-    named = dict(zip(COLUMNS, np.split(row, np.cumsum(list(COLUMNS.values()))[:-1]), strict=True))
-    w, x, y, z = named["plug_quat_b"]
+    values = row.tolist()
+    w, x, y, z = values[_SLICES["plug_quat_b"]]
     half = hole.yaw_rad / 2.0
     return transforms_bytes(
-        float(named["t_s"][0]),
+        values[0],
         [
-            ("B", "plug", named["tip_xyz_b"], np.array([x, y, z, w])),
-            (
-                "B",
-                "H",
-                np.array([hole.x_m, hole.y_m, hole.z_m]),
-                np.array([0.0, 0.0, np.sin(half), np.cos(half)]),
-            ),
+            ("B", "plug", values[_SLICES["tip_xyz_b"]], (x, y, z, w)),
+            ("B", "H", (hole.x_m, hole.y_m, hole.z_m), (0.0, 0.0, math.sin(half), math.cos(half))),
         ],
     )
 
 
 class SimTruthLogger:
-    """Queues the world's new truth rows into ``writer`` each tick; ``attach(world)`` (the
-    run path's ``prepare`` hook) gives it the world once built; ``drain()`` queues what is
-    left at the end (after the trial's final ``sync``)."""
+    """Queues the world's new truth rows into ``recording``'s writer each tick;
+    ``attach(world)`` (the run path's ``prepare`` hook) gives it the world once built;
+    ``drain()`` queues what is left at the end (after the trial's final ``sync``)."""
 
-    def __init__(self, writer: EpisodeWriter) -> None:
-        self.writer = writer
+    def __init__(self, recording: EpisodeRecording) -> None:
+        self.recording = recording
         self.world: Any = None
         self._seen = 0
 
@@ -64,12 +67,13 @@ class SimTruthLogger:
         self.drain()
 
     def drain(self) -> None:
-        if self.world is None:
+        writer = self.recording.writer
+        if self.world is None or writer is None:
             return
         truth = self.world.truth
         rows = truth.rows_since(self._seen)
         self._seen += len(rows)
         for row in rows:
             t_s = float(row[0])
-            self.writer.log(topics.SIM_TRUTH, t_s, truth_json, row)
-            self.writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole))
+            writer.log(topics.SIM_TRUTH, t_s, truth_json, row)
+            writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole))

@@ -90,7 +90,7 @@ def run(
     if out_dir is None:
         raise ValueError("episode: a trial writes its episode into out_dir; give one")
     out_dir.mkdir(parents=True, exist_ok=True)
-    recording = EpisodeRecording.open(
+    recording = EpisodeRecording(
         out_dir / EPISODE_FILE,
         task.raw,
         task=task.config.task,
@@ -130,7 +130,7 @@ def _run(
     recording: EpisodeRecording | None,
     run_options: dict[str, Any],
 ) -> TrialOutcome:
-    truth_logger = SimTruthLogger(recording.writer) if recording is not None else None
+    truth_logger = SimTruthLogger(recording) if recording is not None else None
     if truth_logger is not None:
         prepare = run_options.pop("prepare", None)
 

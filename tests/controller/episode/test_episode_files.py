@@ -101,3 +101,14 @@ def test_a_file_cut_inside_its_header_is_not_an_episode(tmp_path):
     cut.write_bytes(path.read_bytes()[:12])
     with pytest.raises(EpisodeError, match="not an MCAP file"):
         read_episode(cut)
+
+
+def test_a_record_its_encoder_refuses_is_dropped_and_counted_and_writing_goes_on(tmp_path):
+    writer = _writer(tmp_path / "e.mcap")
+    writer.log(LOOP_TICK, 0.0, json_bytes, {"index": 0, "start_s": 0.0, "phase": "x"})
+    writer.log(LOOP_TICK, 0.01, json_bytes, {"index": 1, "start_s": float("nan"), "phase": "x"})
+    writer.log(LOOP_TICK, 0.02, json_bytes, {"index": 2, "start_s": 0.02, "phase": "x"})
+    writer.close({"reason": "done"})
+    ep = read_episode(tmp_path / "e.mcap")
+    assert [m.value["index"] for m in ep.messages("/loop/tick")] == [0, 2]
+    assert ep.complete and ep.outcome["dropped_total"] == "1"

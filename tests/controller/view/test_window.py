@@ -10,7 +10,7 @@ import time  # noqa: E402
 import pygame  # noqa: E402
 
 from controller.view import window  # noqa: E402
-from tests.controller.view.test_render import snapshot  # noqa: E402
+from tests.controller.view.test_view_drawing import snapshot  # noqa: E402
 
 
 def test_offers_never_wait_and_the_view_process_ends_when_closed(tmp_path):

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from controller.episode import read_episode
 from core.config import CONFIG_ROOT, ConfigError
 from evaluation.common.cli_support import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
@@ -22,7 +23,7 @@ from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.records import keep_record, unfinished_record
 from evaluation.trials.result import TrialResult
-from evaluation.trials.spec import SpecError, TrialSpec, format_seeds, parse_seeds
+from evaluation.trials.spec import SeedSpecs, SpecError, TrialSpec, format_seeds, parse_seeds
 from evaluation.trials.summary import summarize, wilson_ci
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -389,6 +390,25 @@ def test_a_real_batch_keeps_each_trials_record_with_its_chart(tmp_path):
     record = out / "records" / "dipole-4"
     assert json.loads((record / "trial.json").read_text())["seed"] == 4
     assert (record / "summary.png").stat().st_size > 10000
+    assert not (record / "episode.mcap").exists()  # episodes are opt-in
+
+
+def test_a_batch_with_episodes_keeps_each_trials_episode_in_its_record(tmp_path):
+    out = tmp_path / "out"
+    code = batch_main(["--task", "usb_c", "--seeds", "4:5", "--episodes", "--out", str(out),
+                       "--set", "machine.timeouts.total_s=3.0"])  # fmt: skip
+    assert code == 0
+    episode = read_episode(out / "records" / "dipole-4" / "episode.mcap")
+    assert episode.complete and episode.info["seed"] == "4"
+    assert json.loads(episode.outcome["result"])["seed"] == 4
+    assert episode.counts["/loop/tick"] > 100 and episode.counts["/sim/truth"] > 100
+
+
+def test_an_episode_needs_a_record_folder():
+    with pytest.raises(SpecError, match="episode: a trial writes its episode into its out_dir"):
+        TrialSpec("usb_c", "dipole", 0, episode=True)
+    with pytest.raises(SpecError, match="episodes: each trial's episode goes into its record"):
+        SeedSpecs("usb_c", "dipole", range(2), episodes=True)
 
 
 def test_default_trial_function_is_the_real_runner():

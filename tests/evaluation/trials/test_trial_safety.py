@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from controller.episode import read_episode
 from controller.insertion import Phase
 from controller.run import CONTROLLERS, Controller, run_task
 from controller.run.task import load_task
@@ -126,6 +127,9 @@ def test_sigterm_during_a_trial_stops_safely_and_keeps_the_record(tmp_path):
     assert not summary["result"]["success"]
     ticks = (out / "ticks.jsonl").read_text().splitlines()
     assert ticks and all(json.loads(line) for line in ticks)  # every line whole
+    episode = read_episode(out / "episode.mcap")  # closed on SIGTERM, with its outcome
+    assert episode.complete and episode.outcome["reason"] == "signal"
+    assert episode.counts["/loop/tick"] == len(ticks)
 
 
 def test_a_wrong_size_frame_mid_trial_ends_as_a_fault_with_a_complete_record(tmp_path):

@@ -1,6 +1,6 @@
 """Benchmark: the teleop demo's live view and its stop after an unplug.
 
-1. **Drawing cost**: ``controller.view.render.draw`` plus the display flip, per frame, on
+1. **Drawing cost**: ``controller.view.view_drawing.draw`` plus the display flip, per frame, on
    ``--frames`` snapshots of the Mini's size (a 320 x 240 frame, the default estimator's
    16 x 12 field with its divergence, a history filling up to 10 s), in this process with
    SDL's dummy video driver unless ``SDL_VIDEODRIVER`` names another. The view process
@@ -62,8 +62,8 @@ def drawing_cost_ms(frames: int) -> np.ndarray:
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     import pygame
 
-    from controller.view.render import SIZE, ViewState, draw
     from controller.view.snapshot import ViewSnapshot
+    from controller.view.view_drawing import SIZE, ViewState, draw
 
     pygame.display.init()
     pygame.font.init()

@@ -8,7 +8,7 @@ import numpy as np  # noqa: E402
 import pygame  # noqa: E402
 import pytest  # noqa: E402
 
-from controller.view import render  # noqa: E402
+from controller.view import view_drawing as render  # noqa: E402
 from controller.view.snapshot import ViewSnapshot  # noqa: E402
 
 
