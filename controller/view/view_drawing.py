@@ -6,7 +6,7 @@ Layout (``SIZE`` = 1000 x 640 px)::
     +---------------- IMAGE ---------+----------- DIVERGENCE ------+-- BARS --+
     | tactile image, displacement    | div heat map (red +, blue -),| tau_x    |
     | arrows (ARROW colour)          | C+ and C- centroids, their   | tau_y    |
-    |                                | midpoint, the dipole arrow   | tau_z    |
+    |                                | midpoint, the dipole arrow p | tau_z    |
     +---------------------------------- PLOT ------------------------------------+
     | tau_x, tau_y, tau_z over the last 10 s (each scaled to its own range)     |
     +---------------------------------- STATUS ----------------------------------+
@@ -16,6 +16,12 @@ Each torque has its colour (``TAU_COLOURS``) in the bars and the plot; a bar's f
 is the largest magnitude of that torque in the plot's window (at least ``FLOOR``), printed
 beside it with the unit: N*mm when the estimate is calibrated, else the estimator's raw
 units (mm for tau_x, tau_y; mm^2 for tau_z), labelled "raw".
+
+The dipole arrow is the moment p the tilt torques come from (tau_x = c_x p_y,
+tau_y = -c_y p_x: controller/tactile/dipole.py), drawn from the centroids' midpoint in the
+image's axes (S's x right, y down), its length relative to the tilt bars' scale. It is the
+estimator's p, taken about its own origin (the grasp's contact by default), so with
+several regions of each sign it need not point from C- to C+.
 """
 
 from __future__ import annotations
@@ -44,6 +50,8 @@ PLOT = pygame.Rect(0, 310, 1000, 200)
 STATUS = pygame.Rect(0, 520, 1000, 120)
 PHASE_LABEL = pygame.Rect(10, 530, 300, 48)
 HISTORY_S = 10.0
+DIPOLE_PX = 120.0
+"""The dipole arrow's length (px) at the tilt bars' full scale."""
 
 BACKGROUND = (18, 18, 24)
 ARROW = (0, 255, 255)
@@ -93,9 +101,9 @@ def draw(surface: pygame.Surface, snapshot: ViewSnapshot, state: ViewState) -> N
     surface.fill(BACKGROUND)
     font = state.font(22)
     _image_panel(surface, snapshot)
-    _divergence_panel(surface, snapshot)
     scales = _scales(state)
-    _bars(surface, snapshot, scales, font)
+    _divergence_panel(surface, snapshot, scales)
+    _bars(surface, snapshot, scales, font, state.font(17))
     _plot(surface, state, scales, font)
     _status(surface, snapshot, state, font)
 
@@ -131,7 +139,9 @@ def _image_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
             pygame.draw.rect(surface, ARROW, (end[0] - 2, end[1] - 2, 4, 4))
 
 
-def _divergence_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
+def _divergence_panel(
+    surface: pygame.Surface, snapshot: ViewSnapshot, scales: Sequence[float]
+) -> None:
     pygame.draw.rect(surface, (40, 40, 48), DIVERGENCE)
     if snapshot.div is None:
         return
@@ -160,10 +170,19 @@ def _divergence_panel(surface: pygame.Surface, snapshot: ViewSnapshot) -> None:
         pygame.draw.circle(surface, (255, 255, 255), (cx, cy), 9)
         pygame.draw.circle(surface, colour, (cx, cy), 7)
     plus, minus = centroids
+    mid = None
     if plus is not None and minus is not None:
         mid = ((plus[0] + minus[0]) / 2, (plus[1] + minus[1]) / 2)
         pygame.draw.circle(surface, MIDPOINT, mid, 5)
-        _arrow(surface, DIPOLE, mid, (mid[0] + plus[0] - minus[0], mid[1] + plus[1] - minus[1]))
+    # the dipole moment the torques come from: tau_x = c_x p_y, tau_y = -c_y p_x (dipole.py)
+    tau_x, tau_y = snapshot.tau[0], snapshot.tau[1]
+    if math.isfinite(tau_x) and math.isfinite(tau_y) and (tau_x or tau_y):
+        start = mid if mid is not None else DIVERGENCE.center
+        p_x, p_y = -tau_y, tau_x
+        length = DIPOLE_PX * min(1.0, math.hypot(p_x, p_y) / max(scales[0], scales[1]))
+        norm = math.hypot(p_x, p_y)
+        end = (start[0] + length * p_x / norm, start[1] + length * p_y / norm)
+        _arrow(surface, DIPOLE, start, end)
 
 
 def _arrow(surface: pygame.Surface, colour: tuple[int, int, int], start: tuple[float, float],
@@ -192,7 +211,7 @@ def unit_label(index: int, calibrated: bool) -> str:
 
 
 def _bars(surface: pygame.Surface, snapshot: ViewSnapshot, scales: Sequence[float],
-          font: pygame.font.Font) -> None:  # fmt: skip
+          font: pygame.font.Font, small: pygame.font.Font) -> None:  # fmt: skip
     width = BARS.width // 3
     half = (BARS.height - 70) / 2
     zero_y = BARS.y + 30 + half
@@ -206,8 +225,8 @@ def _bars(surface: pygame.Surface, snapshot: ViewSnapshot, scales: Sequence[floa
             pygame.draw.rect(surface, TAU_COLOURS[k],
                              pygame.Rect(x, top, width - 16, max(abs(length), 2.0)))  # fmt: skip
         surface.blit(font.render(TAU_NAMES[k], True, TAU_COLOURS[k]), (x - 4, BARS.y + 4))
-        shown = f"{value * factor:+.2g}" if math.isfinite(value) else "n/a"
-        surface.blit(font.render(shown, True, TEXT), (x - 6, BARS.bottom - 38))
+        shown = f"{value * factor:+.1e}" if math.isfinite(value) else "n/a"
+        surface.blit(small.render(shown, True, TEXT), (x - 6, BARS.bottom - 38))
     units = f"{unit_label(0, snapshot.calibrated)} / {unit_label(2, snapshot.calibrated)}"
     surface.blit(font.render(units, True, TEXT), (BARS.x, BARS.bottom - 18))
 

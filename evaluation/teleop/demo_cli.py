@@ -37,6 +37,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from controller.episode import Episode, read_episode
 from controller.episode.session import EPISODE_FILE, EpisodeRecording
 from controller.insertion.teleop_only import TeleopOnlyMachine
 from controller.run import RunOutcome, run_task
@@ -55,6 +56,7 @@ from evaluation.common.cli_support import (
 )
 from evaluation.common.outputs import check_output_folder
 from evaluation.teleop.pad_script import load_pad_script
+from evaluation.teleop.signs import Manoeuvre, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
@@ -187,6 +189,8 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
         if stream is not None:
             stream.close()
     print(summary(outcome, view))
+    if script is not None and not args.autonomy:
+        print(sign_table(read_episode(args.out / EPISODE_FILE), manoeuvres(script)))
     print(f"teleop_demo: episode {args.out / EPISODE_FILE}")
     if outcome.loop.reason == "signal" and not quit_asked:
         return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
@@ -249,6 +253,18 @@ def mapping_lines(task: Task) -> list[str]:
              for action, b in config.axes.items()]  # fmt: skip
     lines.append(", ".join(f"{action}: {button}" for action, button in config.buttons.items()))
     return [" | ".join(lines[:2]), " | ".join(lines[2:4]), *lines[4:]]
+
+
+def sign_table(episode: Episode, script: list[Manoeuvre]) -> str:
+    """Each scripted manoeuvre, the torque it drives, the expected sign and the change
+    the episode recorded (docs/TELEOP.md, "Signs")."""
+    lines = ["manoeuvre (script s)          torque  expected  measured change  ok"]
+    for check in measured_signs(episode, script):
+        m = check.manoeuvre
+        lines.append(f"{m.action} {m.value:+.2f} ({m.start_s:5.1f}-{m.end_s:5.1f})"
+                     f"{'':8}{m.torque}  {m.expected_sign:+d}        {check.change:+.2e}"
+                     f"        {'yes' if check.ok else 'NO'}")  # fmt: skip
+    return "\n".join(lines)
 
 
 def summary(outcome: RunOutcome | None, view: Any) -> str:
