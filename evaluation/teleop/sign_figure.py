@@ -80,10 +80,7 @@ def _translation(ax: Axes) -> None:
     ax.text(2.6, 3.2, "gel's torque on the plug:\ntau_x > 0 (about +S x, out of page)",
             color=GEL, fontsize=9)  # fmt: skip
     _axes_key(ax, (-5.5, 7.5), "S z", "-S y (up)", "S x: out of page")
-    ax.set_xlim(-6.5, 7.5)
-    ax.set_ylim(-3.5, 10)
-    ax.set_aspect("equal")
-    ax.axis("off")
+    _frame(ax, (-6.5, 7.5), (-3.5, 10.0))
 
 
 def _rotation(ax: Axes) -> None:
@@ -107,7 +104,12 @@ def _rotation(ax: Axes) -> None:
     ax.text(-5.8, -4.3, "the gel turns the plug on: tau_y > 0 (about +S y, into the page)",
             color=GEL, fontsize=9)  # fmt: skip
     _axes_key(ax, (-5.5, 4.2), "S x", "S z", "S y: into page")
-    ax.set_xlim(-6.5, 6.5)
-    ax.set_ylim(-4.8, 6.2)
+    _frame(ax, (-6.5, 6.5), (-4.8, 6.2))
+
+
+def _frame(ax: Axes, xlim: tuple[float, float], ylim: tuple[float, float]) -> None:
+    """A drawing's extent (mm), equal scales, no axes."""
+    ax.set_xlim(*xlim)
+    ax.set_ylim(*ylim)
     ax.set_aspect("equal")
     ax.axis("off")

@@ -4,25 +4,19 @@ own pad path (``demo_cli._pad_preparation`` without a script puts the real pad i
 The joystick is moved from the loop's observer, so each change is seen at the next tick."""
 
 import pytest
-from pygame._sdl2 import controller as sdl_controller
 
 from controller.insertion import Phase
 from controller.run import load_task, run_task
-from drivers.gamepad.pad import init_sdl
 from evaluation.teleop import demo_cli
 from evaluation.teleop.demo_cli import TELEOP_CONTROLLER, _pad_preparation
-from tests.drivers.virtual_joystick import VirtualJoystick, load_pygame_sdl
+from tests.drivers.virtual_joystick import VirtualJoystick, pygame_sdl_or_skip
 
 FULL = 32767
 
 
 @pytest.fixture(scope="module")
 def sdl():
-    init_sdl()
-    lib = load_pygame_sdl()
-    if sdl_controller.get_count():
-        pytest.skip("a real joystick is attached; unplug it to run the virtual-device tests")
-    return lib
+    return pygame_sdl_or_skip()
 
 
 def script_for(joystick):
