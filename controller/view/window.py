@@ -65,7 +65,8 @@ class LiveView:
 
     def watch(self, on_command: Callable[[str], None]) -> None:
         """Call ``on_command`` with each key command the view sends ('rezero', 'quit',
-        'screenshot PATH'), on a thread of its own, until the view ends."""
+        'screenshot PATH', or 'error MESSAGE' if it could not open its window), on a thread
+        of its own, until the view ends."""
 
         def read() -> None:
             while True:
@@ -112,9 +113,13 @@ def run_window(snapshots: Any, commands: Any, mapping: Sequence[str], out_dir: s
 
     from controller.view.view_drawing import SIZE, ViewState, draw
 
-    pygame.display.init()
-    pygame.font.init()
-    screen = pygame.display.set_mode(SIZE)
+    try:
+        pygame.display.init()
+        pygame.font.init()
+        screen = pygame.display.set_mode(SIZE)
+    except pygame.error as error:  # no display: say so once, the run goes on without a view
+        commands.put(f"error {error}")
+        return
     pygame.display.set_caption("tactile-insertion: teleop live view")
     state = ViewState.new([*mapping, "keys: " + ", ".join(KEYS)])
     paused = False

@@ -224,6 +224,9 @@ def _on_view_command(machines: list[Any], quit_asked: list[bool]) -> Callable[[s
                 print("teleop_demo: re-zero: only without --autonomy (the machine re-zeroes)")
         elif command.startswith("screenshot "):
             print(f"teleop_demo: saved {command.split(' ', 1)[1]}")
+        elif command.startswith("error "):
+            print(f"teleop_demo: the view could not open its window ({command[6:]}); the "
+                  "demo goes on without it (--no-view to skip it)")  # fmt: skip
 
     return on_command
 

@@ -40,3 +40,18 @@ def test_a_screenshot_is_a_whole_png_named_in_order(tmp_path):
         assert [p.name for p in tmp_path.iterdir()] == ["screenshot-003.png"]
     finally:
         pygame.quit()
+
+
+def test_a_view_without_a_display_says_so_once_and_ends(tmp_path, monkeypatch):
+    monkeypatch.setenv("SDL_VIDEODRIVER", "no_such_driver")  # the view's process inherits it
+    view = window.LiveView([], tmp_path)
+    view.start()
+    commands = []
+    view.watch(commands.append)
+    deadline = time.monotonic() + 60.0
+    while view.alive and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)  # the watcher's last read
+    view.close()
+    assert len(commands) == 1 and commands[0].startswith("error ")
+    assert "no_such_driver" in commands[0]
