@@ -31,9 +31,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import os
 import signal
 from collections.abc import Callable
+from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
@@ -56,7 +58,7 @@ from evaluation.common.cli_support import (
 )
 from evaluation.common.outputs import check_output_folder
 from evaluation.teleop.pad_script import load_pad_script
-from evaluation.teleop.signs import Manoeuvre, manoeuvres, measured_signs
+from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
@@ -134,60 +136,58 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     machines: list[Any] = []
     table = controller_table(machines)
     controller = "dipole" if args.autonomy else TELEOP_CONTROLLER
-    stream = None
     listeners: list[Any] = []
-    if args.foxglove:
-        from controller.view.live_stream import FoxgloveLiveStream, LiveStreamError
-
-        try:
-            stream = FoxgloveLiveStream(args.foxglove_host, args.foxglove_port)
-        except LiveStreamError as error:
-            raise ToolError(str(error)) from None
-        listeners.append(stream)
-        print(f"teleop_demo: Foxglove live stream on {stream.url} (Open connection -> Foxglove "
-              "WebSocket; layout docs/foxglove/episode_layout.json)")  # fmt: skip
     view = None
     quit_asked: list[bool] = []
-    if args.view:
-        from controller.view.feed import ViewFeed
-        from controller.view.window import LiveView
+    with ExitStack() as stack:  # the view and the stream end after the recording has closed
+        if args.foxglove:
+            from controller.view.live_stream import FoxgloveLiveStream, LiveStreamError
 
-        view = LiveView(mapping_lines(task), args.out)
-        listeners.append(ViewFeed(view.offer, sensor_profile(task.tactile_model).mm_per_px))
-    recording = EpisodeRecording(
-        args.out / EPISODE_FILE,
-        task.raw,
-        task=task.config.task,
-        task_file=task.path,
-        overrides=task.overrides,
-        seed=args.seed,
-        controller=controller,
-        backend=args.backend,
-        listeners=listeners,
-    )
-    if view is not None:
-        view.start()
-        view.watch(_on_view_command(machines, quit_asked))
-    outcome: RunOutcome | None = None
-    try:
-        outcome = run_task(
-            task,
-            controller,
-            args.seed,
+            try:
+                stream = FoxgloveLiveStream(args.foxglove_host, args.foxglove_port)
+            except LiveStreamError as error:
+                raise ToolError(str(error)) from None
+            stack.callback(stream.close)
+            listeners.append(stream)
+            print(f"teleop_demo: Foxglove live stream on {stream.url} (Open connection -> "
+                  "Foxglove WebSocket; layout docs/foxglove/episode_layout.json)")  # fmt: skip
+        if args.view:
+            from controller.view.feed import ViewFeed
+            from controller.view.window import LiveView
+
+            view = LiveView(mapping_lines(task), args.out)
+            listeners.append(ViewFeed(view.offer, sensor_profile(task.tactile_model).mm_per_px))
+            view.start()
+            stack.callback(view.close)
+            view.watch(_on_view_command(machines, quit_asked))
+        recording = EpisodeRecording(
+            args.out / EPISODE_FILE,
+            task.raw,
+            task=task.config.task,
+            task_file=task.path,
+            overrides=task.overrides,
+            seed=args.seed,
+            controller=controller,
             backend=args.backend,
-            realtime=not args.fast,
-            controllers=table,
-            prepare=_pad_preparation(task, script),
-            episode=recording,
+            listeners=listeners,
         )
-    finally:
-        result = {"reason": outcome.loop.reason, "message": outcome.loop.message,
-                  "phase": outcome.loop.phase.value} if outcome is not None else {}  # fmt: skip
-        recording.close(result or {"error": "the demo raised"})
-        if view is not None:
-            view.close()
-        if stream is not None:
-            stream.close()
+        try:
+            outcome = run_task(
+                task,
+                controller,
+                args.seed,
+                backend=args.backend,
+                realtime=not args.fast,
+                controllers=table,
+                prepare=_pad_preparation(task, script),
+                episode=recording,
+            )
+        except BaseException as error:
+            recording.close({"error": f"{type(error).__name__}: {error}"})
+            raise
+        loop = outcome.loop
+        recording.close({"reason": loop.reason, "message": loop.message,
+                         "phase": loop.phase.value, "error": ""})  # fmt: skip
     print(summary(outcome, view))
     if script is not None and not args.autonomy:
         print(sign_table(read_episode(args.out / EPISODE_FILE), manoeuvres(script)))
@@ -239,9 +239,10 @@ def _pad_preparation(task: Task, script: Any) -> Callable[[registry.DeviceSet], 
         if device_set.world is None:
             return None
         if script is not None:
-            device_set.devices.gamepad.play(script)
+            twin: Any = device_set.devices.gamepad  # the simulated pad (drivers/sim/twins)
+            twin.play(script)
             return None
-        pad = registry.load_device(task.device_files["gamepad"], "real", kind="gamepad")
+        pad: Any = registry.load_device(task.device_files["gamepad"], "real", kind="gamepad")
         devices = dataclasses.replace(device_set.devices, gamepad=pad)
         return dataclasses.replace(device_set, devices=devices)
 
@@ -266,14 +267,19 @@ def sign_table(episode: Episode, script: list[Manoeuvre]) -> str:
         m = check.manoeuvre
         lines.append(f"{m.action} {m.value:+.2f} ({m.start_s:5.1f}-{m.end_s:5.1f})"
                      f"{'':8}{m.torque}  {m.expected_sign:+d}        {check.change:+.2e}"
-                     f"        {'yes' if check.ok else 'NO'}")  # fmt: skip
+                     f"        {verdict(check)}")  # fmt: skip
     return "\n".join(lines)
 
 
-def summary(outcome: RunOutcome | None, view: Any) -> str:
+def verdict(check: SignCheck) -> str:
+    """'yes', 'NO', or 'not reached' (the demo ended before the manoeuvre)."""
+    if math.isnan(check.change):
+        return "not reached"
+    return "yes" if check.ok else "NO"
+
+
+def summary(outcome: RunOutcome, view: Any) -> str:
     """The phase timeline, how the demo ended, and the loop's timing."""
-    if outcome is None:
-        return "teleop_demo: no outcome"
     lines = [f"{'t (s)':>8}  phase change (reason)"]
     lines += [f"{t.t_s:8.2f}  {t.source.value} -> {t.target.value} ({t.reason})"
               for t in outcome.transitions]  # fmt: skip

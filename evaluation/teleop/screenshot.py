@@ -14,6 +14,7 @@ picture of the sim demo is made this way (docs/TELEOP.md has the command).
 from __future__ import annotations
 
 import argparse
+import math
 import os
 from pathlib import Path
 from typing import Any
@@ -103,6 +104,14 @@ def snapshots_of(episode: Any, mm_per_px: float) -> list[ViewSnapshot]:
     return out
 
 
+def _torques(wrench: Any) -> tuple[float, float, float]:
+    """(tau_x, tau_y, tau_z) of a ``/tactile/wrench`` message, NaN for null."""
+    x, y, z = (
+        math.nan if wrench[k] is None else float(wrench[k]) for k in ("tau_x", "tau_y", "tau_z")
+    )
+    return x, y, z
+
+
 def _snapshot(wrench: Any, image: Any, grid: Any, tick: Any, teleop: Any,
               mm_per_px: float) -> ViewSnapshot:  # fmt: skip
     fields = x_mm = y_mm = None
@@ -118,7 +127,7 @@ def _snapshot(wrench: Any, image: Any, grid: Any, tick: Any, teleop: Any,
         u_mm=None if fields is None else fields["u_mm"],
         v_mm=None if fields is None else fields["v_mm"],
         div=None if fields is None else fields["div"],
-        tau=tuple(np.nan if wrench[k] is None else wrench[k] for k in ("tau_x", "tau_y", "tau_z")),
+        tau=_torques(wrench),
         calibrated=wrench.get("calibrated", False), phase=phase,
         operator=teleop.get("in_control", False), connected=teleop.get("connected", False),
         deadman=teleop.get("deadman", False),

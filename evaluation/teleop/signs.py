@@ -17,6 +17,7 @@ second after it starts to its end) against the second before it.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -52,7 +53,8 @@ class Manoeuvre:
 @dataclass(frozen=True)
 class SignCheck:
     """One manoeuvre, its torque's change (``change``: hold mean minus the mean before,
-    estimate units) and whether its sign is the expected one."""
+    estimate units; NaN if the episode does not cover it) and whether its sign is the
+    expected one."""
 
     manoeuvre: Manoeuvre
     change: float
@@ -92,6 +94,9 @@ def measured_signs(
         column = 1 if m.torque == "tau_x" else 2
         hold = (t >= m.start_s + SETTLE_S) & (t <= m.end_s)
         before = (t >= m.start_s - BEFORE_S) & (t < m.start_s)
+        if not (np.isfinite(data[hold, column]).any() and np.isfinite(data[before, column]).any()):
+            checks.append(SignCheck(m, math.nan))  # not in the episode (it ended before)
+            continue
         change = float(np.nanmean(data[hold, column]) - np.nanmean(data[before, column]))
         checks.append(SignCheck(m, change))
     return checks
