@@ -213,7 +213,6 @@ class EpisodeWriter:
                     return
                 if item is not None:
                     self._write(item)
-                    time.sleep(0)  # let a waiting loop thread take the GIL now, not in 5 ms
                 wanted = self._flush_wanted.is_set()
                 if wanted or time.monotonic() >= next_flush:
                     if wanted:

@@ -4,8 +4,8 @@
    (evaluation/bench/episode_child.py, the watchdog's overrun policy relaxed so a shared
    machine's hiccups do not end it) is killed with SIGKILL at a uniformly random time 2..10 s
    after its episode file appears. The loss of records is the newest tick the loop had made
-   (its start, which the child keeps in shared memory) minus the newest record the reader
-   finds in the killed file, both on the loop's clock; the kill's own time (the real-time
+   (its start, which the child keeps in shared memory) minus the newest ``/loop/tick`` record
+   the reader finds in the killed file, both on the loop's clock; the kill's own time (the real-time
    trial's clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus that record
    adds how far the loop itself lagged;
 2. **cost**: one long simulated trial in this process (as fast as possible, the search made
@@ -45,6 +45,7 @@ import numpy as np
 
 from controller.episode import read_episode
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
+from controller.episode.topics import LOOP_TICK
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
 from evaluation.common.machine_info import describe_machine
@@ -105,7 +106,7 @@ def kill_losses(work: Path, kills: int, seed: int) -> None:
         process.send_signal(signal.SIGKILL)
         process.wait()
         ep = read_episode(episode)
-        last = ep.time_range_s()[1]
+        last = max(m.t_s for m in ep.messages(LOOP_TICK.name))  # the newest tick on disk
         (made,) = struct.unpack("<d", mark.read_bytes())
         losses.append(made - last)
         since_kill.append(killed_at - last)
