@@ -27,12 +27,22 @@ import numpy as np
 from controller.run import load_task, run_task
 from core.sensor_profile import sensor_profile
 from drivers.sim.twins.gamepad import PadEvent
-from evaluation.common.cli_support import integer, run_tool
+from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.common.machine_info import describe_machine
 from evaluation.teleop import demo_cli
 
 UNPLUG_S = 4.0
 """When the pad is unplugged (s after the start; the grasp ends at about 2.3 s)."""
+BENCH_OVERRIDES = (
+    "machine.timeouts.total_s=10",
+    # a loaded machine cannot always keep the real-time simulation (physics and rendering) at
+    # 100 Hz: the overrun and stale-frame trips are lifted so that the unplug is what trips;
+    # the latency then includes whatever lateness the loop has
+    "loop.max_consecutive_overruns=100000",
+    "loop.max_overruns_in_window=100000",
+    "loop.overrun_window_ticks=100000",
+    "loop.tactile_max_age_s=5.0",
+)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -119,7 +129,7 @@ class _StopTimer:
 def stop_latencies_ms(runs: int) -> np.ndarray:
     """The unplug-to-stop latency (ms) of each of ``runs`` real-time demos."""
     args = demo_cli.build_parser().parse_args(["--no-view", "--out", "unused"])
-    task = load_task("usb_c", [*demo_cli.demo_overrides(args), "machine.timeouts.total_s=10"])
+    task = load_task("usb_c", [*demo_cli.demo_overrides(args), *BENCH_OVERRIDES])
     table = demo_cli.controller_table([])
     latencies = []
     for k in range(runs):
@@ -139,6 +149,7 @@ def stop_latencies_ms(runs: int) -> np.ndarray:
         outcome = run_task(task, demo_cli.TELEOP_CONTROLLER, 0, realtime=True,
                            controllers=table, prepare=prepare)  # fmt: skip
         if "gamepad" not in outcome.loop.message or noted["arm"].stopped_s is None:
-            raise RuntimeError(f"run {k}: expected a trip on the unplug, got {outcome.loop}")
+            raise ToolError(f"run {k}: expected a trip on the unplug, got "
+                            f"{outcome.loop.reason}: {outcome.loop.message}")  # fmt: skip
         latencies.append((noted["arm"].stopped_s - noted["start_s"] - unplug_s) * 1e3)
     return np.array(latencies)
