@@ -11,7 +11,8 @@
    latency is from the unplug to the arm's ``stop()`` (the watchdog's safe stop), both on
    the run's clock. One control period (10 ms) is the bound the issue sets.
 
-Run: ``.venv/bin/python scripts/bench_teleop.py [--frames 500] [--runs 10]``.
+Run: ``.venv/bin/python scripts/bench_teleop.py [--frames 500] [--runs 10]
+[--rt-priority 50]`` (the demo's loop under SCHED_FIFO; needs CAP_SYS_NICE).
 """
 
 from __future__ import annotations
@@ -49,13 +50,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--frames", type=integer(10, 100_000), default=500)
     parser.add_argument("--runs", type=integer(1, 1000), default=10)
+    parser.add_argument("--rt-priority", type=integer(1, 99), default=None,
+                        help="the demo's loop under SCHED_FIFO (loop.rt_priority)")  # fmt: skip
     args = parser.parse_args(argv)
-    return run_tool("bench_teleop", lambda: bench(args.frames, args.runs))
+    return run_tool("bench_teleop", lambda: bench(args.frames, args.runs, args.rt_priority))
 
 
-def bench(frames: int, runs: int) -> int:
+def bench(frames: int, runs: int, rt_priority: int | None = None) -> int:
     draw_ms = drawing_cost_ms(frames)
-    latency_ms = stop_latencies_ms(runs)
+    latency_ms = stop_latencies_ms(runs, rt_priority)
+    policy = "default scheduler" if rt_priority is None else f"SCHED_FIFO {rt_priority}"
+    print(f"the demo's loop: 100 Hz, {policy}\n")
     print("| measure | n | median | p99 | max |")
     print("|---|---:|---:|---:|---:|")
     for name, values in (("view: draw + flip per frame (ms)", draw_ms),
@@ -126,10 +131,11 @@ class _StopTimer:
         self._arm.__exit__(*exc)
 
 
-def stop_latencies_ms(runs: int) -> np.ndarray:
+def stop_latencies_ms(runs: int, rt_priority: int | None = None) -> np.ndarray:
     """The unplug-to-stop latency (ms) of each of ``runs`` real-time demos."""
     args = demo_cli.build_parser().parse_args(["--no-view", "--out", "unused"])
-    task = load_task("usb_c", [*demo_cli.demo_overrides(args), *BENCH_OVERRIDES])
+    priority = [] if rt_priority is None else [f"loop.rt_priority={rt_priority}"]
+    task = load_task("usb_c", [*demo_cli.demo_overrides(args), *BENCH_OVERRIDES, *priority])
     table = demo_cli.controller_table([])
     latencies = []
     for k in range(runs):
