@@ -356,8 +356,10 @@ class ControlLoop:
         trip = self.watchdog.check(
             now, frame_t_s=None, arm=None, gripper=None, teleop=teleop, errors=errors
         )
-        if trip is not None:
-            return "fault", self._fault(trip, self._last_observation, k, deadline, now)
+        if trip is not None:  # recorded with this tick's pad and the last other readings
+            last = self._last_observation
+            seen = None if last is None else dataclasses.replace(last, t_s=now, teleop=teleop)
+            return "fault", self._fault(trip, seen, k, deadline, now)
         frame = _read(devices.tactile.read_latest, errors, "tactile",
                       self.config.tactile_max_age_s)  # fmt: skip
         if isinstance(frame, TactileFrame) and frame.t_s != self._frame_t_s:
