@@ -11,9 +11,11 @@ same loop runs in real time (``core.clock.MonotonicClock``) or as fast as possib
 Tick order:
 
 1. wait for the deadline; stop if a signal arrived or ``max_duration_s`` has passed;
-2. read the newest tactile frame (``read_latest(tactile_max_age_s)``) and push it into the
-   estimator (a ``WrenchSource``) if it is new; read the arm, the gripper and the gamepad;
-   arbitrate the gamepad (``controller.teleop``);
+2. read the gamepad and arbitrate it (``controller.teleop``); a pad lost while the operator
+   is in control, or one whose read fails, trips at once (go to 7), before the tick's other
+   reads and the estimator's work; read the newest tactile frame
+   (``read_latest(tactile_max_age_s)``) and push it into the estimator (a ``WrenchSource``)
+   if it is new; read the arm and the gripper;
 3. the watchdog (``controller.safety.Watchdog``) checks the readings; on a trip go to 7;
 4. build the ``Observation`` and call ``machine.step``; a ``capture_open_tactile`` command
    has the estimator take the next ``rezero_frames`` frames as the open gel, a
@@ -345,6 +347,19 @@ class ControlLoop:
     def _tick(self, k: int, deadline: float, now: float) -> tuple[StopReason, str] | None:
         devices = self.devices
         errors: dict[str, Exception] = {}
+        # the pad first: a pad lost (or failing) while the operator drives stops the arm
+        # before the tick's other reads and the estimator's work
+        pad: GamepadState | None = None
+        if devices.gamepad is not None:
+            pad = _read(devices.gamepad.read, errors, "gamepad")
+        teleop = self.arbiter.update(pad) if devices.gamepad is not None else TeleopInput()
+        trip = self.watchdog.check(
+            now, frame_t_s=None, arm=None, gripper=None, teleop=teleop, errors=errors
+        )
+        if trip is not None:  # recorded with this tick's pad and the last other readings
+            last = self._last_observation
+            seen = None if last is None else dataclasses.replace(last, t_s=now, teleop=teleop)
+            return "fault", self._fault(trip, seen, k, deadline, now)
         frame = _read(devices.tactile.read_latest, errors, "tactile",
                       self.config.tactile_max_age_s)  # fmt: skip
         if isinstance(frame, TactileFrame) and frame.t_s != self._frame_t_s:
@@ -356,10 +371,6 @@ class ControlLoop:
         gripper = _read(devices.gripper.read_status, errors, "gripper")
         if gripper is not None:
             self._gripper_status = gripper
-        pad: GamepadState | None = None
-        if devices.gamepad is not None:
-            pad = _read(devices.gamepad.read, errors, "gamepad")
-        teleop = self.arbiter.update(pad) if devices.gamepad is not None else TeleopInput()
         if self._arm_status is not None and self._gripper_status is not None:
             self._last_observation = Observation(
                 now, self._wrench, self._arm_status, self._gripper_status, teleop

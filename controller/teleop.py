@@ -84,7 +84,8 @@ class TeleopArbiter:
         edges = {name: bool(buttons.get(name, False)) and not self._pressed[name]
                  for name in EDGE_BUTTONS}  # fmt: skip
         self._pressed = {name: bool(buttons.get(name, False)) for name in EDGE_BUTTONS}
-        deadman = bool(buttons.get("deadman", False)) or not self.config.require_deadman
+        held = bool(buttons.get("deadman", False))
+        deadman = held or not self.config.require_deadman
 
         linear = np.array([float(axes.get(a, 0.0)) for a in LINEAR_ACTIONS])
         angular = np.array([float(axes.get(a, 0.0)) for a in ANGULAR_ACTIONS])
@@ -116,6 +117,7 @@ class TeleopArbiter:
             hand_back=edges["hand_back"],
             estop=bool(buttons.get("estop", False)),
             estop_ack=edges["estop_ack"],
+            deadman=held,
         )
 
 

@@ -17,6 +17,7 @@ TOOLS = {
     "calibrate": "evaluation.offline.calibrate_cli",
     "check_hardware": "drivers.check_hardware",
     "replay": "evaluation.episodes.replay_cli",
+    "teleop_demo": "evaluation.teleop.demo_cli",
 }
 """Script name (scripts/NAME.py, command ``tactile-NAME`` with dashes) -> the tool's module."""
 
@@ -47,3 +48,7 @@ def check_hardware() -> NoReturn:
 
 def replay() -> NoReturn:
     run_main(TOOLS["replay"])
+
+
+def teleop_demo() -> NoReturn:
+    run_main(TOOLS["teleop_demo"])

@@ -117,6 +117,7 @@ def teleop_json(teleop: TeleopInput) -> bytes:
             "hand_back": teleop.hand_back,
             "estop": teleop.estop,
             "estop_ack": teleop.estop_ack,
+            "deadman": teleop.deadman,
         }
     )
 

@@ -24,7 +24,7 @@ import yaml
 
 from controller.episode.recorder import RecordingSource, TickLogger
 from controller.episode.topics import ATTACHMENT_CALIBRATION, ATTACHMENT_TASK, FORMAT_VERSION
-from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter
+from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter, Listener
 from controller.tactile.calibration import Calibration
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
@@ -76,7 +76,8 @@ def machine_description() -> str:
 
 class EpisodeRecording:
     """One run's episode (see the module doc): ``path``, the ``options``, and once started
-    the ``writer``."""
+    the ``writer``. ``listeners`` get every record as the writer writes it (``EpisodeWriter``;
+    the live view and the Foxglove live stream)."""
 
     def __init__(
         self,
@@ -91,10 +92,12 @@ class EpisodeRecording:
         backend: str,
         options: EpisodeOptions | None = None,
         calibration: Calibration | None = None,
+        listeners: Sequence[Listener] = (),
     ) -> None:
         options = options or EpisodeOptions()
         self.path = Path(path)
         self.options = options
+        self.listeners = tuple(listeners)
         self.writer: EpisodeWriter | None = None
         self._info = {
             "format_version": FORMAT_VERSION,
@@ -137,6 +140,7 @@ class EpisodeRecording:
             self._attachments,
             queue_size=self.options.queue_size,
             flush_interval_s=self.options.flush_interval_s,
+            listeners=self.listeners,
         )
         return self.writer
 

@@ -158,7 +158,8 @@ TELEOP = Topic(
     "The gamepad after arbitration (``controller.teleop``): ``connected``, ``in_control`` "
     "(true: the operator drives the arm; false: the machine), ``in_control_by`` ('operator' "
     "or 'machine'), ``twist_linear_m_s``, ``twist_angular_rad_s`` (the operator's TCP twist "
-    "in B), ``gripper_open``, ``gripper_close``, ``hand_back``, ``estop``, ``estop_ack``.",
+    "in B), ``gripper_open``, ``gripper_close``, ``hand_back``, ``estop``, ``estop_ack``, "
+    "``deadman`` (the deadman button held).",
 )
 TRANSITION = Topic(
     "/machine/transition",
@@ -335,7 +336,8 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "twist_angular_rad_s": _VEC3,
             **{
                 k: _BOOL
-                for k in ("gripper_open", "gripper_close", "hand_back", "estop", "estop_ack")
+                for k in ("gripper_open", "gripper_close", "hand_back", "estop", "estop_ack",
+                          "deadman")  # fmt: skip
             },
         },
         ("in_control", "in_control_by"),

@@ -28,7 +28,7 @@ import queue
 import threading
 import time
 from collections import Counter
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
@@ -58,12 +58,26 @@ LIBRARY = "tactile-insertion episode writer"
 
 Encoder = Callable[[Any], bytes]
 """Turns a payload into a message's bytes (run on the logger thread)."""
+Listener = Callable[[Topic, int, Any, bytes], None]
+"""Called on the logger thread with each record written: its topic, log time (ns), the
+loop's payload and the encoded message (the live view and the Foxglove live stream)."""
 
 
 def json_bytes(payload: Mapping[str, Any]) -> bytes:
     """A JSON topic's message: ``payload`` as compact JSON (NaN and inf are not allowed:
     the caller writes null)."""
     return json.dumps(payload, separators=(",", ":"), allow_nan=False).encode()
+
+
+def schema_of(topic: Topic) -> tuple[str, str, bytes]:
+    """``topic``'s schema as (name, encoding, data): our JSON Schema (``jsonschema``) or
+    Foxglove's protobuf FileDescriptorSet."""
+    if topic.encoding == "json":
+        return topic.schema, "jsonschema", json.dumps(JSON_SCHEMAS[topic.schema]).encode()
+    from controller.episode import foxglove_types
+
+    found = foxglove_types.schema(topic.schema)
+    return found.name, found.encoding, found.data
 
 
 _STOP = object()
@@ -74,8 +88,9 @@ class EpisodeWriter:
 
     ``info``: the ``episode`` metadata (controller/episode/topics.py, METADATA_EPISODE);
     ``attachments``: name -> (media type, bytes), e.g. the task file. ``queue_size``,
-    ``flush_interval_s``: see the module doc. Use it as a context manager, or call
-    ``close``.
+    ``flush_interval_s``: see the module doc. ``listeners``: each gets every record written,
+    on the logger thread (one that raises is logged and dropped). Use it as a context
+    manager, or call ``close``.
     """
 
     def __init__(
@@ -86,8 +101,10 @@ class EpisodeWriter:
         *,
         queue_size: int = QUEUE_SIZE,
         flush_interval_s: float = FLUSH_INTERVAL_S,
+        listeners: Sequence[Listener] = (),
     ) -> None:
         self.path = Path(path)
+        self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
         self._stream: IO[bytes] = self.path.open("xb")
         self._mcap = Writer(
@@ -236,6 +253,13 @@ class EpisodeWriter:
             channel = self._register(topic)
         self._mcap.add_message(channel, t_ns, data, t_ns, sequence % 2**32)
         self._last_ns = max(self._last_ns, t_ns)
+        for listener in tuple(self._listeners):
+            try:
+                listener(topic, t_ns, payload, data)
+            except Exception as error:  # a viewer's failure never stops the recording
+                log.error("episode %s: listener dropped: %s: %s", self.path,
+                          type(error).__name__, error)  # fmt: skip
+                self._listeners.remove(listener)
 
     def _write_drops(self, t_ns: int) -> None:
         total = self.dropped_total
@@ -246,14 +270,7 @@ class EpisodeWriter:
         self._write((DROPS, t_ns, next(self._sequence), json_bytes, payload))
 
     def _register(self, topic: Topic) -> int:
-        if topic.encoding == "json":
-            schema = json.dumps(JSON_SCHEMAS[topic.schema]).encode()
-            schema_id = self._mcap.register_schema(topic.schema, "jsonschema", schema)
-        else:
-            from controller.episode import foxglove_types
-
-            found = foxglove_types.schema(topic.schema)
-            schema_id = self._mcap.register_schema(found.name, found.encoding, found.data)
+        schema_id = self._mcap.register_schema(*schema_of(topic))
         channel = self._mcap.register_channel(topic.name, topic.encoding, schema_id)
         self._channels[topic.name] = channel
         return channel

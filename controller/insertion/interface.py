@@ -53,6 +53,8 @@ class TeleopInput:
     in B, zero unless in control. ``gripper_open`` / ``gripper_close``: the gripper buttons
     this tick. ``hand_back``: the hand-back button was pressed this tick. ``estop``: the
     e-stop button is held; ``estop_ack``: the acknowledge button was pressed this tick.
+    ``deadman``: the deadman button is held (for display and the record; the arbiter has
+    already zeroed the twist without it when the task requires it).
     """
 
     connected: bool = False
@@ -63,6 +65,7 @@ class TeleopInput:
     hand_back: bool = False
     estop: bool = False
     estop_ack: bool = False
+    deadman: bool = False
 
 
 @dataclass(frozen=True)

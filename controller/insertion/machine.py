@@ -31,6 +31,7 @@ from controller.insertion.interface import (
     GripperTarget,
     Observation,
     Phase,
+    TeleopInput,
     Transition,
 )
 from controller.insertion.machine_config import MachineConfig
@@ -171,7 +172,7 @@ class InsertionMachine:
         if self._phase in TERMINAL:
             self._fire("hold")
             return _hold()
-        if _has_fault(obs):
+        if has_fault(obs):
             return self._fail(obs, FailureReason.DEVICE_FAULT)
         if obs.teleop.estop and self._phase is not Phase.ESTOP:
             self._go(obs, Phase.ESTOP, "estop")
@@ -301,19 +302,7 @@ class InsertionMachine:
             self._go(obs, self._resume_phase(obs), "hand_back")
             return _hold()
         self._fire("operator")
-        limits = self.config.limits
-        twist = bounded_twist(
-            np.asarray(teleop.twist.linear_m_s),
-            np.asarray(teleop.twist.angular_rad_s),
-            limits.max_linear_speed_m_s,
-            limits.max_angular_speed_rad_s,
-        )
-        gripper = None
-        if teleop.gripper_close:
-            gripper = self._close_target()
-        elif teleop.gripper_open:
-            gripper = self._open_target(self.config.gripper.open_width_m)
-        return Command(twist=twist, gripper=gripper)
+        return operator_command(teleop, self.config)
 
     # -- phases ----------------------------------------------------------------------------
 
@@ -704,12 +693,40 @@ class InsertionMachine:
         return Command(twist=Twist(), gripper=gripper, capture_open_tactile=True)
 
     def _close_target(self) -> GripperTarget:
-        g = self.config.gripper
-        return GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n)
+        return close_target(self.config)
 
     def _open_target(self, width_m: float) -> GripperTarget:
-        g = self.config.gripper
-        return GripperTarget(width_m, g.open_speed_m_s, g.close_force_n)
+        return open_target(self.config, width_m)
+
+
+def close_target(config: MachineConfig) -> GripperTarget:
+    """The gripper's close command (``gripper.close_*``)."""
+    g = config.gripper
+    return GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n)
+
+
+def open_target(config: MachineConfig, width_m: float) -> GripperTarget:
+    """The gripper's open command to ``width_m`` (m)."""
+    g = config.gripper
+    return GripperTarget(width_m, g.open_speed_m_s, g.close_force_n)
+
+
+def operator_command(teleop: TeleopInput, config: MachineConfig) -> Command:
+    """The operator's command in TELEOP: the pad's twist (TCP, in B) bounded by the
+    machine's ``limits`` speeds, and a gripper target on a gripper button's press."""
+    limits = config.limits
+    twist = bounded_twist(
+        np.asarray(teleop.twist.linear_m_s),
+        np.asarray(teleop.twist.angular_rad_s),
+        limits.max_linear_speed_m_s,
+        limits.max_angular_speed_rad_s,
+    )
+    gripper = None
+    if teleop.gripper_close:
+        gripper = close_target(config)
+    elif teleop.gripper_open:
+        gripper = open_target(config, config.gripper.open_width_m)
+    return Command(twist=twist, gripper=gripper)
 
 
 def _hold() -> Command:
@@ -723,6 +740,6 @@ def _yaw_of(rotation: Rotation) -> float:
     return math.atan2(float(x_t[1]), float(x_t[0]))
 
 
-def _has_fault(obs: Observation) -> bool:
+def has_fault(obs: Observation) -> bool:
     """A device fault this tick: the loop's, the arm's error code or the gripper's."""
     return obs.fault is not None or obs.arm.error_code != 0 or obs.gripper.fault_code != 0

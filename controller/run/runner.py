@@ -92,7 +92,8 @@ def run_task(
     simulated world's seed (recorded only on hardware); ``realtime``: pace the simulated
     world to the wall clock (hardware always is); ``out_dir``: where the run's record goes
     (``RunRecorder``); ``observers``: more tick observers; ``prepare``: called with the built
-    devices before they connect (e.g. a scripted gamepad); ``episode``: the run's episode
+    devices before they connect (e.g. a scripted gamepad); a ``DeviceSet`` it returns
+    replaces them (e.g. a real gamepad in the simulated world); ``episode``: the run's episode
     (controller/episode), started once the devices are connected, that taps the wrench
     source and observes every tick; the caller closes it with the outcome."""
     entry = controller_entry(controller, backend, controllers)
@@ -104,7 +105,9 @@ def run_task(
         world = registry.WorldSpec(task.scene, config.plug, config.hole, seed, realtime)
     device_set = registry.build_device_set(task.device_files, backend, world)
     if prepare is not None:
-        prepare(device_set)
+        replaced = prepare(device_set)
+        if isinstance(replaced, registry.DeviceSet):
+            device_set = replaced
     estimator = estimator_for_sensor(task.tactile_model, config.estimator, task.calibration)
     source = entry.wrench_source(estimator, device_set.world, seed)
     machine = entry.machine(config)

@@ -207,6 +207,36 @@ def test_a_lost_gamepad_in_control_trips_the_watchdog(devices, clock):
     assert max(moving) > 0  # the operator drove the arm before the pad was lost
 
 
+class ReadSpy:
+    """Wraps the tactile sensor, noting the clock time of every ``read_latest``."""
+
+    def __init__(self, sensor, clock) -> None:
+        self._sensor, self._clock = sensor, clock
+        self.reads: list[float] = []
+
+    def __getattr__(self, name):
+        return getattr(self._sensor, name)
+
+    def read_latest(self, max_age_s):
+        self.reads.append(self._clock.now())
+        return self._sensor.read_latest(max_age_s)
+
+
+def test_a_lost_gamepad_stops_the_arm_before_the_ticks_other_reads(devices, clock):
+    devices.gamepad.play([PadEvent(0.05, axes={"vx": 0.5}), PadEvent(0.20, attached=False)])
+    tactile, arm = ReadSpy(devices.tactile, clock), StopSpy(devices.arm, clock)
+    records = []
+    result = make_loop(ScriptedMachine(takeover_machine),
+                       dataclasses.replace(devices, tactile=tactile), clock,
+                       observer=records.append, arm=arm).run()  # fmt: skip
+    tripped = records[-1]
+    assert result.reason == "fault" and tripped.fault is not None
+    assert not tripped.observation.teleop.connected  # the record shows the pad as read
+    assert arm.stops[0] == tripped.timing.start_s  # stopped in the tick that read the unplug
+    assert tripped.timing.start_s not in tactile.reads  # ... before reading the camera
+    assert tripped.timing.start_s - records[-2].timing.start_s == pytest.approx(0.01)
+
+
 def test_a_lost_gamepad_not_in_control_does_not_trip(devices, clock):
     devices.gamepad.play([PadEvent(0.05, attached=False)])
     result = make_loop(ScriptedMachine(takeover_machine, done_after=50), devices, clock).run()

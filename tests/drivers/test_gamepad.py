@@ -19,13 +19,13 @@ from core.config import ConfigError, build
 from core.errors import DeviceNotConnectedError
 from drivers.gamepad import AxisBinding, GamepadConfig, axis_value
 from drivers.gamepad.mapping import AXIS_NAMES, BUTTON_NAMES
-from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, PygameGamepad, init_sdl
+from drivers.gamepad.pad import AXIS_IDS, BUTTON_IDS, PygameGamepad
 from drivers.registry import load_device, load_device_config
 from tests.drivers.virtual_joystick import (
     VIRTUAL_AXES,
     VIRTUAL_BUTTONS,
     VirtualJoystick,
-    load_pygame_sdl,
+    pygame_sdl_or_skip,
 )
 
 XBOX_YAML = Path(__file__).resolve().parents[2] / "configs" / "gamepad" / "xbox.yaml"
@@ -39,11 +39,7 @@ def raw(unit: float) -> int:
 
 @pytest.fixture(scope="module")
 def sdl():
-    init_sdl()
-    lib = load_pygame_sdl()
-    if sdl_controller.get_count():
-        pytest.skip("a real joystick is attached; unplug it to run the virtual-device tests")
-    return lib
+    return pygame_sdl_or_skip()
 
 
 @pytest.fixture

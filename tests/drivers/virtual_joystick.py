@@ -102,6 +102,22 @@ def load_pygame_sdl() -> ctypes.CDLL:
     return lib
 
 
+def pygame_sdl_or_skip() -> ctypes.CDLL:
+    """Start pygame's SDL (``drivers.gamepad.pad.init_sdl``) and return its library for
+    virtual devices; skip the test if a real joystick is attached (it would be opened
+    first)."""
+    import pytest
+    from pygame._sdl2 import controller as sdl_controller
+
+    from drivers.gamepad.pad import init_sdl
+
+    init_sdl()
+    lib = load_pygame_sdl()
+    if sdl_controller.get_count():
+        pytest.skip("a real joystick is attached; unplug it to run the virtual-device tests")
+    return lib
+
+
 class VirtualJoystick:
     """One SDL virtual device, attached on ``attach()`` (or ``with``), removed on ``detach()``.
 

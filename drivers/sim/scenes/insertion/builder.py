@@ -8,7 +8,9 @@ twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realti
 
 * the SimArm, its configuration adapted to the scene through the config objects: it
   starts upright over the nominal hole, the plug's tip ``start_above_hole_m`` above the
-  board, turned to the nominal yaw; its envelope is the robot configuration's, unchanged
+  board, turned to the nominal yaw (or, with ``start_depth_m``, partly inserted in the
+  true hole, aligned with it: the teleoperated alignment demo's start); its envelope is
+  the robot configuration's, unchanged
   (a task whose insertion that envelope cannot reach is refused when it loads:
   ``core.envelope_checks``);
 * the SimGripper, its object width the plug's thickness;
@@ -97,10 +99,14 @@ def draw_hole(nominal: HolePose, uncertainty: HoleUncertainty, seed: int) -> Hol
 def scene_arm_config(
     arm: SimArmConfig, scene: InsertionSceneConfig, plug: PlugGeometry, hole: HolePose
 ) -> SimArmConfig:
-    """``arm`` starting over the nominal ``hole`` (its envelope unchanged)."""
-    start = upright_pose(
-        (hole.x_m, hole.y_m, hole.z_m + plug.length_m + scene.start_above_hole_m), hole.yaw_rad
+    """``arm`` starting upright over ``hole`` (its envelope unchanged): the tip
+    ``start_above_hole_m`` above it, or ``start_depth_m`` below its surface when set."""
+    tip_z_m = (
+        hole.z_m + scene.start_above_hole_m
+        if scene.start_depth_m is None
+        else hole.z_m - scene.start_depth_m
     )
+    start = upright_pose((hole.x_m, hole.y_m, tip_z_m + plug.length_m), hole.yaw_rad)
     (x, y, z), (roll, pitch, yaw) = start.xyz_m, start.rpy_rad
     sim = dataclasses.replace(
         arm.sim,
@@ -127,7 +133,9 @@ def build_insertion_sim(
     check_fits(scene, plug)
     hole = draw_hole(hole_nominal, scene.hole_uncertainty, seed)
     clock = SceneClock(MonotonicClock() if realtime else ManualClock())
-    arm_config = scene_arm_config(devices.arm, scene, plug, hole_nominal)
+    # the trials start over the nominal hole; the alignment demo (start_depth_m) in the true one
+    start_hole = hole_nominal if scene.start_depth_m is None else hole
+    arm_config = scene_arm_config(devices.arm, scene, plug, start_hole)
     start = arm_config.sim.start_pose
     arm = SimArm(arm_config, clock)
     gripper_sim = dataclasses.replace(devices.gripper.sim, object_width_m=plug.thickness_m)

@@ -121,8 +121,11 @@ class InsertionSceneConfig(Config):
     ``timestep_s``: the physics step. ``gripper_mass_kg``: the gripper body behind the
     wrist (its weight is compensated, as the arm's payload setting does). ``grip_*``: the
     tactile coupling (module ``coupling``). ``start_above_hole_m``: the SimArm starts
-    upright with the plug's tip this far above the nominal hole. ``truth_rate_hz``: rate
-    of the ground-truth record.
+    upright with the plug's tip this far above the nominal hole. ``start_depth_m``: None
+    (the trials' start, above the hole), or the teleoperated alignment demo's start: the
+    plug upright and aligned in the **true** hole, its tip this far below the board surface
+    (partly inserted; ``start_above_hole_m`` is then unused). ``truth_rate_hz``: rate of
+    the ground-truth record.
     """
 
     receptacle: ReceptacleConfig = ReceptacleConfig()
@@ -135,6 +138,7 @@ class InsertionSceneConfig(Config):
     timestep_s: float = number(1e-4, 0.005, default=0.0005)
     gripper_mass_kg: float = number(0.05, 10.0, default=0.9)
     start_above_hole_m: float = number(0.0, 0.3, default=0.03)
+    start_depth_m: float | None = number(0.0, 0.05, default=None)
     truth_rate_hz: float = number(1.0, 2000.0, default=100.0)
     tactile_appearance: str = "realistic"
 
@@ -159,6 +163,11 @@ class InsertionSceneConfig(Config):
                     f"key 'board.size_{axis}_m': expected more than the opening ({opening}), "
                     f"got {size!r}"
                 )
+        if self.start_depth_m is not None and self.start_depth_m >= self.receptacle.depth_m:
+            raise ValueError(
+                f"key 'start_depth_m': expected less than receptacle.depth_m "
+                f"({self.receptacle.depth_m}), got {self.start_depth_m!r}"
+            )
         if self.contact.solref[0] < 2.0 * self.timestep_s:
             raise ValueError(
                 f"key 'contact.solref': expected a time constant of at least twice "

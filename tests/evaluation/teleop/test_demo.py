@@ -1,0 +1,127 @@
+"""The scripted sim demo end to end (no view, as fast as the simulation goes): every
+manoeuvre's tilt torque has the documented sign, the episode records it all; bad input."""
+
+import pytest
+
+from controller.episode import read_episode
+from controller.view.live_stream import FoxgloveLiveStream
+from evaluation.teleop import demo_cli
+from evaluation.teleop.pad_script import load_pad_script
+from evaluation.teleop.signs import manoeuvres, measured_signs
+
+
+@pytest.fixture(scope="module")
+def demo(tmp_path_factory):
+    out = tmp_path_factory.mktemp("demo") / "out"
+    assert demo_cli.main(["--no-view", "--fast", "--out", str(out)]) == 0
+    return read_episode(out / "episode.mcap")
+
+
+def test_each_manoeuvre_gives_the_documented_tilt_torque_sign(demo):
+    script = manoeuvres(load_pad_script(demo_cli.DEFAULT_SCRIPT))
+    assert [m.action for m in script].count("vy") == 4 and [m.action for m in script].count(
+        "wz"
+    ) == 4
+    checks = measured_signs(demo, script)
+    assert all(c.ok for c in checks), [(c.manoeuvre, c.change) for c in checks]
+    translation = [abs(c.change) for c in checks if c.manoeuvre.action == "vy"]
+    assert min(translation) > 2e-4  # above the tilt channel's noise floor (raw mm)
+
+
+def test_the_episode_records_the_demo_grasp_teleop_and_the_deadman(demo):
+    transitions = [(m.value["from"], m.value["to"], m.value["reason"])
+                   for m in demo.messages("/machine/transition")]  # fmt: skip
+    assert transitions == [
+        ("grasp", "teleop", "grasped_and_zeroed"),
+        ("teleop", "done", "hand_back"),
+    ]
+    teleop = [m.value for m in demo.messages("/teleop/input")]
+    assert all(t["deadman"] for t in teleop)
+    assert any(t["in_control_by"] == "operator" for t in teleop)
+    assert demo.complete and demo.info["controller"] == "teleop"
+
+
+def test_a_taken_foxglove_port_is_one_line_and_exit_2(tmp_path, capsys):
+    taken = FoxgloveLiveStream(port=0)
+    try:
+        code = demo_cli.main(["--no-view", "--fast", "--foxglove", "--foxglove-port",
+                              str(taken.port), "--out", str(tmp_path / "o")])  # fmt: skip
+    finally:
+        taken.close()
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and f"127.0.0.1:{taken.port}" in err
+
+
+def test_a_bad_script_is_one_line_naming_the_event(tmp_path, capsys):
+    script = tmp_path / "pad.yaml"
+    script.write_text("events:\n  - {t_s: 1.0, axes: {vy: 2.0}}\n")
+    code = demo_cli.main(
+        ["--no-view", "--fast", "--script", str(script), "--out", str(tmp_path / "o")]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and "events[0]" in err and "axes.vy" in err and err.count("\n") == 1
+
+
+class QuittingView:
+    """Stands in for the view process: after ``after`` frames it sends 'rezero', then
+    'quit', as the window's keys would (from the writer's thread, as the real watcher's)."""
+
+    def __init__(self, mapping, out_dir, after=80):
+        self.offered, self.dropped, self.after = 0, 0, after
+        self.on_command = None
+        self.mapping = mapping
+
+    def start(self):
+        pass
+
+    def watch(self, on_command):
+        self.on_command = on_command
+
+    def offer(self, snapshot):
+        self.offered += 1
+        if self.offered == self.after:
+            self.on_command("rezero")
+        elif self.offered == self.after + 10:
+            self.on_command("quit")
+
+    def close(self):
+        pass
+
+
+def test_the_view_quitting_ends_the_demo_safely_with_exit_0(tmp_path, monkeypatch):
+    from controller.view import window
+
+    monkeypatch.setattr(window, "LiveView", QuittingView)
+    out = tmp_path / "out"
+    assert demo_cli.main(["--fast", "--out", str(out)]) == 0  # a view: QuittingView
+    episode = read_episode(out / "episode.mcap")
+    assert episode.outcome["reason"] == "signal"  # the loop's safe path, as Ctrl-C
+    calls = [m.value["call"] for m in episode.messages("/tactile/push")]
+    assert calls.count("rezero") == 2  # the grasp's, then the view's key
+    ends = max(m.t_s for m in episode.messages("/loop/tick"))
+    assert ends < 10.0  # long before the script's end (20.5 s)
+
+
+def test_with_autonomy_the_pad_overrides_and_hand_back_resumes_from_the_contact_state(tmp_path):
+    script = tmp_path / "pad.yaml"
+    script.write_text(
+        "events:\n"
+        "  - {t_s: 0.0, buttons: {deadman: true}}\n"
+        "  - {t_s: 6.0, axes: {vz: 0.5}}\n"  # up, off the board, during the search
+        "  - {t_s: 6.5, axes: {vz: 0.0}}\n"
+        "  - {t_s: 7.0, buttons: {hand_back: true}}\n"
+    )
+    out = tmp_path / "out"
+    args = ["--autonomy", "--no-view", "--fast", "--script", str(script), "--duration", "10"]
+    assert demo_cli.main([*args, "--out", str(out)]) == 0
+    episode = read_episode(out / "episode.mcap")
+    moves = [(m.value["from"], m.value["to"], m.value["reason"])
+             for m in episode.messages("/machine/transition")]  # fmt: skip
+    assert moves[:5] == [
+        ("grasp", "approach", "grasped_and_zeroed"),
+        ("approach", "search", "surface_contact"),
+        ("search", "teleop", "operator_takeover"),
+        ("teleop", "approach", "hand_back"),  # lifted clear of the board: no contact
+        ("approach", "search", "surface_contact"),  # autonomy carries on
+    ]
+    assert episode.info["controller"] == "dipole"
