@@ -10,8 +10,8 @@ file, the key and the command that fits it again.
 
 The grasp's scene is what the fit depends on: the task's ``scene:`` but the keys that place
 the world around the grasp (``OUTSIDE_THE_GRASP``: the board, the hole's draw, contacts and
-friction with the board, the wrist that carries the gripper, the start height and the
-truth's rate), the plug's geometry, the grip force and the tactile camera's file. So an
+friction with the board, the wrist that carries the gripper, the start height or depth and
+the truth's rate), the plug's geometry, the grip force and the tactile camera's file. So an
 easier or harder search (``--set scene.hole_uncertainty.yaw_rad=0``) keeps the calibration,
 and a change to the gel, the sensor or the grasp asks for a new one.
 """
@@ -36,6 +36,7 @@ OUTSIDE_THE_GRASP = (
     "contact",
     "wrist",
     "start_above_hole_m",
+    "start_depth_m",
     "truth_rate_hz",
 )
 """Keys of ``scene:`` that do not change the grasped plug's tactile response."""
