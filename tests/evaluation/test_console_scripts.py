@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_each_command_runs_the_tool_of_its_script():
     commands = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert len(commands) == len(console_scripts.TOOLS) == 7
+    assert len(commands) == len(console_scripts.TOOLS) == 8
     for command, target in commands.items():
         name = command.removeprefix("tactile-").replace("-", "_")
         assert target == f"evaluation.console_scripts:{name}" and callable(

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from mcap.reader import make_reader
 
 from controller.episode import TOPICS, decode_image, grid_arrays, read_episode
@@ -22,6 +23,7 @@ from controller.episode.repair import repair
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import load_task
 from controller.tactile import estimator_for_sensor
+from controller.tactile.calibration import Calibration
 from controller.tactile.wrench import VALUE_FIELDS
 from evaluation.trials.trial import run
 
@@ -98,7 +100,10 @@ def test_every_stream_round_trips(trial):
 def test_lossless_frames_re_estimate_the_logged_estimates_exactly(trial):
     task, _, out = trial
     ep = read_episode(out / EPISODE_FILE)
-    estimator = estimator_for_sensor(task.tactile_model, task.config.estimator)
+    attached = yaml.safe_load(ep.attachments["calibration.yaml"])
+    calibration = Calibration.from_document(attached, "calibration.yaml")
+    assert calibration == task.calibration  # the run's, applied to every logged estimate
+    estimator = estimator_for_sensor(task.tactile_model, task.config.estimator, calibration)
     images = ep.messages("/tactile/image")
     again = []
     for m in ep.messages("/tactile/push"):
