@@ -9,17 +9,21 @@ divergence d_t (on the field grid, the curl-free part's) is zero off the contact
 camera noise: on the contact it is a_t + b_t (x - c) (a press, a tilt). So per cell i:
 
     P_i = mean_t d_t,i^2                       its power over the recording
-    N_i = mean_t (d_t+1,i - d_t,i)^2 / 2       its noise power (frame-to-frame changes:
-                                               noise, mostly, for motion slower than the
-                                               frame rate; faster motion only raises N)
-    e_i = max(P_i / N_i - 1, 0)                 the excess power in noise units
+    C_i = mean_t (d_t+1,i - d_t,i)^2 / 2       its frame-to-frame change: the noise power,
+                                               plus the motion's share where the gel moves
+    N   = the 25th percentile of C over the cells: the noise floor (the camera noise is
+          about the same everywhere; most cells are off the contact, and motion only adds)
+    e_i = max(P_i / N - 1, 0)                  the excess power in noise units
 
 and the support is ``dipole.grasp_support`` of e (smoothstep of e relative to its largest
-value, 0 at or below 20%, 1 from 70%: the open gel's rule) with its centroid. Taken relative to
-the noise, a tilt across a contact's narrow side still stands out, where the power alone
-also weighs the noise of the cells off the contact (on tuning seed 100 of the real-gel
-check, R^2 0.81-0.96 against 0.46-0.86). A tilt alone is about antisymmetric about c and a
-push about uniform, so both put c at the contact's centre.
+value, 0 at or below 20%, 1 from 70%: the open gel's rule) with its centroid. Taken against
+the noise, a weak tilt across a contact's narrow side still finds the contact, where the
+relative power alone also weighs the cells off it; taken against each cell's own change,
+a low-noise gel (markers) whose motion dominates the changes spreads the support over the
+whole grid (on tuning seed 100 of the real-gel check, tilt alone: R^2 0.76-0.96 with N,
+0.46-0.86 with the power alone; the rendered GelSight marker recordings: 91% sign agreement
+with C_i, 100% with N). A tilt alone is about antisymmetric about c and a push about
+uniform, so both put c at the contact's centre.
 
 ``recording_fallback``: after a first pass over a recording without ``--open`` (the
 configured estimator, its field divergences collected), the estimator to estimate it again
@@ -51,6 +55,8 @@ SUPPORT_REASON = "no open gel given: the contact's support taken from the whole 
 UNGATED_REASON = "no open gel given and no press from the open gel in the recording"
 # Fewer frames leave too few frame-to-frame changes to tell the noise from the contact.
 MIN_FRAMES = 8
+# The percentile of the cells' frame-to-frame change taken as the noise floor.
+NOISE_PERCENTILE = 25.0
 
 
 def recording_support(
@@ -68,12 +74,11 @@ def recording_support(
     if len(stack) < MIN_FRAMES:
         return None
     power = np.square(stack).mean(axis=0)
-    noise = np.square(np.diff(stack, axis=0)).mean(axis=0) / 2.0
-    # A cell without frame-to-frame change (a still recording) has no noise to measure.
-    floor = float(noise.max()) * 1e-9
-    if not floor > 0.0:
+    change = np.square(np.diff(stack, axis=0)).mean(axis=0) / 2.0
+    noise = float(np.percentile(change, NOISE_PERCENTILE))
+    if not noise > 0.0:  # a still recording: no noise to measure against
         return None
-    excess = np.maximum(power / np.maximum(noise, floor) - 1.0, 0.0)
+    excess = np.maximum(power / noise - 1.0, 0.0)
     return grasp_support(excess, x_mm, y_mm) if float(excess.max()) > 0.0 else None
 
 

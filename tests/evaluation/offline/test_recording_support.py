@@ -49,9 +49,9 @@ def test_a_weak_tilt_alone_stands_out_of_the_noise_cell_by_cell():
     divergences, tilting = _recording(push=0.0, tilt=0.02, noise=0.02)
     support = recording_support(divergences, X_MM, Y_MM)
     assert support is not None
-    assert np.all(support.weights[CONTACT == 0] == 0.0)
-    assert support.weights[CONTACT == 1].sum() >= 4.0
-    assert support.centre_mm[1] == pytest.approx(CENTRE[1], abs=0.3)
+    assert support.weights[CONTACT == 0].sum() < 0.01
+    assert support.weights[CONTACT == 1].sum() >= 8.0
+    assert support.centre_mm == pytest.approx(CENTRE, abs=0.1)
     about_support = _tilt_x(divergences, support.weights, support.centre_mm[1])
     whole_grid = _tilt_x(divergences, np.ones_like(CONTACT), 0.0)
     assert np.corrcoef(about_support, tilting)[0, 1] > 0.97
