@@ -191,7 +191,8 @@ class TactileEstimator:
     @property
     def contact_centre_mm(self) -> tuple[float, float] | None:
         """The contact's centre (x, y) in mm, frame S, measured from the grasp against the
-        open gel when the reference was set; None without an open gel or contact."""
+        open gel when the reference was set, else the one given by ``set_contact_support``;
+        None without either (or without contact)."""
         support = None if self._pipeline is None else self._pipeline.grasp_dipole.support
         return None if support is None else support.centre_mm
 
