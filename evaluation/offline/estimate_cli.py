@@ -76,7 +76,7 @@ from evaluation.common.cli_support import (
 from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.common.quiet_decoding import read_image
 from evaluation.offline.open_gel import open_gel_doubt
-from evaluation.offline.recording_support import recording_fallback
+from evaluation.offline.recording_support import recording_fallback, uses_recording
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -375,7 +375,7 @@ def estimate_file(
 
     sidecar = fallback_sidecar(out_csv)
     choice = None
-    divergences = None if open_range is not None else []
+    divergences = [] if uses_recording(estimator, open_range is not None) else None
     with atomic_text(out_csv, newline="") as handle:
         count, problems = _write_rows(estimator, source, rate_hz, handle, divergences)
         if problems and not allow_damaged:

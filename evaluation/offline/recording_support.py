@@ -92,6 +92,13 @@ class FallbackChoice:
     message: str
 
 
+def uses_recording(estimator: TactileEstimator, open_given: bool) -> bool:
+    """Whether a first pass of ``estimator`` over a recording should collect its divergences
+    for ``recording_fallback``: no open gel given, and the tilt taken about the grasp's
+    support (``grasp_centroid``)."""
+    return not open_given and estimator.config.dipole_origin == "grasp_centroid"
+
+
 def recording_fallback(
     first: TactileEstimator,
     divergences: Sequence[np.ndarray],
@@ -104,7 +111,7 @@ def recording_fallback(
     take the tilt about the grasp's support, or neither a support nor the gate's rule
     applies). ``flow``: the new estimator's flow hook (``first``'s, for an experiment)."""
     config = first.config
-    if open_given or config.dipole_origin != "grasp_centroid":
+    if not uses_recording(first, open_given):
         return None
     ungated = first.noise_gated and first.noise_gate_peak < PRESS_RATIO
     support = None

@@ -23,7 +23,11 @@ from controller.tactile.estimator import GridFlowFactory, TactileEstimator
 from controller.tactile.flow import make_grid_flow
 from controller.tactile.settings import EstimatorConfig
 from core.sensor_profile import sensor_profile
-from evaluation.offline.recording_support import FallbackChoice, recording_fallback
+from evaluation.offline.recording_support import (
+    FallbackChoice,
+    recording_fallback,
+    uses_recording,
+)
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import TEXTURES
@@ -190,7 +194,7 @@ def run_one(
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])
     axis = 0 if spec.axis == "x" else 1
-    divergences: list[np.ndarray] | None = None if open_gel else []
+    divergences: list[np.ndarray] | None = [] if uses_recording(estimator, open_gel) else None
     tilt, fv, seconds, degenerate, zero, slip = _push_all(
         estimator, sequence, axis, fps, divergences
     )
