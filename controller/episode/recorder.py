@@ -20,21 +20,11 @@ from controller.insertion.interface import TeleopInput
 from controller.loop import TickRecord
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField
-from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
+from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS, WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
 from core.spatial import quaternion_from_rpy
-
-FLAG_FIELDS = (
-    "contact",
-    "degenerate",
-    "slip_suspected",
-    "slip_gross",
-    "rezero_recommended",
-    "zeroing",
-    "calibrated",
-)
 
 
 def finite_or_none(value: float) -> float | None:

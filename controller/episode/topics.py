@@ -26,6 +26,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS
+
 FORMAT_VERSION = "1"
 """The episode format's version (metadata ``episode.format_version``); a reader refuses
 another major version."""
@@ -246,32 +248,8 @@ JSON_SCHEMAS: Mapping[str, dict] = {
         {
             "t_s": _NUM,
             "push_index": _INT,
-            **{
-                k: _NUM_OR_NULL
-                for k in (
-                    "tau_x",
-                    "tau_y",
-                    "tau_z",
-                    "shear_x",
-                    "shear_y",
-                    "normal",
-                    "fv_tau_x",
-                    "fv_tau_y",
-                    "fv_tau_z",
-                )
-            },
-            **{
-                k: _BOOL
-                for k in (
-                    "contact",
-                    "degenerate",
-                    "slip_suspected",
-                    "slip_gross",
-                    "rezero_recommended",
-                    "zeroing",
-                    "calibrated",
-                )
-            },
+            **{k: _NUM_OR_NULL for k in VALUE_FIELDS},
+            **{k: _BOOL for k in FLAG_FIELDS},
         },
         ("t_s", "push_index", "tau_x", "tau_y", "tau_z"),
     ),  # fmt: skip
