@@ -49,7 +49,7 @@ log = logging.getLogger(__name__)
 
 NS_PER_S = 1_000_000_000
 QUEUE_SIZE = 4096
-"""Records the queue holds (about 4 s of a trial's records at the default rates)."""
+"""Records the queue holds (about 6 s of a simulated trial's 700 records a second)."""
 FLUSH_INTERVAL_S = 0.05
 """Every 0.05 s: half the 0.1 s a SIGKILL may lose, so that the writer's own latency on a
 loaded machine (its wake-up, writing the records queued since the last flush) fits in the
