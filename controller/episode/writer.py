@@ -208,7 +208,7 @@ class EpisodeWriter:
         topic, t_ns, sequence, encode, payload = item
         try:
             data = encode(payload)
-        except (ValueError, TypeError, OverflowError) as error:  # e.g. a NaN in a JSON field
+        except (ValueError, TypeError, OverflowError) as error:  # e.g. a value JSON cannot hold
             if not self.dropped[topic.name]:
                 log.error("episode %s: dropping a %s record: %s", self.path, topic.name, error)
             self.dropped[topic.name] += 1
