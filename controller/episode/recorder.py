@@ -26,7 +26,6 @@ from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
 from core.spatial import quaternion_from_rpy
 
-
 # -- the tick's messages (encoded on the writer's thread) ----------------------------------
 
 
