@@ -86,32 +86,32 @@ def main():
 """
 
 
+def _run_main_on(folder: Path, prog: str, source: str) -> subprocess.CompletedProcess:
+    """Run ``run_main`` as script ``prog`` on a tool module with ``source``, in a new process."""
+    (folder / f"{prog}_tool.py").write_text(source)
+    runner = (
+        f"import sys; sys.path[:0] = [{str(folder)!r}, {str(ROOT)!r}]; sys.argv = [{prog!r}]\n"
+        f"from core.entry_point import run_main\nrun_main('{prog}_tool')"
+    )
+    return subprocess.run([sys.executable, "-c", runner], capture_output=True, text=True, timeout=60)
+
+
 @pytest.mark.parametrize(
     "stop, code, word",
     [("KeyboardInterrupt", 130, "interrupted by SIGINT"), ("Terminated", 143, "ended by SIGTERM")],
 )
-def test_a_stop_lost_in_a_callback_is_sent_again_and_still_ends_the_tool(tmp_path, stop, code, word):
-    (tmp_path / "lossy_tool.py").write_text(LOSES_A_STOP.format(stop=stop))
-    runner = (
-        f"import sys; sys.path[:0] = [{str(tmp_path)!r}, {str(ROOT)!r}]; sys.argv = ['lossy']\n"
-        "from core.entry_point import run_main\nrun_main('lossy_tool')"
-    )
+def test_a_stop_lost_in_a_callback_is_sent_again_and_still_ends_the_tool(
+    tmp_path, stop, code, word
+):
     started = time.monotonic()
-    done = subprocess.run([sys.executable, "-c", runner], capture_output=True, text=True, timeout=60)
+    done = _run_main_on(tmp_path, "lossy", LOSES_A_STOP.format(stop=stop))
     assert done.returncode == code, done.stderr
     assert done.stderr.strip() == f"lossy: {word}"
     assert time.monotonic() - started < 15  # not after the 20 s of work
 
 
 def test_other_unraisable_exceptions_still_reach_the_previous_hook(tmp_path):
-    (tmp_path / "noisy_tool.py").write_text(
-        "class Drops:\n    def __del__(self):\n        raise ValueError('lost in __del__')\n"
-        "def main():\n    Drops()\n    return 0\n"
-    )
-    runner = (
-        f"import sys; sys.path[:0] = [{str(tmp_path)!r}, {str(ROOT)!r}]; sys.argv = ['noisy']\n"
-        "from core.entry_point import run_main\nrun_main('noisy_tool')"
-    )
-    done = subprocess.run([sys.executable, "-c", runner], capture_output=True, text=True, timeout=60)
+    tool = "class Drops:\n    def __del__(self):\n        raise ValueError('lost in __del__')\n"
+    done = _run_main_on(tmp_path, "noisy", tool + "def main():\n    Drops()\n    return 0\n")
     assert done.returncode == 0
     assert "Exception ignored" in done.stderr and "lost in __del__" in done.stderr
