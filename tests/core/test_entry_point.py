@@ -93,7 +93,8 @@ def _run_main_on(folder: Path, prog: str, source: str) -> subprocess.CompletedPr
         f"import sys; sys.path[:0] = [{str(folder)!r}, {str(ROOT)!r}]; sys.argv = [{prog!r}]\n"
         f"from core.entry_point import run_main\nrun_main('{prog}_tool')"
     )
-    return subprocess.run([sys.executable, "-c", runner], capture_output=True, text=True, timeout=60)
+    command = [sys.executable, "-c", runner]
+    return subprocess.run(command, capture_output=True, text=True, timeout=60)
 
 
 @pytest.mark.parametrize(
