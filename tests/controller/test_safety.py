@@ -97,9 +97,7 @@ def test_a_limited_pose_target_stays_in_the_box_the_cone_and_the_step(tcp, targe
     assert tilt_rad(out.pose.rpy_rad) <= LIMITS.max_tilt_rad + 1e-9
     step = np.linalg.norm(np.subtract(out.pose.xyz_m, tcp.xyz_m))
     assert step <= LIMITS.max_linear_speed_m_s * PERIOD + EPS
-    turn = (
-        rotation_from_rpy(out.pose.rpy_rad) * rotation_from_rpy(tcp.rpy_rad).inv()
-    )
+    turn = rotation_from_rpy(out.pose.rpy_rad) * rotation_from_rpy(tcp.rpy_rad).inv()
     assert turn.magnitude() <= LIMITS.max_angular_speed_rad_s * PERIOD + 1e-9
 
 

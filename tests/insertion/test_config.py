@@ -43,21 +43,42 @@ def test_the_example_loads_and_matches_the_code_defaults():
 @pytest.mark.parametrize(
     ("where", "value", "expected"),
     [
-        ("machine.search.pattern", "zigzag",
-         "key 'machine.search.pattern': expected one of 'spiral', 'raster', got 'zigzag'"),
-        ("machine.approach.contact_frames", 0,
-         "key 'machine.approach.contact_frames': expected an integer in [1, 100], got 0"),
-        ("machine.slip.policy", "retry",
-         "key 'machine.slip.policy': expected one of 'regrasp', 'fail', got 'retry'"),
-        ("plug.length_m", -0.01,
-         "key 'plug.length_m': expected a number in [0.005, 0.1], got -0.01"),
-        ("machine.signals.torque_axes", ["+x", "+x", "-y"],
-         "key 'machine.signals.torque_axes': expected each tool axis once"),
+        (
+            "machine.search.pattern",
+            "zigzag",
+            "key 'machine.search.pattern': expected one of 'spiral', 'raster', got 'zigzag'",
+        ),
+        (
+            "machine.approach.contact_frames",
+            0,
+            "key 'machine.approach.contact_frames': expected an integer in [1, 100], got 0",
+        ),
+        (
+            "machine.slip.policy",
+            "retry",
+            "key 'machine.slip.policy': expected one of 'regrasp', 'fail', got 'retry'",
+        ),
+        (
+            "plug.length_m",
+            -0.01,
+            "key 'plug.length_m': expected a number in [0.005, 0.1], got -0.01",
+        ),
+        (
+            "machine.signals.torque_axes",
+            ["+x", "+x", "-y"],
+            "key 'machine.signals.torque_axes': expected each tool axis once",
+        ),
         ("machine.signals.torque_axes", ["+x", "+z", "+y"], "right-handed frame"),
-        ("machine.insert.force_budget", 0.9,
-         "key 'machine.insert.force_budget': expected at most limits.force_limit (0.2)"),
-        ("machine.approach.tilt_rad", 0.6,
-         "key 'machine.approach.tilt_rad': expected less than limits.max_tilt_rad"),
+        (
+            "machine.insert.force_budget",
+            0.9,
+            "key 'machine.insert.force_budget': expected at most limits.force_limit (0.2)",
+        ),
+        (
+            "machine.approach.tilt_rad",
+            0.6,
+            "key 'machine.approach.tilt_rad': expected less than limits.max_tilt_rad",
+        ),
         ("machine.search.pitch_m", True, "key 'machine.search.pitch_m': expected a number"),
     ],
 )

@@ -25,7 +25,12 @@ def test_the_insertion_table_passes_and_names_every_failure_reason():
     check_definition(INSERTION)
     reasons = {e.guard for e in INSERTION.edges if e.target is Phase.FAILED}
     assert reasons == {
-        "timeout", "limit_exceeded", "slip", "contact_lost", "too_many_retries", "device_fault"
+        "timeout",
+        "limit_exceeded",
+        "slip",
+        "contact_lost",
+        "too_many_retries",
+        "device_fault",
     }
 
 

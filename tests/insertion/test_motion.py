@@ -51,8 +51,9 @@ def test_approach_rotation_tilts_by_the_angle_and_keeps_the_width_axis():
     rotation = approach_rotation(0.3, math.radians(15), "x")
     angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
     assert angle == pytest.approx(math.radians(15))
-    np.testing.assert_allclose(rotation.apply([1, 0, 0]), [math.cos(0.3), math.sin(0.3), 0],
-                               atol=1e-12)
+    np.testing.assert_allclose(
+        rotation.apply([1, 0, 0]), [math.cos(0.3), math.sin(0.3), 0], atol=1e-12
+    )
     # turning about the axis by the angle brings T z straight down
     upright = Rotation.from_rotvec(axis * angle) * rotation
     np.testing.assert_allclose(upright.apply([0, 0, 1]), [0, 0, -1], atol=1e-12)

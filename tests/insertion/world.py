@@ -128,14 +128,23 @@ class ToyWorld:
             t_s=self.t_s,
             wrench=self.last_estimate,
             arm=ArmStatus(
-                self.t_s, self.pose(), (math.nan,) * 6, ArmMode.VELOCITY, ArmState.READY,
+                self.t_s,
+                self.pose(),
+                (math.nan,) * 6,
+                ArmMode.VELOCITY,
+                ArmState.READY,
                 self.arm_error,
             ),
             gripper=GripperStatus(
-                self.t_s, True, moving,
-                GripperObject.MOVING if moving else (
-                    GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET),
-                self.gripper_width, self.gripper_fault, "fault" if self.gripper_fault else "",
+                self.t_s,
+                True,
+                moving,
+                GripperObject.MOVING
+                if moving
+                else (GripperObject.CONTACT_CLOSING if holding else GripperObject.AT_TARGET),
+                self.gripper_width,
+                self.gripper_fault,
+                "fault" if self.gripper_fault else "",
             ),
             teleop=self.teleop,
             fault=self.fault,
@@ -155,9 +164,7 @@ class ToyWorld:
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
         upright = float(np.dot(z_t, [0.0, 0.0, -1.0])) > math.cos(math.radians(2.0))
-        if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (
-            tip[2] < surface
-        ):
+        if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (tip[2] < surface):
             self.on_rim = True  # the upright plug stands on the rim: the board holds it
             in_region = False
             self.caught = False

@@ -20,10 +20,11 @@ from core.spatial import rotation_from_rpy, rpy_from_rotation
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.registry import load_device_config
 from drivers.sim.scenes.insertion import (
+    GraspPose,
     InsertionSceneConfig,
     SimDevices,
     build_insertion_sim,
-    draw_hole,
+    draw_scene,
 )
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
@@ -162,22 +163,58 @@ def test_tilt_torque_signs_when_the_tilted_tip_touches_the_surface(sign):
     assert -sign * tau[2] > 1e-3 and abs(tau[2]) > 5 * abs(tau[0])
 
 
-def test_the_hole_is_seeded_deterministic_and_within_the_uncertainty():
-    uncertainty = InsertionSceneConfig().hole_uncertainty
-    holes = [draw_hole(HOLE, uncertainty, seed) for seed in range(50)]
-    assert draw_hole(HOLE, uncertainty, 7) == holes[7]
-    assert draw_hole(HOLE, uncertainty, 8) != holes[7]
-    assert len({(h.x_m, h.y_m, h.yaw_rad) for h in holes}) == 50
-    offsets = np.array(
-        [(h.x_m - HOLE.x_m, h.y_m - HOLE.y_m, h.yaw_rad - HOLE.yaw_rad) for h in holes]
-    )
-    assert np.all(np.abs(offsets) <= [0.003, 0.003, math.radians(3.0)])
-    assert np.all(np.abs(offsets).max(axis=0) > [0.0025, 0.0025, math.radians(2.5)])
-    assert all(h.z_m == HOLE.z_m for h in holes)
+def test_every_draw_is_seeded_deterministic_and_within_its_range():
+    scene = InsertionSceneConfig()
+    draws = [draw_scene(HOLE, scene, seed) for seed in range(60)]
+    assert draw_scene(HOLE, scene, 7) == draws[7]
+    assert draw_scene(HOLE, scene, 8) != draws[7]
+    values = np.array(
+        [
+            (
+                d.hole.x_m - HOLE.x_m, d.hole.y_m - HOLE.y_m, d.hole.yaw_rad - HOLE.yaw_rad,
+                d.hole.z_m - HOLE.z_m, *d.board_tilt_rad,
+                d.grasp.tilt_x_rad, d.grasp.tilt_z_rad, d.grasp.along_m, d.grasp.across_m,
+            )
+            for d in draws
+        ]
+    )  # fmt: skip
+    d3, d1, d5 = math.radians(3.0), math.radians(1.0), math.radians(5.0)
+    ranges = np.array([0.003, 0.003, d3, 0.001, d1, d1, d5, d5, 0.002, 0.001])
+    assert np.all(np.abs(values) <= ranges)
+    assert np.all(np.abs(values).max(axis=0) > 0.85 * ranges)  # the ranges are used
+    assert len({tuple(row) for row in values}) == 60
     section = task("usb_c")
     sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=7)
-    assert sim.truth.hole == draw_hole(HOLE, section.scene.hole_uncertainty, 7)
+    assert sim.draw == draw_scene(HOLE, section.scene, 7)
+    assert sim.truth.hole == sim.draw.hole
     assert sim.truth.hole_nominal == HOLE
+
+
+def test_zero_ranges_give_the_nominal_board_and_grasp_and_keep_the_hole_draw():
+    scene = InsertionSceneConfig()
+    hard, nominal = draw_scene(HOLE, scene, 4), draw_scene(HOLE, easy(scene), 4)
+    assert nominal.board_tilt_rad == (0.0, 0.0) and nominal.hole.z_m == HOLE.z_m
+    assert nominal.grasp == GraspPose()
+    assert (nominal.hole.x_m, nominal.hole.y_m, nominal.hole.yaw_rad) == (
+        hard.hole.x_m, hard.hole.y_m, hard.hole.yaw_rad,
+    )  # fmt: skip
+
+
+def test_the_plug_sits_in_the_grasp_as_drawn():
+    section = task("usb_c")
+    plug = section.plug
+    grasp = GraspPose(tilt_x_rad=0.05, tilt_z_rad=-0.08, along_m=0.0015, across_m=-0.0007)
+    pose = upright_pose((0.40, 0.0, 0.1), 0.0)
+
+    def tip(g):
+        truth = TruthLog(HOLE, HOLE)
+        return InsertionPhysics(section.scene, plug, HOLE, pose, 0.0, truth, grasp=g).tip_xyz()
+
+    moved = tip(grasp) - tip(GraspPose())
+    # S in B for the upright tool at yaw 0: x_S = x_T = x_B, y_S = z_T = -z_B, z_S = -y_T = y_B
+    expected = grasp.place(np.array([0.0, plug.length_m, 0.0])) - np.array([0, plug.length_m, 0])
+    assert moved == pytest.approx([expected[0], expected[2], -expected[1]], abs=1e-9)
+    assert np.linalg.norm(moved) > 1e-3
 
 
 def _public_objects(root, depth=3):
@@ -221,9 +258,44 @@ def test_the_devices_and_the_clock_expose_no_truth():
     assert any(isinstance(o, InsertionPhysics) for o in _public_objects(sim.world))
 
 
-def test_a_grasped_plug_lowered_by_the_arm_inserts_and_the_frames_show_contact():
+def easy(scene: InsertionSceneConfig) -> InsertionSceneConfig:
+    """``scene`` with the board and the grasp nominal (the hole still drawn)."""
+    return dataclasses.replace(
+        scene,
+        board_uncertainty=dataclasses.replace(scene.board_uncertainty, height_m=0.0, tilt_rad=0.0),
+        grasp_uncertainty=dataclasses.replace(
+            scene.grasp_uncertainty, tilt_rad=0.0, along_m=0.0, across_m=0.0
+        ),
+    )
+
+
+def test_with_the_grasp_drawn_a_blind_upright_insertion_over_the_true_hole_fails():
+    # What the grasp's uncertainty is for: the arm's upright is not the plug's. Over the
+    # TRUE hole, the easy scene's move (next test) inserts; with seed 5's grasp (tilted
+    # -0.9 deg about x_S, -4.6 deg about z_S) the tip stops on the edge.
     section = task("usb_c")
     sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=5)
+    assert max(abs(sim.draw.grasp.tilt_x_rad), abs(sim.draw.grasp.tilt_z_rad)) > 0.03
+    for device in (sim.arm, sim.gripper):
+        device.connect()
+    sim.gripper.activate()
+    sim.gripper.move(0.0, 0.15, 40.0)
+    sim.clock.sleep(0.5)
+    hole, plug, depth = sim.truth.hole, section.plug, section.scene.receptacle.depth_m
+    above = upright_pose((hole.x_m, hole.y_m, hole.z_m + plug.length_m + 0.002), hole.yaw_rad)
+    sim.arm.move_to(above, 0.05)
+    bottom = upright_pose(
+        (hole.x_m, hole.y_m, hole.z_m + plug.length_m - depth - 0.001), hole.yaw_rad
+    )
+    sim.arm.move_to(bottom, 0.01)
+    sim.clock.sleep(0.3)
+    sim.sync()
+    assert sim.truth.arrays()["depth_m"][-1] < 0.5 * depth
+
+
+def test_a_grasped_plug_lowered_by_the_arm_inserts_and_the_frames_show_contact():
+    section = task("usb_c")
+    sim = build_insertion_sim(easy(section.scene), section.plug, HOLE, default_devices(), seed=5)
     for device in (sim.arm, sim.gripper, sim.tactile):
         device.connect()
     reference = sim.tactile.read_latest(1.0).image.astype(float)

@@ -114,11 +114,23 @@ def test_wilson_interval_known_values():
     assert wilson_ci(0, 0) is None
 
 
-def _result(seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0,
-            status=None):
+def _result(
+    seed, success, time_s=None, force=1.0, reason=None, duration=10.0, wall=1.0, status=None
+):
     status = status or ("inserted" if success else "failed")
-    return TrialResult("usb_c", "dipole", seed, success, status, reason, time_s, duration, force,
-                       FORCE_LIMIT_N, wall)
+    return TrialResult(
+        "usb_c",
+        "dipole",
+        seed,
+        success,
+        status,
+        reason,
+        time_s,
+        duration,
+        force,
+        FORCE_LIMIT_N,
+        wall,
+    )
 
 
 def test_summary_values():
@@ -333,8 +345,21 @@ def test_bad_inputs_found_before_any_trial_exit_2(tmp_path, capsys, args, messag
 
 
 def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, capsys):
-    assert batch_main(["--task", "usb_x", "--seeds", "0:2", "--out", str(tmp_path / "a"),
-                       "--trial-function", FAKE]) == 2
+    assert (
+        batch_main(
+            [
+                "--task",
+                "usb_x",
+                "--seeds",
+                "0:2",
+                "--out",
+                str(tmp_path / "a"),
+                "--trial-function",
+                FAKE,
+            ]
+        )
+        == 2
+    )
     assert "unknown task configuration 'usb_x'" in capsys.readouterr().err
     assert run_cli(tmp_path, "--seeds", "0:2") == 0
     assert run_cli(tmp_path, "--seeds", "0:2") == 2
@@ -342,8 +367,19 @@ def test_cli_refuses_an_unknown_task_and_a_folder_holding_a_batch(tmp_path, caps
 
 
 def test_records_give_each_trial_its_own_folder(tmp_path):
-    assert run_cli(tmp_path, "--seeds", "0:2", "--controller", "blind", "--records",
-                   "--trial-function", f"{__name__}:recording_trial") == 0
+    assert (
+        run_cli(
+            tmp_path,
+            "--seeds",
+            "0:2",
+            "--controller",
+            "blind",
+            "--records",
+            "--trial-function",
+            f"{__name__}:recording_trial",
+        )
+        == 0
+    )
     text = (tmp_path / "out" / "records" / "blind-1" / "spec.txt").read_text()
     assert "seed=1" in text and "controller='blind'" in text
 
@@ -408,8 +444,20 @@ def test_ray_missing_is_a_one_line_error(monkeypatch):
 def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     out = tmp_path / "cmp"
     code = compare_main(
-        ["--task", "usb_c", "--seeds", "0:6", "--controllers", "dipole,blind,oracle",
-         "--speeds", "0.01,0.02", "--out", str(out), "--trial-function", FAKE]
+        [
+            "--task",
+            "usb_c",
+            "--seeds",
+            "0:6",
+            "--controllers",
+            "dipole,blind,oracle",
+            "--speeds",
+            "0.01,0.02",
+            "--out",
+            str(out),
+            "--trial-function",
+            FAKE,
+        ]
     )
     assert code == 0
     for name in ("speed_success.png", "time_to_insert_0.01.png", "time_to_insert_0.02.png"):
@@ -429,16 +477,29 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
 
 def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
     with pytest.raises(SystemExit) as caught:
-        compare_main(["--task", "usb_c", "--seeds", "0:2", "--out", str(tmp_path),
-                      "--set", "machine.insert.speed_m_s=1", "--trial-function", FAKE])
+        compare_main(
+            [
+                "--task",
+                "usb_c",
+                "--seeds",
+                "0:2",
+                "--out",
+                str(tmp_path),
+                "--set",
+                "machine.insert.speed_m_s=1",
+                "--trial-function",
+                FAKE,
+            ]
+        )
     assert caught.value.code == 2
     assert "is the speed key" in capsys.readouterr().err
 
 
 def test_charts_with_an_empty_controller(tmp_path):
     summary = summarize([_result(0, True, 4.0), _result(1, False, reason="timeout")])
-    speed_success_chart({"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png",
-                        "speed", "t")
+    speed_success_chart(
+        {"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png", "speed", "t"
+    )
     time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
     assert (tmp_path / "a.png").stat().st_size > 1000
     assert (tmp_path / "b.png").stat().st_size > 1000
@@ -455,12 +516,23 @@ def test_an_unreachable_ray_address_is_a_quick_one_line_error(ray_available):
 
 def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
     out = tmp_path / "out"
-    code = (
-        "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
-    )
+    code = "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
     process = subprocess.Popen(
-        [sys.executable, "-c", code, "--task", "usb_c", "--seeds", "0:3", "--workers", "2",
-         "--out", str(out), "--trial-function", f"{__name__}:slow_trial"],
+        [
+            sys.executable,
+            "-c",
+            code,
+            "--task",
+            "usb_c",
+            "--seeds",
+            "0:3",
+            "--workers",
+            "2",
+            "--out",
+            str(out),
+            "--trial-function",
+            f"{__name__}:slow_trial",
+        ],
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},
         stdout=subprocess.PIPE,

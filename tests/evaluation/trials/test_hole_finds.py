@@ -76,8 +76,10 @@ def test_the_summary_counts_finds_by_place_and_end():
     [
         (["--task", "usb_c", "--seeds", "3:1"], "--seeds"),
         (["--task", "nope", "--seeds", "0:1"], "nope"),
-        (["--task", "usb_c", "--seeds", "0:1", "--set", "machine.search.pitch_m=-1"],
-         "machine.search.pitch_m"),
+        (
+            ["--task", "usb_c", "--seeds", "0:1", "--set", "machine.search.pitch_m=-1"],
+            "machine.search.pitch_m",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):

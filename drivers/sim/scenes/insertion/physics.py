@@ -1,9 +1,10 @@
 """The MuJoCo side of the insertion scene: the model, its stepping with the commanded TCP,
 the grasp's wrench and the ground truth.
 
-``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s)`` builds the model of
-``mjcf.scene_xml``. ``step_to(t_s, pose_t_s, pose)`` advances in fixed steps of
-``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
+``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s, truth, board_tilt_rad,
+grasp)`` builds the model of ``mjcf.scene_xml`` (the board tilted and the plug placed in
+the fingers as drawn; nominal by default). ``step_to(t_s, pose_t_s, pose)`` advances in
+fixed steps of ``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
 linear interpolation of the quaternion) from its last pose to ``pose`` reached at
 ``pose_t_s`` and held after it. Each step keeps the grasp's wrench in a ring buffer
 (``grasp_wrench_at``: the wrench at a past step, for the tactile frames) and the ground
@@ -25,6 +26,7 @@ import numpy as np
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
+from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
@@ -58,8 +60,11 @@ class InsertionPhysics:
         start_pose: Pose,
         t0_s: float,
         truth: TruthLog,
+        board_tilt_rad: tuple[float, float] = (0.0, 0.0),
+        grasp: GraspPose = NOMINAL_GRASP,
     ) -> None:
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene, plug, hole_true))
+        xml = scene_xml(scene, plug, hole_true, board_tilt_rad, grasp)
+        self.model = mujoco.MjModel.from_xml_string(xml)
         self.data = mujoco.MjData(self.model)
         self.dt_s = self.model.opt.timestep
         self._share = scene.gel_spring.load_share
