@@ -217,6 +217,20 @@ def test_the_plug_sits_in_the_grasp_as_drawn():
     assert np.linalg.norm(moved) > 1e-3
 
 
+def test_the_scene_camera_lags_at_least_one_frame():
+    section = task("usb_c")
+    sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=2)
+    asked = []
+    sim.tactile.set_field_source(lambda t_s: asked.append(t_s))
+    period = 1.0 / sim.tactile.config.frame_rate_hz
+    with sim.tactile:
+        for _ in range(50):
+            sim.clock.sleep(0.013)
+            frame = sim.tactile.read_latest(0.2)
+            assert frame.t_s - asked[-1] >= period - 1e-12
+    assert len(set(asked)) > 20
+
+
 def _public_objects(root, depth=3):
     """Every object reachable from ``root`` through public attributes (not through names
     starting with an underscore), ``depth`` levels deep."""
