@@ -228,7 +228,7 @@ def test_the_scene_camera_lags_at_least_one_frame():
             sim.clock.sleep(0.013)
             frame = sim.tactile.read_latest(0.2)
             assert frame.t_s - asked[-1] >= period - 1e-12
-    assert len(set(asked)) > 20
+    assert len(set(asked)) >= 15  # 0.65 s at 25 Hz
 
 
 def _public_objects(root, depth=3):

@@ -409,7 +409,7 @@ def test_a_frame_arrives_a_latency_after_its_jittered_capture(clock):
     with sensor:
         assert sensor.read_latest(0.1).t_s == pytest.approx(0.0)  # frame 0 arrives at once
         captures, arrivals = [], []
-        for k in range(1, 400):
+        for _ in range(1, 400):
             clock.advance(0.004)
             frame = sensor.read_latest(0.2)
             if frame.t_s != (arrivals or [0.0])[-1]:
