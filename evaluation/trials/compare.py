@@ -158,8 +158,10 @@ def write_comparison(
     for cell, batch in cells.items():
         series.setdefault(cell.controller, []).append((cell.speed, batch.summary))
     speed_success_chart(
-        series, out / SPEED_CHART, speed_key, f"{task}: success against insertion speed, "
-        f"seeds {seeds}"
+        series,
+        out / SPEED_CHART,
+        speed_key,
+        f"{task}: success against insertion speed, seeds {seeds}",
     )
     for speed in sorted({c.speed for c in cells}):
         times = {

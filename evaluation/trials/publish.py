@@ -143,8 +143,7 @@ def section_lines(page: str | None) -> list[str]:
         return lines + ["Not run yet: `make trials` writes docs/TRIALS.md, included here."]
     body = page.split("\n", 1)[1]  # without its title
     return lines + [
-        "From docs/TRIALS.md (`make trials`, a separate run, which also refreshes this "
-        "section):",
+        "From docs/TRIALS.md (`make trials`, a separate run, which also refreshes this section):",
         *("#" + line if line.startswith("## ") else line for line in body.splitlines()),
     ]
 

@@ -71,4 +71,3 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         else None,
     )
     return summary
-

@@ -161,8 +161,7 @@ def _summary(task, controller, seed, result, ran: RunOutcome) -> dict[str, Any]:
         "controller": controller,
         "seed": seed,
         "result": result.as_row(),
-        "loop": {"reason": loop.reason, "message": loop.message,
-                 **dataclasses.asdict(loop.stats)},
+        "loop": {"reason": loop.reason, "message": loop.message, **dataclasses.asdict(loop.stats)},
         "transitions": [
             {"t_s": tr.t_s, "from": tr.source.value, "to": tr.target.value, "reason": tr.reason}
             for tr in ran.transitions

@@ -45,8 +45,16 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
     for ax in (torque_ax, force_ax):
         for start, end, phase in _phase_spans(ticks):
             ax.axvspan(start, end, color=PHASE_COLOURS.get(phase, "white"), lw=0)
-            ax.text((start + end) / 2, 1.0, phase, transform=ax.get_xaxis_transform(),
-                    ha="center", va="bottom", fontsize=7, rotation=30)
+            ax.text(
+                (start + end) / 2,
+                1.0,
+                phase,
+                transform=ax.get_xaxis_transform(),
+                ha="center",
+                va="bottom",
+                fontsize=7,
+                rotation=30,
+            )
     estimated = [tick for tick in ticks if "estimate" in tick]
     t_est = np.array([tick["t_s"] for tick in estimated])
     for key, label in (("tau_x", "tau_x"), ("tau_y", "tau_y"), ("tau_z", "tau_z / 10")):
@@ -58,8 +66,14 @@ def trial_chart(folder: Path, path: Path, title: str) -> None:
     t = truth["t_s"]
     force = np.linalg.norm(truth["wrist_wrench_t"][:, :3], axis=1)
     force_ax.plot(t, force, color="k", lw=1, label="|wrist force| (truth)")
-    force_ax.plot(t, truth["contact_force_n"], color="tab:red", lw=0.6, alpha=0.6,
-                  label="plug contact force (truth)")
+    force_ax.plot(
+        t,
+        truth["contact_force_n"],
+        color="tab:red",
+        lw=0.6,
+        alpha=0.6,
+        label="plug contact force (truth)",
+    )
     force_ax.set_ylabel("N")
     force_ax.set_xlabel("time (s)")
     force_ax.legend(loc="upper left", fontsize=8)

@@ -26,8 +26,11 @@ Bodies and frames (every name below is looked up by name in ``physics``):
   at the body's origin, carrying the force/torque sensors of the grasp (the gripper's wrench
   on the plug in S's axes about the grasp point), ``tip`` at the plug's tip on its axis.
 
-MuJoCo does the rigid contacts (pyramidal friction cones, ``contact`` solref/solimp), the
-joint springs and the integration (``implicitfast``); nothing here is a solver.
+MuJoCo does the rigid contacts (elliptic friction cones, ``contact`` solref/solimp), the
+joint springs and the integration (``implicitfast``); nothing here is a solver. Elliptic,
+not pyramidal, cones: at 0.5 ms steps a plug dragged over the board under pyramidal cones
+chattered (its contact force swinging by 28 % of the mean at 133 Hz); see
+docs/SIMULATION.md, "Contact artefacts".
 """
 
 from __future__ import annotations
@@ -179,7 +182,7 @@ def scene_xml(
     return f"""
 <mujoco model="insertion">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{scene.timestep_s:.9g}" integrator="implicitfast" cone="pyramidal"/>
+  <option timestep="{scene.timestep_s:.9g}" integrator="implicitfast" cone="elliptic"/>
   <worldbody>
     <body name="board" pos="{_vec((hole_true.x_m, hole_true.y_m, hole_true.z_m))}"
           quat="{_vec(board_quat)}">

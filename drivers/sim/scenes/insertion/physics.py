@@ -27,7 +27,7 @@ import numpy as np
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
-from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
+from drivers.sim.scenes.insertion.frames import S_IN_T, quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TruthLog
@@ -73,6 +73,8 @@ class InsertionPhysics:
         m = self.model
         self._tip = m.site("tip").id
         self._plug = m.body("plug").id
+        self._gripper = m.body("gripper").id
+        self._condim = int(m.geom("plug").condim[0])
         force = m.sensor_adr[m.sensor("gel_force").id]
         if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
@@ -125,17 +127,19 @@ class InsertionPhysics:
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
         ring, n_ring = self._ring, len(self._ring)
         grasp, sensors = self._grasp, d.sensordata
-        every = self._truth_every
+        every, condim = self._truth_every, self._condim
         for i in range(n):
+            if self.released:
+                self._leave_plug(positions[i])
             d.mocap_pos[0] = positions[i]
             d.mocap_quat[0] = quats[i]
             mujoco.mj_step(m, d)
             self._steps += 1
             ring[self._steps % n_ring] = sensors[grasp]
-            if d.nefc:
-                # Pyramidal cones: a contact's normal force is the sum of its edges' forces,
-                # and every constraint row of this model is a contact's.
-                total = float(d.efc_force[: d.nefc].sum())
+            if d.ncon:
+                # Elliptic cones: a contact's rows are its normal force, then its friction;
+                # the contacts' rows come last, and every contact has the plug's condim.
+                total = float(d.efc_force[d.nefc - d.ncon * condim : d.nefc : condim].sum())
                 if total > self._peak_force_n:
                     self._peak_force_n = total
             if self._steps % every == 0:
@@ -170,6 +174,18 @@ class InsertionPhysics:
         self.model.jnt_stiffness[self._gel_j] = 0.0
         self.model.dof_damping[self._gel_v] = _RELEASED_DAMPING
         self.released = True
+
+    def _leave_plug(self, tcp_xyz: np.ndarray) -> None:
+        """Keep a released plug where it is as the TCP moves: MuJoCo moves a mocap body by
+        setting its position, which carries its children along without a velocity, so the
+        free plug (its joints are relative to the gripper) would be lifted with every step
+        of the retracting arm and knocked back by the board (the resting plug's contact
+        force then peaked at 16 times its weight). The gel's slide joints take up the TCP's
+        translation; its rotation (the arm holds its orientation while retracting) is not
+        taken up."""
+        d = self.data
+        axes = d.xmat[self._gripper].reshape(3, 3) @ S_IN_T  # the slides' axes in B
+        d.qpos[self._gel_q[:3]] -= axes.T @ (tcp_xyz - d.mocap_pos[0])
 
     def grasp(self) -> None:
         """The fingers close on the plug where it is: the gel spring's rest is its pose."""
