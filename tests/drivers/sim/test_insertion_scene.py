@@ -220,18 +220,23 @@ def test_an_unstable_physics_is_an_error_not_a_silent_reset(tmp_path, monkeypatc
 
 @pytest.mark.parametrize("sign", (1.0, -1.0))
 def test_tilt_torque_signs_when_the_tilted_tip_touches_the_surface(sign):
-    """Documented in docs/SIMULATION.md: the tip's lowest edge (opposite its swing) takes the
-    surface's push up the plug's axis. Tilted about x_S = x_T with the tip swung toward +z_S
-    (away from the gel): tau_x > 0. Tilted about T's y with the tip swung toward +x_S:
-    tau_z < 0."""
-    away = 0.01  # beside the hole, on the board
-    truth, _ = lower("usb_c", -away, (sign * 0.15, 0.0, 0.0), below_m=0.002)
+    """Documented in docs/SIMULATION.md, "What the torques mean here": without friction the
+    board pushes straight up at the tip's lowest edge (opposite its swing), and the gel's
+    torque about the grasp point is that edge's lever crossed with the gel's force. Tilted
+    about x_S = x_T with the tip swung toward +z_S: tau_x = L f_z + (t / 2) f_y, negative
+    (the plug's length, not its half-thickness, is the longer lever at 0.15 rad); tilted
+    about T's y with the tip swung toward +x_S: tau_z = -(w / 2) f_y - L f_x, negative."""
+    plug = task("usb_c").plug
+    length, half_t, half_w = plug.length_m, plug.thickness_m / 2, plug.width_m / 2
+    truth, _ = lower("usb_c", -0.01, (sign * 0.15, 0.0, 0.0), below_m=0.002, friction=0.0)
     assert truth["contact_force_n"][-1] > 0.3
-    tau = truth["gel_wrench_s"][-1, 3:]
-    assert sign * tau[0] > 3e-4 and abs(tau[0]) > 5 * abs(tau[1])  # 0.47 mN*m
-    truth, _ = lower("usb_c", -away, (0.0, sign * 0.15, 0.0), below_m=0.002)
-    tau = truth["gel_wrench_s"][-1, 3:]
-    assert -sign * tau[2] > 1e-3 and abs(tau[2]) > 5 * abs(tau[0])
+    fx, fy, fz, tau_x, tau_y, tau_z = truth["gel_wrench_s"][-1]
+    assert tau_x == pytest.approx(length * fz + sign * half_t * fy, rel=0.1)
+    assert -sign * tau_x > 1e-3 and abs(tau_x) > 5 * abs(tau_y)
+    truth, _ = lower("usb_c", -0.01, (0.0, sign * 0.15, 0.0), below_m=0.002, friction=0.0)
+    fx, fy, fz, tau_x, tau_y, tau_z = truth["gel_wrench_s"][-1]
+    assert tau_z == pytest.approx(-sign * half_w * fy - length * fx, rel=0.15)
+    assert -sign * tau_z > 5e-4 and abs(tau_z) > 5 * abs(tau_x)
 
 
 def test_every_draw_is_seeded_deterministic_and_within_its_range():

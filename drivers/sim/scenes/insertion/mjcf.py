@@ -12,7 +12,8 @@ Bodies and frames (every name below is looked up by name in ``physics``):
   when the tool points down).
 * ``gripper``: at the wrist's pivot, ``pivot_above_tcp_m`` from the TCP back along the
   tool axis, axes as T's when the wrist is at rest; six joints (slide x, y, z, hinge x, y,
-  z of T) with the wrist's stiffness and damping. Its weight is compensated
+  z of T) with the wrist's stiffness and damping, the tilt and z joints stopped at the
+  wrist's travel. Its weight is compensated
   (``gravcomp``), as the arm's payload setting does: hanging below the pivot, 0.9 kg would
   add about 0.8 N*m/rad of pendulum stiffness to the tilt spring's 0.5 and pull a
   commanded tilt mostly back to vertical, so the configured rates would not be the ones
@@ -57,12 +58,19 @@ def _box_inertia(mass: float, size: tuple[float, float, float]) -> tuple[float, 
 
 
 def _joint(
-    name: str, kind: str, axis: str, stiffness: float, damping: float, armature: float = 0.0
+    name: str,
+    kind: str,
+    axis: str,
+    stiffness: float,
+    damping: float,
+    armature: float = 0.0,
+    travel: float | None = None,
 ) -> str:
     vector = {"x": "1 0 0", "y": "0 1 0", "z": "0 0 1"}[axis]
+    limits = "" if travel is None else f' range="{-travel:.9g} {travel:.9g}"'
     return (
         f'<joint name="{name}" type="{kind}" axis="{vector}" stiffness="{stiffness:.9g}" '
-        f'damping="{damping:.9g}" armature="{armature:.9g}"/>'
+        f'damping="{damping:.9g}" armature="{armature:.9g}"{limits}/>'
     )
 
 
@@ -143,10 +151,24 @@ def scene_xml(
             _joint(f"wrist_{a}", "slide", a, wrist.xy_stiffness_n_m, wrist.xy_damping_n_s_m)
             for a in "xy"
         ]
-        + [_joint("wrist_z", "slide", "z", wrist.z_stiffness_n_m, wrist.z_damping_n_s_m)]
         + [
             _joint(
-                f"wrist_r{a}", "hinge", a, wrist.tilt_stiffness_nm_rad, wrist.tilt_damping_nm_s_rad
+                "wrist_z",
+                "slide",
+                "z",
+                wrist.z_stiffness_n_m,
+                wrist.z_damping_n_s_m,
+                travel=wrist.z_travel_m,
+            )
+        ]
+        + [
+            _joint(
+                f"wrist_r{a}",
+                "hinge",
+                a,
+                wrist.tilt_stiffness_nm_rad,
+                wrist.tilt_damping_nm_s_rad,
+                travel=wrist.tilt_travel_rad,
             )
             for a in "xy"
         ]

@@ -105,11 +105,13 @@ class SensorTiming(Config):
 
 @config_dataclass
 class WristConfig(Config):
-    """The compliant wrist between the commanded TCP and the gripper (OMRON soft wrist
-    defaults): stiffness and damping per axis of the tool frame at the wrist's pivot,
-    ``pivot_above_tcp_m`` above the TCP along the tool axis. ``x/y`` translation (N/m,
-    N*s/m; the wrist is stiff there), ``z`` translation along the tool axis, ``tilt`` about
-    the tool's x and y (N*m/rad, N*m*s/rad), ``twist`` about the tool axis."""
+    """The compliant wrist between the commanded TCP and the gripper (a spring-loaded soft
+    wrist; docs/SIMULATION.md, "The compliant wrist"): stiffness and damping per axis of the
+    tool frame at the wrist's pivot, ``pivot_above_tcp_m`` above the TCP along the tool
+    axis. ``x/y`` translation (N/m, N*s/m; the wrist is stiff there), ``z`` translation
+    along the tool axis, ``tilt`` about the tool's x and y (N*m/rad, N*m*s/rad), ``twist``
+    about the tool axis. Travel: the tilt stops at +-``tilt_travel_rad`` and the z
+    translation at +-``z_travel_m`` (hard stops)."""
 
     pivot_above_tcp_m: float = number(0.0, 0.5, default=0.19)
     xy_stiffness_n_m: float = number(10.0, 1e7, default=1e5)
@@ -120,6 +122,8 @@ class WristConfig(Config):
     tilt_damping_nm_s_rad: float = number(0.0, 100.0, default=0.005)
     twist_stiffness_nm_rad: float = number(0.01, 1e4, default=5.0)
     twist_damping_nm_s_rad: float = number(0.0, 100.0, default=0.05)
+    tilt_travel_rad: float = number(1e-3, 1.5, default=0.095)
+    z_travel_m: float = number(1e-4, 0.1, default=0.01)
 
 
 @config_dataclass
