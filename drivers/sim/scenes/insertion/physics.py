@@ -125,21 +125,25 @@ class InsertionPhysics:
         positions = self._pos + share[:, None] * (end_pos - self._pos)
         quats = self._quat + share[:, None] * (end_quat - self._quat)
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        # Views bound once: this loop runs at 2 kHz of simulated time.
         ring, n_ring = self._ring, len(self._ring)
-        grasp, sensors = self._grasp, d.sensordata
-        every, condim = self._truth_every, self._condim
+        grasp = d.sensordata[self._grasp]  # a fixed buffer (efc_force is not: read it anew)
+        mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
+        every, condim, step = self._truth_every, self._condim, mujoco.mj_step
         for i in range(n):
             if self.released:
                 self._leave_plug(positions[i])
-            d.mocap_pos[0] = positions[i]
-            d.mocap_quat[0] = quats[i]
-            mujoco.mj_step(m, d)
+            mocap_pos[0] = positions[i]
+            mocap_quat[0] = quats[i]
+            step(m, d)
             self._steps += 1
-            ring[self._steps % n_ring] = sensors[grasp]
-            if d.ncon:
+            ring[self._steps % n_ring] = grasp
+            ncon = d.ncon
+            if ncon:
                 # Elliptic cones: a contact's rows are its normal force, then its friction;
                 # the contacts' rows come last, and every contact has the plug's condim.
-                total = float(d.efc_force[d.nefc - d.ncon * condim : d.nefc : condim].sum())
+                nefc = d.nefc
+                total = float(d.efc_force[nefc - ncon * condim : nefc : condim].sum())
                 if total > self._peak_force_n:
                     self._peak_force_n = total
             if self._steps % every == 0:
