@@ -122,13 +122,25 @@ class TcpMotion:
     def _next_velocity(self, v_des: Vec) -> Vec:
         env, dt = self.envelope, self.dt_s
         brake = self.max_accel_m_s2 / math.sqrt(3.0)
-        p = self.position_m
-        high = tuple(stopping_speed(h - x, brake, dt) for h, x in zip(self._high, p, strict=True))
-        low = tuple(-stopping_speed(x - lo, brake, dt) for lo, x in zip(self._low, p, strict=True))
+        (px, py, pz), (lx, ly, lz), (hx, hy, hz) = self.position_m, self._low, self._high
+        high = (
+            stopping_speed(hx - px, brake, dt),
+            stopping_speed(hy - py, brake, dt),
+            stopping_speed(hz - pz, brake, dt),
+        )
+        low = (
+            -stopping_speed(px - lx, brake, dt),
+            -stopping_speed(py - ly, brake, dt),
+            -stopping_speed(pz - lz, brake, dt),
+        )
         v_des = _clip(_scaled_to(v_des, env.max_linear_speed_m_s), low, high)
         v = self.velocity_m_s
         candidate = _add(v, _scaled_to(_sub(v_des, v), self.max_accel_m_s2 * dt))
-        if all(lo <= c <= hi for c, lo, hi in zip(candidate, low, high, strict=True)):
+        if (
+            low[0] <= candidate[0] <= high[0]
+            and low[1] <= candidate[1] <= high[1]
+            and low[2] <= candidate[2] <= high[2]
+        ):
             return candidate
         safe = _clip(v, low, high)
         direction = _sub(candidate, safe)
