@@ -23,7 +23,7 @@ import numpy as np
 
 from controller.insertion import Phase
 from controller.run import load_task
-from evaluation.common.cli_support import run_tool
+from evaluation.common.cli_support import number_list, run_tool
 from evaluation.trials.spec import parse_seeds
 from evaluation.trials.trial import run
 
@@ -87,16 +87,17 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--task", choices=TASKS, default="usb_c")
     parser.add_argument("--seeds", type=parse_seeds, default=range(0, 5))
-    parser.add_argument("--stiffness", default="0.5,5,15,45", help="N*m/rad, comma-separated")
+    parser.add_argument(
+        "--stiffness",
+        type=number_list(0.01, 1e4, "N*m/rad"),
+        default=(0.5, 5.0, 15.0, 45.0),
+        help="tilt stiffnesses, N*m/rad, comma-separated",
+    )
     parser.add_argument("--controller", default="dipole")
     args = parser.parse_args(argv)
 
     def body() -> int:
-        try:
-            values = [float(v) for v in args.stiffness.split(",")]
-        except ValueError:
-            parser.error(f"--stiffness: expected numbers and commas, got {args.stiffness!r}")
-        print(sweep(args.task, args.seeds, values, args.controller))
+        print(sweep(args.task, args.seeds, list(args.stiffness), args.controller))
         return 0
 
     return run_tool("search_torques", body)

@@ -16,7 +16,7 @@ from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.real_texture import load_capture
 from evaluation.appearance.stats import measure, table_rows
-from evaluation.common.cli_support import run_tool
+from evaluation.common.cli_support import number_list, run_tool
 
 CAPTURES = ("gelsight_markers_a", "gelsight_markers_b")
 KEYS = ("marker edge 10-90 % px", "mean B", "mean G", "mean R", "noise")
@@ -53,15 +53,16 @@ def rows(blurs: list[float]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--blur", default="0,0.3,0.5,0.7", help="sigmas, px, comma-separated")
+    parser.add_argument(
+        "--blur",
+        type=number_list(0.0, 20.0, "px"),
+        default=(0.0, 0.3, 0.5, 0.7),
+        help="blur sigmas, px, comma-separated",
+    )
     args = parser.parse_args(argv)
 
     def body() -> int:
-        try:
-            blurs = [float(v) for v in args.blur.split(",")]
-        except ValueError:
-            parser.error(f"--blur: expected numbers and commas, got {args.blur!r}")
-        print("\n".join(rows(blurs)))
+        print("\n".join(rows(list(args.blur))))
         return 0
 
     return run_tool("sensor_levels", body)
