@@ -22,6 +22,7 @@ from drivers.registry import load_device_config
 from drivers.sim.scenes.insertion import (
     GraspPose,
     InsertionSceneConfig,
+    SceneDraw,
     SimDevices,
     build_insertion_sim,
     draw_scene,
@@ -333,8 +334,8 @@ def test_the_devices_and_the_clock_expose_no_truth():
     section = task("usb_c")
     sim = build_insertion_sim(section.scene, section.plug, HOLE, default_devices(), seed=3)
     truth_types = (
-        InsertionPhysics, InsertionWorld, GelCoupling, TruthLog, HolePose, mujoco.MjModel,
-        mujoco.MjData,
+        InsertionPhysics, InsertionWorld, GelCoupling, TruthLog, HolePose, SceneDraw, GraspPose,
+        mujoco.MjModel, mujoco.MjData,
     )  # fmt: skip
     facing = [sim.clock, sim.arm, sim.gripper, sim.tactile, sim.gamepad]
     for device in (sim.arm, sim.gripper, sim.tactile):
@@ -344,8 +345,9 @@ def test_the_devices_and_the_clock_expose_no_truth():
     for root in facing:
         leaked = [type(o).__name__ for o in _public_objects(root) if isinstance(o, truth_types)]
         assert not leaked, f"{type(root).__name__} exposes {leaked}"
-    # the check can fail: the world itself is truth
+    # the check can fail: the world itself is truth, and holds the seed's draws
     assert any(isinstance(o, InsertionPhysics) for o in _public_objects(sim.world))
+    assert any(isinstance(o, GraspPose) for o in _public_objects(sim))
 
 
 def easy(scene: InsertionSceneConfig) -> InsertionSceneConfig:
