@@ -2,7 +2,8 @@
 physics, gel solve and rendering, and optionally the tactile estimator, in a 100 Hz loop.
 
 No controller: a scripted TCP trajectory streamed to the arm twin (``servo_pose``) at
-100 Hz, built from the TRUE hole (a benchmark may look; a controller may not): grasp the
+100 Hz, built from the scene's TRUE draws (the hole, the board's tilt and the plug's pose
+in the grasp: a benchmark may look; a controller may not): grasp the
 plug, a tilted approach beside the opening, touch the surface, drag the tip over the
 opening's edge, turn upright over the hole and insert to the floor. Every tick reads the
 arm, the gripper and the newest tactile frame (25 Hz: the gel is solved and the frame
@@ -26,12 +27,15 @@ from dataclasses import dataclass
 import cv2
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from controller.run import load_task
 from controller.tactile import estimator_for_sensor
 from core.devices import Pose
+from core.spatial import rpy_from_rotation
 from drivers.registry import WorldSpec, build_device_set
 from drivers.sim.scenes.insertion import InsertionSim
+from drivers.sim.scenes.insertion.frames import S_IN_T
 from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
 
@@ -67,21 +71,25 @@ def script(half_width_m: float, depth_m: float) -> list[Waypoint]:
 
 
 def tcp_for_tip(sim: InsertionSim, length_m: float, waypoint: Waypoint) -> Pose:
-    """The TCP pose that puts the plug's tip (with a rigid wrist) where ``waypoint`` says."""
-    hole = sim.truth.hole
-    c, s = math.cos(hole.yaw_rad), math.sin(hole.yaw_rad)
-    tip = np.array(
-        [
-            hole.x_m + c * waypoint.offset_x_m,
-            hole.y_m + s * waypoint.offset_x_m,
-            hole.z_m + waypoint.height_m,
-        ]
+    """The TCP pose that puts the plug's tip (with a rigid wrist) where ``waypoint`` says, in
+    the true board's frame H, the plug's axis tilted by the waypoint's tilt from H's normal
+    about H's y, whatever the plug's pose in the grasp."""
+    draw = sim.draw
+    hole = draw.hole
+    board = Rotation.from_euler("z", hole.yaw_rad) * Rotation.from_euler("xy", draw.board_tilt_rad)
+    tip = np.array([hole.x_m, hole.y_m, hole.z_m]) + board.apply(
+        [waypoint.offset_x_m, 0.0, waypoint.height_m]
     )
-    # rpy (pi, tilt, yaw): the tool axis is Rz(yaw) (-sin tilt, 0, -cos tilt)
-    axis = np.array([-math.sin(waypoint.tilt_rad) * c, -math.sin(waypoint.tilt_rad) * s, 0.0])
-    axis[2] = -math.cos(waypoint.tilt_rad)
-    tcp = tip - length_m * axis
-    return Pose(tuple(float(v) for v in tcp), (math.pi, waypoint.tilt_rad, hole.yaw_rad))
+    # the nominal tool (rpy (pi, tilt, 0) in H) points its z along the wanted plug axis;
+    # the grasped plug's axis and tip in T (S2T = S_IN_T) are turned onto that z
+    nominal = board * Rotation.from_euler("xyz", (math.pi, waypoint.tilt_rad, 0.0))
+    axis_t = S_IN_T @ draw.grasp.rotation() @ np.array([0.0, 1.0, 0.0])
+    onto_z, _ = Rotation.align_vectors([[0.0, 0.0, 1.0]], [axis_t])
+    tool = nominal * onto_z
+    tip_t = S_IN_T @ draw.grasp.place(np.array([0.0, length_m, 0.0]))
+    tcp = tip - tool.apply(tip_t)
+    near = (math.pi, waypoint.tilt_rad, hole.yaw_rad)  # the script interpolates rpy
+    return Pose(tuple(float(v) for v in tcp), rpy_from_rotation(tool, near))
 
 
 @dataclass(frozen=True)

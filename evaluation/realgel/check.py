@@ -256,9 +256,7 @@ def run_check(specs: Iterable[SequenceSpec], entries: Sequence[Entry], progress=
     for spec in specs:
         sequence = render(spec, references)
         for entry in entries:
-            rows.append(
-                run_one(sequence, entry.name, entry.config, entry.oracle, entry.open_gel)
-            )
+            rows.append(run_one(sequence, entry.name, entry.config, entry.oracle, entry.open_gel))
             if progress is not None:
                 progress(rows[-1])
     return rows

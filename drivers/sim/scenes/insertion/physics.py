@@ -1,9 +1,10 @@
 """The MuJoCo side of the insertion scene: the model, its stepping with the commanded TCP,
 the grasp's wrench and the ground truth.
 
-``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s)`` builds the model of
-``mjcf.scene_xml``. ``step_to(t_s, pose_t_s, pose)`` advances in fixed steps of
-``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
+``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s, truth, board_tilt_rad,
+grasp)`` builds the model of ``mjcf.scene_xml`` (the board tilted and the plug placed in
+the fingers as drawn; nominal by default). ``step_to(t_s, pose_t_s, pose)`` advances in
+fixed steps of ``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
 linear interpolation of the quaternion) from its last pose to ``pose`` reached at
 ``pose_t_s`` and held after it. Each step keeps the grasp's wrench in a ring buffer
 (``grasp_wrench_at``: the wrench at a past step, for the tactile frames) and the ground
@@ -25,7 +26,8 @@ import numpy as np
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
+from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
+from drivers.sim.scenes.insertion.frames import S_IN_T, quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TruthLog
@@ -58,8 +60,11 @@ class InsertionPhysics:
         start_pose: Pose,
         t0_s: float,
         truth: TruthLog,
+        board_tilt_rad: tuple[float, float] = (0.0, 0.0),
+        grasp: GraspPose = NOMINAL_GRASP,
     ) -> None:
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene, plug, hole_true))
+        xml = scene_xml(scene, plug, hole_true, board_tilt_rad, grasp)
+        self.model = mujoco.MjModel.from_xml_string(xml)
         self.data = mujoco.MjData(self.model)
         self.dt_s = self.model.opt.timestep
         self._share = scene.gel_spring.load_share
@@ -68,6 +73,8 @@ class InsertionPhysics:
         m = self.model
         self._tip = m.site("tip").id
         self._plug = m.body("plug").id
+        self._gripper = m.body("gripper").id
+        self._condim = int(m.geom("plug").condim[0])
         force = m.sensor_adr[m.sensor("gel_force").id]
         if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
@@ -118,19 +125,25 @@ class InsertionPhysics:
         positions = self._pos + share[:, None] * (end_pos - self._pos)
         quats = self._quat + share[:, None] * (end_quat - self._quat)
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        # Views bound once: this loop runs at 2 kHz of simulated time.
         ring, n_ring = self._ring, len(self._ring)
-        grasp, sensors = self._grasp, d.sensordata
-        every = self._truth_every
+        grasp = d.sensordata[self._grasp]  # a fixed buffer (efc_force is not: read it anew)
+        mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
+        every, condim, step = self._truth_every, self._condim, mujoco.mj_step
         for i in range(n):
-            d.mocap_pos[0] = positions[i]
-            d.mocap_quat[0] = quats[i]
-            mujoco.mj_step(m, d)
+            if self.released:
+                self._leave_plug(positions[i])
+            mocap_pos[0] = positions[i]
+            mocap_quat[0] = quats[i]
+            step(m, d)
             self._steps += 1
-            ring[self._steps % n_ring] = sensors[grasp]
-            if d.nefc:
-                # Pyramidal cones: a contact's normal force is the sum of its edges' forces,
-                # and every constraint row of this model is a contact's.
-                total = float(d.efc_force[: d.nefc].sum())
+            ring[self._steps % n_ring] = grasp
+            ncon = d.ncon
+            if ncon:
+                # Elliptic cones: a contact's rows are its normal force, then its friction;
+                # the contacts' rows come last, and every contact has the plug's condim.
+                nefc = d.nefc
+                total = float(d.efc_force[nefc - ncon * condim : nefc : condim].sum())
                 if total > self._peak_force_n:
                     self._peak_force_n = total
             if self._steps % every == 0:
@@ -165,6 +178,18 @@ class InsertionPhysics:
         self.model.jnt_stiffness[self._gel_j] = 0.0
         self.model.dof_damping[self._gel_v] = _RELEASED_DAMPING
         self.released = True
+
+    def _leave_plug(self, tcp_xyz: np.ndarray) -> None:
+        """Keep a released plug where it is as the TCP moves: MuJoCo moves a mocap body by
+        setting its position, which carries its children along without a velocity, so the
+        free plug (its joints are relative to the gripper) would be lifted with every step
+        of the retracting arm and knocked back by the board (the resting plug's contact
+        force then peaked at 16 times its weight). The gel's slide joints take up the TCP's
+        translation; its rotation (the arm holds its orientation while retracting) is not
+        taken up."""
+        d = self.data
+        axes = d.xmat[self._gripper].reshape(3, 3) @ S_IN_T  # the slides' axes in B
+        d.qpos[self._gel_q[:3]] -= axes.T @ (tcp_xyz - d.mocap_pos[0])
 
     def grasp(self) -> None:
         """The fingers close on the plug where it is: the gel spring's rest is its pose."""
