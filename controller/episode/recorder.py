@@ -20,32 +20,11 @@ from controller.insertion.interface import TeleopInput
 from controller.loop import TickRecord
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField
-from controller.tactile.wrench import VALUE_FIELDS, WrenchEstimate
+from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS, WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
 from core.spatial import quaternion_from_rpy
-
-FLAG_FIELDS = (
-    "contact",
-    "degenerate",
-    "slip_suspected",
-    "slip_gross",
-    "rezero_recommended",
-    "zeroing",
-    "calibrated",
-)
-
-
-def finite_or_none(value: float) -> float | None:
-    """``value`` as a float, None (JSON null) if it is NaN or infinite."""
-    value = float(value)
-    return value if math.isfinite(value) else None
-
-
-def _vec(values: Any) -> list[float | None]:
-    return [finite_or_none(v) for v in values]
-
 
 # -- the tick's messages (encoded on the writer's thread) ----------------------------------
 
@@ -57,10 +36,10 @@ def command_json(tick: TickRecord) -> bytes:
     gripper = command.gripper if command is not None else None
     return json_bytes(
         {
-            "twist_linear_m_s": _vec(twist.linear_m_s) if twist else None,
-            "twist_angular_rad_s": _vec(twist.angular_rad_s) if twist else None,
-            "pose_xyz_m": _vec(pose.xyz_m) if pose else None,
-            "pose_rpy_rad": _vec(pose.rpy_rad) if pose else None,
+            "twist_linear_m_s": twist.linear_m_s if twist else None,
+            "twist_angular_rad_s": twist.angular_rad_s if twist else None,
+            "pose_xyz_m": pose.xyz_m if pose else None,
+            "pose_rpy_rad": pose.rpy_rad if pose else None,
             "gripper_width_m": gripper.width_m if gripper else None,
             "gripper_speed_m_s": gripper.speed_m_s if gripper else None,
             "gripper_force_n": gripper.force_n if gripper else None,
@@ -78,9 +57,9 @@ def arm_json(arm: ArmStatus) -> bytes:
     return json_bytes(
         {
             "t_s": arm.t_s,
-            "tcp_xyz_m": _vec(arm.tcp.xyz_m),
-            "tcp_rpy_rad": _vec(arm.tcp.rpy_rad),
-            "joints_rad": _vec(arm.joints_rad),
+            "tcp_xyz_m": arm.tcp.xyz_m,
+            "tcp_rpy_rad": arm.tcp.rpy_rad,
+            "joints_rad": arm.joints_rad,
             "mode": arm.mode.name.lower(),
             "state": arm.state.name.lower(),
             "error_code": arm.error_code,
@@ -96,7 +75,7 @@ def gripper_json(gripper: GripperStatus) -> bytes:
             "activated": gripper.activated,
             "moving": gripper.moving,
             "object": gripper.object.name.lower(),
-            "width_m": finite_or_none(gripper.width_m),
+            "width_m": gripper.width_m,
             "fault_code": gripper.fault_code,
             "fault_message": gripper.fault_message,
         }
@@ -110,8 +89,8 @@ def teleop_json(teleop: TeleopInput) -> bytes:
             "connected": teleop.connected,
             "in_control": teleop.in_control,
             "in_control_by": "operator" if teleop.in_control else "machine",
-            "twist_linear_m_s": _vec(twist.linear_m_s),
-            "twist_angular_rad_s": _vec(twist.angular_rad_s),
+            "twist_linear_m_s": twist.linear_m_s,
+            "twist_angular_rad_s": twist.angular_rad_s,
             "gripper_open": teleop.gripper_open,
             "gripper_close": teleop.gripper_close,
             "hand_back": teleop.hand_back,
@@ -154,20 +133,53 @@ def transition_json(transition: Any) -> bytes:
     )
 
 
+LATCH_PERIOD_S = 1.0
+"""A latched topic (``/gripper/status``, ``/teleop/input``) is written when its value changes,
+and otherwise again at the first tick this long after the last one written, s of loop time
+(controller/episode/topics.py)."""
+
+
+class Latch:
+    """When a slowly changing value is due in the file: the first time, whenever ``key``
+    differs from the last one written, and otherwise once ``period_s`` (s on the loop's
+    clock) has passed since the last one written."""
+
+    def __init__(self, period_s: float = LATCH_PERIOD_S) -> None:
+        self.period_s = period_s
+        self._key: object = None
+        self._due_s = -math.inf
+
+    def due(self, key: object, t_s: float) -> bool:
+        if t_s < self._due_s and key == self._key:
+            return False
+        self._key, self._due_s = key, t_s + self.period_s
+        return True
+
+
+def gripper_key(gripper: GripperStatus) -> tuple:
+    """What makes a gripper status a change: every field but its read time."""
+    g = gripper
+    return (g.activated, g.moving, g.object, g.width_m, g.fault_code, g.fault_message)
+
+
 class TickLogger:
-    """The loop's observer: queues each tick's messages into ``writer``, and asks for a
-    flush at each phase change."""
+    """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
+    only when due, see ``Latch``), and asks for a flush at each phase change."""
 
     def __init__(self, writer: EpisodeWriter) -> None:
         self.writer = writer
+        self._gripper = Latch()
+        self._teleop = Latch()
 
     def __call__(self, tick: TickRecord) -> None:
         log, t = self.writer.log, tick.timing.start_s
         obs = tick.observation
         log(topics.COMMAND, t, command_json, tick)
         log(topics.ARM_STATUS, t, arm_json, obs.arm)
-        log(topics.GRIPPER_STATUS, t, gripper_json, obs.gripper)
-        log(topics.TELEOP, t, teleop_json, obs.teleop)
+        if self._gripper.due(gripper_key(obs.gripper), t):
+            log(topics.GRIPPER_STATUS, t, gripper_json, obs.gripper)
+        if self._teleop.due(obs.teleop, t):
+            log(topics.TELEOP, t, teleop_json, obs.teleop)
         log(topics.LOOP_TICK, t, tick_json, tick)
         log(topics.TCP_TF, t, tcp_tf, obs.arm)
         for transition in tick.transitions:
@@ -182,7 +194,7 @@ class TickLogger:
 def wrench_json(item: tuple[int, WrenchEstimate]) -> bytes:
     index, e = item
     row: dict[str, Any] = {"t_s": e.t_s, "push_index": index}
-    row.update({k: finite_or_none(getattr(e, k)) for k in VALUE_FIELDS})
+    row.update({k: getattr(e, k) for k in VALUE_FIELDS})
     row.update({k: bool(getattr(e, k)) for k in FLAG_FIELDS})
     return json_bytes(row)
 

@@ -17,7 +17,15 @@ Two encodings:
   ``foxglove.Grid``, ``foxglove.FrameTransforms``), encoded by ``foxglove-sdk``'s message
   classes, so Foxglove's image, plot and 3D panels show them without a converter;
 * ``json``: our messages, one JSON object each, with a JSON Schema (``jsonschema``)
-  registered in the file, named ``tactile_insertion.NAME``.
+  registered in the file, named ``tactile_insertion.NAME``. A non-finite number (NaN,
+  inf) in any JSON field is written as null.
+
+Rates (each ``Topic.rate``): most topics have a message per tick or per frame. The
+**latched** topics (``/gripper/status``, ``/teleop/input``: values that change seldom) have
+one at the first tick, at each tick whose value changed, and at the first tick 1 s or more
+of loop time after the last one written (``controller.episode.recorder.LATCH_PERIOD_S``): a
+tick without a message holds the value of the newest message at or before it, which is at
+most 1 s and one tick older.
 """
 
 from __future__ import annotations
@@ -25,6 +33,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
+
+from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS
 
 FORMAT_VERSION = "1"
 """The episode format's version (metadata ``episode.format_version``); a reader refuses
@@ -145,7 +155,9 @@ GRIPPER_STATUS = Topic(
     "tactile_insertion.GripperStatus",
     "json",
     "",
-    "every tick",
+    "latched: the first tick, each tick whose status differs from the last one written in "
+    "any field but ``t_s``, and the first tick 1 s or more after the last one written; a "
+    "tick without one holds the previous value",
     "``t_s``, ``activated``, ``moving``, ``object`` (the Hand-E's object detection), "
     "``width_m`` (finger opening), ``fault_code``, ``fault_message``.",
 )
@@ -154,7 +166,9 @@ TELEOP = Topic(
     "tactile_insertion.TeleopInput",
     "json",
     "B",
-    "every tick",
+    "latched: the first tick, each tick whose input differs from the last one written, and "
+    "the first tick 1 s or more after the last one written; a tick without one holds the "
+    "previous value",
     "The gamepad after arbitration (``controller.teleop``): ``connected``, ``in_control`` "
     "(true: the operator drives the arm; false: the machine), ``in_control_by`` ('operator' "
     "or 'machine'), ``twist_linear_m_s``, ``twist_angular_rad_s`` (the operator's TCP twist "
@@ -246,32 +260,8 @@ JSON_SCHEMAS: Mapping[str, dict] = {
         {
             "t_s": _NUM,
             "push_index": _INT,
-            **{
-                k: _NUM_OR_NULL
-                for k in (
-                    "tau_x",
-                    "tau_y",
-                    "tau_z",
-                    "shear_x",
-                    "shear_y",
-                    "normal",
-                    "fv_tau_x",
-                    "fv_tau_y",
-                    "fv_tau_z",
-                )
-            },
-            **{
-                k: _BOOL
-                for k in (
-                    "contact",
-                    "degenerate",
-                    "slip_suspected",
-                    "slip_gross",
-                    "rezero_recommended",
-                    "zeroing",
-                    "calibrated",
-                )
-            },
+            **{k: _NUM_OR_NULL for k in VALUE_FIELDS},
+            **{k: _BOOL for k in FLAG_FIELDS},
         },
         ("t_s", "push_index", "tau_x", "tau_y", "tau_z"),
     ),  # fmt: skip

@@ -1,16 +1,18 @@
 """Writing an episode file: ``EpisodeWriter``, a logger thread fed by a bounded queue.
 
 The control loop's thread only enqueues (``log``: the topic, the time, an encoder and its
-payload; no encoding, no I/O); the logger thread encodes each record, appends it to the
-MCAP file (``mcap``'s writer, zstd chunks) and flushes the file (finishing the chunk in
-progress) every ``flush_interval_s`` and whenever ``flush_soon`` asks (at each phase
-change). A process killed with SIGKILL therefore leaves every record up to the last flush
-readable (controller/episode/reader.py); ``repair`` finishes such a file.
+payload appended to a deque; no lock, no encoding, no I/O). The logger thread sleeps until
+the next flush is due (every ``flush_interval_s``, or at once when ``flush_soon`` asks, at
+each phase change), then encodes every record queued, appends them to the MCAP file
+(``mcap``'s writer, zstd chunks) and flushes the file (finishing the chunk in progress):
+one wake-up per flush rather than one per record (docs/EPISODES.md, "Cost"). A process
+killed with SIGKILL therefore leaves every record up to the last flush readable
+(controller/episode/reader.py); ``repair`` finishes such a file.
 
 When the queue is full the record is dropped, not waited for: the drop is counted by topic,
 logged once per topic as a warning, written to ``/episode/drops`` at the next flush and to
 the ``outcome`` metadata at the end. A record whose payload its encoder refuses (ValueError,
-TypeError: e.g. a NaN where JSON wants a number) is dropped and counted the same way, and
+TypeError: e.g. a value JSON cannot hold) is dropped and counted the same way, and
 the writer goes on.
 
 ``close(outcome)`` stops the thread after it has written everything queued, writes the
@@ -24,14 +26,14 @@ from __future__ import annotations
 import itertools
 import json
 import logging
-import queue
 import threading
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
+import orjson
 from mcap.writer import CompressionType, Writer
 
 from controller.episode.topics import (
@@ -47,11 +49,11 @@ log = logging.getLogger(__name__)
 
 NS_PER_S = 1_000_000_000
 QUEUE_SIZE = 4096
-"""Records the queue holds (about 4 s of a trial's records at the default rates)."""
-FLUSH_INTERVAL_S = 0.08
-"""About every 0.1 s ("flush about every 100 ms"), a little less so that a SIGKILL, which
-comes on average half an interval after a flush and at worst a whole one plus the writer's
-latency, loses at most 0.1 s (docs/BENCHMARKS.md, "Episodes")."""
+"""Records the queue holds (about 6 s of a simulated trial's 700 records a second)."""
+FLUSH_INTERVAL_S = 0.05
+"""Every 0.05 s: half the 0.1 s a SIGKILL may lose, so that the writer's own latency on a
+loaded machine (its wake-up, writing the records queued since the last flush) fits in the
+other half (docs/EPISODES.md "Cost", docs/BENCHMARKS.md "Episodes")."""
 CHUNK_SIZE_BYTES = 4 * 1024 * 1024
 """A chunk is finished at this size or at the next flush, whichever comes first."""
 LIBRARY = "tactile-insertion episode writer"
@@ -64,9 +66,10 @@ loop's payload and the encoded message (the live view and the Foxglove live stre
 
 
 def json_bytes(payload: Mapping[str, Any]) -> bytes:
-    """A JSON topic's message: ``payload`` as compact JSON (NaN and inf are not allowed:
-    the caller writes null)."""
-    return json.dumps(payload, separators=(",", ":"), allow_nan=False).encode()
+    """A JSON topic's message: ``payload`` as compact JSON (``orjson``: numpy arrays and
+    scalars as numbers, a non-finite number as null). TypeError for a value JSON cannot
+    hold."""
+    return orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
 
 
 def schema_of(topic: Topic) -> tuple[str, str, bytes]:
@@ -79,8 +82,6 @@ def schema_of(topic: Topic) -> tuple[str, str, bytes]:
     found = foxglove_types.schema(topic.schema)
     return found.name, found.encoding, found.data
 
-
-_STOP = object()
 
 
 class EpisodeWriter:
@@ -116,12 +117,14 @@ class EpisodeWriter:
             self._mcap.add_attachment(0, 0, name, media_type, data)
         self._mcap.flush()
         self._channels: dict[str, int] = {}
-        self._queue: queue.Queue[Any] = queue.Queue(maxsize=queue_size)
+        self._queue_size = queue_size
+        self._queue: deque[tuple[Topic, int, int, Encoder, Any]] = deque()
         self._sequence = itertools.count()
         self.dropped: Counter[str] = Counter()
         self._dropped_written = 0
         self._last_ns = 0  # the newest log time written, ns
-        self._flush_wanted = threading.Event()
+        self._wake = threading.Event()  # a flush or the stop is wanted now
+        self._stopping = False
         self._error: OSError | None = None
         self._closed = False
         self.busy_s = 0.0
@@ -136,12 +139,9 @@ class EpisodeWriter:
         on the logger thread by ``encode(payload)``; dropped and counted if the queue is
         full or the writer has failed. ``payload`` must not change afterwards."""
         sequence = next(self._sequence)
-        if self._error is None and not self._closed:
-            try:
-                self._queue.put_nowait((topic, round(t_s * NS_PER_S), sequence, encode, payload))
-                return
-            except queue.Full:
-                pass
+        if self._error is None and not self._closed and len(self._queue) < self._queue_size:
+            self._queue.append((topic, round(t_s * NS_PER_S), sequence, encode, payload))
+            return
         if not self.dropped[topic.name]:
             why = "queue full" if self._error is None and not self._closed else "writer stopped"
             log.warning("episode %s: %s, dropping %s records", self.path, why, topic.name)
@@ -149,7 +149,7 @@ class EpisodeWriter:
 
     def flush_soon(self) -> None:
         """Ask the logger thread to flush after the records queued so far (a phase change)."""
-        self._flush_wanted.set()
+        self._wake.set()
 
     @property
     def dropped_total(self) -> int:
@@ -164,12 +164,8 @@ class EpisodeWriter:
         if self._closed:
             return
         self._closed = True
-        while self._thread.is_alive():  # the thread writes what is queued before the stop
-            try:
-                self._queue.put(_STOP, timeout=0.1)
-                break
-            except queue.Full:
-                continue
+        self._stopping = True  # the thread writes what is queued, then stops
+        self._wake.set()
         self._thread.join()
         try:
             if self._error is None:
@@ -205,45 +201,32 @@ class EpisodeWriter:
         next_flush = time.monotonic() + self.flush_interval_s
         try:
             while True:
-                try:
-                    item = self._queue.get(timeout=max(0.0, next_flush - time.monotonic()))
-                except queue.Empty:
-                    item = None
-                if item is _STOP:
+                self._wake.wait(max(0.0, next_flush - time.monotonic()))
+                self._wake.clear()
+                stopping = self._stopping
+                self._drain()
+                if stopping:
                     return
-                if item is not None:
-                    self._write(item)
-                wanted = self._flush_wanted.is_set()
-                if wanted or time.monotonic() >= next_flush:
-                    if wanted:
-                        self._flush_wanted.clear()
-                        if self._drain():
-                            return
-                    self._write_drops(self._last_ns)
-                    self._mcap.flush()
-                    next_flush = time.monotonic() + self.flush_interval_s
+                self._write_drops(self._last_ns)
+                self._mcap.flush()
+                next_flush = time.monotonic() + self.flush_interval_s
         except OSError as error:
             self._error = error
             log.error("episode %s: writing stopped: %s", self.path, error)
         finally:
             self.busy_s = time.thread_time() - began
 
-    def _drain(self) -> bool:
-        """Write what is queued now, without waiting for more; True if it met the stop."""
-        while True:
-            try:
-                item = self._queue.get_nowait()
-            except queue.Empty:
-                return False
-            if item is _STOP:
-                return True
-            self._write(item)
+    def _drain(self) -> None:
+        """Write every record queued now."""
+        pop, write = self._queue.popleft, self._write
+        while self._queue:
+            write(pop())
 
     def _write(self, item: tuple[Topic, int, int, Encoder, Any]) -> None:
         topic, t_ns, sequence, encode, payload = item
         try:
             data = encode(payload)
-        except (ValueError, TypeError, OverflowError) as error:  # e.g. a NaN in a JSON field
+        except (ValueError, TypeError, OverflowError) as error:  # e.g. a value JSON cannot hold
             if not self.dropped[topic.name]:
                 log.error("episode %s: dropping a %s record: %s", self.path, topic.name, error)
             self.dropped[topic.name] += 1

@@ -46,7 +46,7 @@ import cv2
 import numpy as np
 
 from controller.tactile.calibration import Calibration
-from controller.tactile.dipole import OriginRule
+from controller.tactile.dipole import GraspSupport, OriginRule
 from controller.tactile.field import VectorField, grid_axes_mm
 from controller.tactile.flow import GridFlow, make_grid_flow
 from controller.tactile.frame_capture import FrameCapture, MeanImage
@@ -127,6 +127,7 @@ class TactileEstimator:
         self._make_flow = flow
         self._origin = origin
         self._open = FrameCapture()  # the open gel
+        self._given_support: GraspSupport | None = None  # set_contact_support's
         self._reference = FrameCapture()
         self._awaiting_rezero = False  # after capture_open, until rezero
         self._grid_flow: GridFlow | None = None
@@ -177,10 +178,21 @@ class TactileEstimator:
             return
         self._open.set(self._mean_image(frames, "open"))
 
+    def set_contact_support(self, support: GraspSupport | None) -> None:
+        """Use ``support`` (weights on the field grid and their centre, mm in frame S) as the
+        contact's support for the ``grasp_centroid`` dipole of every reference set from now on
+        for which the open gel gives none (no open gel, or no contact against it); None to
+        forget it. For a support found elsewhere, e.g. offline from a whole recording
+        (evaluation/offline/recording_support.py). Unlike the open gel's, it does not stand
+        for a contact seen: the no-contact gate stays. A support that does not fit the
+        reference's grid makes ``set_reference`` raise ValueError."""
+        self._given_support = support
+
     @property
     def contact_centre_mm(self) -> tuple[float, float] | None:
         """The contact's centre (x, y) in mm, frame S, measured from the grasp against the
-        open gel when the reference was set; None without an open gel or contact."""
+        open gel when the reference was set, else the one given by ``set_contact_support``;
+        None without either (or without contact)."""
         support = None if self._pipeline is None else self._pipeline.grasp_dipole.support
         return None if support is None else support.centre_mm
 
@@ -192,8 +204,7 @@ class TactileEstimator:
             or not 1 <= n <= MAX_REFERENCE_FRAMES
         ):
             raise ValueError(
-                f"{what} needs a whole number of frames in [1, {MAX_REFERENCE_FRAMES}], "
-                f"got {n!r}"
+                f"{what} needs a whole number of frames in [1, {MAX_REFERENCE_FRAMES}], got {n!r}"
             )
         return int(n)
 
@@ -253,8 +264,11 @@ class TactileEstimator:
             grasp_flow = make_grid_flow(flow_config, (height, width), rows, cols)
             grasp_flow.set_reference(open_gel.image)
             support = pipeline.grasp_support(grasp_flow, image, GRASP_FLOW_PASSES)
+        given = support is None and self._measures_grasp and self._given_support is not None
+        if given:
+            support = self._given_support
         pipeline.grasp_dipole.set_grasp_support(support)
-        if support is None:
+        if support is None or given:
             pipeline.noise_gate = self._noise_gate(grid_flow, pipeline)
         self._grid_flow = grid_flow
         self._pipeline = pipeline
@@ -375,6 +389,15 @@ class TactileEstimator:
         if self._pipeline is None:
             raise RuntimeError("no field yet: the estimator has no reference")
         return self._pipeline.field
+
+    def field_divergence(self) -> np.ndarray:
+        """The divergence of the latest field on the field grid, as the ``grasp_centroid``
+        dipole sees it (``divergence_of``: of the curl-free part or the raw field),
+        dimensionless, (rows, cols): a new array (an NHHD per call). RuntimeError without a
+        reference."""
+        if self._pipeline is None:
+            raise RuntimeError("no field yet: the estimator has no reference")
+        return self._pipeline.field_divergence()
 
     @property
     def noise_gated(self) -> bool:

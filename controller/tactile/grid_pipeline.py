@@ -1,6 +1,7 @@
 """Everything after the flow, on one field grid: the grid displacement in px -> mm in frame S
 (optional temporal EMA) -> NHHD (tau_z, shear, normal) -> the tilt dipole (on the grasp's
-support, or on the configured grid behind the no-contact gate) and the FingerVision baseline
+support, or on the configured grid; behind the no-contact gate unless the support came from
+the open gel) and the FingerVision baseline
 -> the slip detector. The estimator (controller/tactile/estimator.py) builds one per
 reference; its buffers are allocated here, and a frame allocates only the estimate."""
 
@@ -106,6 +107,12 @@ class GridPipeline:
         self._reset_field()
         return support
 
+    def field_divergence(self) -> np.ndarray:
+        """The divergence the grasp's dipole takes its moment of (the curl-free part's, or the
+        raw field's, on the field grid; dimensionless, (rows, cols)) of the field last set by
+        ``update_field``: a new array."""
+        return self.divergence.on_field(self.nhhd.decompose(self._u, self._v)).copy()
+
     def divergence_map(self) -> np.ndarray:
         """The linear map (k, 2 n) from the field in px (n cells, row-major, x before y) to
         the fallback dipole's divergence (k values), probed column by column (it depends on
@@ -140,14 +147,19 @@ class GridPipeline:
         ``rezero_policy``."""
         decomposition = self.nhhd.decompose(self._u, self._v)
         if self.grasp_dipole.support is not None:
-            dipole = self.grasp_dipole(self.divergence.on_field(decomposition))
+            calculator, div = self.grasp_dipole, self.divergence.on_field(decomposition)
         else:
-            div = self.divergence(self._u, self._v, decomposition)
-            if self.noise_gate is not None:
-                gate = self.noise_gate.until_contact(div)
-                if gate < 1.0:  # not in place: the buffer may be the decomposition's
-                    div = div * gate
-            dipole = self.dipole(div)
+            calculator, div = self.dipole, self.divergence(self._u, self._v, decomposition)
+        if self.noise_gate is not None:
+            gated = (
+                div
+                if calculator is self.dipole
+                else self.divergence(self._u, self._v, decomposition)
+            )
+            gate = self.noise_gate.until_contact(gated)
+            if gate < 1.0:  # not in place: the buffer may be the decomposition's
+                div = div * gate
+        dipole = calculator(div)
         tau_x, tau_y = dipole.tilt_torque_raw
         fv_x, fv_y, fv_z = self.baseline(self._u, self._v)
         np.hypot(self._u, self._v, out=self._magnitude)

@@ -16,6 +16,16 @@ VALUE_FIELDS = (
     "fv_tau_y",
     "fv_tau_z",
 )
+# The estimate's flags, in a fixed order.
+FLAG_FIELDS = (
+    "contact",
+    "degenerate",
+    "slip_suspected",
+    "slip_gross",
+    "rezero_recommended",
+    "zeroing",
+    "calibrated",
+)
 
 
 @dataclass(frozen=True, slots=True)

@@ -11,13 +11,14 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 (a included, b excluded) are averaged into the zeroing reference. ``--open`` names frames
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
-(without, it falls back to the centroid midpoint behind the no-contact gate; when that gate
-never sees a press from the open gel in the whole recording, the recording was zeroed in the
-grasp, and the tool estimates it again without the gate, says so in one line and records the
-choice in ``OUT.fallback.json``). The open frames must end before the reference begins
-(overlapping or later ranges are refused); open frames that differ from each other or from
-the recording's first frame far beyond the camera noise are used with one warning
-(evaluation/offline/open_gel.py). ``--method`` names an
+(without, the tool finds the contact's support from the whole recording, each cell's
+divergence power against its frame-to-frame noise (evaluation/offline/recording_support.py),
+estimates the recording again about it, behind the no-contact gate unless that gate never
+saw a press from the open gel (the recording was zeroed in the grasp), says so in one line
+and records the choice in ``OUT.fallback.json``). The open frames must end before the
+reference begins (overlapping or later ranges are refused); open frames that differ from
+each other or from the recording's first frame far beyond the camera noise are used with one
+warning (evaluation/offline/open_gel.py). ``--method`` names an
 estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -51,7 +52,7 @@ import re
 import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TextIO
 
@@ -75,6 +76,7 @@ from evaluation.common.cli_support import (
 from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.common.quiet_decoding import read_image
 from evaluation.offline.open_gel import open_gel_doubt
+from evaluation.offline.recording_support import recording_fallback, uses_recording
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
@@ -82,12 +84,6 @@ FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_
 CSV_COLUMNS = ("frame", "time_s", *VALUE_FIELDS, *FLAG_FIELDS, "latency_ms")
 PROGRESS_MIN_FRAMES = 100
 MIN_RATE_HZ, MAX_RATE_HZ = 0.1, 10_000.0
-# Without --open, a recording whose field never reached PRESS_RATIO times the no-contact gate's
-# threshold saw no press from the open gel (hundreds of times the threshold): it was zeroed in
-# the grasp (or never touched), and the gate would only cut into its tilt (docs/ARCHITECTURE.md,
-# "Without open frames").
-PRESS_RATIO = 10.0
-UNGATED_REASON = "no open gel given and no press from the open gel in the recording"
 
 
 class InputError(ToolError):
@@ -279,26 +275,16 @@ def fallback_sidecar(out_csv: Path) -> Path:
     return out_csv.with_name(out_csv.stem + ".fallback.json")
 
 
-def ungated_fallback(estimator: TactileEstimator, open_given: bool) -> TactileEstimator | None:
-    """After a pass over a recording: the estimator to estimate it again with, without the
-    no-contact gate, when no open gel was given (``open_given``) and the gate's statistic
-    never reached ``PRESS_RATIO`` times its threshold (``UNGATED_REASON``); None to keep the
-    pass. Its reference is not set."""
-    if open_given or not estimator.noise_gated or estimator.noise_gate_peak >= PRESS_RATIO:
-        return None
-    return TactileEstimator(
-        replace(estimator.config, noise_gate=None),
-        estimator.profile,
-        estimator.calibration,
-        config_name=estimator.config_name,
-    )
-
-
 def _write_rows(
-    estimator: TactileEstimator, source: FrameSource, rate_hz: float, handle: TextIO
+    estimator: TactileEstimator,
+    source: FrameSource,
+    rate_hz: float,
+    handle: TextIO,
+    divergences: list[np.ndarray] | None = None,
 ) -> tuple[int, list[str]]:
     """Write the CSV (header and a row per frame that decodes) of ``source`` to ``handle``;
-    returns the rows written and what the pass lost."""
+    returns the rows written and what the pass lost. ``divergences``: if given, each frame's
+    ``field_divergence`` is appended to it."""
     show_progress = source.frame_count is None or source.frame_count >= PROGRESS_MIN_FRAMES
     log = ReadLog()
     writer = csv.writer(handle)
@@ -326,6 +312,8 @@ def _write_rows(
             raise InputError(f"{source.describe(number)}: {exc}{hint}; nothing written") from None
         latency_ms = (time.perf_counter() - began) * 1e3
         writer.writerow(csv_row(number, t_s, estimate, latency_ms))
+        if divergences is not None:
+            divergences.append(estimator.field_divergence())
         count += 1
     return count, source.damage(log)
 
@@ -387,28 +375,27 @@ def estimate_file(
 
     sidecar = fallback_sidecar(out_csv)
     choice = None
+    divergences = [] if uses_recording(estimator, open_range is not None) else None
     with atomic_text(out_csv, newline="") as handle:
-        count, problems = _write_rows(estimator, source, rate_hz, handle)
+        count, problems = _write_rows(estimator, source, rate_hz, handle, divergences)
         if problems and not allow_damaged:
             raise InputError(
                 "; ".join(problems) + "; nothing written (pass --allow-damaged to estimate "
                 "the frames that decoded)"
             )
-        ungated = ungated_fallback(estimator, open_range is not None)
-        if ungated is not None:
-            warn(f"{UNGATED_REASON}: re-estimating without the no-contact gate ({sidecar})")
-            estimator = ungated
+        choice = recording_fallback(estimator, divergences or [], open_range is not None)
+        if choice is not None:
+            warn(f"{choice.message}: re-estimated ({sidecar})")
+            estimator = choice.estimator
             estimator.set_reference(reference_frames)
             handle.seek(0)
             handle.truncate()
             count, problems = _write_rows(estimator, source, rate_hz, handle)
-            choice = {"estimator": estimator.config_name, "noise_gate": None}
-            choice["reason"] = UNGATED_REASON
     if choice is None:
         sidecar.unlink(missing_ok=True)  # a previous run's choice, not this one's
     else:
         with atomic_text(sidecar) as handle:
-            json.dump(choice, handle, indent=1)
+            json.dump(choice.record, handle, indent=1)
     for problem in problems:
         warn(problem)
     return count

@@ -23,7 +23,11 @@ from controller.tactile.estimator import GridFlowFactory, TactileEstimator
 from controller.tactile.flow import make_grid_flow
 from controller.tactile.settings import EstimatorConfig
 from core.sensor_profile import sensor_profile
-from evaluation.offline.estimate_cli import ungated_fallback
+from evaluation.offline.recording_support import (
+    FallbackChoice,
+    recording_fallback,
+    uses_recording,
+)
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import TEXTURES
@@ -190,14 +194,18 @@ def run_one(
     except ValueError as error:
         return _not_run(common, str(error).split(";")[0])
     axis = 0 if spec.axis == "x" else 1
-    pushes = _push_all(estimator, sequence, axis, fps)
+    divergences: list[np.ndarray] | None = [] if uses_recording(estimator, open_gel) else None
+    tilt, fv, seconds, degenerate, zero, slip = _push_all(
+        estimator, sequence, axis, fps, divergences
+    )
     # Without the open gel, the offline tool's choice (scripts/estimate.py): estimated again
-    # without the no-contact gate if the gate never saw a press from the open gel.
-    ungated = ungated_fallback(estimator, open_gel)
-    if ungated is not None:
-        ungated.set_reference(sequence.references[: config.reference_frames])
-        pushes = _push_all(ungated, sequence, axis, fps)
-    tilt, fv, seconds, degenerate, zero, slip = pushes
+    # about the contact's support found in the whole recording (recording_support.py).
+    choice = recording_fallback(estimator, divergences or [], open_gel, flow)
+    if choice is not None:
+        choice.estimator.set_reference(sequence.references[: config.reference_frames])
+        first_seconds = seconds
+        tilt, fv, seconds, degenerate, zero, slip = _push_all(choice.estimator, sequence, axis, fps)
+        seconds = seconds + first_seconds  # a frame costs both passes
     n = len(sequence.frames)
     truth = sequence.mechanics.truth[:, axis]
     fit = held_out_fit(tilt, truth)
@@ -211,15 +219,30 @@ def run_one(
         degenerate=degenerate / n,
         zero_tilt=zero / n,
         slip=slip / n,
-        note="ungated (no press seen)" if ungated is not None else "",
+        note=_fallback_note(choice),
     )
 
 
+def _fallback_note(choice: FallbackChoice | None) -> str:
+    """The row's note for the offline tool's choice without the open gel."""
+    if choice is None:
+        return ""
+    support = "recording support" if "contact_support" in choice.record else ""
+    ungated = "ungated (no press seen)" if "noise_gate" in choice.record else ""
+    return ", ".join(part for part in (support, ungated) if part)
+
+
 def _push_all(
-    estimator: TactileEstimator, sequence: RenderedSequence, axis: int, fps: float
+    estimator: TactileEstimator,
+    sequence: RenderedSequence,
+    axis: int,
+    fps: float,
+    divergences: list[np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int, int, int]:
     """Push every frame of ``sequence``: the tilt and the baseline's on ``axis``, the seconds
-    of each push, and the counts of degenerate, zero-tilt and slip-flagged frames."""
+    of each push, and the counts of degenerate, zero-tilt and slip-flagged frames.
+    ``divergences``: if given, each frame's ``field_divergence`` is appended to it (timed
+    with the push)."""
     n = len(sequence.frames)
     tilt = np.empty(n)
     fv = np.empty(n)
@@ -228,6 +251,8 @@ def _push_all(
     for i, frame in enumerate(sequence.frames):
         began = time.perf_counter()
         estimate = estimator.push(frame, (i + 1) / fps)
+        if divergences is not None:
+            divergences.append(estimator.field_divergence())
         seconds[i] = time.perf_counter() - began
         tilt[i] = (estimate.tau_x, estimate.tau_y)[axis]
         fv[i] = (estimate.fv_tau_x, estimate.fv_tau_y)[axis]

@@ -12,7 +12,6 @@ import numpy as np
 
 from controller.episode import topics
 from controller.episode.foxglove_types import transforms_bytes
-from controller.episode.recorder import finite_or_none
 from controller.episode.session import EpisodeRecording
 from controller.episode.writer import json_bytes
 from controller.loop import TickRecord
@@ -29,7 +28,7 @@ _SLICES = {
 
 def truth_json(row: np.ndarray) -> bytes:
     out: dict[str, Any] = {}
-    values = [finite_or_none(v) for v in row.tolist()]
+    values = row.tolist()
     for name, where in _SLICES.items():
         out[name] = values[where] if COLUMNS[name] > 1 else values[where.start]
     return json_bytes(out)

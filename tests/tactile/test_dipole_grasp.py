@@ -167,3 +167,35 @@ def test_open_frames_of_another_size_are_refused_and_can_be_forgotten(renderer):
     assert est.contact_centre_mm is None
     with pytest.raises(ValueError, match="capture_open needs a whole number"):
         est.capture_open(0)
+
+
+def test_a_given_support_serves_where_the_open_gel_gives_none(renderer):
+    """set_contact_support (the offline tool's support from a whole recording): used for the
+    references the open gel does not locate, behind the no-contact gate; the open gel's own
+    support comes first; one that does not fit the grid is refused, leaving the estimator as
+    it was; None forgets it."""
+    reference = renderer.render(press_px())
+    weights = np.zeros((12, 16))
+    weights[3:7, 9:13] = 1.0
+    given = GraspSupport(weights, (2.5, -1.5))
+    est = TactileEstimator(GRID_LK, PROFILE)
+    est.set_contact_support(given)
+    est.set_reference(reference)
+    assert est.contact_centre_mm == (2.5, -1.5) and est.noise_gated
+    about = DipoleMomentCalculator(X_MM, Y_MM, "grasp_centroid")
+    about.set_grasp_support(given)
+    frame = renderer.render(press_px(2.4))
+    estimate = est.push(frame, 0.0)
+    dipole = about(est.field_divergence())
+    assert estimate.tau_x == pytest.approx(dipole.tilt_torque_raw[0], rel=1e-12, abs=1e-15)
+    est.set_open_reference([renderer.render()])
+    est.set_reference(reference)  # the open gel locates the press: its support, no gate
+    assert est.contact_centre_mm != (2.5, -1.5) and not est.noise_gated
+    est.set_open_reference(None)
+    est.set_contact_support(GraspSupport(np.ones((4, 4)), (0.0, 0.0)))
+    with pytest.raises(ValueError, match="grasp support must have 192 grid values"):
+        est.set_reference(reference)
+    assert not est.noise_gated  # left as it was
+    est.set_contact_support(None)
+    est.set_reference(reference)
+    assert est.contact_centre_mm is None and est.noise_gated

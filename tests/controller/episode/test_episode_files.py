@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import json
 import threading
 
+import numpy as np
 import pytest
 from mcap.writer import Writer
 
@@ -106,9 +108,14 @@ def test_a_file_cut_inside_its_header_is_not_an_episode(tmp_path):
 def test_a_record_its_encoder_refuses_is_dropped_and_counted_and_writing_goes_on(tmp_path):
     writer = _writer(tmp_path / "e.mcap")
     writer.log(LOOP_TICK, 0.0, json_bytes, {"index": 0, "start_s": 0.0, "phase": "x"})
-    writer.log(LOOP_TICK, 0.01, json_bytes, {"index": 1, "start_s": float("nan"), "phase": "x"})
+    writer.log(LOOP_TICK, 0.01, json_bytes, {"index": 1, "start_s": object(), "phase": "x"})
     writer.log(LOOP_TICK, 0.02, json_bytes, {"index": 2, "start_s": 0.02, "phase": "x"})
     writer.close({"reason": "done"})
     ep = read_episode(tmp_path / "e.mcap")
     assert [m.value["index"] for m in ep.messages("/loop/tick")] == [0, 2]
     assert ep.complete and ep.outcome["dropped_total"] == "1"
+
+
+def test_json_writes_a_non_finite_number_as_null_and_numpy_values_as_numbers():
+    payload = {"a": float("nan"), "b": np.array([1.5, np.inf]), "c": np.float32(0.25)}
+    assert json.loads(json_bytes(payload)) == {"a": None, "b": [1.5, None], "c": 0.25}

@@ -4,6 +4,8 @@ leaves a file the reader opens up to its last flush and ``repair`` finishes."""
 
 from __future__ import annotations
 
+import bisect
+import itertools
 import json
 import math
 import os
@@ -63,9 +65,17 @@ def test_every_stream_round_trips(trial):
         c["twist_linear_m_s"] + c["twist_angular_rad_s"] for c in commands if c["twist_linear_m_s"]
     ]
     assert twists == [t["twist"] for t in ticks if "twist" in t]
-    widths = [m.value["width_m"] for m in ep.messages("/gripper/status")]
-    assert widths == [t["gripper_width_m"] for t in ticks]
-    assert all(m.value["in_control_by"] == "machine" for m in ep.messages("/teleop/input"))
+    gripper = list(ep.messages("/gripper/status"))  # latched: a tick holds the newest before
+    tick_times = [m.t_s for m in ep.messages("/loop/tick")]
+    assert gripper[0].t_s == tick_times[0] and len(gripper) < len(ticks)
+    period_s = 1.0 / task.config.loop.rate_hz  # a tick 1 s or more after the last one
+    assert all(b.t_s - a.t_s < 1.0 + 1.5 * period_s for a, b in itertools.pairwise(gripper))
+    times = [g.t_s for g in gripper]
+    held = [gripper[bisect.bisect_right(times, t) - 1] for t in tick_times]
+    assert [g.value["width_m"] for g in held] == [t["gripper_width_m"] for t in ticks]
+    teleop = list(ep.messages("/teleop/input"))
+    assert 0 < len(teleop) < len(ticks)
+    assert all(m.value["in_control_by"] == "machine" for m in teleop)
 
     transitions = [m.value for m in ep.messages("/machine/transition")]
     assert [(t["from"], t["to"], t["reason"], t["rule"]) for t in transitions] == [

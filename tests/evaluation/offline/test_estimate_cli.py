@@ -320,8 +320,10 @@ def test_truncated_video_with_allow_damaged_warns_and_keeps_true_times(clip, tmp
     out = tmp_path / "x.csv"
     code, err = run_main(capsys, clip, "--out", out, "--allow-damaged")
     assert code == 0
-    assert err.startswith("estimate: warning:") and "header says 12 frames" in err
-    assert len(err.splitlines()) == 1
+    lines = err.splitlines()  # the loss, and the choice made without --open (one line each)
+    assert all(line.startswith("estimate: warning:") for line in lines)
+    assert len([line for line in lines if "header says 12 frames" in line]) == 1
+    assert len(lines) == 2 and "no open gel given" in lines[0]
     assert rows_of(out) == [(i, pytest.approx(i / 20.0)) for i in range(8)]
 
 
@@ -554,46 +556,73 @@ def _tilt_x_columns(path: Path) -> tuple[np.ndarray, np.ndarray]:
     )
 
 
-def test_without_open_frames_a_recording_that_never_leaves_the_noise_is_estimated_ungated(
-    tmp_path, capsys
-):
-    """Issue 23: zeroed on a grasp (no --open), a weak tilt never establishes a contact, and
-    the no-contact gate would zero most of it; the tool then re-estimates without the gate,
-    says so in one line and records the choice beside the CSV. With --open, or once a
-    contact is established, it does not."""
-    from dataclasses import replace
-
-    from evaluation.offline.estimate_cli import UNGATED_REASON, fallback_sidecar
+def _recording_folders(tmp_path: Path, push: float) -> tuple[object, dict[str, Path]]:
+    """A varied contact tilted about x (seed 314, 20 frames) as recorded in the grasp
+    ("grasped": its 4 reference frames, then the tilt) and from the open gel on ("opened")."""
     from evaluation.realgel.sequences import SequenceSpec, render
 
-    spec = SequenceSpec("gelsight_background", "x", 0.0, 0.4, 3.0, 314, 20, contact="varied")
+    spec = SequenceSpec("gelsight_background", "x", push, 0.4, 3.0, 314, 20, contact="varied")
     sequence = render(spec, 4)
     frames = [*sequence.references, *sequence.frames]  # an old recording, in the grasp
     folders = {}
     for name, recorded in (("grasped", frames), ("opened", [*sequence.open_frames, *frames])):
-        folders[name] = tmp_path / name
+        folders[name] = tmp_path / f"{name}{push}"
         folders[name].mkdir()
         for index, frame in enumerate(recorded):
             cv2.imwrite(str(folders[name] / f"f{index:03d}.png"), frame)
+    return sequence, folders
+
+
+@pytest.mark.parametrize("push", [0.0, 0.4])
+def test_without_open_frames_the_tool_takes_the_contact_from_the_whole_recording(
+    tmp_path, capsys, push
+):
+    """Issue 23: zeroed on a grasp (no --open), the tool finds the contact's support in the
+    whole recording and estimates it again about it, says so in one line and records the
+    choice beside the CSV. A weak tilt alone never establishes a contact, and the no-contact
+    gate would zero most of it: that recording is also estimated without the gate. With
+    --open the tool keeps the configuration and removes an old record."""
+    from dataclasses import replace
+
+    from evaluation.offline.estimate_cli import fallback_sidecar
+    from evaluation.offline.recording_support import (
+        SUPPORT_REASON,
+        UNGATED_REASON,
+        recording_support,
+    )
+
+    sequence, folders = _recording_folders(tmp_path, push)
+    frames = [*sequence.references, *sequence.frames]
     out = tmp_path / "x.csv"
     sidecar = fallback_sidecar(out)
     assert main([str(folders["grasped"]), "--reference", "0:4", "--out", str(out)]) == 0
     err = capsys.readouterr().err.strip()
-    assert err.count("\n") == 0 and UNGATED_REASON in err and sidecar.name in err
-    assert json.loads(sidecar.read_text()) == {
-        "estimator": "default",
-        "noise_gate": None,
-        "reason": UNGATED_REASON,
-    }
+    assert err.count("\n") == 0 and SUPPORT_REASON in err and sidecar.name in err
+    assert (UNGATED_REASON in err) == (push == 0.0)
+    record = json.loads(sidecar.read_text())
+    assert record["estimator"] == "default" and SUPPORT_REASON in record["reason"]
+    assert ("noise_gate" in record) == (push == 0.0)
+    # the same, step by step: a first pass for the divergences, then about their support
+    profile = sensor_profile("gelsight_mini")
+    config = sensor_estimator(profile)[1]
+    first = TactileEstimator(config, profile)
+    first.set_reference(sequence.references)
+    divergences = []
+    for frame in frames:
+        first.push(frame, 0.0)
+        divergences.append(first.field_divergence())
+    field = first.field
+    support = recording_support(divergences, field.x_mm, field.y_mm)
+    assert support is not None
+    assert record["contact_support"]["centre_mm"] == pytest.approx(support.centre_mm, abs=1e-4)
+    second = TactileEstimator(replace(config, noise_gate=None) if push == 0.0 else config, profile)
+    second.set_contact_support(support)
+    second.set_reference(sequence.references)
+    assert second.contact_centre_mm == support.centre_mm
+    expected = [second.push(frame, 0.0).tau_x for frame in frames]
     tau_x, degenerate = _tilt_x_columns(out)
-    ungated = TactileEstimator(
-        replace(sensor_estimator(sensor_profile("gelsight_mini"))[1], noise_gate=None),
-        sensor_profile("gelsight_mini"),
-    )
-    ungated.set_reference(sequence.references)
-    expected = [ungated.push(frame, 0.0).tau_x for frame in frames]
     np.testing.assert_allclose(tau_x, expected, rtol=1e-8, atol=1e-12)
-    assert not degenerate.any()
+    assert not degenerate[4:].any()
     # with the open gel the tool keeps the configuration, and the old record goes
     args = [str(folders["opened"]), "--reference", "4:8", "--open", "0:4", "--out", str(out)]
     assert main(args) == 0

@@ -1,0 +1,155 @@
+"""Where the episode writer's thread spends its CPU (docs/EPISODES.md "Cost"): a simulated
+usb_c trial run as fast as possible for ``--seconds`` of loop time (the search made to fail so
+it lasts), with each record's encoding and ``mcap`` ``add_message`` and each file flush timed
+on the writer thread (``time.thread_time_ns``), by topic.
+
+The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
+slower than real time their count per second of loop time is not the real-time one; the
+last line therefore also gives the real-time estimate: the records' work per second of loop
+time plus one flush's mean cost times the flushes a real-time second makes. The timers add
+about a microsecond per record.
+
+    python scripts/bench_episode_stages.py [--seconds 20] [--seed 1]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from controller.episode.session import EPISODE_FILE, EpisodeOptions
+from controller.episode.writer import EpisodeWriter
+from controller.run import load_task
+from evaluation.common.machine_info import describe_machine
+from evaluation.trials.trial import run
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not 1.0 <= value <= 600.0:
+        raise argparse.ArgumentTypeError(f"expected seconds in [1, 600], got {text!r}")
+    return value
+
+
+class StageTimes:
+    """Writer-thread CPU (ns) by stage and topic, filled by the patched writer."""
+
+    def __init__(self) -> None:
+        self.encode_ns: Counter[str] = Counter()
+        self.add_ns: Counter[str] = Counter()
+        self.count: Counter[str] = Counter()
+        self.flush_ns = 0
+        self.flushes = 0
+        self.busy_s = 0.0
+        self.flush_interval_s = 0.0
+
+    def patch(self) -> Any:
+        """Patch ``EpisodeWriter`` (log, __init__, close); returns a function that undoes it."""
+        original_log, original_init = EpisodeWriter.log, EpisodeWriter.__init__
+        original_close = EpisodeWriter.close
+        clock = time.thread_time_ns
+        stages = self
+
+        def log(self, topic, t_s, encode, payload):  # type: ignore[no-untyped-def]
+            def timed(item: Any) -> bytes:
+                began = clock()
+                data = encode(item)
+                stages.encode_ns[topic.name] += clock() - began
+                stages.count[topic.name] += 1
+                return data
+
+            original_log(self, topic, t_s, timed, payload)
+
+        def init(self, *args, **kwargs):  # type: ignore[no-untyped-def]
+            original_init(self, *args, **kwargs)
+            stages.flush_interval_s = self.flush_interval_s
+            mcap = self._mcap
+            add, flush = mcap.add_message, mcap.flush
+            names: dict[int, str] = {}
+
+            def add_message(channel, log_time, data, publish_time, sequence=0):  # type: ignore[no-untyped-def]
+                began = clock()
+                add(channel, log_time, data, publish_time, sequence)
+                name = names.get(channel) or names.setdefault(channel, _topic_of(self, channel))
+                stages.add_ns[name] += clock() - began
+
+            def flushed() -> None:
+                began = clock()
+                flush()
+                stages.flush_ns += clock() - began
+                stages.flushes += 1
+
+            mcap.add_message, mcap.flush = add_message, flushed
+
+        def close(self, outcome=None):  # type: ignore[no-untyped-def]
+            original_close(self, outcome)
+            stages.busy_s = self.busy_s
+
+        EpisodeWriter.log, EpisodeWriter.close = log, close  # type: ignore[method-assign]
+        EpisodeWriter.__init__ = init  # type: ignore[method-assign]
+
+        def undo() -> None:
+            EpisodeWriter.log, EpisodeWriter.close = original_log, original_close  # type: ignore[method-assign]
+            EpisodeWriter.__init__ = original_init  # type: ignore[method-assign]
+
+        return undo
+
+
+def _topic_of(writer: EpisodeWriter, channel: int) -> str:
+    return next((name for name, cid in writer._channels.items() if cid == channel), "?")
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(
+        prog="bench_episode_stages", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
+    parser.add_argument("--seed", type=int, default=1)
+    args = parser.parse_args(argv)
+    budget = f"{args.seconds:g}"
+    task = load_task("usb_c", [f"machine.timeouts.search_s={budget}",
+                               f"machine.timeouts.total_s={budget}",
+                               "machine.search.uncertainty_xy_m=0.0003"])  # fmt: skip
+    stages = StageTimes()
+    undo = stages.patch()
+    try:
+        with tempfile.TemporaryDirectory(prefix="bench_episode_stages_") as work:
+            out = Path(work) / "trial"
+            began = time.monotonic()
+            outcome = run(task, "dipole", args.seed, out_dir=out, episode=EpisodeOptions())
+            wall_s = time.monotonic() - began
+            size = (out / EPISODE_FILE).stat().st_size
+    finally:
+        undo()
+    loop_s = outcome.loop.stats.ticks / task.config.loop.rate_hz
+    print(f"Machine: {describe_machine('the trial in one process, its writer thread')}")
+    print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time in {wall_s:.1f} s of wall "
+          f"time, {sum(stages.count.values())} records, file {size / 1e6:.2f} MB\n")  # fmt: skip
+    print(
+        "| topic | records | encode, us each | add_message, us each | CPU per s of loop time, ms |"
+    )
+    print("|---|---|---|---|---|")
+    for name in sorted(stages.count, key=lambda k: -(stages.encode_ns[k] + stages.add_ns[k])):
+        n = stages.count[name]
+        total = stages.encode_ns[name] + stages.add_ns[name]
+        print(f"| {name} | {n} | {stages.encode_ns[name] / n / 1e3:.1f} | "
+              f"{stages.add_ns[name] / n / 1e3:.1f} | {total / 1e6 / loop_s:.2f} |")  # fmt: skip
+    records_s = (sum(stages.encode_ns.values()) + sum(stages.add_ns.values())) / 1e9
+    flush_each_s = stages.flush_ns / 1e9 / max(stages.flushes, 1)
+    other_s = stages.busy_s - records_s - stages.flush_ns / 1e9
+    print(f"\nwriter thread CPU {stages.busy_s:.3f} s = {stages.busy_s / loop_s * 100:.2f} % "
+          f"of a core per s of loop time: records (encode + add) {records_s:.3f} s, "
+          f"{stages.flushes} flushes {stages.flush_ns / 1e9:.3f} s ({flush_each_s * 1e3:.2f} "
+          f"ms each), the rest (waiting, queue, timers) {other_s:.3f} s")  # fmt: skip
+    realtime = records_s / loop_s + flush_each_s / stages.flush_interval_s
+    print(f"real-time estimate (records per s of loop time + a flush every "
+          f"{stages.flush_interval_s:g} s): {realtime * 100:.2f} % of a core, without the "
+          f"rest")  # fmt: skip
+    return 0
