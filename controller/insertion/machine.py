@@ -661,7 +661,8 @@ class InsertionMachine:
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
         w_t = -self.signals.s2t @ (gains * outside) * scale
         angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
-        return rotation.apply(w_t) + settings.upright_gain_1_s * angle * axis
+        beyond = max(angle - settings.upright_within_rad, 0.0)
+        return rotation.apply(w_t) + settings.upright_gain_1_s * beyond * axis
 
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B servoing the TCP to the approach rotation."""

@@ -191,7 +191,9 @@ class AlignSettings(Config):
     term ``upright_gain_1_s`` x (tilt of T z from straight down). Gains ``gain_tau_*`` in
     rad/s per noise unit; tolerances ``tol_tau_*_sigma`` in noise units. Aligned: every
     torque within its tolerance and the tilt within ``tilt_tol_rad`` for ``frames``
-    successive estimates.
+    successive estimates. ``upright_within_rad``: within this tilt of straight down the
+    uprighting stops and only the torques turn the plug (the plug's upright is not the arm's
+    when the grasp is tilted; EXPERIMENT on feel24).
 
     The pivot (the tip face's lowest edge, the heel) is moved backward, against the tilt's
     lean, at ``wall_seek_m_s`` for at most ``wall_seek_max_m``: uprighting about the heel
@@ -206,6 +208,7 @@ class AlignSettings(Config):
     tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
     upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
+    upright_within_rad: float = number(0.0, 0.3, default=0.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
