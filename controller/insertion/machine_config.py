@@ -185,35 +185,46 @@ class SearchSettings(Config):
 
 @config_dataclass
 class AlignSettings(Config):
-    """ALIGN: rotate the TCP about the plug's tip (the tip stays put). The angular velocity in
-    T is w_T = -R_S2T (k * n_S) (the TCP yields to the contact's torque; n_S the normalised,
-    filtered torques tau_x, tau_y, tau_z, zero within their tolerance) plus the uprighting
-    term ``upright_gain_1_s`` x (tilt of T z from straight down). Gains ``gain_tau_*`` in
-    rad/s per noise unit; tolerances ``tol_tau_*_sigma`` in noise units. Aligned: every
-    torque within its tolerance and the tilt within ``tilt_tol_rad`` for ``frames``
-    successive estimates. ``upright_within_rad``: within this tilt of straight down the
-    uprighting stops and only the torques turn the plug (the plug's upright is not the arm's
-    when the grasp is tilted; EXPERIMENT on feel24).
+    """ALIGN, after SEARCH caught the tilted tip's lowest edge (the heel) in the opening, in
+    three stages (docs/ARCHITECTURE.md, "ALIGN"):
 
-    The pivot (the tip face's lowest edge, the heel) is moved backward, against the tilt's
-    lean, at ``wall_seek_m_s`` for at most ``wall_seek_max_m``: uprighting about the heel
-    puts the plug's body on the lean's side of it, so the heel must sit against the
-    opening's wall behind it for the plug to come upright inside the opening (the wall
-    stops the heel; the compliant wrist takes up the rest)."""
+    *Seek*: move the heel horizontally against the tilt's lean at ``seek_speed_m_s``,
+    pressing with SEARCH's load, until the opening's wall (or the friction at the rim)
+    holds it: the lateral resistance r (``search.lateral_resistance``: the tilt torque
+    of a force against the motion, noise units) risen by ``wall_sigma`` above its value when
+    ALIGN began, for ``frames`` successive estimates. No wall within ``seek_max_m``: the
+    catch was not the opening (BACKOFF, then SEARCH again).
 
-    gain_tau_x: float = number(0.0, 10.0, default=0.004)
-    gain_tau_y: float = number(0.0, 10.0, default=0.004)
-    gain_tau_z: float = number(0.0, 10.0, default=0.004)
+    *Turn*: turn the TCP toward straight down about the heel at ``upright_gain_1_s`` x the
+    tilt (capped by ``max_angular_speed_rad_s``), holding the heel against the wall: its
+    horizontal speed is ``seek_speed_m_s`` x (1 - rise / ``wall_sigma``) within +-1. Ends
+    when the tilt of T z from straight down is within ``tilt_tol_rad`` (the arm's upright,
+    which is the plug's only for a nominal grasp). If the tip face's lowest edge is then
+    ``enter_m`` below the surface found by touch, the plug is in the opening (the servo
+    stage); otherwise the *yaw* stage sweeps the yaw as INSERT's press does
+    (``insert.yaw_sweep_rad``, ``yaw_rate_rad_s``, ``sweeps``) until it enters, or backs
+    off to SEARCH again.
+
+    *Servo*: turn about the tip to null the torques, pressing: the TCP
+    yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
+    torques tau_x, tau_y, tau_z, zero within their tolerance; gains ``gain_tau_*`` in rad/s
+    per noise unit). Aligned: every torque within its tolerance (``tol_tau_*_sigma``, noise
+    units) for ``frames`` successive estimates."""
+
+    gain_tau_x: float = number(0.0, 10.0, default=0.02)
+    gain_tau_y: float = number(0.0, 10.0, default=0.02)
+    gain_tau_z: float = number(0.0, 10.0, default=0.005)
     tol_tau_x_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
-    tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
+    tol_tau_z_sigma: float = number(0.1, 1e4, default=18.0)
     upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
-    upright_within_rad: float = number(0.0, 0.3, default=0.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
-    wall_seek_m_s: float = number(0.0, 0.02, default=0.001)
-    wall_seek_max_m: float = number(0.0, 0.01, default=0.0015)
+    seek_speed_m_s: float = number(1e-5, 0.02, default=0.001)
+    seek_max_m: float = number(1e-5, 0.01, default=0.0025)
+    wall_sigma: float = number(0.1, 1e4, default=2.0)
+    enter_m: float = number(1e-5, 0.01, default=0.001)
 
 
 @config_dataclass
@@ -235,7 +246,8 @@ class InsertSettings(Config):
     ``compliance_scale`` of its gains. The axial force (the estimated force along T z,
     estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
     torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
-    INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF, then ALIGN).
+    INSERT, for ``jam_frames`` successive estimates, or the TCP not 0.1 mm lower for
+    ``stall_s``: a jam (BACKOFF, then ALIGN).
     ``force_budget`` in N.
 
     Success (either stage): the tip ``depth_m`` below the board surface, by the arm's TCP,
@@ -253,6 +265,7 @@ class InsertSettings(Config):
     yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
     yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
     sweeps: int = number(1, 20, default=1)
+    stall_s: float = number(0.1, 60.0, default=1.5)
 
 
 @config_dataclass
@@ -313,7 +326,7 @@ class Timeouts(Config):
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)
     search_s: float = number(0.1, 600.0, default=30.0)
-    align_s: float = number(0.1, 600.0, default=5.0)
+    align_s: float = number(0.1, 600.0, default=10.0)
     insert_s: float = number(0.1, 600.0, default=8.0)
     backoff_s: float = number(0.1, 600.0, default=3.0)
     release_s: float = number(0.1, 600.0, default=3.0)
