@@ -470,6 +470,10 @@ class InsertionMachine:
         config.AlignSettings)."""
         stage, settings = self._stage, self.config.align
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        if stage.name == "" and tilt_of_rotation(rotation) <= settings.tilt_tol_rad:
+            # upright already (after a jam's back-off): no heel to seek or turn about
+            self._next_stage(obs, "servo" if self._entered(obs, rotation) else "yaw")
+            stage.start_yaw_rad = _yaw_of(rotation) - self.hole.yaw_rad
         if stage.name == "":
             self._next_stage(obs, "seek")
             lean = rotation.apply([0.0, 0.0, 1.0])

@@ -263,7 +263,7 @@ class InsertSettings(Config):
     press_load_ratio: float = number(0.1, 100.0, default=1.0)
     engage_m: float = number(1e-5, 0.01, default=0.0008)
     yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
-    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
+    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.15)
     sweeps: int = number(1, 20, default=1)
     stall_s: float = number(0.1, 60.0, default=1.5)
 
