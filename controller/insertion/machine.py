@@ -139,8 +139,6 @@ class InsertionMachine:
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
         self._surface_z: float | None = None  # the board surface's height found by touch (m)
-        self._drag_z_m: float | None = None  # SEARCH's TCP height at contact, kept for ALIGN's
-        # return to the drag (no_wall); reset by each new surface contact
         self._rule = ""  # the rule deciding this tick's command (Command.rule)
 
     # -- the Machine protocol ------------------------------------------------------------
@@ -393,7 +391,6 @@ class InsertionMachine:
         if stage.count >= settings.contact_frames:
             rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
             self._surface_z = float(self._lowest_edge(obs, rotation)[2])
-            self._drag_z_m = None
             self._go(obs, Phase.SEARCH, "surface_contact")
             return _hold()
         self._fire("descend")
@@ -405,9 +402,6 @@ class InsertionMachine:
         stage, settings = self._stage, self.config.search
         if stage.detector is None:
             stage.detector = HoleDetector(settings, self.config.signals.ema_alpha)
-            if self._drag_z_m is not None:  # dragging on after a catch that was no opening
-                stage.z0_m = self._drag_z_m
-            self._drag_z_m = stage.z0_m
         self._search_s_m += settings.speed_m_s * min(self._tick_s, _MAX_DT_S)
         offset = self._planar(self._pattern.offset(self._search_s_m))
         ahead = self._planar(self._pattern.offset(self._search_s_m + 1e-4)) - offset
@@ -456,7 +450,6 @@ class InsertionMachine:
                 self._fire("probe_surface")
                 self._next_stage(obs, "")
                 stage.z0_m = float(obs.arm.tcp.xyz_m[2])
-                self._drag_z_m = stage.z0_m
             return _hold()
         if tip_z < self.hole.z_m - approach.overtravel_m:
             return self._fail(obs, FailureReason.CONTACT_LOST)
@@ -507,8 +500,7 @@ class InsertionMachine:
             stage.point = edge
             return _hold()
         if moved >= settings.seek_max_m:
-            self._go(obs, Phase.SEARCH, "no_wall")  # drag on where the pattern left off
-            return _hold()
+            return self._back_off(obs, "no_wall")
         self._fire("seek")
         v_edge = settings.seek_speed_m_s * stage.v_tip
         v_edge[2] = -self._press_rate()
@@ -683,7 +675,7 @@ class InsertionMachine:
         if self._retries >= self.config.backoff.max_retries:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
-        self._search_again = guard in ("not_engaged", "not_entered")
+        self._search_again = guard in ("not_engaged", "no_wall", "not_entered")
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 

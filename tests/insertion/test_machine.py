@@ -204,22 +204,14 @@ def test_align_seeks_the_wall_against_the_lean_then_turns_upright_about_the_heel
     assert np.linalg.norm((now - held)[:2]) < 5e-4  # turned about the heel, held at the wall
 
 
-def test_a_catch_without_a_wall_is_not_the_opening_and_the_drag_goes_on():
+def test_a_catch_without_a_wall_is_not_the_opening_and_searches_again():
     world = ToyWorld(catch=0.0)  # the tip drops in, but nothing resists its sideways motion
-    machine = make_machine(world, toy_config())
-    world.run_until(machine, Phase.SEARCH)
-    world.step(machine)
-    pressed_from = machine._stage.z0_m
-    world.run_until(machine, Phase.ALIGN)
-    searched = machine._search_s_m
-    while machine.phase is Phase.ALIGN:
-        world.step(machine)
-    assert path(machine)[-1] == ("ALIGN", "SEARCH", "no_wall")
-    assert machine.retries == 0
-    world.step(machine)
-    assert machine._stage.z0_m == pressed_from  # the same preload, not pressed deeper
-    world.run_until(machine, Phase.ALIGN)
-    assert machine._search_s_m > searched  # the drag went on along the pattern
+    cfg = replace(toy_config(), backoff=BackoffSettings(max_retries=1))
+    machine = make_machine(world, cfg)
+    world.run_until(machine, (Phase.BACKOFF, Phase.INSERT))
+    assert ("ALIGN", "BACKOFF", "no_wall") in path(machine)
+    world.run_until(machine, Phase.APPROACH)
+    assert path(machine)[-1] == ("BACKOFF", "APPROACH", "search_again")
 
 
 def test_the_force_budget_counts_as_a_jam():
