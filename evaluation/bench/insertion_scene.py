@@ -7,9 +7,12 @@ in the grasp: a benchmark may look; a controller may not): grasp the
 plug, a tilted approach beside the opening, touch the surface, drag the tip over the
 opening's edge, turn upright over the hole and insert to the floor. Every tick reads the
 arm, the gripper and the newest tactile frame (25 Hz: the gel is solved and the frame
-rendered once per new frame) and runs the estimator on each new frame. Reported: simulated
-seconds per wall second (the median over runs), the frames, the final insertion depth and
-the largest contact force.
+rendered once per new frame) and gives each new frame to the estimator. The estimator is
+zeroed as the control loop zeroes it for the insertion machine (controller/loop.py): the
+open gel from the task's ``loop.rezero_frames`` frames before the fingers close, the
+reference from as many frames once the grasp has settled (until then a push only
+captures). Reported: simulated seconds per wall second and per CPU second (the median over
+runs), the frames, the final insertion depth and the largest contact force.
 
     python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
 
@@ -121,16 +124,21 @@ def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
     clock, arm, gripper, tactile = sim.clock, sim.arm, sim.gripper, sim.tactile
     for device in (arm, gripper, tactile):
         device.connect()
+    zeroing_frames = loaded.config.loop.rezero_frames
     begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), clock.now()
     loop = _Loop(sim, estimator)
     gripper.activate()
+    if estimator is not None:
+        estimator.capture_open(zeroing_frames)
+    while loop.frames < zeroing_frames:  # the open gel (the same ticks without estimator)
+        loop.tick(None)
     gripper.move(0.0, 0.05, GRIP_FORCE_N)
     while not gripper.read_status().holding:
         loop.tick(None)
     for _ in range(round(0.2 * RATE_HZ)):
         loop.tick(None)
     if estimator is not None:
-        estimator.rezero(1)
+        estimator.rezero(zeroing_frames)
     previous = arm.read_status().tcp
     receptacle = loaded.scene.receptacle
     for waypoint in script(receptacle.width_m / 2, receptacle.depth_m):
