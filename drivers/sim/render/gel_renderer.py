@@ -142,10 +142,11 @@ class GelRenderer:
         return shade(gel, shading, noise)
 
     def _optics(self, end_px: np.ndarray | None, start_px: np.ndarray | None) -> np.ndarray:
-        """The gel as the lens sees it: moved by the fields, occluded, blurred (float32; the
-        caller must not change it). A function of the fields alone, so the last one is kept and reused when both
-        fields equal the last call's (a steady press, or no contact, renders the same gel
-        under new noise and lighting)."""
+        """The gel's reflectance as the lens sees it, per colour channel: moved by the fields,
+        occluded, blurred (float32 (H, W, 3); the caller must not change it). A function of
+        the fields alone, so the last one is kept and reused when both fields equal the last
+        call's (a steady press, or no contact, renders the same gel under new noise and
+        lighting)."""
         last = self._last_optics
         if last is not None and _same_field(last[0], end_px) and _same_field(last[1], start_px):
             return last[2]
@@ -154,6 +155,8 @@ class GelRenderer:
             gel = self._occlusion.apply(gel)
         if self.effects.blur_sigma_px > 0:
             gel = cv2.GaussianBlur(gel, (0, 0), self.effects.blur_sigma_px)
+        if gel.ndim == 2:  # one reflectance for the three channels, as ``shade`` takes it
+            gel = cv2.merge([gel, gel, gel])
         self._last_optics = (_kept(end_px), _kept(start_px), gel)
         return gel
 
