@@ -15,6 +15,11 @@ captures). Reported: simulated seconds per wall second and per CPU second (the m
 runs), the frames, the final insertion depth and the largest contact force.
 
     python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
+        [--profile]
+
+``--profile``: after the timed runs, one more run of the first seed under ``cProfile`` on
+the CPU-time clock, its time split by part of the scene and its costliest functions
+(evaluation/bench/scene_profile.py).
 
 The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads, and OpenCV to
 one thread.
@@ -24,7 +29,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import pstats
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import cv2
@@ -32,13 +39,14 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from controller.run import load_task
-from controller.tactile import estimator_for_sensor
+from controller.run import Task, load_task
+from controller.tactile import TactileEstimator, estimator_for_sensor
 from core.devices import Pose
 from core.spatial import rpy_from_rotation
 from drivers.registry import WorldSpec, build_device_set
 from drivers.sim.scenes.insertion import InsertionSim
 from drivers.sim.scenes.insertion.frames import S_IN_T
+from evaluation.bench.scene_profile import part_clock, part_times, profile_call, top_functions
 from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
 
@@ -115,18 +123,36 @@ class RunResult:
         return self.sim_s / self.cpu_s
 
 
-def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
-    """One scripted insertion (see the module docstring), timed from the first command."""
+def scripted_run(
+    task: str,
+    seed: int,
+    estimate: bool,
+    runner: Callable[[Callable[[], None]], object] = lambda drive: drive(),
+) -> RunResult:
+    """One scripted insertion (see the module docstring), timed from the first command;
+    ``runner(drive)`` runs its timed part (e.g. under a profiler)."""
     loaded = load_task(task)
     world = WorldSpec(loaded.scene, loaded.config.plug, loaded.config.hole, seed)
     sim = build_device_set(loaded.device_files, "sim", world).world
     estimator = estimator_for_sensor(loaded.tactile_model) if estimate else None
-    clock, arm, gripper, tactile = sim.clock, sim.arm, sim.gripper, sim.tactile
-    for device in (arm, gripper, tactile):
+    for device in (sim.arm, sim.gripper, sim.tactile):
         device.connect()
-    zeroing_frames = loaded.config.loop.rezero_frames
-    begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), clock.now()
+    begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), sim.clock.now()
     loop = _Loop(sim, estimator)
+    runner(lambda: _drive(loaded, sim, loop))
+    sim.sync()
+    wall, cpu = time.perf_counter() - begin_wall, time.process_time() - begin_cpu
+    depth = float(sim.truth.arrays()["depth_m"][-1])
+    return RunResult(
+        sim.clock.now() - begin_sim, wall, cpu, loop.frames, depth, sim.truth.max_contact_force_n
+    )
+
+
+def _drive(loaded: Task, sim: InsertionSim, loop: _Loop) -> None:
+    """The timed part: the grasp (zeroing the estimator as the control loop does), then the
+    script's waypoints."""
+    estimator, gripper = loop.estimator, sim.gripper
+    zeroing_frames = loaded.config.loop.rezero_frames
     gripper.activate()
     if estimator is not None:
         estimator.capture_open(zeroing_frames)
@@ -139,7 +165,7 @@ def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
         loop.tick(None)
     if estimator is not None:
         estimator.rezero(zeroing_frames)
-    previous = arm.read_status().tcp
+    previous = sim.arm.read_status().tcp
     receptacle = loaded.scene.receptacle
     for waypoint in script(receptacle.width_m / 2, receptacle.depth_m):
         goal = tcp_for_tip(sim, loaded.config.plug.length_m, waypoint)
@@ -154,19 +180,13 @@ def scripted_run(task: str, seed: int, estimate: bool) -> RunResult:
             )
             loop.tick(Pose(xyz, rpy))
         previous = goal
-    sim.sync()
-    wall, cpu = time.perf_counter() - begin_wall, time.process_time() - begin_cpu
-    depth = float(sim.truth.arrays()["depth_m"][-1])
-    return RunResult(
-        clock.now() - begin_sim, wall, cpu, loop.frames, depth, sim.truth.max_contact_force_n
-    )
 
 
 class _Loop:
     """One 100 Hz tick: read the arm, the gripper and the newest frame (estimating on a new
     one), send the servo target if any, sleep to the period's end."""
 
-    def __init__(self, sim: InsertionSim, estimator) -> None:
+    def __init__(self, sim: InsertionSim, estimator: TactileEstimator | None) -> None:
         self.sim, self.estimator = sim, estimator
         self.frames = 0
         self._last_t: float | None = None
@@ -194,6 +214,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=integer(0, 2**31 - 1), default=0, help="first seed")
     parser.add_argument(
         "--no-estimate", action="store_true", help="leave the tactile estimator out of the loop"
+    )
+    parser.add_argument(
+        "--profile",
+        action="store_true",
+        help="then profile one run of the first seed: CPU time by part of the scene",
     )
     args = parser.parse_args(argv)
     return run_tool("bench_insertion_scene", lambda: bench(args))
@@ -223,4 +248,39 @@ def bench(args: argparse.Namespace) -> int:
         "CPU second of the process (the same on an idle core; lower wall figures mean a busy "
         "machine)."
     )
+    if args.profile:
+        print_profile(args.task, args.seed, estimate)
     return 0
+
+
+def print_profile(task: str, seed: int, estimate: bool) -> None:
+    """Two more runs of ``seed``: one with the parts' timers (the split), one under the
+    profiler (its top functions)."""
+    with part_clock() as seconds:
+        run = scripted_run(task, seed, estimate)
+    print(
+        f"\nSeed {seed}'s timed part by part of the scene (timers around each part's entry "
+        f"points, exclusive of the parts it calls): {run.cpu_s:.3f} CPU s for "
+        f"{run.sim_s:.2f} simulated s.\n"
+    )
+    print("| part | CPU s | share |")
+    print("|---|---|---|")
+    rest = run.cpu_s - sum(seconds.values())
+    for part, part_s in sorted(
+        [*seconds.items(), ("loop and the rest", rest)], key=lambda p: -p[1]
+    ):
+        print(f"| {part} | {part_s:.3f} | {100 * part_s / run.cpu_s:.0f} % |")
+    profiles: list[pstats.Stats] = []
+    run = scripted_run(task, seed, estimate, lambda drive: profiles.append(profile_call(drive)))
+    print(
+        f"\nThe same under cProfile on the CPU clock ({run.cpu_s:.2f} CPU s: the profiler slows "
+        "Python-heavy parts most), by part and by function:\n"
+    )
+    print("| part | CPU s | share |")
+    print("|---|---|---|")
+    for part in part_times(profiles[0]):
+        print(f"| {part.part} | {part.seconds:.3f} | {100 * part.share:.0f} % |")
+    print("\n| function | calls | own CPU s | part |")
+    print("|---|---|---|---|")
+    for where, calls, own_s, part_name in top_functions(profiles[0], 15):
+        print(f"| `{where}` | {calls} | {own_s:.3f} | {part_name} |")

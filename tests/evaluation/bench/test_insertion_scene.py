@@ -9,7 +9,10 @@ def test_the_scripted_insertion_reaches_the_floor():
     assert result.frames > 100 and result.sim_s > 5.0
 
 
-def test_the_benchmark_prints_its_table(capsys):
-    assert main(["--runs", "1", "--no-estimate", "--task", "usb_a"]) == 0
+def test_the_benchmark_prints_its_table_and_its_profile(capsys):
+    assert main(["--runs", "1", "--no-estimate", "--task", "usb_a", "--profile"]) == 0
     out = capsys.readouterr().out
     assert "Machine:" in out and "Median:" in out and "| 0 |" in out
+    split, profile = out.split("under cProfile")
+    assert "| physics |" in split and "| estimator |" not in split  # left out: not timed
+    assert "| physics |" in profile and "| function | calls |" in profile

@@ -138,7 +138,8 @@ class InsertionPhysics:
         ring, n_ring = self._ring, len(self._ring)
         grasp = d.sensordata[self._grasp]  # a fixed buffer (efc_force is not: read it anew)
         mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
-        every, condim, step, total_of = self._truth_every, self._condim, mujoco.mj_step, np.add.reduce
+        every, condim = self._truth_every, self._condim
+        step, total_of = mujoco.mj_step, np.add.reduce
         released, steps, peak = self.released, self._steps, self._peak_force_n
         for i in range(n):
             if released:
