@@ -15,7 +15,11 @@ captures). Reported: simulated seconds per wall second and per CPU second (the m
 runs), the frames, the final insertion depth and the largest contact force.
 
     python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
-        [--profile]
+        [--fingerprint] [--profile]
+
+``--fingerprint``: after the timed runs, each seed again, untimed, with digests of its
+frames, estimates and truth (evaluation/bench/run_fingerprint.py): two versions of the code
+that print the same digests made the same runs bit for bit.
 
 ``--profile``: after the timed runs, one more run of the first seed under ``cProfile`` on
 the CPU-time clock, its time split by part of the scene and its costliest functions
@@ -46,6 +50,7 @@ from core.spatial import rpy_from_rotation
 from drivers.registry import WorldSpec, build_device_set
 from drivers.sim.scenes.insertion import InsertionSim
 from drivers.sim.scenes.insertion.frames import S_IN_T
+from evaluation.bench.run_fingerprint import RunFingerprint
 from evaluation.bench.scene_profile import part_clock, part_times, profile_call, top_functions
 from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
@@ -111,6 +116,7 @@ class RunResult:
     frames: int
     depth_m: float
     max_contact_force_n: float
+    digests: dict[str, str] | None = None  # with a fingerprint (run_fingerprint.py)
 
     @property
     def speed_x(self) -> float:
@@ -128,9 +134,11 @@ def scripted_run(
     seed: int,
     estimate: bool,
     runner: Callable[[Callable[[], None]], object] = lambda drive: drive(),
+    fingerprint: RunFingerprint | None = None,
 ) -> RunResult:
     """One scripted insertion (see the module docstring), timed from the first command;
-    ``runner(drive)`` runs its timed part (e.g. under a profiler)."""
+    ``runner(drive)`` runs its timed part (e.g. under a profiler); ``fingerprint`` is fed
+    every frame and estimate (its hashing is timed too)."""
     loaded = load_task(task)
     world = WorldSpec(loaded.scene, loaded.config.plug, loaded.config.hole, seed)
     sim = build_device_set(loaded.device_files, "sim", world).world
@@ -138,13 +146,19 @@ def scripted_run(
     for device in (sim.arm, sim.gripper, sim.tactile):
         device.connect()
     begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), sim.clock.now()
-    loop = _Loop(sim, estimator)
+    loop = _Loop(sim, estimator, fingerprint)
     runner(lambda: _drive(loaded, sim, loop))
     sim.sync()
     wall, cpu = time.perf_counter() - begin_wall, time.process_time() - begin_cpu
     depth = float(sim.truth.arrays()["depth_m"][-1])
     return RunResult(
-        sim.clock.now() - begin_sim, wall, cpu, loop.frames, depth, sim.truth.max_contact_force_n
+        sim.clock.now() - begin_sim,
+        wall,
+        cpu,
+        loop.frames,
+        depth,
+        sim.truth.max_contact_force_n,
+        None if fingerprint is None else fingerprint.digests(sim.truth),
     )
 
 
@@ -186,8 +200,13 @@ class _Loop:
     """One 100 Hz tick: read the arm, the gripper and the newest frame (estimating on a new
     one), send the servo target if any, sleep to the period's end."""
 
-    def __init__(self, sim: InsertionSim, estimator: TactileEstimator | None) -> None:
-        self.sim, self.estimator = sim, estimator
+    def __init__(
+        self,
+        sim: InsertionSim,
+        estimator: TactileEstimator | None,
+        fingerprint: RunFingerprint | None = None,
+    ) -> None:
+        self.sim, self.estimator, self.fingerprint = sim, estimator, fingerprint
         self.frames = 0
         self._last_t: float | None = None
 
@@ -200,8 +219,13 @@ class _Loop:
         if frame.t_s != self._last_t:
             self._last_t = frame.t_s
             self.frames += 1
+            estimate = None
             if self.estimator is not None:
-                self.estimator.push(frame.image, frame.t_s)
+                estimate = self.estimator.push(frame.image, frame.t_s)
+            if self.fingerprint is not None:
+                self.fingerprint.frame(frame.image)
+                if estimate is not None:
+                    self.fingerprint.estimate(estimate)
         if target is not None:
             sim.arm.servo_pose(target)
         sim.clock.sleep(start + 1.0 / RATE_HZ - sim.clock.now())
@@ -214,6 +238,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=integer(0, 2**31 - 1), default=0, help="first seed")
     parser.add_argument(
         "--no-estimate", action="store_true", help="leave the tactile estimator out of the loop"
+    )
+    parser.add_argument(
+        "--fingerprint",
+        action="store_true",
+        help="then run each seed again and print digests of its frames, estimates and truth",
     )
     parser.add_argument(
         "--profile",
@@ -248,6 +277,13 @@ def bench(args: argparse.Namespace) -> int:
         "CPU second of the process (the same on an idle core; lower wall figures mean a busy "
         "machine)."
     )
+    if args.fingerprint:
+        print("\n| seed | frames | estimates | truth |")
+        print("|---|---|---|---|")
+        for seed in range(args.seed, args.seed + args.runs):
+            digests = scripted_run(args.task, seed, estimate, fingerprint=RunFingerprint()).digests
+            assert digests is not None
+            print(f"| {seed} | {digests['frames']} | {digests['estimates']} | {digests['truth']} |")
     if args.profile:
         print_profile(args.task, args.seed, estimate)
     return 0
