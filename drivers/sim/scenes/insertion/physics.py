@@ -154,7 +154,10 @@ class InsertionPhysics:
                 # Elliptic cones: a contact's rows are its normal force, then its friction;
                 # the contacts' rows come last, and every contact has the plug's condim.
                 nefc = d.nefc
-                total = float(total_of(d.efc_force[nefc - ncon * condim : nefc : condim]))
+                if ncon == 1:  # the sum of one row is that row
+                    total = float(d.efc_force[nefc - condim])
+                else:
+                    total = float(total_of(d.efc_force[nefc - ncon * condim : nefc : condim]))
                 if total > peak:
                     peak = total
             if steps % every == 0:
