@@ -128,8 +128,17 @@ def require_finite(name: str, values: Iterable[float]) -> None:
 
 
 def clamp_position(xyz_m: tuple[float, float, float] | np.ndarray, box: WorkspaceBox) -> np.ndarray:
-    """The point of the workspace box nearest to ``xyz_m`` (m, in B)."""
-    return np.clip(np.asarray(xyz_m, dtype=float), box.box_min_m, box.box_max_m)
+    """The point of the workspace box nearest to ``xyz_m`` (m, in B). (``np.clip``'s
+    result, in plain floats: the arm twin clamps every servo command, and NumPy's per-call
+    overhead on three numbers was most of it.)"""
+    x, y, z = (float(v) for v in xyz_m)
+    return np.array(
+        (
+            min(max(x, box.x_min_m), box.x_max_m),
+            min(max(y, box.y_min_m), box.y_max_m),
+            min(max(z, box.z_min_m), box.z_max_m),
+        )
+    )
 
 
 def clamp_tilt(T2B: Quat, max_tilt_rad: float) -> Quat:
@@ -150,7 +159,7 @@ def clamp_pose(pose: Pose, envelope: Envelope) -> Limited[Pose]:
     """``pose`` with its position clipped into the box and its tilt limited; its
     ``rpy_rad`` is kept exactly when the tilt is within."""
     xyz = clamp_position(pose.xyz_m, envelope)
-    limited = () if np.array_equal(xyz, pose.xyz_m) else ("workspace",)
+    limited = () if xyz.tolist() == [float(v) for v in pose.xyz_m] else ("workspace",)
     rotation = quat_from_rpy(pose.rpy_rad)
     clamped = clamp_tilt(rotation, envelope.max_tilt_rad)
     if clamped is rotation:

@@ -209,3 +209,13 @@ def test_the_arm_envelope_holds_the_step_per_servo_command():
     with pytest.raises(ValueError, match="key 'max_step_m'"):
         SafetyEnvelope(max_step_m=0.0)
     assert SafetyEnvelope().max_tilt_rad == Envelope().max_tilt_rad  # the same base keys
+
+
+@given(st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3))
+def test_clamp_position_is_numpys_clip_bit_for_bit(xyz):
+    """The clamp in plain floats gives what ``np.clip`` into the box gave, exactly (the arm
+    twin's trajectories do not change)."""
+    expected = np.clip(np.asarray(xyz, float), ENV.box_min_m, ENV.box_max_m)
+    clamped = clamp_position(tuple(xyz), ENV)
+    assert clamped.dtype == np.float64 and clamped.tobytes() == expected.tobytes()
+    assert clamp_position(np.asarray(xyz), ENV).tobytes() == expected.tobytes()

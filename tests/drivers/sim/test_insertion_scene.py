@@ -30,7 +30,11 @@ from drivers.sim.scenes.insertion import (
 from drivers.sim.scenes.insertion.coupling import GelCoupling
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
-from drivers.sim.scenes.insertion.physics import InsertionPhysics, UnstablePhysicsError
+from drivers.sim.scenes.insertion.physics import (
+    InsertionPhysics,
+    UnstablePhysicsError,
+    _index,
+)
 from drivers.sim.scenes.insertion.scene_config import check_fits
 from drivers.sim.scenes.insertion.truth import TruthLog
 from drivers.sim.scenes.insertion.world import InsertionWorld
@@ -275,6 +279,30 @@ def test_zero_ranges_give_the_nominal_board_and_grasp_and_keep_the_hole_draw():
     assert (nominal.hole.x_m, nominal.hole.y_m, nominal.hole.yaw_rad) == (
         hard.hole.x_m, hard.hole.y_m, hard.hole.yaw_rad,
     )  # fmt: skip
+
+
+def test_a_truth_row_holds_what_the_physics_reports_at_its_step():
+    """The row written in place at a recording step is the accessors' values there, with
+    the contact force's peak since the previous row, and the peak restarts after it."""
+    section = task("usb_c")
+    truth = TruthLog(HOLE, HOLE)
+    pose = tilted_pose(HOLE, section.plug.length_m, (0.008, 0.0, -0.0003), (0.0, 0.0, 0.0))
+    physics = InsertionPhysics(section.scene, section.plug, HOLE, pose, 0.0, truth)
+    every = physics._truth_every * physics.dt_s
+    physics.step_to(every, every, pose)  # started 0.3 mm into the surface: pushed out
+    row = truth.arrays()
+    assert len(truth) == 2 and row["contact_force_n"][-1] > 1.0
+    np.testing.assert_array_equal(row["wrist_wrench_t"][-1], physics.wrist_wrench())
+    np.testing.assert_array_equal(row["tip_xyz_b"][-1], physics.tip_xyz())
+    np.testing.assert_array_equal(row["plug_quat_b"][-1], physics.plug_quat())
+    np.testing.assert_array_equal(row["gel_wrench_s"][-1], physics.gel_wrench_at(every))
+    assert row["depth_m"][-1] == HOLE.z_m - physics.tip_xyz()[2]
+    assert physics._peak_force_n == 0.0
+
+
+def test_consecutive_mujoco_addresses_are_slices():
+    assert _index([3, 4, 5]) == slice(3, 6)
+    np.testing.assert_array_equal(_index([3, 5, 4]), [3, 5, 4])
 
 
 def test_the_plug_sits_in_the_grasp_as_drawn():

@@ -30,7 +30,7 @@ from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
 from drivers.sim.scenes.insertion.frames import S_IN_T, quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
-from drivers.sim.scenes.insertion.truth import TruthLog
+from drivers.sim.scenes.insertion.truth import TRUTH_WIDTH, TruthLog
 
 RING_S = 1.0  # how far back the grasp's wrench is kept, s
 _WRIST = ("wrist_x", "wrist_y", "wrist_z", "wrist_rx", "wrist_ry", "wrist_rz")
@@ -41,6 +41,15 @@ _BAD_STATE = (
     mujoco.mjtWarning.mjWARN_BADQACC,
 )
 _RELEASED_DAMPING = 1e-4  # the gel joints' damping once the fingers let go (numerical only)
+
+
+def _index(addresses: list[int]) -> slice | np.ndarray:
+    """Addresses into MuJoCo's arrays: a slice when they are consecutive (a view, as fast
+    as an attribute), else an index array."""
+    first = int(addresses[0])
+    if [int(a) for a in addresses] == list(range(first, first + len(addresses))):
+        return slice(first, first + len(addresses))
+    return np.array(addresses)
 
 
 class UnstablePhysicsError(RuntimeError):
@@ -80,9 +89,9 @@ class InsertionPhysics:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
         self._grasp = slice(int(force), int(force) + 6)
         wrist = [m.joint(name) for name in _WRIST]
-        self._wrist_j = np.array([j.id for j in wrist])
-        self._wrist_q = np.array([j.qposadr[0] for j in wrist])
-        self._wrist_v = np.array([j.dofadr[0] for j in wrist])
+        self._wrist_j = _index([j.id for j in wrist])
+        self._wrist_q = _index([j.qposadr[0] for j in wrist])
+        self._wrist_v = _index([j.dofadr[0] for j in wrist])
         gel = [m.joint(name) for name in _GEL]
         self._gel_j = np.array([j.id for j in gel])
         self._gel_q = np.array([j.qposadr[0] for j in gel])
@@ -125,30 +134,37 @@ class InsertionPhysics:
         positions = self._pos + share[:, None] * (end_pos - self._pos)
         quats = self._quat + share[:, None] * (end_quat - self._quat)
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
-        # Views bound once: this loop runs at 2 kHz of simulated time.
+        # Views and counters bound once: this loop runs at 2 kHz of simulated time.
         ring, n_ring = self._ring, len(self._ring)
         grasp = d.sensordata[self._grasp]  # a fixed buffer (efc_force is not: read it anew)
         mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
-        every, condim, step = self._truth_every, self._condim, mujoco.mj_step
+        every, condim = self._truth_every, self._condim
+        step, total_of = mujoco.mj_step, np.add.reduce
+        released, steps, peak = self.released, self._steps, self._peak_force_n
         for i in range(n):
-            if self.released:
+            if released:
                 self._leave_plug(positions[i])
             mocap_pos[0] = positions[i]
             mocap_quat[0] = quats[i]
             step(m, d)
-            self._steps += 1
-            ring[self._steps % n_ring] = grasp
+            steps += 1
+            ring[steps % n_ring] = grasp
             ncon = d.ncon
             if ncon:
                 # Elliptic cones: a contact's rows are its normal force, then its friction;
                 # the contacts' rows come last, and every contact has the plug's condim.
                 nefc = d.nefc
-                total = float(d.efc_force[nefc - ncon * condim : nefc : condim].sum())
-                if total > self._peak_force_n:
-                    self._peak_force_n = total
-            if self._steps % every == 0:
-                self.t_s = float(times[i])
+                if ncon == 1:  # the sum of one row is that row
+                    total = float(d.efc_force[nefc - condim])
+                else:
+                    total = float(total_of(d.efc_force[nefc - ncon * condim : nefc : condim]))
+                if total > peak:
+                    peak = total
+            if steps % every == 0:
+                self.t_s, self._steps, self._peak_force_n = float(times[i]), steps, peak
                 self._record()
+                peak = 0.0
+        self._steps, self._peak_force_n = steps, peak
         self.t_s = float(times[-1])
         self._pos, self._quat = positions[-1].copy(), quats[-1].copy()
         if any(d.warning[w].number for w in _BAD_STATE):
@@ -222,16 +238,14 @@ class InsertionPhysics:
         return self.data.sensordata[self._grasp].copy()
 
     def _record(self) -> None:
-        tip = self.tip_xyz()
-        row = np.concatenate(
-            [
-                [self.t_s],
-                self._share * self._grasp_now(),
-                self.wrist_wrench(),
-                tip,
-                self.plug_quat(),
-                [self._hole_z - tip[2], self._peak_force_n],
-            ]
-        )
+        d = self.data
+        row = np.empty(TRUTH_WIDTH)
+        row[0] = self.t_s
+        np.multiply(self._share, d.sensordata[self._grasp], out=row[1:7])
+        row[7:13] = self.wrist_wrench()
+        row[13:16] = d.site_xpos[self._tip]
+        row[16:20] = d.xquat[self._plug]
+        row[20] = self._hole_z - row[15]
+        row[21] = self._peak_force_n
         self._truth.append(row)
         self._peak_force_n = 0.0

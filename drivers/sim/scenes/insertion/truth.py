@@ -37,7 +37,7 @@ COLUMNS = {
     "depth_m": 1,
     "contact_force_n": 1,
 }
-_WIDTH = sum(COLUMNS.values())
+TRUTH_WIDTH = sum(COLUMNS.values())
 
 
 @dataclass
@@ -50,8 +50,8 @@ class TruthLog:
 
     def append(self, row: np.ndarray) -> None:
         """One row of ``sum(COLUMNS.values())`` numbers in ``COLUMNS`` order."""
-        if row.shape != (_WIDTH,):
-            raise ValueError(f"row: expected shape ({_WIDTH},), got {row.shape}")
+        if row.shape != (TRUTH_WIDTH,):
+            raise ValueError(f"row: expected shape ({TRUTH_WIDTH},), got {row.shape}")
         self._rows.append(row)
 
     def __len__(self) -> int:
@@ -64,7 +64,7 @@ class TruthLog:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Every column as an array: (n,) for one number, (n, k) for k."""
-        table = np.array(self._rows).reshape(-1, _WIDTH)
+        table = np.array(self._rows).reshape(-1, TRUTH_WIDTH)
         out, start = {}, 0
         for name, width in COLUMNS.items():
             block = table[:, start : start + width]
