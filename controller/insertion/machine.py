@@ -563,15 +563,20 @@ class InsertionMachine:
 
     def _align_servo(self, obs: Observation, new: bool) -> Command:
         """ALIGN's servo stage (the plug in the opening): yield to the torques about the tip,
-        pressing with SEARCH's load; aligned once every torque is within tolerance."""
+        pressing with SEARCH's load; aligned once every torque is within tolerance under at
+        least half that load, or once the plug is down to INSERT's depth."""
         stage, settings = self._stage, self.config.align
         if new:
-            stage.count = stage.count + 1 if self._torques_within_tolerance() else 0
+            loaded = self.signals.axial_force_n >= 0.5 * self._preload
+            aligned = loaded and self._torques_within_tolerance()
+            stage.count = stage.count + 1 if aligned else 0
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        if self._depth(obs, rotation) >= self.config.insert.depth_m:
+            stage.count = settings.frames  # slid in while turning: INSERT judges the depth
         if stage.count >= settings.frames:
             self._go(obs, Phase.INSERT, "aligned")
             return _hold()
         self._fire("within_tolerance" if self._torques_within_tolerance() else "torque_servo")
-        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_speed_rad_s)
         return self._tip_command(obs, np.array([0.0, 0.0, -self._press_rate()]), w)
 

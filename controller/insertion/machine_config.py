@@ -209,7 +209,8 @@ class AlignSettings(Config):
     yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
     torques tau_x, tau_y, tau_z, zero within their tolerance; gains ``gain_tau_*`` in rad/s
     per noise unit). Aligned: every torque within its tolerance (``tol_tau_*_sigma``, noise
-    units) for ``frames`` successive estimates."""
+    units) with the axial load at least half of SEARCH's, for ``frames`` successive
+    estimates, or the plug down to ``insert.depth_m`` (it slid in while turning)."""
 
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
     gain_tau_y: float = number(0.0, 10.0, default=0.02)
@@ -263,7 +264,7 @@ class InsertSettings(Config):
     press_load_ratio: float = number(0.1, 100.0, default=1.0)
     engage_m: float = number(1e-5, 0.01, default=0.0008)
     yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
-    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.15)
+    yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
     sweeps: int = number(1, 20, default=1)
     stall_s: float = number(0.1, 60.0, default=1.5)
 

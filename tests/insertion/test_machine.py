@@ -60,7 +60,7 @@ def test_every_command_names_its_rule_and_the_hole_find_names_its_detector():
     rules = [c.rule for c in world.commands]
     assert all(rules), "a command without its rule"
     assert {r.split(".")[0] for r in rules} == {src.lower() for src, _, _ in HAPPY}
-    assert "search.drag" in rules and "insert.push" in rules
+    assert "search.drag" in rules and "insert.depth_reached" in rules
     found = next(t for t in machine.transitions if t.reason == "hole_found")
     assert found.rule in {"torque_catch", "load_drop", "torque_catch+load_drop", "probe"}
     assert f"search.hole_found:{found.rule}" in rules
