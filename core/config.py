@@ -306,16 +306,26 @@ malformed scalars (the timestamp 2020-13-45, a tagged !!float x, an integer of m
 than Python converts), and deep nesting exhausts the recursion limit."""
 
 
+MAX_CONFIG_BYTES = 16 * 2**20
+"""The largest configuration file read: a device or stream that never ends (/dev/zero,
+/dev/full) is refused after this many bytes instead of filling the memory."""
+
+
 def load_yaml(path: Path | str) -> dict[str, Any]:
     """The top-level mapping of the YAML file at ``path``; ConfigError naming the file if it
-    is missing, not UTF-8 text, not valid YAML (with line and column), empty or not a
-    mapping."""
+    is missing, larger than ``MAX_CONFIG_BYTES``, not UTF-8 text, not valid YAML (with line
+    and column), empty or not a mapping."""
     path = Path(path)
     try:
-        raw = path.read_bytes()
+        with path.open("rb") as stream:
+            raw = stream.read(MAX_CONFIG_BYTES + 1)
     except OSError as exc:
         reason = exc.strerror or type(exc).__name__
         raise ConfigError(f"{path}: cannot read configuration file ({reason})") from None
+    if len(raw) > MAX_CONFIG_BYTES:
+        raise ConfigError(
+            f"{path}: more than {MAX_CONFIG_BYTES // 2**20} MiB; expected a configuration file"
+        )
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

@@ -16,7 +16,20 @@ camera noise: on the contact it is a_t + b_t (x - c) (a press, a tilt). So per c
     e_i = max(P_i / N - 1, 0)                  the excess power in noise units
 
 and the support is ``dipole.grasp_support`` of e (smoothstep of e relative to its largest
-value, 0 at or below 20%, 1 from 70%: the open gel's rule) with its centroid. Taken against
+value, 0 at or below 20%, 1 from 70%: the open gel's rule) with its centroid, provided the
+contact moved the gel clearly more than noise alone would over the recording's T frames:
+
+    V_i = var_t d_t,i                          the cell's change over the recording (the
+                                               reference's own noise, a constant, drops out)
+    m   = max_i (V_i / N - 1) / sqrt(2 / (T - 1))
+
+in units of the relative spread of a noise power measured over T frames, must reach
+``MOTION_SIGNIFICANCE``. Noise alone (the real-gel check's captures with the field zero,
+40 and 160 frames) reaches m of 4.5-11 on the backgrounds and 13-31 on the marker gels; its
+P_i / N, which holds the reference's noise, reaches e of 1.8-5.7 on the backgrounds, as high
+as a weak tilt's. Below that the support would weigh the cells where the reference happened
+to be noisiest, and the tilt is taken on the whole grid instead (the 4 x 4 moment, None
+here; docs/ARCHITECTURE.md, "Without open frames", item 4). Taken against
 the noise, a weak tilt across a contact's narrow side still finds the contact, where the
 relative power alone also weighs the cells off it; taken against each cell's own change,
 a low-noise gel (markers) whose motion dominates the changes spreads the support over the
@@ -30,7 +43,8 @@ configured estimator, its field divergences collected), the estimator to estimat
 with, the record of that choice (``OUT.fallback.json``) and its one-line message. The
 no-contact gate stays unless the first pass's gate never saw a press from the open gel
 (its peak statistic below ``PRESS_RATIO`` times its threshold): the recording was then zeroed in
-the grasp, and the gate would only cut into its tilt.
+the grasp, and the gate would only cut into its tilt. Such a recording whose change is not
+clearly above the noise (no support) is estimated again on the whole grid, without the gate.
 """
 
 from __future__ import annotations
@@ -53,10 +67,19 @@ from controller.tactile.flow import make_grid_flow
 PRESS_RATIO = 10.0
 SUPPORT_REASON = "no open gel given: the contact's support taken from the whole recording"
 UNGATED_REASON = "no open gel given and no press from the open gel in the recording"
+WHOLE_GRID_REASON = (
+    "no contact's support in the recording (its change not clearly above the camera noise, or "
+    "too few frames): the tilt on the whole grid"
+)
 # Fewer frames leave too few frame-to-frame changes to tell the noise from the contact.
 MIN_FRAMES = 8
 # The percentile of the cells' frame-to-frame change taken as the noise floor.
 NOISE_PERCENTILE = 25.0
+# The largest change over the recording, in units of a noise power's relative spread over
+# its frames, below which no support is taken (module docstring). Set on the tilt-alone
+# sequences of tuning seeds 100-103 and 200-225 of the real-gel check's varied contacts: the
+# middle of 13-19, where the fewest fall short of `paper` (docs/ARCHITECTURE.md).
+MOTION_SIGNIFICANCE = 16.0
 
 
 def recording_support(
@@ -64,7 +87,8 @@ def recording_support(
 ) -> GraspSupport | None:
     """The contact's support (module docstring) from the field divergences ``divergences``
     (frames, rows, cols), dimensionless, on the grid ``x_mm`` (cols,) x ``y_mm`` (rows,), mm in
-    frame S; None with fewer than ``MIN_FRAMES`` frames or no cell above its noise."""
+    frame S; None with fewer than ``MIN_FRAMES`` frames, or no cell above its noise, or no
+    cell's change over the recording clearly above what the noise alone reaches."""
     stack = np.asarray(divergences, float)
     if stack.ndim != 3 or stack.shape[1:] != (y_mm.size, x_mm.size):
         raise ValueError(
@@ -78,8 +102,18 @@ def recording_support(
     noise = float(np.percentile(change, NOISE_PERCENTILE))
     if not noise > 0.0:  # a still recording: no noise to measure against
         return None
+    if motion_significance(stack, noise) < MOTION_SIGNIFICANCE:
+        return None
     excess = np.maximum(power / noise - 1.0, 0.0)
     return grasp_support(excess, x_mm, y_mm) if float(excess.max()) > 0.0 else None
+
+
+def motion_significance(stack: np.ndarray, noise: float) -> float:
+    """m of the module docstring: the largest variance over the frames of ``stack`` (frames,
+    rows, cols) per cell, in excess of the noise power ``noise`` (same units squared) and
+    relative to it, over a noise power's relative spread over that many frames."""
+    spread = np.sqrt(2.0 / (len(stack) - 1))
+    return float((stack.var(axis=0).max() / noise - 1.0) / spread)
 
 
 @dataclass(frozen=True)
@@ -136,6 +170,9 @@ def recording_fallback(
             "weights": np.round(support.weights, 4).tolist(),
         }
         reasons.append(SUPPORT_REASON)
+    else:
+        record["contact_support"] = None
+        reasons.append(WHOLE_GRID_REASON)
     if ungated:
         record["noise_gate"] = None
         reasons.append(UNGATED_REASON + ": without the no-contact gate")

@@ -227,7 +227,10 @@ def _fallback_note(choice: FallbackChoice | None) -> str:
     """The row's note for the offline tool's choice without the open gel."""
     if choice is None:
         return ""
-    support = "recording support" if "contact_support" in choice.record else ""
+    support = ""
+    if "contact_support" in choice.record:
+        found = choice.record["contact_support"] is not None
+        support = "recording support" if found else "whole grid"
     ungated = "ungated (no press seen)" if "noise_gate" in choice.record else ""
     return ", ".join(part for part in (support, ungated) if part)
 

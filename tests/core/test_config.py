@@ -455,3 +455,10 @@ def test_infinities_and_nan_stay_refused_in_overrides(text):
     raw = apply_overrides(_RAW, [f"scene.friction={text}"], "t")
     with pytest.raises(ConfigError, match=r"key 'scene.friction': expected a number"):
         build(_Task, raw, source="t")
+
+
+def test_a_file_that_never_ends_is_refused_by_its_size_not_read_into_memory():
+    # /dev/zero reads zeros forever: reading it whole used to exhaust the memory (the
+    # offline tool's fuzz test found it with --calibration /dev/full)
+    with pytest.raises(ConfigError, match=r"/dev/zero: more than 16 MiB; expected a configuration"):
+        load_yaml("/dev/zero")

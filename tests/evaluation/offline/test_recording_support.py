@@ -3,7 +3,12 @@
 import numpy as np
 import pytest
 
-from evaluation.offline.recording_support import MIN_FRAMES, recording_support
+from evaluation.offline.recording_support import (
+    MIN_FRAMES,
+    MOTION_SIGNIFICANCE,
+    motion_significance,
+    recording_support,
+)
 
 X_MM = np.arange(16) - 7.5  # cell centres, 1 mm apart
 Y_MM = np.arange(12) - 5.5
@@ -56,6 +61,25 @@ def test_a_weak_tilt_alone_stands_out_of_the_noise_cell_by_cell():
     whole_grid = _tilt_x(divergences, np.ones_like(CONTACT), 0.0)
     assert np.corrcoef(about_support, tilting)[0, 1] > 0.97
     assert np.corrcoef(whole_grid, tilting)[0, 1] < 0.8
+
+
+def test_noise_alone_finds_no_support_though_the_reference_noise_looks_like_a_weak_tilt():
+    """Zeroed on a reference of 4 noisy frames, every frame carries that reference's noise, a
+    constant per cell. Its power over the recording reaches that of a weak tilt on some cell
+    (a support would weigh those cells); its change over the recording does not, and no
+    support is taken."""
+    divergences, _ = _recording(push=0.0, tilt=0.02, noise=0.02)
+    assert motion_significance(divergences, 0.02**2) >= MOTION_SIGNIFICANCE
+    assert recording_support(divergences, X_MM, Y_MM) is not None
+    for seed in range(10):
+        rng = np.random.default_rng(seed)
+        reference = 0.01 * rng.standard_normal((12, 16))  # 4 frames averaged: noise / 2
+        noise = reference + 0.02 * rng.standard_normal((160, 12, 16))
+        power = np.square(noise).mean(axis=0) / 0.02**2 - 1.0
+        tilt_power = np.square(divergences).mean(axis=0) / 0.02**2 - 1.0
+        assert power.max() > 0.5 * tilt_power.max()
+        assert motion_significance(noise, 0.02**2) < 0.5 * MOTION_SIGNIFICANCE
+        assert recording_support(noise, X_MM, Y_MM) is None
 
 
 def test_no_support_without_enough_frames_or_any_noise_or_signal():
