@@ -82,6 +82,14 @@ def lower(
     """Lower the plug from 2 mm above the board to ``below_m`` under the surface (default:
     1 mm past the floor) at 20 mm/s, then hold 0.2 s; the truth's arrays. ``scene``:
     overrides of the task's scene keys."""
+    truth, depth, _ = lower_physics(name, tip_x_m, rotvec_t, below_m, **scene)
+    return truth, depth
+
+
+def lower_physics(
+    name: str, tip_x_m: float, rotvec_t=(0.0, 0.0, 0.0), below_m: float | None = None, **scene
+):
+    """``lower``'s run: (the truth's arrays, the receptacle's depth, the physics at its end)."""
     section = task(name)
     section = dataclasses.replace(section, scene=dataclasses.replace(section.scene, **scene))
     plug, depth = section.plug, section.scene.receptacle.depth_m
@@ -96,7 +104,45 @@ def lower(
     for k in range(1, round((duration + 0.2) / 0.01) + 1):
         t = 0.01 * k
         physics.step_to(t, t, pose(0.002 - 0.02 * min(t, duration)))
-    return truth.arrays(), depth
+    return truth.arrays(), depth, physics
+
+
+def net_contact_force_b(physics: InsertionPhysics) -> np.ndarray:
+    """The net force (3, N, B) of every contact on the plug, from MuJoCo's own contact
+    forces (``mj_contactForce``: in the contact frame, on geom2 from geom1)."""
+    m, d = physics.model, physics.data
+    plug, net, wrench = m.body("plug").id, np.zeros(3), np.zeros(6)
+    for i in range(d.ncon):
+        contact = d.contact[i]
+        mujoco.mj_contactForce(m, d, i, wrench)
+        on_geom2 = contact.frame.reshape(3, 3).T @ wrench[:3]
+        net += -on_geom2 if m.geom_bodyid[contact.geom1] == plug else on_geom2
+    return net
+
+
+WEDGED = dict(tip_x_m=0.0, rotvec_t=(0.07, 0.0, 0.0), below_m=0.003)  # 4 deg, 3 mm down
+
+
+@pytest.mark.parametrize(
+    "placed",
+    [
+        dict(tip_x_m=0.0, rotvec_t=(0.0, 0.0, 0.0), below_m=None),  # upright, on the floor
+        dict(tip_x_m=0.003, rotvec_t=(0.0, 0.0, 0.0), below_m=0.0008),  # beside the opening
+        WEDGED,
+    ],
+    ids=["on_the_floor", "beside", "wedged"],
+)
+def test_the_insertion_force_is_the_net_contact_force_along_the_hole_axis(placed):
+    truth, _, physics = lower_physics("usb_c", **placed)
+    assert physics.data.ncon > 0
+    along_axis = float(net_contact_force_b(physics)[2])  # HOLE's axis is B's z
+    row_peak = truth["insertion_force_n"][-1]  # the largest over the row's steps
+    assert 0.05 < along_axis <= row_peak + 1e-9 and row_peak == pytest.approx(along_axis, rel=0.1)
+
+
+def test_a_wedged_plug_squeezes_far_harder_than_it_pushes_along_the_axis():
+    truth, _, _ = lower_physics("usb_c", **WEDGED)
+    assert truth["contact_force_n"][-1] > 5 * truth["insertion_force_n"][-1]
 
 
 @pytest.mark.parametrize("name", TASKS)

@@ -8,7 +8,8 @@ fixed steps of ``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (
 linear interpolation of the quaternion) from its last pose to ``pose`` reached at
 ``pose_t_s`` and held after it. Each step keeps the grasp's wrench in a ring buffer
 (``grasp_wrench_at``: the wrench at a past step, for the tactile frames) and the ground
-truth's running contact-force maximum; a ``TruthLog`` row is written every
+truth's running contact-force maxima (the summed normal force, and the net force along the
+hole's axis); a ``TruthLog`` row is written every
 ``1 / truth_rate_hz`` s.
 
 The grasp's wrench is the wrench the gripper exerts on the plug through the gel spring,
@@ -23,6 +24,7 @@ import math
 
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
@@ -84,6 +86,10 @@ class InsertionPhysics:
         self._plug = m.body("plug").id
         self._gripper = m.body("gripper").id
         self._condim = int(m.geom("plug").condim[0])
+        # The hole's axis in B (out of the board): H's z, the board tilted as mjcf builds it.
+        self._hole_axis_b = (
+            Rotation.from_euler("z", hole_true.yaw_rad) * Rotation.from_euler("xy", board_tilt_rad)
+        ).apply([0.0, 0.0, 1.0])
         force = m.sensor_adr[m.sensor("gel_force").id]
         if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
@@ -98,6 +104,8 @@ class InsertionPhysics:
         self._gel_v = np.array([j.dofadr[0] for j in gel])
         self._gel_stiffness = m.jnt_stiffness[self._gel_j].copy()
         self._gel_damping = m.dof_damping[self._gel_v].copy()
+        self._slide_j = _index([j.id for j in gel[:3]])
+        self._slide_v = _index([j.dofadr[0] for j in gel[:3]])
         self.released = False
         self._pos = np.array(start_pose.xyz_m, float)
         self._quat = quat_wxyz_from_pose(start_pose)
@@ -112,6 +120,7 @@ class InsertionPhysics:
         self._ring[0] = self._grasp_now()
         self._truth_every = max(1, round(1.0 / (scene.truth_rate_hz * self.dt_s)))
         self._peak_force_n = 0.0
+        self._peak_axial_n = 0.0
         self._record()
 
     # ----------------------------------------------------------------- stepping
@@ -140,7 +149,13 @@ class InsertionPhysics:
         mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
         every, condim = self._truth_every, self._condim
         step, total_of = mujoco.mj_step, np.add.reduce
+        # The plug's only contacts are the board's and the receptacle's, and its slide joints
+        # (relative to the gripper) are orthonormal and unlimited: their constraint forces
+        # are the net contact force on the plug along their axes (xaxis, in B).
+        slide_forces, slide_axes = d.qfrc_constraint[self._slide_v], d.xaxis[self._slide_j]
+        hole_axis = self._hole_axis_b
         released, steps, peak = self.released, self._steps, self._peak_force_n
+        peak_axial = self._peak_axial_n
         for i in range(n):
             if released:
                 self._leave_plug(positions[i])
@@ -160,11 +175,15 @@ class InsertionPhysics:
                     total = float(total_of(d.efc_force[nefc - ncon * condim : nefc : condim]))
                 if total > peak:
                     peak = total
+                axial = float(slide_forces @ (slide_axes @ hole_axis))
+                if axial > peak_axial:
+                    peak_axial = axial
             if steps % every == 0:
-                self.t_s, self._steps, self._peak_force_n = float(times[i]), steps, peak
+                self.t_s, self._steps = float(times[i]), steps
+                self._peak_force_n, self._peak_axial_n = peak, peak_axial
                 self._record()
-                peak = 0.0
-        self._steps, self._peak_force_n = steps, peak
+                peak = peak_axial = 0.0
+        self._steps, self._peak_force_n, self._peak_axial_n = steps, peak, peak_axial
         self.t_s = float(times[-1])
         self._pos, self._quat = positions[-1].copy(), quats[-1].copy()
         if any(d.warning[w].number for w in _BAD_STATE):
@@ -247,5 +266,6 @@ class InsertionPhysics:
         row[16:20] = d.xquat[self._plug]
         row[20] = self._hole_z - row[15]
         row[21] = self._peak_force_n
+        row[22] = self._peak_axial_n
         self._truth.append(row)
-        self._peak_force_n = 0.0
+        self._peak_force_n = self._peak_axial_n = 0.0

@@ -15,7 +15,11 @@ One row every ``1 / truth_rate_hz`` s of simulated time:
 * ``depth_m``: how far the tip is below the board surface (the hole's z), m (negative
   above it);
 * ``contact_force_n``: the largest, over the physics steps since the previous row, of the
-  sum of the normal forces of the plug's contacts with the board and the receptacle, N.
+  sum of the normal forces of the plug's contacts with the board and the receptacle, N
+  (a wedged plug's squeeze counts once per wall);
+* ``insertion_force_n``: the largest, over the same steps, of the net contact force on the
+  plug along the true hole's axis (out of the board), N: the force that resists the
+  insertion, which the connectors' specifications limit (0 without contact).
 
 ``hole`` is the true hole pose in B; ``hole_nominal`` the one the task file gives.
 """
@@ -36,6 +40,7 @@ COLUMNS = {
     "plug_quat_b": 4,
     "depth_m": 1,
     "contact_force_n": 1,
+    "insertion_force_n": 1,
 }
 TRUTH_WIDTH = sum(COLUMNS.values())
 
@@ -75,4 +80,4 @@ class TruthLog:
     @property
     def max_contact_force_n(self) -> float:
         """The largest contact force of the whole run so far, N (0 with no rows)."""
-        return float(max((r[-1] for r in self._rows), default=0.0))
+        return float(max((r[-2] for r in self._rows), default=0.0))
