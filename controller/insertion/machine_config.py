@@ -74,7 +74,7 @@ class NoiseFloor(Config):
 
     tilt_x: float = number(1e-9, 1e3, default=0.0008662)
     tilt_y: float = number(1e-9, 1e3, default=0.0005886)
-    inplane: float = number(1e-9, 1e3, default=0.000114)
+    inplane: float = number(1e-9, 1e3, default=0.0005)
     shear_x: float = number(1e-9, 1e3, default=0.004923)
     shear_y: float = number(1e-9, 1e3, default=0.00533)
     normal: float = number(1e-9, 1e3, default=0.03795)
@@ -163,7 +163,11 @@ class SearchSettings(Config):
     ``reference_alpha`` while the load is not dropping. ``hole_drop_ratio`` 0 turns the rule
     off.
     ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
-    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
+    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH).
+    ``yaw_step_rad``: after a find whose plug did not enter (ALIGN's ``not_entered``), the
+    next approach and drag turn the plug to the next yaw of 0, +step, -step, +2 step, ...
+    about the nominal opening's, within ``uncertainty_yaw_rad`` (then from 0 again); 0:
+    always the nominal yaw."""
 
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-4, 0.01, default=0.0008)
@@ -181,6 +185,7 @@ class SearchSettings(Config):
     contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
     contact_lost_frames: int = number(1, 1000, default=15)
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
+    yaw_step_rad: float = number(0.0, 0.5, default=0.0)
 
 
 @config_dataclass
@@ -214,10 +219,10 @@ class AlignSettings(Config):
 
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
     gain_tau_y: float = number(0.0, 10.0, default=0.02)
-    gain_tau_z: float = number(0.0, 10.0, default=0.005)
+    gain_tau_z: float = number(0.0, 10.0, default=0.02)
     tol_tau_x_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
-    tol_tau_z_sigma: float = number(0.1, 1e4, default=18.0)
+    tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
     upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
