@@ -505,7 +505,7 @@ class InsertionMachine:
         v_edge = settings.seek_speed_m_s * stage.v_tip
         v_edge[2] = -self._press_rate()
         v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge,
-                               np.zeros(3))
+                               self._heel_yaw_rate(rotation))
         return self._command(v_tcp, w)
 
     def _align_turn(self, obs: Observation, rotation: Rotation) -> Command:
@@ -522,10 +522,16 @@ class InsertionMachine:
         hold = float(np.clip(1.0 - stage.rise / settings.wall_sigma, -1.0, 1.0))
         v_edge = settings.seek_speed_m_s * hold * stage.v_tip
         v_edge[2] = self.config.approach.pose_gain_1_s * (stage.point[2] - edge[2])
-        w = clamp_norm(settings.upright_gain_1_s * angle * axis,
+        w = clamp_norm(settings.upright_gain_1_s * angle * axis + self._heel_yaw_rate(rotation),
                        settings.max_angular_speed_rad_s)
         v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
         return self._command(v_tcp, w)
+
+    def _heel_yaw_rate(self, rotation: Rotation) -> np.ndarray:
+        """Angular velocity in B yielding in yaw (about T z) to the torque about the plug's
+        axis while the heel is caught (``align.heel_yaw_gain``)."""
+        about_t_z = float((self.signals.s2t @ self.signals.normalised[:3])[2])
+        return rotation.apply([0.0, 0.0, -self.config.align.heel_yaw_gain * about_t_z])
 
     def _align_yaw(self, obs: Observation, rotation: Rotation) -> Command:
         """ALIGN's yaw stage (upright but not in the opening): sweep the yaw about the tip

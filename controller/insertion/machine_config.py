@@ -198,7 +198,10 @@ class AlignSettings(Config):
     holds it: the lateral resistance r (``search.lateral_resistance``: the tilt torque
     of a force against the motion, noise units) risen by ``wall_sigma`` above its value when
     ALIGN began, for ``frames`` successive estimates. No wall within ``seek_max_m``: the
-    catch was not the opening (BACKOFF, then SEARCH again).
+    catch was not the opening (BACKOFF, then SEARCH again). While seeking and turning, the
+    plug yields in yaw (about T z) to the torque about its axis: w_Tz = -``heel_yaw_gain``
+    x n (n that torque in T z, normalised, no tolerance): with the heel in the opening and
+    the plug yawed, the opening's long walls twist it back.
 
     *Turn*: turn the TCP toward straight down about the heel at ``upright_gain_1_s`` x the
     tilt (capped by ``max_angular_speed_rad_s``), holding the heel against the wall: its
@@ -217,6 +220,7 @@ class AlignSettings(Config):
     units) with the axial load at least half of SEARCH's, for ``frames`` successive
     estimates, or the plug down to ``insert.depth_m`` (it slid in while turning)."""
 
+    heel_yaw_gain: float = number(0.0, 10.0, default=0.0)
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
     gain_tau_y: float = number(0.0, 10.0, default=0.02)
     gain_tau_z: float = number(0.0, 10.0, default=0.02)
