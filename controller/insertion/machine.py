@@ -41,7 +41,6 @@ from controller.insertion.motion import (
     pivot_twist,
     rotation_error,
     tip_position,
-    yaw_step_offset,
 )
 from controller.insertion.search import HoleDetector, SearchPattern, lateral_resistance
 from controller.insertion.signals import TactileSignals
@@ -124,8 +123,9 @@ class InsertionMachine:
         )
         self._hole_xyz = np.array([hole.x_m, hole.y_m, hole.z_m])
         self._hole_yaw = Rotation.from_euler("z", hole.yaw_rad)
-        self._yaw_tries = 0  # finds that did not enter: the approach's yaw step
-        self._approach_rot = self._approach_rotation()
+        self._approach_rot = approach_rotation(
+            hole.yaw_rad, config.approach.tilt_rad, config.approach.tilt_axis
+        )
         self._phase = definition.initial
         self._transitions: list[Transition] = []
         self._stage_or_none: _Stage | None = None  # None until the first step
@@ -687,9 +687,6 @@ class InsertionMachine:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
         self._search_again = guard in ("not_engaged", "no_wall", "not_entered")
-        if guard == "not_entered":
-            self._yaw_tries += 1
-            self._approach_rot = self._approach_rotation()
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 
@@ -768,14 +765,6 @@ class InsertionMachine:
         torque_s = self.signals.normalised[:3]
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
         return rotation.apply(-self.signals.s2t @ (gains * outside) * scale)
-
-    def _approach_rotation(self) -> Rotation:
-        """The tilted approach's T2B rotation at the present yaw step (``search.yaw_step_rad``)."""
-        settings = self.config.search
-        yaw = self.hole.yaw_rad + yaw_step_offset(
-            self._yaw_tries, settings.yaw_step_rad, settings.uncertainty_yaw_rad
-        )
-        return approach_rotation(yaw, self.config.approach.tilt_rad, self.config.approach.tilt_axis)
 
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B servoing the TCP to the approach rotation."""

@@ -163,11 +163,7 @@ class SearchSettings(Config):
     ``reference_alpha`` while the load is not dropping. ``hole_drop_ratio`` 0 turns the rule
     off.
     ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
-    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH).
-    ``yaw_step_rad``: after a find whose plug did not enter (ALIGN's ``not_entered``), the
-    next approach and drag turn the plug to the next yaw of 0, +step, -step, +2 step, ...
-    about the nominal opening's, within ``uncertainty_yaw_rad`` (then from 0 again); 0:
-    always the nominal yaw."""
+    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
 
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-4, 0.01, default=0.0008)
@@ -185,7 +181,6 @@ class SearchSettings(Config):
     contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
     contact_lost_frames: int = number(1, 1000, default=15)
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
-    yaw_step_rad: float = number(0.0, 0.5, default=0.0)
 
 
 @config_dataclass
@@ -220,7 +215,7 @@ class AlignSettings(Config):
     units) with the axial load at least half of SEARCH's, for ``frames`` successive
     estimates, or the plug down to ``insert.depth_m`` (it slid in while turning)."""
 
-    heel_yaw_gain: float = number(0.0, 10.0, default=0.0)
+    heel_yaw_gain: float = number(0.0, 10.0, default=0.02)
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
     gain_tau_y: float = number(0.0, 10.0, default=0.02)
     gain_tau_z: float = number(0.0, 10.0, default=0.02)

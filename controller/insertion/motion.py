@@ -45,13 +45,3 @@ def approach_rotation(yaw_rad: float, tilt_rad: float, tilt_axis: str) -> Rotati
     T z straight down, then turned by ``tilt_rad`` about T's ``tilt_axis`` (``x`` or ``y``)."""
     down = Rotation.from_euler("z", yaw_rad) * Rotation.from_euler("x", math.pi)
     return down * Rotation.from_euler(tilt_axis, tilt_rad)
-
-
-def yaw_step_offset(tries: int, step_rad: float, bound_rad: float) -> float:
-    """The ``tries``-th yaw offset (rad) of 0, +step, -step, +2 step, -2 step, ... within
-    +-``bound_rad``, starting over from 0 past the bound (0 when ``step_rad`` is 0)."""
-    if step_rad <= 0.0:
-        return 0.0
-    count = 1 + 2 * int(math.floor(bound_rad / step_rad + 1e-9))
-    k = tries % count
-    return (1 if k % 2 else -1) * ((k + 1) // 2) * step_rad

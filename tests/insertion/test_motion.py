@@ -11,7 +11,6 @@ from controller.insertion.motion import (
     bounded_twist,
     pivot_twist,
     tip_position,
-    yaw_step_offset,
 )
 from controller.insertion.search import SearchPattern
 from core.devices import Pose
@@ -87,12 +86,3 @@ def test_search_pattern_without_uncertainty_stays_at_the_centre():
     for kind in ("spiral", "raster"):
         pattern = SearchPattern(kind, 0.001, 0.0)
         np.testing.assert_allclose(pattern.offset(0.01), [0.0, 0.0], atol=1e-12)
-
-
-def test_the_yaw_steps_alternate_outward_within_the_bound_then_start_over():
-    step, bound = math.radians(2.0), math.radians(3.0)
-    offsets = [yaw_step_offset(k, step, bound) for k in range(7)]
-    assert offsets == pytest.approx([0.0, step, -step, 0.0, step, -step, 0.0])
-    wider = [yaw_step_offset(k, step, math.radians(4.0)) for k in range(5)]
-    assert wider == pytest.approx([0.0, step, -step, 2 * step, -2 * step])
-    assert yaw_step_offset(3, 0.0, bound) == 0.0  # no step: always the nominal yaw
