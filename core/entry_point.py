@@ -12,6 +12,12 @@ are complete and a signal during the interpreter's shutdown ends the process at 
 the same code, silently. Only the interpreter's own start-up (before the script's first line
 runs, some tens of milliseconds) is beyond reach. Importing this module loads only the
 standard library.
+
+Python runs a signal's handler wherever the main thread is, and an exception raised inside a
+weakref callback or a ``__del__`` (e.g. the import system's module-lock callback) is not
+propagated but passed to ``sys.unraisablehook`` and dropped. ``run_main`` installs a hook
+that sends such a lost KeyboardInterrupt or ``Terminated`` again as its signal, from a
+short-lived thread, so it lands once the callback has returned.
 """
 
 from __future__ import annotations
@@ -20,6 +26,7 @@ import importlib
 import os
 import signal
 import sys
+import threading
 from pathlib import Path
 from typing import NoReturn
 
@@ -40,6 +47,26 @@ def _exit_at_once(signum: int, frame: object) -> None:
     os._exit(128 + signum)
 
 
+REDELIVERY_DELAY_S = 0.005
+"""How long the re-sending thread waits: far longer than a callback that swallowed a stop."""
+
+_STOP_SIGNALS = {KeyboardInterrupt: signal.SIGINT, Terminated: signal.SIGTERM}
+
+
+def _redeliver_lost_stops(previous_hook):
+    """An ``unraisablehook`` that sends a dropped stop again as its signal and passes every
+    other unraisable exception to ``previous_hook``."""
+
+    def hook(unraisable) -> None:
+        signum = _STOP_SIGNALS.get(unraisable.exc_type)
+        if signum is None:
+            previous_hook(unraisable)
+            return
+        threading.Timer(REDELIVERY_DELAY_S, os.kill, (os.getpid(), signum)).start()
+
+    return hook
+
+
 def run_main(module: str, first: str | None = None) -> NoReturn:
     """Exit with the code of ``module.main()`` (None: 0), 130 on SIGINT, 143 on SIGTERM.
     ``first``: ``"module:function"`` to call before ``module`` is imported (e.g. to limit
@@ -47,6 +74,7 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
     prog = Path(sys.argv[0]).stem
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, raise_terminated)
+    sys.unraisablehook = _redeliver_lost_stops(sys.unraisablehook)
     stopped_by = None
     try:
         if first is not None:

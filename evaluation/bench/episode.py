@@ -37,9 +37,10 @@ import sys
 import tempfile
 import time
 from collections import Counter
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -242,6 +243,20 @@ def compare_libraries(path: Path, work: Path) -> None:
     messages = sorted(messages, key=lambda m: (m.log_time, m.sequence))
     flush_ns = 100_000_000
 
+    def write_flushing(target: Path, log: Callable[[Any], None], flush: Callable[[], None]) -> Path:
+        """Log every message through ``log``, flushing every ``flush_ns`` of log time, then
+        flush and copy the file as a kill at that moment would leave it (the copy's path)."""
+        next_flush = messages[0].log_time + flush_ns
+        for m in messages:
+            log(m)
+            if m.log_time >= next_flush:
+                flush()
+                next_flush += flush_ns
+        flush()
+        snapshot = target.with_suffix(".killed.mcap")
+        shutil.copyfile(target, snapshot)
+        return snapshot
+
     def with_mcap(target: Path) -> Path | None:
         snapshot = None
         with target.open("wb") as stream:
@@ -252,15 +267,13 @@ def compare_libraries(path: Path, work: Path) -> None:
             }
             cids = {i: writer.register_channel(c.topic, c.message_encoding, sids[c.schema_id])
                     for i, c in channels.items()}  # fmt: skip
-            next_flush = messages[0].log_time + flush_ns
-            for m in messages:
-                writer.add_message(cids[m.channel_id], m.log_time, m.data, m.log_time, m.sequence)
-                if m.log_time >= next_flush:
-                    writer.flush()
-                    next_flush += flush_ns
-            writer.flush()
-            snapshot = target.with_suffix(".killed.mcap")
-            shutil.copyfile(target, snapshot)
+            snapshot = write_flushing(
+                target,
+                lambda m: writer.add_message(
+                    cids[m.channel_id], m.log_time, m.data, m.log_time, m.sequence
+                ),
+                writer.flush,
+            )
             writer.finish()
         return snapshot
 
@@ -279,15 +292,9 @@ def compare_libraries(path: Path, work: Path) -> None:
             )
             for i, c in channels.items()
         }  # fmt: skip
-        next_flush = messages[0].log_time + flush_ns
-        for m in messages:
-            made[m.channel_id].log(m.data, log_time=m.log_time)
-            if m.log_time >= next_flush:
-                writer.flush()
-                next_flush += flush_ns
-        writer.flush()
-        snapshot = target.with_suffix(".killed.mcap")
-        shutil.copyfile(target, snapshot)
+        snapshot = write_flushing(
+            target, lambda m: made[m.channel_id].log(m.data, log_time=m.log_time), writer.flush
+        )
         writer.close()
         return snapshot
 
