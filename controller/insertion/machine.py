@@ -465,7 +465,7 @@ class InsertionMachine:
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         if stage.name == "" and tilt_of_rotation(rotation) <= settings.tilt_tol_rad:
             # upright already (after a jam's back-off): no heel to seek or turn about
-            self._next_stage(obs, "servo" if self._entered(obs, rotation) else "yaw")
+            self._after_upright(obs, rotation)
             stage.start_yaw_rad = _yaw_of(rotation) - self.hole.yaw_rad
         if stage.name == "":
             self._next_stage(obs, "seek")
@@ -476,6 +476,8 @@ class InsertionMachine:
             stage.point = self._lowest_edge(obs, rotation)
         if stage.name == "servo":
             return self._align_servo(obs, new)
+        if stage.name == "width":
+            return self._align_width(obs, rotation, new)
         if stage.name == "yaw":
             return self._align_yaw(obs, rotation)
         if new and np.linalg.norm(stage.v_tip) > 0.0:
@@ -514,7 +516,7 @@ class InsertionMachine:
         angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
         if angle <= settings.tilt_tol_rad:
             self._fire("upright")
-            self._next_stage(obs, "servo" if self._entered(obs, rotation) else "yaw")
+            self._after_upright(obs, rotation)
             stage.start_yaw_rad = _yaw_of(rotation) - self.hole.yaw_rad
             return _hold()
         self._fire("turn")
@@ -526,6 +528,48 @@ class InsertionMachine:
                        settings.max_angular_speed_rad_s)
         v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
         return self._command(v_tcp, w)
+
+    def _after_upright(self, obs: Observation, rotation: Rotation) -> None:
+        """The stage after the turn: the servo if the plug is in the opening, else the width
+        stage (toward the low end the in-plane torque names), or the yaw stage without it."""
+        stage = self._stage
+        if self._entered(obs, rotation):
+            self._next_stage(obs, "servo")
+        elif self.config.align.width_speed_m_s > 0.0:
+            self._next_stage(obs, "width")
+            toward = -math.copysign(1.0, float(self.signals.normalised[2]))
+            along = rotation.apply([toward, 0.0, 0.0])
+            along[2] = 0.0
+            stage.v_tip = along / np.linalg.norm(along)
+            stage.point = tip_position(obs.arm.tcp, self.plug.length_m)
+            stage.resistance0 = math.nan
+        else:
+            self._next_stage(obs, "yaw")
+
+    def _align_width(self, obs: Observation, rotation: Rotation, new: bool) -> Command:
+        """ALIGN's width stage (see config.AlignSettings): slide toward the low end, pressing,
+        until the plug enters; the end wall or ``width_max_m`` first: the yaw stage."""
+        stage, settings = self._stage, self.config.align
+        if self._entered(obs, rotation):
+            self._fire("entered")
+            self._next_stage(obs, "servo")
+            return _hold()
+        if new:
+            resistance = lateral_resistance(self.signals, rotation, stage.v_tip)[1]
+            if math.isnan(stage.resistance0):
+                stage.resistance0 = resistance
+            held = resistance - stage.resistance0 >= settings.wall_sigma
+            stage.count = stage.count + 1 if held else 0
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        slid = float(np.linalg.norm((tip - stage.point)[:2]))
+        if stage.count >= settings.frames or slid >= settings.width_max_m:
+            self._fire("end_wall" if stage.count >= settings.frames else "width_done")
+            self._next_stage(obs, "yaw")
+            return _hold()
+        self._fire("width_slide")
+        v_tip = settings.width_speed_m_s * stage.v_tip
+        v_tip[2] = -self._press_rate()
+        return self._tip_command(obs, v_tip, self._heel_yaw_rate(rotation))
 
     def _heel_yaw_rate(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B yielding in yaw (about T z) to the torque about the plug's
