@@ -531,11 +531,14 @@ class InsertionMachine:
 
     def _after_upright(self, obs: Observation, rotation: Rotation) -> None:
         """The stage after the turn: the servo if the plug is in the opening, else the width
-        stage (toward the low end the in-plane torque names), or the yaw stage without it."""
+        stage (toward the low end the in-plane torque names), or the yaw stage when the
+        in-plane torque names no side (below ``align.width_sigma``) or the stage is off."""
         stage = self._stage
         if self._entered(obs, rotation):
             self._next_stage(obs, "servo")
-        elif self.config.align.width_speed_m_s > 0.0:
+        elif self.config.align.width_speed_m_s > 0.0 and (
+            abs(float(self.signals.normalised[2])) >= self.config.align.width_sigma
+        ):
             self._next_stage(obs, "width")
             toward = -math.copysign(1.0, float(self.signals.normalised[2]))
             along = rotation.apply([toward, 0.0, 0.0])
@@ -595,6 +598,10 @@ class InsertionMachine:
         if stage.reversals >= 2 * settings.sweeps and (
             stage.yaw_sign * (yaw - stage.start_yaw_rad) >= 0.0
         ):
+            if self._depth(obs, rotation) >= 0.5 * self.config.align.enter_m:
+                self._fire("entering")  # on its way in as the sweep ends: the servo
+                self._next_stage(obs, "servo")
+                return _hold()
             return self._back_off(obs, "not_entered")
         self._fire("yaw_sweep")
         w = np.array([0.0, 0.0, stage.yaw_sign * settings.yaw_rate_rad_s])

@@ -208,14 +208,17 @@ class AlignSettings(Config):
 
     *Width*: an in-grasp tilt about T y leaves one end of the plug's tip low: that corner
     catches in the opening with the plug's centre off toward the other end, and the
-    in-plane torque's sign names the side (tau_z > 0: the centre is toward +T x). The tip
+    in-plane torque's sign names the side (tau_z > 0: the centre is toward +T x; it names
+    none below ``width_sigma`` noise units, and the stage is skipped). The tip
     slides along T x toward the low end at ``width_speed_m_s``, pressing, until the plug
     enters (the servo stage); the end wall holding it (the lateral resistance risen by
     ``wall_sigma`` for ``frames`` estimates) or ``width_max_m`` slid without entering: the
     yaw stage. ``width_speed_m_s`` 0 skips the stage.
 
     *Yaw*: sweep the yaw as INSERT's press does (``insert.yaw_sweep_rad``,
-    ``yaw_rate_rad_s``, ``sweeps``) until the plug enters, or back off to SEARCH again.
+    ``yaw_rate_rad_s``, ``sweeps``) until the plug enters; back where the sweep began, a
+    plug at least half of ``enter_m`` in goes on to the servo, any other backs off to
+    SEARCH again.
 
     *Servo*: turn about the tip to null the torques, pressing: the TCP
     yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
@@ -239,8 +242,9 @@ class AlignSettings(Config):
     seek_max_m: float = number(1e-5, 0.01, default=0.0025)
     wall_sigma: float = number(0.1, 1e4, default=2.0)
     enter_m: float = number(1e-5, 0.01, default=0.001)
-    width_speed_m_s: float = number(0.0, 0.02, default=0.0)
+    width_speed_m_s: float = number(0.0, 0.02, default=0.001)
     width_max_m: float = number(1e-5, 0.01, default=0.004)
+    width_sigma: float = number(0.0, 1e4, default=1.0)
 
 
 @config_dataclass

@@ -67,10 +67,13 @@ def test_every_command_names_its_rule_and_the_hole_find_names_its_detector():
     aligned = rules.index("align.aligned")
     align_rules = [r for r in rules[:aligned] if r.startswith("align.")]
     stages = [r for i, r in enumerate(align_rules) if i == 0 or align_rules[i - 1] != r]
-    # seek the wall, turn upright about the heel, (sweep the yaw until it enters,) servo
+    # seek the wall, turn upright about the heel, (slide to the low end, sweep the yaw until
+    # it enters,) servo
     assert stages[:4] == ["align.seek", "align.wall", "align.turn", "align.upright"]
-    assert set(stages[4:]) <= {"align.yaw_sweep", "align.entered", "align.torque_servo",
-                               "align.within_tolerance"}
+    assert set(stages[4:]) <= {
+        "align.width_slide", "align.end_wall", "align.width_done", "align.yaw_sweep",
+        "align.entered", "align.entering", "align.torque_servo", "align.within_tolerance",
+    }  # fmt: skip
 
 
 def test_commands_are_bounded_twists_and_hold_still_while_grasping():
