@@ -809,13 +809,18 @@ class InsertionMachine:
 
     def _align_rate(self, rotation: Rotation, scale: float) -> np.ndarray:
         """Angular velocity in B yielding to the torques outside tolerance: w_T = -R_S2T k
-        n_S, scaled (config.AlignSettings)."""
+        n_S, scaled (config.AlignSettings); at ``align.servo_tilt_max_rad`` from straight
+        down or more, without the part that would tilt the TCP further."""
         settings = self.config.align
         gains = np.array([settings.gain_tau_x, settings.gain_tau_y, settings.gain_tau_z])
         tolerance = self._torque_tolerance()
         torque_s = self.signals.normalised[:3]
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
-        return rotation.apply(-self.signals.s2t @ (gains * outside) * scale)
+        w = rotation.apply(-self.signals.s2t @ (gains * outside) * scale)
+        angle, upright = tilt_of_tool_axis(tool_z_in_base(rotation))  # w along it: uprights
+        if angle >= settings.servo_tilt_max_rad:
+            w = w - min(0.0, float(w @ upright)) * upright
+        return w
 
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B servoing the TCP to the approach rotation."""

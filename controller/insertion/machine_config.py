@@ -225,7 +225,10 @@ class AlignSettings(Config):
     torques tau_x, tau_y, tau_z, zero within their tolerance; gains ``gain_tau_*`` in rad/s
     per noise unit). Aligned: every torque within its tolerance (``tol_tau_*_sigma``, noise
     units) with the axial load at least half of SEARCH's, for ``frames`` successive
-    estimates, or the plug down to ``insert.depth_m`` (it slid in while turning)."""
+    estimates, or the plug down to ``insert.depth_m`` (it slid in while turning). The
+    servo (and INSERT's share of it) never tilts the TCP beyond ``servo_tilt_max_rad`` from
+    straight down (the in-grasp tilt, the board's and a margin): past it, only its
+    uprighting part is kept."""
 
     heel_yaw_gain: float = number(0.0, 10.0, default=0.02)
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
@@ -245,6 +248,7 @@ class AlignSettings(Config):
     width_speed_m_s: float = number(0.0, 0.02, default=0.001)
     width_max_m: float = number(1e-5, 0.01, default=0.004)
     width_sigma: float = number(0.0, 1e4, default=1.0)
+    servo_tilt_max_rad: float = number(0.0, 1.0, default=10 * _DEG)
 
 
 @config_dataclass
