@@ -8,6 +8,8 @@
 * ``task_geometry``: the plug and hole of a task;
 * ``sensor_profile``: a visuotactile sensor's image geometry;
 * ``spatial``: rotations and tilts with their frames in the names;
+* ``quaternion``: unit quaternions as float tuples in closed form (one orientation at a time,
+  hundreds of times a second);
 * ``envelope``: the workspace box, the tilt limit and the speed limits with their clamps,
   one geometry for the arm driver's envelope and the controller's limiter;
 * ``atomic_files``: a result replaces its destination only when complete;

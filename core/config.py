@@ -165,9 +165,7 @@ def show(value: Any) -> str:
 def _field_specs(cls: type) -> tuple[tuple[str, Any, tuple[float, float] | None], ...]:
     hints = typing.get_type_hints(cls)
     return tuple(
-        (f.name, hints[f.name], f.metadata.get(_RANGE))
-        for f in dataclasses.fields(cls)
-        if f.init
+        (f.name, hints[f.name], f.metadata.get(_RANGE)) for f in dataclasses.fields(cls) if f.init
     )
 
 
@@ -351,9 +349,7 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
     if data is None:
         raise ConfigError(f"{path}: empty configuration file; expected a mapping of keys")
     if not isinstance(data, dict):
-        raise ConfigError(
-            f"{path}: expected a mapping of keys at the top level, got {show(data)}"
-        )
+        raise ConfigError(f"{path}: expected a mapping of keys at the top level, got {show(data)}")
     return data
 
 

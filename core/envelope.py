@@ -40,12 +40,16 @@ from typing import Generic, NamedTuple, TypeVar
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from core import quaternion
 from core.config import Config, config_dataclass, number
 from core.devices import Pose, Twist
+from core.quaternion import Quat
 from core.spatial import (
     clamp_norm,
+    quat_from_rpy,
     rotation_from_rpy,
-    rpy_from_rotation,
+    rpy_from_quat,
+    tilt_of_quat,
     tilt_of_rotation,
     tilt_of_tool_axis,
     tool_z_in_base,
@@ -123,34 +127,44 @@ def require_finite(name: str, values: Iterable[float]) -> None:
         raise ValueError(f"{name}: expected finite numbers, got {values!r}")
 
 
-def clamp_position(
-    xyz_m: tuple[float, float, float] | np.ndarray, box: WorkspaceBox
-) -> np.ndarray:
-    """The point of the workspace box nearest to ``xyz_m`` (m, in B)."""
-    return np.clip(np.asarray(xyz_m, dtype=float), box.box_min_m, box.box_max_m)
+def clamp_position(xyz_m: tuple[float, float, float] | np.ndarray, box: WorkspaceBox) -> np.ndarray:
+    """The point of the workspace box nearest to ``xyz_m`` (m, in B). (``np.clip``'s
+    result, in plain floats: the arm twin clamps every servo command, and NumPy's per-call
+    overhead on three numbers was most of it.)"""
+    x, y, z = (float(v) for v in xyz_m)
+    return np.array(
+        (
+            min(max(x, box.x_min_m), box.x_max_m),
+            min(max(y, box.y_min_m), box.y_max_m),
+            min(max(z, box.z_min_m), box.z_max_m),
+        )
+    )
 
 
-def clamp_tilt(T2B: Rotation, max_tilt_rad: float) -> Rotation:
-    """R_T2B turned toward vertical along the shortest arc until its tilt is at most
-    ``max_tilt_rad``; returned unchanged (the same object) when already within."""
-    tilt, axis = tilt_of_tool_axis(tool_z_in_base(T2B))
+def clamp_tilt(T2B: Quat, max_tilt_rad: float) -> Quat:
+    """R_T2B (a quaternion (x, y, z, w), ``core.quaternion``) turned toward vertical along
+    the shortest arc until its tilt is at most ``max_tilt_rad``; returned unchanged (the
+    same tuple) when already within. Closed form: the simulated arm clamps every step."""
+    tilt, axis = tilt_of_quat(T2B)
     if tilt <= max_tilt_rad + ROUNDING_RAD:
         return T2B
-    if not axis.any():  # pointing straight up
-        axis = np.array([1.0, 0.0, 0.0])
-    return Rotation.from_rotvec(axis * (tilt - max_tilt_rad)) * T2B
+    if axis == (0.0, 0.0, 0.0):  # pointing straight up
+        axis = (1.0, 0.0, 0.0)
+    excess = tilt - max_tilt_rad
+    turn = quaternion.from_rotvec((axis[0] * excess, axis[1] * excess, axis[2] * excess))
+    return quaternion.multiply(turn, T2B)
 
 
 def clamp_pose(pose: Pose, envelope: Envelope) -> Limited[Pose]:
     """``pose`` with its position clipped into the box and its tilt limited; its
     ``rpy_rad`` is kept exactly when the tilt is within."""
     xyz = clamp_position(pose.xyz_m, envelope)
-    limited = () if np.array_equal(xyz, pose.xyz_m) else ("workspace",)
-    rotation = rotation_from_rpy(pose.rpy_rad)
+    limited = () if xyz.tolist() == [float(v) for v in pose.xyz_m] else ("workspace",)
+    rotation = quat_from_rpy(pose.rpy_rad)
     clamped = clamp_tilt(rotation, envelope.max_tilt_rad)
     if clamped is rotation:
         return Limited(Pose(vec3(xyz), pose.rpy_rad), limited)
-    return Limited(Pose(vec3(xyz), rpy_from_rotation(clamped, pose.rpy_rad)), (*limited, "tilt"))
+    return Limited(Pose(vec3(xyz), rpy_from_quat(clamped, pose.rpy_rad)), (*limited, "tilt"))
 
 
 def limit_pose(
@@ -169,20 +183,28 @@ def limit_pose(
         limited = (*limited, "step")
     position = clamp_position(position, envelope)  # a no-op up to rounding: the box is convex
 
-    r0 = rotation_from_rpy(previous.rpy_rad)
-    turn = (rotation_from_rpy(goal.rpy_rad) * r0.inv()).as_rotvec()
-    angle = float(np.linalg.norm(turn))
+    r0 = quat_from_rpy(previous.rpy_rad)
+    back = quaternion.inverse(r0)
+    tx, ty, tz = quaternion.rotvec(quaternion.multiply(quat_from_rpy(goal.rpy_rad), back))
+    angle = math.sqrt(tx * tx + ty * ty + tz * tz)
     if angle <= max_step_rad:
         return Limited(Pose(vec3(position), goal.rpy_rad), limited)
     if "step" not in limited:
         limited = (*limited, "step")
     fraction = max_step_rad / angle
     for _ in range(2):  # at most one halving is needed (see the module docstring)
-        rotation = clamp_tilt(Rotation.from_rotvec(turn * fraction) * r0, envelope.max_tilt_rad)
-        if (rotation * r0.inv()).magnitude() <= max_step_rad + ROUNDING_RAD:
+        step = quaternion.from_rotvec((tx * fraction, ty * fraction, tz * fraction))
+        rotation = clamp_tilt(quaternion.multiply(step, r0), envelope.max_tilt_rad)
+        if _norm3(quaternion.rotvec(quaternion.multiply(rotation, back))) <= (
+            max_step_rad + ROUNDING_RAD
+        ):
             break
         fraction /= 2.0
-    return Limited(Pose(vec3(position), rpy_from_rotation(rotation, goal.rpy_rad)), limited)
+    return Limited(Pose(vec3(position), rpy_from_quat(rotation, goal.rpy_rad)), limited)
+
+
+def _norm3(v: tuple[float, float, float]) -> float:
+    return math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
 
 
 def limit_twist(twist: Twist, pose: Pose, duration_s: float, envelope: Envelope) -> Limited[Twist]:
@@ -217,4 +239,3 @@ def _tilts_beyond(pose: Pose, angular: np.ndarray, duration_s: float, max_tilt_r
     times = np.linspace(duration_s / _TWIST_TILT_SAMPLES, duration_s, _TWIST_TILT_SAMPLES)
     z_path = Rotation.from_rotvec(np.outer(times, angular)).apply(tool_z_in_base(rotation))
     return any(tilt_of_tool_axis(z_T_in_B)[0] > allowed for z_T_in_B in z_path)
-

@@ -5,7 +5,9 @@ the gripper toward the plug's tip). A ``Pose`` (core/devices.py) is T2B: its ``x
 TCP in B (m) and its ``rpy_rad`` the orientation of T in B as fixed-axis roll, pitch, yaw
 (rad): R_T2B = Rz(yaw) @ Ry(pitch) @ Rx(roll), the xArm convention. This module is the one
 place that convention is written; everything else converts through ``rotation_from_rpy`` and
-``rpy_from_rotation``. Rotations are scipy ``Rotation`` objects.
+``rpy_from_rotation``. Rotations are scipy ``Rotation`` objects, or, where one orientation is
+turned hundreds of times a second, quaternion tuples (``core.quaternion``; ``quat_from_rpy``
+and ``rpy_from_quat``).
 
 The tilt of the tool is the angle (rad, in [0, pi]) between z_T and the downward vertical
 -z_B: 0 with the tool pointing straight down.
@@ -17,6 +19,11 @@ import math
 
 import numpy as np
 from scipy.spatial.transform import Rotation
+
+from core import quaternion
+from core.quaternion import Quat
+
+Vec3 = tuple[float, float, float]
 
 DOWN_B = np.array([0.0, 0.0, -1.0])
 """The downward vertical, a unit vector in B."""
@@ -55,6 +62,56 @@ def rpy_from_rotation(
         reference = np.asarray(near_rpy_rad, dtype=float)
         rpy = rpy + 2.0 * np.pi * np.round((reference - rpy) / (2.0 * np.pi))
     return vec3(rpy)
+
+
+def quat_from_rpy(rpy_rad: tuple[float, float, float]) -> Quat:
+    """R_T2B of ``Pose.rpy_rad`` as a quaternion (x, y, z, w): Rz(yaw) Ry(pitch) Rx(roll)."""
+    roll, pitch, yaw = (0.5 * float(a) for a in rpy_rad)
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return (
+        cy * cp * sr - sy * sp * cr,
+        cy * sp * cr + sy * cp * sr,
+        sy * cp * cr - cy * sp * sr,
+        cy * cp * cr + sy * sp * sr,
+    )
+
+
+def rpy_from_quat(
+    T2B: Quat, near_rpy_rad: tuple[float, float, float] | None = None
+) -> tuple[float, float, float]:
+    """``rpy_from_rotation`` of a quaternion (x, y, z, w), in closed form away from pitch
+    +-pi/2 (where scipy's gimbal-lock rule decides)."""
+    x, y, z, w = T2B
+    r20 = 2.0 * (x * z - w * y)
+    if abs(r20) > 1.0 - 1e-9:
+        return rpy_from_rotation(Rotation.from_quat(T2B), near_rpy_rad)
+    rpy = (
+        math.atan2(2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)),
+        -math.asin(r20),
+        math.atan2(2.0 * (x * y + w * z), 1.0 - 2.0 * (y * y + z * z)),
+    )
+    if near_rpy_rad is None:
+        return rpy
+    two_pi = 2.0 * math.pi
+    r, p, yw = (
+        a + two_pi * round((ref - a) / two_pi) for a, ref in zip(rpy, near_rpy_rad, strict=True)
+    )
+    return (r, p, yw)
+
+
+def tilt_of_quat(T2B: Quat) -> tuple[float, Vec3]:
+    """``tilt_of_tool_axis`` of the tool oriented by a quaternion, in closed form: the tilt
+    (rad) and the unit horizontal axis (x, y, 0) in B about which turning by it brings z_T
+    straight down (zeros when straight down or up)."""
+    zx, zy, zz = quaternion.z_axis(T2B)
+    # z_T x -z_B = (-zy, zx, 0)
+    norm = math.hypot(zx, zy)
+    angle = math.atan2(norm, -zz)
+    if norm <= 1e-12:
+        return angle, (0.0, 0.0, 0.0)
+    return angle, (-zy / norm, zx / norm, 0.0)
 
 
 def tool_z_in_base(T2B: Rotation) -> np.ndarray:

@@ -238,4 +238,3 @@ def check(spec: registry.DeviceSpec, arm_config: Any) -> bool:
     device = f"{spec.kind} {spec.type_name}/{spec.backend}"
     print(f"{'OK' if ok else 'FAIL':<4} {device:<32} {_shown(spec.path)}: {text}", flush=True)
     return ok
-

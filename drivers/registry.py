@@ -325,8 +325,7 @@ def build_device_set(
     ``MonotonicClock``, or the simulated world described by ``world`` with the files' twins
     (see the module doc). ConfigError for a bad file; ValueError for a sim without a world."""
     specs = {
-        kind: load_device_config(path, backend=backend, kind=kind)
-        for kind, path in files.items()
+        kind: load_device_config(path, backend=backend, kind=kind) for kind, path in files.items()
     }
     if backend == "real":
         clock = MonotonicClock()

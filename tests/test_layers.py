@@ -65,7 +65,7 @@ def test_each_layer_imports_only_what_its_rule_allows(layer):
 def test_the_rule_catches_a_forbidden_import(tmp_path):
     bad = tmp_path / "bad.py"
     bad.write_text("def f():\n    from drivers.sim.twins.arm import SimArm\n")
-    (line, module), = imported_modules(bad)
+    ((line, module),) = imported_modules(bad)
     assert (line, module) == (2, "drivers.sim.twins.arm.SimArm")
     assert not allowed(module, "controller") and not allowed(module, "core")
     assert allowed("drivers.registry", "controller") and not allowed("controller", "drivers")

@@ -10,6 +10,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 PACKAGES = ("controller", "core", "drivers", "evaluation")
 
+
 def repeated_basenames(root: Path, packages: tuple[str, ...]) -> dict[str, list[str]]:
     """Basename -> the paths (relative to ``root``) of every module of ``packages`` that bears
     it, for the basenames borne by more than one module."""

@@ -222,7 +222,8 @@ SIM_TRUTH = Topic(
     "drivers/sim/scenes/insertion/truth.py's row: ``t_s``, ``gel_wrench_s`` (fx, fy, fz N; "
     "tau_x, tau_y, tau_z N*m: the gel on the plug, in S), ``wrist_wrench_t`` (6, N and N*m), "
     "``tip_xyz_b`` (m, B), ``plug_quat_b`` (w, x, y, z; S2B), ``depth_m`` (tip below the "
-    "board surface), ``contact_force_n``.",
+    "board surface), ``contact_force_n`` (summed normal, N), ``insertion_force_n`` (along the "
+    "hole's axis, N).",
 )
 SIM_TF = Topic(
     "/sim/tf",
@@ -361,6 +362,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "plug_quat_b": _NUMS,
             "depth_m": _NUM,
             "contact_force_n": _NUM,
+            "insertion_force_n": _NUM,
         },
         ("t_s",),
     ),

@@ -71,6 +71,8 @@ def _insertion_edges() -> tuple[Edge, ...]:
         Edge(Phase.APPROACH, Phase.SEARCH, "surface_contact"),
         Edge(Phase.SEARCH, Phase.ALIGN, "hole_found"),
         Edge(Phase.ALIGN, Phase.INSERT, "aligned"),
+        Edge(Phase.ALIGN, Phase.BACKOFF, "no_wall"),
+        Edge(Phase.ALIGN, Phase.BACKOFF, "not_entered"),
         Edge(Phase.INSERT, Phase.BACKOFF, "jam"),
         Edge(Phase.INSERT, Phase.BACKOFF, "not_engaged"),
         Edge(Phase.INSERT, Phase.RELEASE, "depth_reached"),

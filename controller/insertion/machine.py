@@ -42,7 +42,7 @@ from controller.insertion.motion import (
     rotation_error,
     tip_position,
 )
-from controller.insertion.search import HoleDetector, SearchPattern
+from controller.insertion.search import HoleDetector, SearchPattern, lateral_resistance
 from controller.insertion.signals import TactileSignals
 from core.devices import Twist
 from core.spatial import (
@@ -55,6 +55,7 @@ from core.spatial import (
 from core.task_geometry import HolePose, PlugGeometry
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
+_PROGRESS_M = 1e-4  # INSERT's push: the TCP this much lower is progress
 _MAX_DT_S = 0.1  # a longer gap between ticks advances the search path by this much only
 _TIMEOUT_KEYS = {
     Phase.GRASP: "grasp_s",
@@ -79,10 +80,11 @@ class _Stage:
     z0_m: float = 0.0  # the TCP's height on entry
     detector: HoleDetector | None = None  # SEARCH: the hole-found rule
     v_tip: np.ndarray = field(default_factory=lambda: np.zeros(3))  # SEARCH: last command;
-    # ALIGN: the heel's backward direction
-    s_m: float = 0.0  # ALIGN: how far the heel has been moved back
+    # ALIGN: the horizontal unit vector against the lean
+    resistance0: float = math.nan  # ALIGN: the lateral resistance when it began (noise units)
+    rise: float = 0.0  # ALIGN: the lateral resistance's rise since (noise units)
     lowest: float = math.inf  # INSERT: lowest tilt torque so far
-    point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the pivot
+    point: np.ndarray = field(default_factory=lambda: np.zeros(3))  # ALIGN: the heel at its start
     frame_t_s: float = math.nan  # GRASP: time of the last tactile estimate counted
     stall_z_m: float = math.nan  # INSERT: the TCP's height when the press load was reached
     yaw_sign: float = 1.0  # INSERT: the yaw sweep's present direction
@@ -136,6 +138,7 @@ class InsertionMachine:
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
+        self._surface_z: float | None = None  # the board surface's height found by touch (m)
         self._rule = ""  # the rule deciding this tick's command (Command.rule)
 
     # -- the Machine protocol ------------------------------------------------------------
@@ -386,6 +389,8 @@ class InsertionMachine:
             contact = self.signals.magnitude >= settings.contact_sigma
             stage.count = stage.count + 1 if contact else 0
         if stage.count >= settings.contact_frames:
+            rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+            self._surface_z = float(self._lowest_edge(obs, rotation)[2])
             self._go(obs, Phase.SEARCH, "surface_contact")
             return _hold()
         self._fire("descend")
@@ -454,37 +459,183 @@ class InsertionMachine:
         return self._tip_command(obs, v_tip, self._hold_rotation(rotation))
 
     def _align(self, obs: Observation, new: bool) -> Command:
-        """Turn about the tip to null the torques and upright the plug, holding the tip where
-        ALIGN began, pressing it down toward SEARCH's preload but never below that point (so a
-        tip caught in the opening stays there while the plug turns)."""
+        """Seek the wall with the heel, turn upright about it, then null the torques (see
+        config.AlignSettings)."""
         stage, settings = self._stage, self.config.align
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
-        edge = self._lowest_edge(obs, rotation)
+        if stage.name == "" and tilt_of_rotation(rotation) <= settings.tilt_tol_rad:
+            # upright already (after a jam's back-off): no heel to seek or turn about
+            self._after_upright(obs, rotation)
+            stage.start_yaw_rad = _yaw_of(rotation) - self.hole.yaw_rad
         if stage.name == "":
-            stage.name = "servo"
-            stage.point = edge
+            self._next_stage(obs, "seek")
             lean = rotation.apply([0.0, 0.0, 1.0])
             lean[2] = 0.0
             norm = float(np.linalg.norm(lean))
             stage.v_tip = -lean / norm if norm > 1e-9 else np.zeros(3)
-        if stage.s_m < settings.wall_seek_max_m:
-            step = settings.wall_seek_m_s * min(self._tick_s, _MAX_DT_S)
-            stage.s_m += step
-            stage.point = stage.point + step * stage.v_tip
+            stage.point = self._lowest_edge(obs, rotation)
+        if stage.name == "servo":
+            return self._align_servo(obs, new)
+        if stage.name == "width":
+            return self._align_width(obs, rotation, new)
+        if stage.name == "yaw":
+            return self._align_yaw(obs, rotation)
+        if new and np.linalg.norm(stage.v_tip) > 0.0:
+            resistance = lateral_resistance(self.signals, rotation, stage.v_tip)[1]
+            if math.isnan(stage.resistance0):
+                stage.resistance0 = resistance
+            stage.rise = resistance - stage.resistance0
+            held = stage.rise >= settings.wall_sigma
+            stage.count = stage.count + 1 if held else 0
+        if stage.name == "seek":
+            return self._align_seek(obs, rotation)
+        return self._align_turn(obs, rotation)
+
+    def _align_seek(self, obs: Observation, rotation: Rotation) -> Command:
+        """ALIGN's seek stage: the heel against the lean until the wall holds it."""
+        stage, settings = self._stage, self.config.align
+        edge = self._lowest_edge(obs, rotation)
+        moved = float(np.linalg.norm((edge - stage.point)[:2]))
+        if stage.count >= settings.frames or not np.any(stage.v_tip):
+            self._fire("wall")
+            self._next_stage(obs, "turn")
+            stage.point = edge
+            return _hold()
+        if moved >= settings.seek_max_m:
+            return self._back_off(obs, "no_wall")
+        self._fire("seek")
+        v_edge = settings.seek_speed_m_s * stage.v_tip
+        v_edge[2] = -self._press_rate()
+        v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge,
+                               self._heel_yaw_rate(rotation))
+        return self._command(v_tcp, w)
+
+    def _align_turn(self, obs: Observation, rotation: Rotation) -> Command:
+        """ALIGN's turn stage: upright about the heel, the heel held against the wall."""
+        stage, settings = self._stage, self.config.align
+        angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
+        if angle <= settings.tilt_tol_rad:
+            self._fire("upright")
+            self._after_upright(obs, rotation)
+            stage.start_yaw_rad = _yaw_of(rotation) - self.hole.yaw_rad
+            return _hold()
+        self._fire("turn")
+        edge = self._lowest_edge(obs, rotation)
+        hold = float(np.clip(1.0 - stage.rise / settings.wall_sigma, -1.0, 1.0))
+        v_edge = settings.seek_speed_m_s * hold * stage.v_tip
+        v_edge[2] = self.config.approach.pose_gain_1_s * (stage.point[2] - edge[2])
+        w = clamp_norm(settings.upright_gain_1_s * angle * axis + self._heel_yaw_rate(rotation),
+                       settings.max_angular_speed_rad_s)
+        v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
+        return self._command(v_tcp, w)
+
+    def _after_upright(self, obs: Observation, rotation: Rotation) -> None:
+        """The stage after the turn: the servo if the plug is in the opening, else the width
+        stage (toward the low end the in-plane torque names), or the yaw stage when the
+        in-plane torque names no side (below ``align.width_sigma``) or the stage is off."""
+        stage = self._stage
+        if self._entered(obs, rotation):
+            self._next_stage(obs, "servo")
+        elif self.config.align.width_speed_m_s > 0.0 and (
+            abs(float(self.signals.normalised[2])) >= self.config.align.width_sigma
+        ):
+            self._next_stage(obs, "width")
+            toward = -math.copysign(1.0, float(self.signals.normalised[2]))
+            along = rotation.apply([toward, 0.0, 0.0])
+            along[2] = 0.0
+            stage.v_tip = along / np.linalg.norm(along)
+            stage.point = tip_position(obs.arm.tcp, self.plug.length_m)
+            stage.resistance0 = math.nan
+        else:
+            self._next_stage(obs, "yaw")
+
+    def _align_width(self, obs: Observation, rotation: Rotation, new: bool) -> Command:
+        """ALIGN's width stage (see config.AlignSettings): slide toward the low end, pressing,
+        until the plug enters; the end wall or ``width_max_m`` first: the yaw stage."""
+        stage, settings = self._stage, self.config.align
+        if self._entered(obs, rotation):
+            self._fire("entered")
+            self._next_stage(obs, "servo")
+            return _hold()
         if new:
-            aligned = self._torques_within_tolerance() and (
-                tilt_of_rotation(rotation) <= settings.tilt_tol_rad
-            )
+            resistance = lateral_resistance(self.signals, rotation, stage.v_tip)[1]
+            if math.isnan(stage.resistance0):
+                stage.resistance0 = resistance
+            held = resistance - stage.resistance0 >= settings.wall_sigma
+            stage.count = stage.count + 1 if held else 0
+        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        slid = float(np.linalg.norm((tip - stage.point)[:2]))
+        if stage.count >= settings.frames or slid >= settings.width_max_m:
+            self._fire("end_wall" if stage.count >= settings.frames else "width_done")
+            self._next_stage(obs, "yaw")
+            return _hold()
+        self._fire("width_slide")
+        v_tip = settings.width_speed_m_s * stage.v_tip
+        v_tip[2] = -self._press_rate()
+        return self._tip_command(obs, v_tip, self._heel_yaw_rate(rotation))
+
+    def _heel_yaw_rate(self, rotation: Rotation) -> np.ndarray:
+        """Angular velocity in B yielding in yaw (about T z) to the torque about the plug's
+        axis while the heel is caught (``align.heel_yaw_gain``)."""
+        about_t_z = float((self.signals.s2t @ self.signals.normalised[:3])[2])
+        return rotation.apply([0.0, 0.0, -self.config.align.heel_yaw_gain * about_t_z])
+
+    def _align_yaw(self, obs: Observation, rotation: Rotation) -> Command:
+        """ALIGN's yaw stage (upright but not in the opening): sweep the yaw about the tip
+        axis, a triangle wave within +-``insert.yaw_sweep_rad`` of the opening's nominal yaw,
+        pressing with SEARCH's load, until the plug enters (then the servo stage); back
+        where the sweep began after ``insert.sweeps`` whole sweeps: not over the opening
+        (BACKOFF, then SEARCH again)."""
+        stage, settings = self._stage, self.config.insert
+        if self._entered(obs, rotation):
+            self._fire("entered")
+            self._next_stage(obs, "servo")
+            return _hold()
+        yaw = _yaw_of(rotation) - self.hole.yaw_rad
+        if stage.yaw_sign * yaw >= settings.yaw_sweep_rad:
+            stage.yaw_sign = -stage.yaw_sign
+            stage.reversals += 1
+        if stage.reversals >= 2 * settings.sweeps and (
+            stage.yaw_sign * (yaw - stage.start_yaw_rad) >= 0.0
+        ):
+            if self._depth(obs, rotation) >= 0.5 * self.config.align.enter_m:
+                self._fire("entering")  # on its way in as the sweep ends: the servo
+                self._next_stage(obs, "servo")
+                return _hold()
+            return self._back_off(obs, "not_entered")
+        self._fire("yaw_sweep")
+        w = np.array([0.0, 0.0, stage.yaw_sign * settings.yaw_rate_rad_s])
+        return self._tip_command(obs, np.array([0.0, 0.0, -self._press_rate()]), w)
+
+    def _entered(self, obs: Observation, rotation: Rotation) -> bool:
+        """True when the plug is in the opening: its tip face's lowest edge at least
+        ``align.enter_m`` below the surface (``_depth``)."""
+        return self._depth(obs, rotation) >= self.config.align.enter_m
+
+    def _depth(self, obs: Observation, rotation: Rotation) -> float:
+        """How far the tip face's lowest edge is below the board surface found by touch (the
+        nominal opening's height before any touch), m."""
+        surface = self.hole.z_m if self._surface_z is None else self._surface_z
+        return surface - float(self._lowest_edge(obs, rotation)[2])
+
+    def _align_servo(self, obs: Observation, new: bool) -> Command:
+        """ALIGN's servo stage (the plug in the opening): yield to the torques about the tip,
+        pressing with SEARCH's load; aligned once every torque is within tolerance under at
+        least half that load, or once the plug is down to INSERT's depth."""
+        stage, settings = self._stage, self.config.align
+        if new:
+            loaded = self.signals.axial_force_n >= 0.5 * self._preload
+            aligned = loaded and self._torques_within_tolerance()
             stage.count = stage.count + 1 if aligned else 0
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        if self._depth(obs, rotation) >= self.config.insert.depth_m:
+            stage.count = settings.frames  # slid in while turning: INSERT judges the depth
         if stage.count >= settings.frames:
             self._go(obs, Phase.INSERT, "aligned")
             return _hold()
-        self._fire("upright" if self._torques_within_tolerance() else "torque_servo")
+        self._fire("within_tolerance" if self._torques_within_tolerance() else "torque_servo")
         w = clamp_norm(self._align_rate(rotation, 1.0), settings.max_angular_speed_rad_s)
-        v_edge = self.config.approach.pose_gain_1_s * (stage.point - edge)
-        v_edge[2] = max(v_edge[2], -self._press_rate())  # never below where ALIGN began
-        v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
-        return self._command(v_tcp, w)
+        return self._tip_command(obs, np.array([0.0, 0.0, -self._press_rate()]), w)
 
     def _lowest_edge(self, obs: Observation, rotation: Rotation) -> np.ndarray:
         """The lowest of the four edge midpoints of the plug's tip face, in B: the edge a
@@ -507,12 +658,12 @@ class InsertionMachine:
         straight down within the budgets; a jam backs off; the depth is success (see
         config.InsertSettings)."""
         stage, settings = self._stage, self.config.insert
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         if stage.name == "":
-            self._next_stage(obs, "press")
-        tip = tip_position(obs.arm.tcp, self.plug.length_m)
+            self._next_stage(obs, "push" if self._entered(obs, rotation) else "press")
         target_load = settings.press_load_ratio * self._preload
         unloaded = self.signals.axial_force_n < target_load
-        if tip[2] <= self.hole.z_m - settings.depth_m and unloaded:
+        if self._depth(obs, rotation) >= settings.depth_m and unloaded:
             self._go(obs, Phase.RELEASE, "depth_reached")
             return _hold()
         if stage.name == "press":
@@ -526,16 +677,21 @@ class InsertionMachine:
                 or self.signals.axial_force > settings.force_budget
             )
             stage.count = stage.count + 1 if jammed else 0
-        if stage.count >= settings.jam_frames:
+        z_tcp = float(obs.arm.tcp.xyz_m[2])
+        if math.isnan(stage.stall_z_m) or z_tcp < stage.stall_z_m - _PROGRESS_M:
+            stage.stall_z_m, stage.since_t_s = z_tcp, obs.t_s
+        stalled = obs.t_s - stage.since_t_s >= settings.stall_s
+        if stage.count >= settings.jam_frames or stalled:
             return self._back_off(obs, "jam")
         self._fire("push")
-        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         w = clamp_norm(
             self._align_rate(rotation, settings.compliance_scale),
             self.config.align.max_angular_speed_rad_s,
         )
         w[2] = 0.0  # the yaw found while pressing is held
-        return self._tip_command(obs, np.array([0.0, 0.0, -settings.speed_m_s]), w)
+        shortfall = (target_load - self.signals.axial_force_n) / target_load
+        v_tip = np.array([0.0, 0.0, -settings.speed_m_s * float(np.clip(shortfall, -1.0, 1.0))])
+        return self._tip_command(obs, v_tip, w)
 
     def _press(self, obs: Observation, target_load: float) -> Command:
         """INSERT's press stage: descend toward the press load; at the stall height sweep
@@ -581,7 +737,7 @@ class InsertionMachine:
         if self._retries >= self.config.backoff.max_retries:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
-        self._search_again = guard == "not_engaged"
+        self._search_again = guard in ("not_engaged", "no_wall", "not_entered")
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 
@@ -652,16 +808,19 @@ class InsertionMachine:
         return bool(np.all(np.abs(self.signals.normalised[:3]) <= self._torque_tolerance()))
 
     def _align_rate(self, rotation: Rotation, scale: float) -> np.ndarray:
-        """Angular velocity in B: yield to the torques outside tolerance (w_T = -R_S2T k n_S,
-        scaled) plus turning T z toward straight down."""
+        """Angular velocity in B yielding to the torques outside tolerance: w_T = -R_S2T k
+        n_S, scaled (config.AlignSettings); at ``align.servo_tilt_max_rad`` from straight
+        down or more, without the part that would tilt the TCP further."""
         settings = self.config.align
         gains = np.array([settings.gain_tau_x, settings.gain_tau_y, settings.gain_tau_z])
         tolerance = self._torque_tolerance()
         torque_s = self.signals.normalised[:3]
         outside = np.where(np.abs(torque_s) > tolerance, torque_s, 0.0)
-        w_t = -self.signals.s2t @ (gains * outside) * scale
-        angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
-        return rotation.apply(w_t) + settings.upright_gain_1_s * angle * axis
+        w = rotation.apply(-self.signals.s2t @ (gains * outside) * scale)
+        angle, upright = tilt_of_tool_axis(tool_z_in_base(rotation))  # w along it: uprights
+        if angle >= settings.servo_tilt_max_rad:
+            w = w - min(0.0, float(w @ upright)) * upright
+        return w
 
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B servoing the TCP to the approach rotation."""

@@ -74,7 +74,7 @@ class NoiseFloor(Config):
 
     tilt_x: float = number(1e-9, 1e3, default=0.0008662)
     tilt_y: float = number(1e-9, 1e3, default=0.0005886)
-    inplane: float = number(1e-9, 1e3, default=0.000114)
+    inplane: float = number(1e-9, 1e3, default=0.0005)
     shear_x: float = number(1e-9, 1e3, default=0.004923)
     shear_y: float = number(1e-9, 1e3, default=0.00533)
     normal: float = number(1e-9, 1e3, default=0.03795)
@@ -185,23 +185,55 @@ class SearchSettings(Config):
 
 @config_dataclass
 class AlignSettings(Config):
-    """ALIGN: rotate the TCP about the plug's tip (the tip stays put). The angular velocity in
-    T is w_T = -R_S2T (k * n_S) (the TCP yields to the contact's torque; n_S the normalised,
-    filtered torques tau_x, tau_y, tau_z, zero within their tolerance) plus the uprighting
-    term ``upright_gain_1_s`` x (tilt of T z from straight down). Gains ``gain_tau_*`` in
-    rad/s per noise unit; tolerances ``tol_tau_*_sigma`` in noise units. Aligned: every
-    torque within its tolerance and the tilt within ``tilt_tol_rad`` for ``frames``
-    successive estimates.
+    """ALIGN, after SEARCH caught the tilted tip's lowest edge (the heel) in the opening, in
+    three stages (docs/ARCHITECTURE.md, "ALIGN"):
 
-    The pivot (the tip face's lowest edge, the heel) is moved backward, against the tilt's
-    lean, at ``wall_seek_m_s`` for at most ``wall_seek_max_m``: uprighting about the heel
-    puts the plug's body on the lean's side of it, so the heel must sit against the
-    opening's wall behind it for the plug to come upright inside the opening (the wall
-    stops the heel; the compliant wrist takes up the rest)."""
+    *Seek*: move the heel horizontally against the tilt's lean at ``seek_speed_m_s``,
+    pressing with SEARCH's load, until the opening's wall (or the friction at the rim)
+    holds it: the lateral resistance r (``search.lateral_resistance``: the tilt torque
+    of a force against the motion, noise units) risen by ``wall_sigma`` above its value when
+    ALIGN began, for ``frames`` successive estimates. No wall within ``seek_max_m``: the
+    catch was not the opening (BACKOFF, then SEARCH again). While seeking and turning, the
+    plug yields in yaw (about T z) to the torque about its axis: w_Tz = -``heel_yaw_gain``
+    x n (n that torque in T z, normalised, no tolerance): with the heel in the opening and
+    the plug yawed, the opening's long walls twist it back.
 
-    gain_tau_x: float = number(0.0, 10.0, default=0.004)
-    gain_tau_y: float = number(0.0, 10.0, default=0.004)
-    gain_tau_z: float = number(0.0, 10.0, default=0.004)
+    *Turn*: turn the TCP toward straight down about the heel at ``upright_gain_1_s`` x the
+    tilt (capped by ``max_angular_speed_rad_s``), holding the heel against the wall: its
+    horizontal speed is ``seek_speed_m_s`` x (1 - rise / ``wall_sigma``) within +-1. Ends
+    when the tilt of T z from straight down is within ``tilt_tol_rad`` (the arm's upright,
+    which is the plug's only for a nominal grasp). If the tip face's lowest edge is then
+    ``enter_m`` below the surface found by touch, the plug is in the opening (the servo
+    stage); otherwise the *width* stage first, then the *yaw* stage.
+
+    *Width*: an in-grasp tilt about T y leaves one end of the plug's tip low: that corner
+    catches in the opening with the plug's centre off toward the other end, and the
+    in-plane torque's sign names the side (tau_z > 0: the centre is toward +T x; it names
+    none below ``width_sigma`` noise units, and the stage is skipped). The tip
+    slides along T x toward the low end at ``width_speed_m_s``, pressing, until the plug
+    enters (the servo stage); the end wall holding it (the lateral resistance risen by
+    ``wall_sigma`` for ``frames`` estimates) or ``width_max_m`` slid without entering: the
+    yaw stage. ``width_speed_m_s`` 0 skips the stage.
+
+    *Yaw*: sweep the yaw as INSERT's press does (``insert.yaw_sweep_rad``,
+    ``yaw_rate_rad_s``, ``sweeps``) until the plug enters; back where the sweep began, a
+    plug at least half of ``enter_m`` in goes on to the servo, any other backs off to
+    SEARCH again.
+
+    *Servo*: turn about the tip to null the torques, pressing: the TCP
+    yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
+    torques tau_x, tau_y, tau_z, zero within their tolerance; gains ``gain_tau_*`` in rad/s
+    per noise unit). Aligned: every torque within its tolerance (``tol_tau_*_sigma``, noise
+    units) with the axial load at least half of SEARCH's, for ``frames`` successive
+    estimates, or the plug down to ``insert.depth_m`` (it slid in while turning). The
+    servo (and INSERT's share of it) never tilts the TCP beyond ``servo_tilt_max_rad`` from
+    straight down (the in-grasp tilt, the board's and a margin): past it, only its
+    uprighting part is kept."""
+
+    heel_yaw_gain: float = number(0.0, 10.0, default=0.02)
+    gain_tau_x: float = number(0.0, 10.0, default=0.02)
+    gain_tau_y: float = number(0.0, 10.0, default=0.02)
+    gain_tau_z: float = number(0.0, 10.0, default=0.02)
     tol_tau_x_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_y_sigma: float = number(0.1, 1e4, default=4.0)
     tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
@@ -209,8 +241,14 @@ class AlignSettings(Config):
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
     max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
-    wall_seek_m_s: float = number(0.0, 0.02, default=0.001)
-    wall_seek_max_m: float = number(0.0, 0.01, default=0.0015)
+    seek_speed_m_s: float = number(1e-5, 0.02, default=0.001)
+    seek_max_m: float = number(1e-5, 0.01, default=0.0025)
+    wall_sigma: float = number(0.1, 1e4, default=2.0)
+    enter_m: float = number(1e-5, 0.01, default=0.001)
+    width_speed_m_s: float = number(0.0, 0.02, default=0.001)
+    width_max_m: float = number(1e-5, 0.01, default=0.004)
+    width_sigma: float = number(0.0, 1e4, default=1.0)
+    servo_tilt_max_rad: float = number(0.0, 1.0, default=10 * _DEG)
 
 
 @config_dataclass
@@ -232,7 +270,8 @@ class InsertSettings(Config):
     ``compliance_scale`` of its gains. The axial force (the estimated force along T z,
     estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
     torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
-    INSERT, for ``jam_frames`` successive estimates: a jam (BACKOFF, then ALIGN).
+    INSERT, for ``jam_frames`` successive estimates, or the TCP not 0.1 mm lower for
+    ``stall_s``: a jam (BACKOFF, then ALIGN).
     ``force_budget`` in N.
 
     Success (either stage): the tip ``depth_m`` below the board surface, by the arm's TCP,
@@ -250,6 +289,7 @@ class InsertSettings(Config):
     yaw_sweep_rad: float = number(0.0, 0.5, default=0.07)
     yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
     sweeps: int = number(1, 20, default=1)
+    stall_s: float = number(0.1, 60.0, default=1.5)
 
 
 @config_dataclass
@@ -310,7 +350,7 @@ class Timeouts(Config):
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)
     search_s: float = number(0.1, 600.0, default=30.0)
-    align_s: float = number(0.1, 600.0, default=5.0)
+    align_s: float = number(0.1, 600.0, default=10.0)
     insert_s: float = number(0.1, 600.0, default=8.0)
     backoff_s: float = number(0.1, 600.0, default=3.0)
     release_s: float = number(0.1, 600.0, default=3.0)

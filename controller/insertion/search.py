@@ -19,6 +19,20 @@ from core.spatial import cross
 STEADY_COSINE = 0.95  # the resistance is judged only on a steady drag direction
 
 
+def lateral_resistance(
+    signals: TactileSignals, rotation: Rotation, direction_b: np.ndarray
+) -> tuple[int, float]:
+    """How hard the surroundings resist the tip's horizontal motion along ``direction_b``
+    (in B; any length), in noise units, from the tilt torques: a force against the motion
+    at the tip acts on the plug's length about e = z_T x d (d the motion's direction), which
+    lies in T's x-y plane. The tool axis a (0: T x, 1: T y) with the larger |e_a| measures it:
+    r = n_a / e_a (n the normalised torque in T), positive when resisting. Returns (a, r)."""
+    axis_b = cross(rotation.apply([0.0, 0.0, 1.0]), direction_b)
+    e_t = rotation.inv().apply(axis_b / np.linalg.norm(axis_b))
+    a = int(np.argmax(np.abs(e_t[:2])))
+    return a, float(signals.torque_t[a] / e_t[a])
+
+
 class SearchPattern:
     """A planar search path in the opening's frame (u along its width axis, v across),
     centred on the nominal opening and parameterised by the path length s (m). Past its end
@@ -162,10 +176,7 @@ class HoleDetector:
         ):
             self._count = 0
             return False
-        axis_b = cross(rotation.apply([0.0, 0.0, 1.0]), drag)
-        e_t = rotation.inv().apply(axis_b / np.linalg.norm(axis_b))
-        a = int(np.argmax(np.abs(e_t[:2])))
-        resistance = float(signals.torque_t[a] / e_t[a])
+        a, resistance = lateral_resistance(signals, rotation, drag)
         load = max(signals.axial_force_n, 1.0)
         ratio = self._ratios[a]
         self._learned[a] += 1

@@ -75,9 +75,9 @@ class TaskConfig(Config):
     """A task file but its ``scene:`` (see the module doc). ``force_limit_n``: the largest
     true force (N) the compliant wrist may pass to the plug; a simulated trial over it counts
     against the controller (judged on the simulator's truth, never seen by the controller).
-    ``contact_force_limit_n``: the largest true contact force (N) between the plug and the
-    board or the receptacle, from the connector's specified insertion force
-    (docs/TRIALS.md); a simulated trial over it fails (``contact_force_exceeded``).
+    ``contact_force_limit_n``: the connector's specified insertion force (N, docs/TRIALS.md):
+    the largest true net contact force on the plug along the hole's axis; a simulated trial
+    over it fails (``insertion_force_exceeded``).
     ``estimator``: the estimator configuration (None: the tactile sensor's own);
     ``calibration``: its calibration file for this task's grasp, relative to configs/ (None:
     raw estimates; controller/run/task_calibration.py)."""

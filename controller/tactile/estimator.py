@@ -70,6 +70,12 @@ MAX_REFERENCE_FRAMES = 10_000
 # moves the gel by several px, more than one linearisation of grid_lk covers.
 GRASP_FLOW_PASSES = 4
 
+# The fallback dipole's divergence map (GridPipeline.divergence_map) per (configuration,
+# scale, grid): a constant of those, shared by every estimator of the process (probing it
+# takes 384 decompositions, about 20 ms, and each estimator would otherwise probe it again).
+_DIVERGENCE_MAPS: dict[tuple, np.ndarray] = {}
+_DIVERGENCE_MAPS_KEPT = 8
+
 # Builds the flow from the reference to each pushed frame: (flow configuration, working
 # image (H, W), grid rows, grid cols) -> GridFlow (px). The product's is ``make_grid_flow``.
 GridFlowFactory = Callable[[FlowConfig, tuple[int, int], int, int], GridFlow]
@@ -134,7 +140,6 @@ class TactileEstimator:
         self._pipeline: GridPipeline | None = None
         self._rezero_policy = RezeroPolicy(config.slip.rezero)
         self._last_slip: SlipStatus | None = None
-        self._divergence_map_cache: tuple[object, np.ndarray] | None = None
         self._last_t_s = -math.inf  # the latest pushed frame's time (set_reference resets it)
 
     # -- reference ---------------------------------------------------------------------------
@@ -287,10 +292,7 @@ class TactileEstimator:
         settings = self.config.noise_gate
         if settings is None or not isinstance(grid_flow, GridLKFlow):
             return None
-        key = (pipeline.grid_px.shape[:2], tuple(pipeline.x_mm), tuple(pipeline.y_mm))
-        if self._divergence_map_cache is None or self._divergence_map_cache[0] != key:
-            self._divergence_map_cache = (key, pipeline.divergence_map())
-        covariance = grid_flow.noise_covariance(settings.noise_grey, self._divergence_map_cache[1])
+        covariance = grid_flow.noise_covariance(settings.noise_grey, _divergence_map(pipeline))
         if not float(np.abs(covariance).max()) > 0.0:  # a featureless image: the field is 0
             return None
         return NoiseGate(covariance, settings.false_alarm)
@@ -422,3 +424,22 @@ class TactileEstimator:
     def rezero_state(self) -> RezeroState:
         """The re-zero policy's current state."""
         return self._rezero_policy.state
+
+
+def _divergence_map(pipeline: GridPipeline) -> np.ndarray:
+    """``pipeline.divergence_map()``, probed once per (configuration, scale, grid) in a
+    process (read-only)."""
+    key = (
+        pipeline.config,
+        pipeline.mm_per_px,
+        tuple(pipeline.x_mm),
+        tuple(pipeline.y_mm),
+    )
+    found = _DIVERGENCE_MAPS.get(key)
+    if found is None:
+        if len(_DIVERGENCE_MAPS) >= _DIVERGENCE_MAPS_KEPT:
+            _DIVERGENCE_MAPS.clear()
+        found = pipeline.divergence_map()
+        found.flags.writeable = False
+        _DIVERGENCE_MAPS[key] = found
+    return found

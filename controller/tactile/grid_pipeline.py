@@ -44,7 +44,7 @@ class GridPipeline:
         self.config = config
         self.x_mm, self.y_mm = x_mm, y_mm
         self.grid_px = np.zeros((*shape, 2))
-        self._mm_per_px = mm_per_px
+        self.mm_per_px = mm_per_px
         self._u = np.zeros(shape)
         self._v = np.zeros(shape)
         self._work = np.empty(shape)
@@ -77,7 +77,7 @@ class GridPipeline:
     def update_field(self) -> None:
         """``grid_px`` -> mm in S, then the temporal EMA (alpha = weight of the newest
         field)."""
-        scale = self._mm_per_px
+        scale = self.mm_per_px
         alpha = self.config.ema_alpha
         if alpha >= 1.0 or not self._filtered:
             np.multiply(self.grid_px[..., 0], scale, out=self._u)

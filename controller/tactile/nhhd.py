@@ -32,6 +32,7 @@ Derived quantities (raw units, to be scaled by calibration):
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 from typing import Literal
 
@@ -66,6 +67,27 @@ def greens_kernel(rows: int, cols: int, dx: float, dy: float) -> np.ndarray:
     kernel = np.zeros((2 * rows, 2 * cols))
     kernel[np.ix_(m % (2 * rows), n % (2 * cols))] = g
     return kernel
+
+
+@functools.lru_cache(maxsize=16)
+def greens_spectrum(rows: int, cols: int, dx: float, dy: float) -> np.ndarray:
+    """``rfft2`` of ``greens_kernel`` times the cell area (mm^2), read-only: a constant of
+    the grid, built once per process (an estimator builds a decomposer per reference)."""
+    spectrum = np.fft.rfft2(greens_kernel(rows, cols, dx, dy)) * (dx * dy)
+    spectrum.flags.writeable = False
+    return spectrum
+
+
+@functools.lru_cache(maxsize=16)
+def greens_matrix(rows: int, cols: int, dx: float, dy: float) -> np.ndarray:
+    """The dense (N, N) Green's matrix of the grid, N = rows * cols, times the cell area
+    (mm^2), read-only: ``greens_matrix @ s.ravel()`` is the NHHD's convolution of the source
+    ``s`` (rows, cols), cells in row-major order. A constant of the grid, built once."""
+    kernel = greens_kernel(rows, cols, dx, dy) * (dx * dy)
+    r, c = np.divmod(np.arange(rows * cols), cols)
+    matrix = kernel[(r[:, None] - r[None, :]) % (2 * rows), (c[:, None] - c[None, :]) % (2 * cols)]
+    matrix.flags.writeable = False
+    return matrix
 
 
 @dataclass(frozen=True)
@@ -117,8 +139,7 @@ class NHHD:
         self._grid_x, self._grid_y = np.meshgrid(x_mm, y_mm)
         shape = (self.rows, self.cols)
         padded = (2 * self.rows, 2 * self.cols)
-        cell_area = self.dx * self.dy
-        self._kernel_spectrum = np.fft.rfft2(greens_kernel(*shape, self.dx, self.dy)) * cell_area
+        self._kernel_spectrum = greens_spectrum(*shape, self.dx, self.dy)
         self._sources = np.zeros((2, *padded))  # [div, curl], zero-padded
         self._spectrum = np.empty((2, padded[0], padded[1] // 2 + 1), dtype=complex)
         self._potentials = np.empty((2, *padded))
@@ -232,11 +253,7 @@ class CurlFreePart:
         rows, cols = y_mm.size, x_mm.size
         self.dx = float(x_mm[1] - x_mm[0])
         self.dy = float(y_mm[1] - y_mm[0])
-        kernel = greens_kernel(rows, cols, self.dx, self.dy) * (self.dx * self.dy)
-        r, c = np.divmod(np.arange(rows * cols), cols)
-        self._green = kernel[
-            (r[:, None] - r[None, :]) % (2 * rows), (c[:, None] - c[None, :]) % (2 * cols)
-        ]
+        self._green = greens_matrix(rows, cols, self.dx, self.dy)
         shape = (rows, cols)
         self._div = np.empty(shape)
         self._work = np.empty(shape)

@@ -228,6 +228,7 @@ def truth(episode: Episode) -> Truth | None:
         t,
         column("wrist_wrench_t", 6),
         np.array([_number(r["contact_force_n"]) for r in rows]),
+        np.array([_number(r.get("insertion_force_n")) for r in rows]),
         column("tip_xyz_b", 3),
         np.array([_number(r["depth_m"]) for r in rows]),
         hole,

@@ -101,9 +101,7 @@ def accuracy(folders: tuple[Path, ...], label: str, config: EstimatorConfig) -> 
         frames = (f for f in dataset.frames() if tilt[f[0]])
         reference = reference_frames(dataset, dataset.meta.reference)
         try:
-            series = estimate_frames(
-                frames, reference, _estimator(config, dataset), _open(dataset)
-            )
+            series = estimate_frames(frames, reference, _estimator(config, dataset), _open(dataset))
         except ValueError:  # cannot run on this gel (markers on a markerless one)
             by_dataset[folder.name], worst = math.inf, -math.inf
             continue
@@ -161,9 +159,7 @@ def _objectives(p: ParetoPoint, with_slip: bool) -> tuple[float, ...]:
     return (p.latency_ms, p.rmse_nmm, *slip)
 
 
-def beating(
-    points: list[ParetoPoint], p: ParetoPoint, with_slip: bool = True
-) -> list[ParetoPoint]:
+def beating(points: list[ParetoPoint], p: ParetoPoint, with_slip: bool = True) -> list[ParetoPoint]:
     """The points at least as good as ``p`` on every objective (latency, tilt RMSE and,
     ``with_slip``, slip recall) and better on one."""
     mine = _objectives(p, with_slip)

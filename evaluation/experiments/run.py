@@ -184,10 +184,7 @@ def _run(args: argparse.Namespace, staging: Path) -> str:
         compared = estimator_variants(args.quick, fallback_variants=False)
         entries = [Entry(label, config) for label, config in compared]
         jobs = [("realgel", [spec], entries) for spec in realgel_specs(args.quick)]
-        jobs += [
-            ("pareto", pareto_folders, label, config)
-            for label, config in compared
-        ]
+        jobs += [("pareto", pareto_folders, label, config) for label, config in compared]
         jobs += [
             ("sweep", condition.name, i, calibrations, args.estimator)
             for condition in conditions
@@ -204,9 +201,7 @@ def _run(args: argparse.Namespace, staging: Path) -> str:
         realgel_rows = [row for kind, rows in outcomes if kind == "realgel" for row in rows]
         realgel_r2 = {label: worst_realgel_r2(realgel_rows, label) for label, _ in compared}
         eligible = [
-            (label, config)
-            for label, config in compared
-            if meets_realgel_target(realgel_r2[label])
+            (label, config) for label, config in compared if meets_realgel_target(realgel_r2[label])
         ]
         slip_runs = pool.map(
             _second_stage_job,

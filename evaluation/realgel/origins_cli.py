@@ -61,9 +61,7 @@ def main(argv: list[str] | None = None) -> int:
         if spec.push > 0
     ]
     results = [
-        (label, spec, origin_scores(spec, config))
-        for label, config in configs
-        for spec in specs
+        (label, spec, origin_scores(spec, config)) for label, config in configs for spec in specs
     ]
     command = "python scripts/realgel_origins.py " + " ".join(
         argv if argv is not None else sys.argv[1:]

@@ -79,9 +79,7 @@ class SequenceSpec:
         if self.shading not in ("moves", "fixed"):
             raise ValueError(f"shading must be 'moves' or 'fixed', got {self.shading!r}")
         if self.contact not in CONTACTS:
-            raise ValueError(
-                f"contact must be one of {', '.join(CONTACTS)}, got {self.contact!r}"
-            )
+            raise ValueError(f"contact must be one of {', '.join(CONTACTS)}, got {self.contact!r}")
         if not 0.0 <= self.lighting < 1.0:
             raise ValueError(f"lighting drift must be in [0, 1), got {self.lighting}")
         if self.frames < 4:

@@ -177,8 +177,9 @@ def describe(summary: dict[str, Any]) -> str:
     if summary["median_time_s"] is not None:
         parts.append(f"median {summary['median_time_s']:.2f} s, p90 {summary['p90_time_s']:.2f} s")
     parts.append(
-        f"plug contact force max {summary['max_contact_force_n']:.2f} N "
-        f"({summary['contact_force_violation_trials']} trials over the limit), max wrist "
+        f"plug insertion force max {summary['max_insertion_force_n']:.2f} N "
+        f"({summary['insertion_force_violation_trials']} trials over the limit), summed contact "
+        f"force max {summary['max_contact_force_n']:.2f} N, max wrist "
         f"force {summary['max_wrist_force_n']:.2f} N ({summary['over_force_trials']} over)"
     )
     if summary["sim_speed_x_realtime"] is not None:

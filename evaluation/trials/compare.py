@@ -123,17 +123,18 @@ def comparison_markdown(
         f"Seeds {seeds} (B excluded), the same for every controller and speed; the speed "
         f"setting is `{speed_key}`. Success rates with their 95% Wilson interval; times are "
         "simulated seconds from the controller's start (after the gripper's activation) to "
-        "the depth, over the successful trials; forces are the simulator's truth: the plug's "
-        "contact force with the board and the receptacle (largest peak and largest p99 over "
-        "the trials; a trial above the connector's limit fails) and the compliant wrist's "
-        "force. Regenerate with:",
+        "the depth, over the successful trials; forces are the simulator's truth (largest "
+        "peak and largest p99 over the trials): the plug's insertion force (the net contact "
+        "force along the hole's axis; a trial above the connector's specified insertion force "
+        "fails), its summed normal contact force (a wedge's squeeze counts once per wall) and "
+        "the compliant wrist's force. Regenerate with:",
         "",
         f"    {command}",
         "",
         f"| controller | {speed_key} | trials | success | 95% CI | median time s | p90 time s "
-        "| contact force max N | contact force p99 N | over contact limit "
-        "| wrist force max N | failures |",
-        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---|",
+        "| insertion force max N | insertion force p99 N | over insertion limit "
+        "| summed contact force max N | wrist force max N | failures |",
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     for cell, batch in cells.items():
         s = batch.summary
@@ -144,8 +145,9 @@ def comparison_markdown(
             f"{_percent(s['success_rate'])} | "
             f"{'–' if ci is None else f'{ci[0]:.1%}–{ci[1]:.1%}'} | "
             f"{_seconds(s['median_time_s'])} | {_seconds(s['p90_time_s'])} | "
-            f"{_seconds(s['max_contact_force_n'])} | {_seconds(s['p99_contact_force_n'])} | "
-            f"{s['contact_force_violation_trials']} | {_seconds(s['max_wrist_force_n'])} | "
+            f"{_seconds(s['max_insertion_force_n'])} | {_seconds(s['p99_insertion_force_n'])} | "
+            f"{s['insertion_force_violation_trials']} | {_seconds(s['max_contact_force_n'])} | "
+            f"{_seconds(s['max_wrist_force_n'])} | "
             f"{failures} |"
         )
     incomplete = sum(not b.summary["complete"] for b in cells.values())

@@ -29,9 +29,12 @@ class TrialResult:
     ``wall_time_s``: the wall-clock time the trial took; ``max_contact_force_n`` and
     ``p99_contact_force_n``: the largest and the 99th percentile of the plug's true contact
     force with the board and the receptacle (the sum of the contacts' normal forces, N,
-    peak per truth row); ``contact_force_limit_n``: the task's limit on it (the connector's
-    specified insertion force); ``contact_force_violations``: how many times the contact
-    force rose above that limit (a violation fails the trial: ``contact_force_exceeded``).
+    peak per truth row: a wedged plug's squeeze counts once per wall);
+    ``max_insertion_force_n`` and ``p99_insertion_force_n``: the same of the insertion force
+    (the net contact force on the plug along the hole's axis, N);
+    ``contact_force_limit_n``: the task's limit on the insertion force (the connector's
+    specified insertion force); ``insertion_force_violations``: how many times the insertion
+    force rose above that limit (a violation fails the trial: ``insertion_force_exceeded``).
     """
 
     task: str
@@ -47,8 +50,10 @@ class TrialResult:
     wall_time_s: float
     max_contact_force_n: float = 0.0
     p99_contact_force_n: float = 0.0
+    max_insertion_force_n: float = 0.0
+    p99_insertion_force_n: float = 0.0
     contact_force_limit_n: float = float("nan")
-    contact_force_violations: int = 0
+    insertion_force_violations: int = 0
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:

@@ -40,9 +40,10 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     (``TrialResult.time_to_insert_s``), over the successful trials; ``max_wrist_force_n`` is over
     every trial; a trial is over force when its ``max_wrist_force_n`` exceeds its own
     ``force_limit_n``; the plug's true contact force: ``max_contact_force_n`` (over every
-    trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles),
-    ``contact_force_limit_n``, ``contact_force_violations`` (summed) and
-    ``contact_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
+    trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles), the same
+    of the insertion force (``max_insertion_force_n``, ``p99_insertion_force_n``), its limit
+    ``contact_force_limit_n``, ``insertion_force_violations`` (summed) and
+    ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
     is the simulated time over the wall time of the trials that ran to an outcome (error
     trials have no simulated time).
     """
@@ -70,11 +71,13 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         over_force_trials=sum(r.max_wrist_force_n > r.force_limit_n for r in ordered),
         max_contact_force_n=max((r.max_contact_force_n for r in ran), default=None),
         p99_contact_force_n=max((r.p99_contact_force_n for r in ran), default=None),
+        max_insertion_force_n=max((r.max_insertion_force_n for r in ran), default=None),
+        p99_insertion_force_n=max((r.p99_insertion_force_n for r in ran), default=None),
         contact_force_limit_n=contact_limits[0]
         if len(contact_limits) == 1
         else contact_limits or None,
-        contact_force_violations=sum(r.contact_force_violations for r in ordered),
-        contact_force_violation_trials=sum(r.contact_force_violations > 0 for r in ordered),
+        insertion_force_violations=sum(r.insertion_force_violations for r in ordered),
+        insertion_force_violation_trials=sum(r.insertion_force_violations > 0 for r in ordered),
         failures=dict(sorted(Counter(r.failure_reason or "unknown" for r in failed).items())),
         failed_seeds=sorted({r.seed for r in failed}),
         errors=sum(r.status == "error" for r in ordered),

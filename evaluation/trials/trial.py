@@ -177,15 +177,15 @@ def write_truth(folder: Path, truth: dict[str, np.ndarray], hole: dict[str, floa
         np.savez_compressed(handle, **truth, **{f"hole_{k}": v for k, v in hole.items()})
 
 
-CONTACT_FORCE_EXCEEDED = "contact_force_exceeded"
-"""The failure reason of a trial whose plug's true contact force rose above the task's
+INSERTION_FORCE_EXCEEDED = "insertion_force_exceeded"
+"""The failure reason of a trial whose plug's true insertion force rose above the task's
 ``contact_force_limit_n`` (even if it reached the depth)."""
 
 
-def contact_force_violations(contact_force_n: np.ndarray, limit_n: float) -> int:
-    """How many times ``contact_force_n`` (a series, N) rose above ``limit_n``: the number
+def insertion_force_violations(insertion_force_n: np.ndarray, limit_n: float) -> int:
+    """How many times ``insertion_force_n`` (a series, N) rose above ``limit_n``: the number
     of runs of successive samples over it."""
-    over = np.asarray(contact_force_n) > limit_n
+    over = np.asarray(insertion_force_n) > limit_n
     return int(np.count_nonzero(over[1:] & ~over[:-1]) + (1 if over.size and over[0] else 0))
 
 
@@ -198,14 +198,14 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
     started = ran.loop.stats.first_tick_s  # after the devices' start-up (activation)
     time_to_insert = float(t[reached[0]] - started) if reached.size else None
     done = ran.machine.phase is Phase.DONE
-    contact = truth["contact_force_n"]
-    violations = contact_force_violations(contact, config.contact_force_limit_n)
+    contact, insertion = truth["contact_force_n"], truth["insertion_force_n"]
+    violations = insertion_force_violations(insertion, config.contact_force_limit_n)
     success = done and reached.size > 0 and violations == 0
     failure = None
     if not success:
         failed = [tr for tr in ran.transitions if tr.target is Phase.FAILED]
         if violations:
-            failure = CONTACT_FORCE_EXCEEDED
+            failure = INSERTION_FORCE_EXCEEDED
         elif failed:
             failure = failed[-1].reason
         elif done:
@@ -228,8 +228,10 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         wall_time_s=ran.wall_s,
         max_contact_force_n=float(contact.max()) if len(contact) else 0.0,
         p99_contact_force_n=float(np.percentile(contact, 99)) if len(contact) else 0.0,
+        max_insertion_force_n=float(insertion.max()) if len(insertion) else 0.0,
+        p99_insertion_force_n=float(np.percentile(insertion, 99)) if len(insertion) else 0.0,
         contact_force_limit_n=config.contact_force_limit_n,
-        contact_force_violations=violations,
+        insertion_force_violations=violations,
     )
 
 

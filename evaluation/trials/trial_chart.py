@@ -36,12 +36,14 @@ TORQUES = ("tau_x", "tau_y", "tau_z")
 @dataclass(frozen=True)
 class ChartTruth:
     """The simulator's truth for the chart, one row per truth sample: ``t_s`` (n,),
-    ``wrist_wrench_t`` (n, 6: N, N*m), ``contact_force_n`` (n,), ``tip_xyz_b`` (n, 3: m, B),
+    ``wrist_wrench_t`` (n, 6: N, N*m), ``contact_force_n`` (n,: summed normal force, N),
+    ``insertion_force_n`` (n,: along the hole's axis, N), ``tip_xyz_b`` (n, 3: m, B),
     ``depth_m`` (n,: tip below the surface) and the true hole's ``hole_xy_m`` (2: m, B)."""
 
     t_s: np.ndarray
     wrist_wrench_t: np.ndarray
     contact_force_n: np.ndarray
+    insertion_force_n: np.ndarray
     tip_xyz_b: np.ndarray
     depth_m: np.ndarray
     hole_xy_m: np.ndarray
@@ -135,11 +137,13 @@ def _truth_panels(
 ) -> None:
     force = np.linalg.norm(truth.wrist_wrench_t[:, :3], axis=1)
     force_ax.plot(truth.t_s, force, color="k", lw=1, label="|wrist force| (truth)")
-    force_ax.plot(truth.t_s, truth.contact_force_n, color="tab:red", lw=0.6, alpha=0.6,
-                  label="plug contact force (truth)")  # fmt: skip
+    force_ax.plot(truth.t_s, truth.contact_force_n, color="tab:orange", lw=0.6, alpha=0.6,
+                  label="plug's summed contact force (truth)")  # fmt: skip
+    force_ax.plot(truth.t_s, truth.insertion_force_n, color="tab:red", lw=0.8,
+                  label="plug's insertion force (truth)")  # fmt: skip
     if contact_force_limit_n is not None and np.isfinite(contact_force_limit_n):
         force_ax.axhline(contact_force_limit_n, color="tab:red", ls="--", lw=0.8,
-                         label=f"contact-force limit {contact_force_limit_n:g} N")  # fmt: skip
+                         label=f"insertion-force limit {contact_force_limit_n:g} N")  # fmt: skip
     force_ax.set_ylabel("N")
     force_ax.set_xlabel("time (s)")
     force_ax.legend(loc="upper left", fontsize=8)
@@ -171,6 +175,7 @@ def trial_series(folder: Path) -> TrialSeries:
             arrays["t_s"],
             arrays["wrist_wrench_t"],
             arrays["contact_force_n"],
+            arrays["insertion_force_n"],
             arrays["tip_xyz_b"],
             arrays["depth_m"],
             np.array([float(arrays["hole_x_m"]), float(arrays["hole_y_m"])]),
@@ -213,8 +218,8 @@ def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     ended = result_text(result.success, result.failure_reason)
     title = (
         chart_title(result.task, result.seed, result.controller, ended)
-        + f"; plug contact force max {result.max_contact_force_n:.1f} N, "
-        f"p99 {result.p99_contact_force_n:.1f} N"
+        + f"; plug insertion force max {result.max_insertion_force_n:.1f} N, "
+        f"p99 {result.p99_insertion_force_n:.1f} N"
     )
     path = folder / CHART_NAME
     trial_chart(folder, path, title, result.contact_force_limit_n)

@@ -102,9 +102,10 @@ def timeline(outcome: TrialOutcome) -> str:
             else ""
         )
         + (
-            f"; true plug contact force max {result.max_contact_force_n:.2f} N, p99 "
-            f"{result.p99_contact_force_n:.2f} N (limit {result.contact_force_limit_n:g} N, "
-            f"{result.contact_force_violations} violations); max true wrist force "
+            f"; true plug insertion force max {result.max_insertion_force_n:.2f} N, p99 "
+            f"{result.p99_insertion_force_n:.2f} N (limit {result.contact_force_limit_n:g} N, "
+            f"{result.insertion_force_violations} violations), summed contact force max "
+            f"{result.max_contact_force_n:.2f} N; max true wrist force "
             f"{result.max_wrist_force_n:.2f} N (limit {result.force_limit_n:g} N)"
             if result.max_wrist_force_n == result.max_wrist_force_n
             else ""

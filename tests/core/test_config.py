@@ -414,8 +414,11 @@ def test_overrides_later_item_wins_and_value_is_validated_like_yaml():
 @pytest.mark.parametrize(
     "item, message",
     [
-        ("scene.frction=0.5", r"t: override 'scene.frction': unknown key 'frction' in 'scene'; "
-         r"expected one of: friction, shape"),
+        (
+            "scene.frction=0.5",
+            r"t: override 'scene.frction': unknown key 'frction' in 'scene'; "
+            r"expected one of: friction, shape",
+        ),
         ("speed=1", r"unknown key 'speed'; expected one of: rate_hz, scene"),
         ("rate_hz.x=1", r"key 'rate_hz' is not a mapping"),
         ("scene.friction", r"expected KEY=VALUE"),

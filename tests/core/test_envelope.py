@@ -21,7 +21,7 @@ from core.envelope import (
     limit_pose,
     limit_twist,
 )
-from core.spatial import rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
+from core.spatial import quat_from_rpy, rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
 from drivers.arm.arm_envelope import SafetyEnvelope
 
 TOL = 1e-9
@@ -58,9 +58,13 @@ def test_clamp_position_clips_each_axis_into_the_box():
     np.testing.assert_allclose(clipped, [0.2, 0.1, 0.4])
 
 
+def clamped_rotation(rotation: Rotation, max_tilt_rad: float) -> Rotation:
+    return Rotation.from_quat(clamp_tilt(tuple(rotation.as_quat()), max_tilt_rad))
+
+
 def test_clamp_tilt_rotates_along_the_shortest_arc_to_the_limit():
     rotation = rotation_from_rpy((math.pi, 0.8, 0.4))  # tilted 0.8 rad
-    clamped = clamp_tilt(rotation, 0.35)
+    clamped = clamped_rotation(rotation, 0.35)
     assert tilt_of_rotation(clamped) == pytest.approx(0.35)
     assert _angle_between(clamped, rotation) == pytest.approx(0.8 - 0.35)
     # the tool z-axis stays in the vertical plane through its old direction
@@ -69,10 +73,10 @@ def test_clamp_tilt_rotates_along_the_shortest_arc_to_the_limit():
 
 
 def test_clamp_tilt_keeps_an_allowed_orientation_and_handles_pointing_up():
-    rotation = rotation_from_rpy((math.pi, 0.1, 0.0))
+    rotation = quat_from_rpy((math.pi, 0.1, 0.0))
     assert clamp_tilt(rotation, 0.35) is rotation
     pointing_up = rotation_from_rpy((0.0, 0.0, 0.0))
-    assert tilt_of_rotation(clamp_tilt(pointing_up, 0.35)) == pytest.approx(0.35)
+    assert tilt_of_rotation(clamped_rotation(pointing_up, 0.35)) == pytest.approx(0.35)
 
 
 @settings(max_examples=150, deadline=None)
@@ -205,3 +209,13 @@ def test_the_arm_envelope_holds_the_step_per_servo_command():
     with pytest.raises(ValueError, match="key 'max_step_m'"):
         SafetyEnvelope(max_step_m=0.0)
     assert SafetyEnvelope().max_tilt_rad == Envelope().max_tilt_rad  # the same base keys
+
+
+@given(st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3))
+def test_clamp_position_is_numpys_clip_bit_for_bit(xyz):
+    """The clamp in plain floats gives what ``np.clip`` into the box gave, exactly (the arm
+    twin's trajectories do not change)."""
+    expected = np.clip(np.asarray(xyz, float), ENV.box_min_m, ENV.box_max_m)
+    clamped = clamp_position(tuple(xyz), ENV)
+    assert clamped.dtype == np.float64 and clamped.tobytes() == expected.tobytes()
+    assert clamp_position(np.asarray(xyz), ENV).tobytes() == expected.tobytes()

@@ -44,9 +44,7 @@ def test_truncated_video_warns_keeps_good_frames_then_disconnects(tmp_path, clip
     camera.disconnect()
 
 
-def test_corrupted_frame_is_skipped_with_one_warning_and_the_stream_goes_on(
-    tmp_path, clip, caplog
-):
+def test_corrupted_frame_is_skipped_with_one_warning_and_the_stream_goes_on(tmp_path, clip, caplog):
     corrupt_frame(clip, 5)
     factory, _ = paced_factory(raw=True, rate_hz=200, loop=True)
     camera = TactileCamera(digit_config(by_id_dir(tmp_path, DIGIT_ID, clip)), factory)

@@ -30,8 +30,6 @@ SIM_CONFIGS = [
 ]
 
 
-
-
 def variant(tmp_path: Path, source: Path, name: str, **changes) -> str:
     """A copy of ``source`` with top-level keys changed (a dotted key changes a sub-key)."""
     data = yaml.safe_load(source.read_text())
@@ -149,7 +147,6 @@ def test_a_sim_only_type_refuses_the_real_backend(capsys):
 
 
 # ------------------------------------------------------------------------------- silence
-
 
 
 def run_script(*args: str, timeout_s: float) -> tuple[subprocess.CompletedProcess, float]:

@@ -569,7 +569,6 @@ def test_connecting_to_a_closed_loopback_port_raises_not_connected():
     assert not arm.is_connected
 
 
-
 def test_a_controller_that_accepts_and_never_answers_fails_connect_in_time(silent_controller):
     """Without a deadline the SDK's connect waits about four minutes here (100 version
     requests of 2 s each)."""

@@ -6,7 +6,8 @@ The estimate is synthetic, in raw estimate units, with the machine's default S->
   shear_y is T z) and a friction torque about z_T x (drag direction);
 * once the tip has dropped into the opening (``caught``): a catch torque about z_T x (drag
   direction) while it moves sideways, a torque turning the plug upright, a wall contact
-  level on ``normal``, and a jam torque deeper than ``jam_depth_m`` (while ``jams`` lasts).
+  level on ``normal``, an axial ``slide_load`` once 1 mm in, and a jam torque deeper
+  than ``jam_depth_m`` (while ``jams`` lasts).
 """
 
 from __future__ import annotations
@@ -67,6 +68,7 @@ class ToyWorld:
     catch: float = 0.03  # catch torque (estimate units)
     upright: float = 0.05  # upright torque per rad of tilt
     wall_normal: float = 0.05
+    slide_load: float = 0.04  # axial force while the plug slides in the opening (estimate units)
     jam_depth_m: float | None = None
     jams: int = 0  # how many times the jam appears (one per INSERT)
     jam_torque: float = 0.03
@@ -189,6 +191,8 @@ class ToyWorld:
                         torque_b += self.jam_torque * self.rotation.apply([1.0, 0.0, 0.0])
                 if tip[2] < surface - self.depth_limit_m:
                     force_t[2] = self.k_board * (surface - self.depth_limit_m - tip[2])
+                elif tip[2] < surface - 0.001:
+                    force_t[2] = self.slide_load  # the walls' friction on a plug pushed in
             else:
                 axial = self.k_board * (surface - tip[2])
                 force_t[2] = axial

@@ -242,9 +242,7 @@ def test_the_grasp_centroid_rule_is_lipschitz_under_a_growing_press(grid):
     n = x_mm.size * y_mm.size
     bound = 2.0 * np.array([np.abs(x_mm).max(), np.abs(y_mm).max()]) / n
     scales = np.linspace(0.0, 3.0 * np.abs(tilt).max() / np.abs(expansion).max(), 20001)
-    readings = np.array(
-        [[(m := calculator(tilt + s * expansion)).p_x, m.p_y] for s in scales]
-    )
+    readings = np.array([[(m := calculator(tilt + s * expansion)).p_x, m.p_y] for s in scales])
     step = np.abs(scales[1] - scales[0]) * np.abs(expansion).sum()
     assert (np.abs(np.diff(readings, axis=0)) <= bound * step * (1 + 1e-9) + 1e-15).all()
     second = np.diff(readings, 2, axis=0)  # linear in the press: no curvature

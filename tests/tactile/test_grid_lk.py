@@ -2,10 +2,18 @@
 
 from dataclasses import replace
 
+import cv2
 import numpy as np
 import pytest
+from scipy import sparse
 
-from controller.tactile.grid_lk import GridLKFlow, grid_laplacian
+from controller.tactile.grid_lk import (
+    GridLKFlow,
+    grid_laplacian,
+    grid_prior,
+    normal_matrix,
+    pixel_grid,
+)
 from controller.tactile.settings import estimator_config
 from drivers.sim.render.marker_images import area_mean_field, smooth_random_field
 
@@ -99,3 +107,45 @@ def test_featureless_image_gives_a_zero_finite_field():
 def test_rejects_another_method():
     with pytest.raises(ValueError, match="grid_lk"):
         GridLKFlow(replace(GRID_LK, method="dis"), (240, 320), ROWS, COLS)
+
+
+def test_normal_matrix_is_the_block_diagonal_plus_the_weighted_prior():
+    """Built as a block-sparse matrix, it is entry for entry (structure included, so the
+    factorisation is the same) what ``sparse.block_diag`` of the blocks plus the prior gave."""
+    blocks = np.random.default_rng(4).normal(size=(ROWS * COLS, 2, 2))
+    blocks[7, 0, 1] = blocks[7, 1, 0] = 0.0  # an explicit zero stays explicit
+    prior = sparse.kron(grid_laplacian(ROWS, COLS), sparse.identity(2), format="csr")
+    expected = (sparse.block_diag(list(blocks), format="csr") + 0.37 * prior).tocsc()
+    built = normal_matrix(blocks, 0.37, ROWS, COLS).tocsc()
+    np.testing.assert_array_equal(built.indptr, expected.indptr)
+    np.testing.assert_array_equal(built.indices, expected.indices)
+    np.testing.assert_array_equal(built.data, expected.data)
+
+
+def test_grid_constants_are_shared_read_only_and_the_direct_constructions():
+    grid = pixel_grid(240, 320)
+    assert pixel_grid(240, 320) is grid and not grid.flags.writeable
+    ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
+    np.testing.assert_array_equal(grid, np.stack([xs, ys], axis=2))
+    assert grid_prior(ROWS, COLS) is grid_prior(ROWS, COLS)
+
+
+def test_the_warp_samples_as_with_one_map_per_axis(renderer):
+    """The warp back uses one two-channel map: OpenCV samples the same positions, bit for
+    bit, as with the x and y maps apart (the estimates do not change)."""
+    reference = renderer.render(None)
+    flow = _flow(reference=reference)
+    flow._theta[:] = np.random.default_rng(5).normal(0.0, 1.5, flow._theta.shape)
+    current = flow._prepare(renderer.render(_translation(0.7, -0.4)), flow._current)
+    warped = flow._warp_back(current).copy()
+    field = flow._theta.reshape(ROWS, COLS, 2).astype(np.float32)
+    dense = cv2.resize(field, (320, 240), interpolation=cv2.INTER_LINEAR)
+    ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
+    expected = cv2.remap(
+        current,
+        xs + dense[..., 0],
+        ys + dense[..., 1],
+        cv2.INTER_LINEAR,
+        borderMode=cv2.BORDER_REPLICATE,
+    )
+    np.testing.assert_array_equal(warped, expected)

@@ -104,6 +104,8 @@ class GelRenderer:
             effects.drift_gradient_angle_rad,
         )
         self._mapper = BackwardMapper(shape_hw)
+        # (end field, start field, the gel they give): see ``_optics``
+        self._last_optics: tuple[np.ndarray | None, np.ndarray | None, np.ndarray] | None = None
 
     @property
     def occlusion_alpha(self) -> np.ndarray | None:
@@ -132,16 +134,31 @@ class GelRenderer:
         ``effects.motion_blur_samples`` fields evenly spaced from that field to
         ``displacement_px`` (linear in time; either may be ``None`` for zero).
         """
-        gel = self._moving_gel(displacement_px, exposure_start_px)
-        if self._occlusion is not None:
-            gel = self._occlusion.apply(gel)
-        if self.effects.blur_sigma_px > 0:
-            gel = cv2.GaussianBlur(gel, (0, 0), self.effects.blur_sigma_px)
+        gel = self._optics(displacement_px, exposure_start_px)
         shading = self._shading
         if drift != 0.0:
             shading = cv2.scaleAdd(self._drift_rate, float(drift), self._shading)
         noise = None if self._noise is None else self._noise.frame(frame_index)
         return shade(gel, shading, noise)
+
+    def _optics(self, end_px: np.ndarray | None, start_px: np.ndarray | None) -> np.ndarray:
+        """The gel's reflectance as the lens sees it, per colour channel: moved by the fields,
+        occluded, blurred (float32 (H, W, 3); the caller must not change it). A function of
+        the fields alone, so the last one is kept and reused when both fields equal the last
+        call's (a steady press, or no contact, renders the same gel under new noise and
+        lighting)."""
+        last = self._last_optics
+        if last is not None and _same_field(last[0], end_px) and _same_field(last[1], start_px):
+            return last[2]
+        gel = self._moving_gel(end_px, start_px)
+        if self._occlusion is not None:
+            gel = self._occlusion.apply(gel)
+        if self.effects.blur_sigma_px > 0:
+            gel = cv2.GaussianBlur(gel, (0, 0), self.effects.blur_sigma_px)
+        if gel.ndim == 2:  # one reflectance for the three channels, as ``shade`` takes it
+            gel = cv2.merge([gel, gel, gel])
+        self._last_optics = (_kept(end_px), _kept(start_px), gel)
+        return gel
 
     def _moving_gel(self, end_px: np.ndarray | None, start_px: np.ndarray | None) -> np.ndarray:
         samples = self.effects.motion_blur_samples
@@ -157,3 +174,15 @@ class GelRenderer:
         for t in np.linspace(0.0, 1.0, samples, dtype=np.float32):
             total += self._gel(self._mapper(start + t * (end - start)))
         return total * np.float32(1.0 / samples)
+
+
+def _kept(field: np.ndarray | None) -> np.ndarray | None:
+    """A private copy of a field (the caller may change its array later)."""
+    return None if field is None else np.array(field, copy=True)
+
+
+def _same_field(kept: np.ndarray | None, field: np.ndarray | None) -> bool:
+    """Whether ``field`` equals a field kept by ``_kept`` (None only equals None)."""
+    if kept is None or field is None:
+        return kept is None and field is None
+    return bool(np.array_equal(kept, field))

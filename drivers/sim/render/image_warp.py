@@ -59,7 +59,7 @@ class SplineWarper:
             self._table = cv2.merge([half_pixel_table(channel) for channel in cv2.split(image)])
 
     def __call__(self, backward_px: np.ndarray) -> np.ndarray:
-        in_table = cv2.multiply(backward_px, (2.0, 2.0, 0.0, 0.0))
+        in_table = cv2.add(backward_px, backward_px)  # 2 x, exactly (a scalar product is 5x slower)
         return cv2.remap(
             self._table, in_table, None, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT_101
         )

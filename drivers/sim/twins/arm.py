@@ -44,11 +44,11 @@ from core.config import Config, config_dataclass, number
 from core.devices import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
 from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
-from core.spatial import rotation_from_rpy, tilt_of_rotation
+from core.spatial import quat_from_rpy, rotation_from_rpy, tilt_of_rotation
 from drivers.arm.arm_envelope import timed_servo_target
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
-from drivers.sim.twins.tcp_motion import TcpMotion, quaternion_from_rpy
+from drivers.sim.twins.tcp_motion import TcpMotion
 
 ARRIVED_M = 1e-6  # a position goal counts as reached within this distance ...
 ARRIVED_RAD = 1e-6  # ... and this angle, with the TCP at rest
@@ -367,4 +367,4 @@ class _Goal:
 
     @classmethod
     def at(cls, pose: Pose, speed_m_s: float) -> _Goal:
-        return cls(pose.xyz_m, quaternion_from_rpy(pose.rpy_rad), speed_m_s)
+        return cls(pose.xyz_m, quat_from_rpy(pose.rpy_rad), speed_m_s)

@@ -12,6 +12,14 @@ A field source is any callable ``source(t_s) -> field or None`` (``None``: no co
 reference image). Set it with ``set_field_source``; the default is no contact. This is where
 a contact model plugs in (the gel physics simulator of a later issue).
 
+Timing (``SensorTiming``; all zero by default): frame ``k`` is captured at ``t_k`` moved by
+a seeded uniform draw within +-``jitter_s`` and arrives ``latency_s`` later; a frame is
+stamped with its arrival time, as the real driver stamps a frame when it reads it, and
+shows the gel at its capture time. The stream starts ``latency_s`` before ``connect()``
+(the camera was already capturing), so frame 0 arrives at the connection. With a
+``drift_period_s``, the lighting drift level of a frame is the time since the connection
+over that period (the renderer's ``drift``).
+
 ``read_latest(max_age_s)`` has the real driver's semantics: the newest frame captured at or
 before ``now()``, or DeviceTimeoutError when it is older than ``max_age_s`` (e.g. after
 ``stall()``); DeviceNotConnectedError before ``connect()`` and after ``unplug()`` ("camera
@@ -26,7 +34,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import field
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -42,6 +50,20 @@ from drivers.tactile.camera import TactileCameraConfig
 
 FieldSource = Callable[[float], np.ndarray | None]
 """Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""
+
+_JITTER_BANK = 4096  # frame k's capture jitter is draw k mod this of one seeded bank
+
+
+@dataclass(frozen=True)
+class SensorTiming:
+    """When frames are captured and arrive, and the lighting's drift (see the module
+    docstring): ``latency_s`` from capture to arrival, ``jitter_s`` the capture time's
+    uniform spread (less than half a frame period), ``drift_period_s`` the time per drift
+    level (``None``: no drift)."""
+
+    latency_s: float = 0.0
+    jitter_s: float = 0.0
+    drift_period_s: float | None = None
 
 
 @config_dataclass
@@ -102,20 +124,34 @@ class SimTactileSensor(ContextManagedDevice):
         rng: np.random.Generator | None = None,
         field_source: FieldSource | None = None,
         appearance: str = "speckle",
+        effects: ImageEffects | None = None,
+        timing: SensorTiming = SensorTiming(),
     ) -> None:
         self.config = config
         self.name = config.name
         self._clock = clock if clock is not None else MonotonicClock()
         rng = rng if rng is not None else np.random.default_rng(config.sim.seed)
         sim = config.sim
+        period_s = 1.0 / config.frame_rate_hz
+        if not 0.0 <= timing.jitter_s < period_s / 2 or timing.latency_s < 0.0:
+            raise ValueError(
+                f"timing: expected a latency >= 0 and a jitter below half the frame period "
+                f"({period_s / 2} s), got {timing!r}"
+            )
         self._renderer = GelRenderer(
             width_px=config.output_width_px,
             height_px=config.output_height_px,
             pitch_px=config.marker_pitch_px,
             dot_radius_px=sim.marker_radius_px or 0.0,
-            effects=ImageEffects(noise_grey=sim.noise_grey),
+            effects=effects if effects is not None else ImageEffects(noise_grey=sim.noise_grey),
             rng=rng,
             appearance=appearance,
+        )
+        self._timing = timing
+        self._jitter_s = (
+            rng.uniform(-timing.jitter_s, timing.jitter_s, _JITTER_BANK)
+            if timing.jitter_s > 0
+            else np.zeros(1)
         )
         self._source = field_source
         self._present = True
@@ -160,7 +196,7 @@ class SimTactileSensor(ContextManagedDevice):
                 f"{self.config.by_id_pattern!r}: the simulated camera is unplugged",
             )
         self._connected, self._lost = True, False
-        self._t0_s = self._clock.now()
+        self._t0_s = self._clock.now() - self._timing.latency_s
         self._stalled_after = None
         self._latest = None
 
@@ -195,7 +231,8 @@ class SimTactileSensor(ContextManagedDevice):
                 "the stream stalled",
             )
         if self._latest is None or self._latest[0] != index:
-            self._latest = (index, TactileFrame(t_s=t_s, image=self._render(index, t_s)))
+            image = self._render(index, self._capture_time(index))
+            self._latest = (index, TactileFrame(t_s=t_s, image=image))
         return self._latest[1]
 
     # -- simulation hooks --------------------------------------------------------------
@@ -211,6 +248,7 @@ class SimTactileSensor(ContextManagedDevice):
             return
         next_index = self._stalled_after + 1
         self._t0_s = self._clock.now() - next_index / self.config.frame_rate_hz
+        self._t0_s -= self._timing.latency_s
         self._stalled_after = None
 
     def unplug(self) -> None:
@@ -225,15 +263,30 @@ class SimTactileSensor(ContextManagedDevice):
     # -- internals ---------------------------------------------------------------------
 
     def _frame_index(self, now: float) -> int:
-        return max(0, math.floor((now - self._t0_s) * self.config.frame_rate_hz + 1e-9))
+        """The newest frame that has arrived by ``now`` (0 at the latest)."""
+        rate = self.config.frame_rate_hz
+        capture_s = now - self._timing.latency_s
+        index = math.floor((capture_s - self._t0_s + self._timing.jitter_s) * rate + 1e-9)
+        while index > 0 and self._capture_time(index) > capture_s + 1e-12:
+            index -= 1
+        return max(0, index)
+
+    def _capture_time(self, index: int) -> float:
+        jitter = self._jitter_s[index % len(self._jitter_s)] if index > 0 else 0.0
+        return self._t0_s + index / self.config.frame_rate_hz + float(jitter)
 
     def _frame_time(self, index: int) -> float:
-        return self._t0_s + index / self.config.frame_rate_hz
+        """Frame ``index``'s arrival time: its stamp."""
+        return self._capture_time(index) + self._timing.latency_s
 
     def _render(self, index: int, t_s: float) -> np.ndarray:
         field = self._source(t_s) if self._source is not None else None
+        period = self._timing.drift_period_s
+        drift = 0.0
+        if period is not None:  # the time since the connection, in drift levels
+            drift = max(0.0, t_s - self._t0_s - self._timing.latency_s) / period
         try:
-            frame = self._renderer.render(field, frame_index=index)
+            frame = self._renderer.render(field, frame_index=index, drift=drift)
         except ValueError as exc:
             raise ValueError(f"field source: {exc}") from exc
         frame.flags.writeable = False

@@ -1,7 +1,8 @@
 """Kinematics of the simulated TCP: speed- and acceleration-limited motion inside the envelope.
 
 The TCP (frame T) is a rigid body in the base frame B with position ``p`` (m), linear
-velocity ``v`` (m/s), orientation ``R`` (T2B, a scipy ``Rotation``) and angular velocity ``w``
+velocity ``v`` (m/s), orientation ``R`` (T2B, a unit quaternion (x, y, z, w) of
+``core.quaternion``) and angular velocity ``w``
 (rad/s, in B). ``step(v_des, w_des)`` advances it by ``dt_s``:
 
 1. ``v_des`` is scaled to the envelope's ``max_linear_speed_m_s`` and each component is
@@ -25,10 +26,10 @@ velocity ``v`` (m/s), orientation ``R`` (T2B, a scipy ``Rotation``) and angular 
 4. ``p += v dt``, ``R = exp(w dt) R``; a final projection on the box and the tilt cone
    (``core.envelope.clamp_tilt``) only absorbs rounding.
 
-Vectors are tuples of Python floats: the twin steps this at hundreds of Hz, where NumPy's
-per-call overhead on 3-vectors would dominate. Orientations are scipy Rotations, with the
-helpers of ``core.spatial`` (roll/pitch/yaw, tilt) and ``core.envelope`` (tilt clamp);
-quaternions (x, y, z, w) only name a goal orientation.
+Vectors and quaternions are tuples of Python floats: the twin steps this at hundreds of Hz,
+where NumPy's per-call overhead on 3-vectors, and a scipy ``Rotation``'s on one orientation,
+would dominate; ``core.spatial`` (roll/pitch/yaw, tilt) and ``core.envelope`` (tilt clamp)
+give the closed forms.
 """
 
 from __future__ import annotations
@@ -36,14 +37,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
-from scipy.spatial.transform import Rotation
-
+from core import quaternion
 from core.devices import Pose
 from core.envelope import Envelope, clamp_tilt
-from core.spatial import rotation_from_rpy, rpy_from_rotation, tilt_of_rotation
+from core.quaternion import Quat
+from core.spatial import quat_from_rpy, rpy_from_quat, tilt_of_quat
 
 Vec = tuple[float, float, float]
-Quat = tuple[float, float, float, float]  # x, y, z, w
 _ZERO: Vec = (0.0, 0.0, 0.0)
 
 
@@ -64,7 +64,7 @@ class TcpMotion:
         self.max_angular_accel_rad_s2 = max_angular_accel_rad_s2
         self.position_m: Vec = _vec(start.xyz_m)
         self.velocity_m_s: Vec = _ZERO
-        self.rotation: Rotation = rotation_from_rpy(start.rpy_rad)
+        self.rotation: Quat = quat_from_rpy(start.rpy_rad)
         self.angular_rad_s: Vec = _ZERO
         self._low: Vec = (envelope.x_min_m, envelope.y_min_m, envelope.z_min_m)
         self._high: Vec = (envelope.x_max_m, envelope.y_max_m, envelope.z_max_m)
@@ -73,16 +73,16 @@ class TcpMotion:
 
     def pose(self, rpy_hint: Vec) -> Pose:
         """The TCP pose, its roll/pitch/yaw wrapped to lie nearest ``rpy_hint``."""
-        return Pose(self.position_m, rpy_from_rotation(self.rotation, rpy_hint))
+        return Pose(self.position_m, rpy_from_quat(self.rotation, rpy_hint))
 
     def at_rest(self, tolerance: float) -> bool:
         return _norm(self.velocity_m_s) <= tolerance and _norm(self.angular_rad_s) <= tolerance
 
-    def offset_to(self, xyz_m: Vec, quaternion: Quat) -> tuple[Vec, Vec]:
+    def offset_to(self, xyz_m: Vec, goal: Quat) -> tuple[Vec, Vec]:
         """(translation in m, rotation vector in rad) from the TCP to the given pose, in B: the
         rotation vector of the shortest turn (angle at most pi)."""
-        turn = Rotation.from_quat(quaternion) * self.rotation.inv()
-        return _sub(xyz_m, self.position_m), _vec(turn.as_rotvec())
+        turn = quaternion.multiply(goal, quaternion.inverse(self.rotation))
+        return _sub(xyz_m, self.position_m), quaternion.rotvec(turn)
 
     # ----------------------------------------------------------------- motion
 
@@ -115,19 +115,32 @@ class TcpMotion:
         dt = self.dt_s
         moved = _add(self.position_m, _scale(self.velocity_m_s, dt))
         self.position_m = _clip(moved, self._low, self._high)
-        turned = Rotation.from_rotvec(_scale(self.angular_rad_s, dt)) * self.rotation
+        turn = quaternion.from_rotvec(_scale(self.angular_rad_s, dt))
+        turned = quaternion.normalised(quaternion.multiply(turn, self.rotation))
         self.rotation = clamp_tilt(turned, self.envelope.max_tilt_rad)
 
     def _next_velocity(self, v_des: Vec) -> Vec:
         env, dt = self.envelope, self.dt_s
         brake = self.max_accel_m_s2 / math.sqrt(3.0)
-        p = self.position_m
-        high = tuple(stopping_speed(h - x, brake, dt) for h, x in zip(self._high, p, strict=True))
-        low = tuple(-stopping_speed(x - lo, brake, dt) for lo, x in zip(self._low, p, strict=True))
+        (px, py, pz), (lx, ly, lz), (hx, hy, hz) = self.position_m, self._low, self._high
+        high = (
+            stopping_speed(hx - px, brake, dt),
+            stopping_speed(hy - py, brake, dt),
+            stopping_speed(hz - pz, brake, dt),
+        )
+        low = (
+            -stopping_speed(px - lx, brake, dt),
+            -stopping_speed(py - ly, brake, dt),
+            -stopping_speed(pz - lz, brake, dt),
+        )
         v_des = _clip(_scaled_to(v_des, env.max_linear_speed_m_s), low, high)
         v = self.velocity_m_s
         candidate = _add(v, _scaled_to(_sub(v_des, v), self.max_accel_m_s2 * dt))
-        if all(lo <= c <= hi for c, lo, hi in zip(candidate, low, high, strict=True)):
+        if (
+            low[0] <= candidate[0] <= high[0]
+            and low[1] <= candidate[1] <= high[1]
+            and low[2] <= candidate[2] <= high[2]
+        ):
             return candidate
         safe = _clip(v, low, high)
         direction = _sub(candidate, safe)
@@ -145,8 +158,8 @@ class TcpMotion:
         w_des = _scaled_to(w_des, env.max_angular_speed_rad_s)
         candidate = _add(w, _scaled_to(_sub(w_des, w), self.max_angular_accel_rad_s2 * dt))
         brake = self.max_angular_accel_rad_s2 / 2.0
-        limit = stopping_speed(env.max_tilt_rad - tilt_of_rotation(self.rotation), brake, dt)
-        zx, zy, _ = _vec(self.rotation.as_matrix()[:, 2])  # the tool's z-axis in B
+        limit = stopping_speed(env.max_tilt_rad - tilt_of_quat(self.rotation)[0], brake, dt)
+        zx, zy, _ = quaternion.z_axis(self.rotation)  # the tool's z-axis in B
         horizontal = math.hypot(zx, zy)
         if horizontal < 1e-9:
             # Pointing straight down: every horizontal rotation tilts the tool. The limit
@@ -173,12 +186,6 @@ def stopping_speed(distance: float, brake: float, dt: float) -> float:
     closer, and stop in one more step), whichever is larger."""
     d = max(distance, 0.0)
     return max(math.sqrt(2.0 * brake * d) - 0.5 * brake * dt, min(d / dt, brake * dt))
-
-
-def quaternion_from_rpy(rpy_rad: tuple[float, float, float]) -> Quat:
-    """Unit quaternion (x, y, z, w) of ``Pose.rpy_rad`` (R = Rz @ Ry @ Rx)."""
-    x, y, z, w = (float(c) for c in rotation_from_rpy(rpy_rad).as_quat())
-    return (x, y, z, w)
 
 
 def _vec(values: Iterable[float]) -> Vec:

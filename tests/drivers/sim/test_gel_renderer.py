@@ -148,6 +148,26 @@ def test_images_depend_only_on_seed_inputs_and_frame_index():
     assert not np.array_equal(first, frame(8, 3))
 
 
+def test_a_gel_kept_from_the_last_render_gives_the_frames_of_a_fresh_renderer():
+    """The renderer keeps the last fields' gel (warped, occluded, blurred) and reuses it when
+    the next fields are equal: frames are bit for bit a fresh renderer's, repeated, changed,
+    absent and motion-blurred fields alike, and a field changed in place is not taken for
+    the one kept."""
+    press, other = smooth_grid((48, 64), 2.0, 5), smooth_grid((48, 64), 1.0, 6)
+    changed = press.copy()
+    calls = [(press, None), (press, None), (None, None), (None, None), (other, press)]
+    calls += [(other, press), (changed, None), (changed, None)]
+    kept = GelRenderer(effects=ALL, rng=np.random.default_rng(7))
+    for index, (field, start) in enumerate(calls):
+        if index == len(calls) - 1:
+            changed += 0.25  # the array of the call before, new values
+        drift = 0.1 * index
+        frame = kept.render(field, frame_index=index, drift=drift, exposure_start_px=start)
+        fresh = GelRenderer(effects=ALL, rng=np.random.default_rng(7))
+        expected = fresh.render(field, frame_index=index, drift=drift, exposure_start_px=start)
+        np.testing.assert_array_equal(frame, expected)
+
+
 # -- effects ---------------------------------------------------------------------------------
 
 

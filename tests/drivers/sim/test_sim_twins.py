@@ -28,7 +28,7 @@ from drivers.sim.twins.arm import SimArm
 from drivers.sim.twins.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.twins.gamepad import PadEvent, SimGamepad
 from drivers.sim.twins.gripper import SimGripper
-from drivers.sim.twins.tactile import SimTactileSensor
+from drivers.sim.twins.tactile import SensorTiming, SimTactileSensor
 
 ARM = load_device_config(CONFIGS / "robot" / "xarm6.yaml").config
 GRIPPER = load_device_config(CONFIGS / "gripper" / "hande.yaml").config
@@ -395,6 +395,40 @@ def test_noise_is_seeded_and_independent_of_the_read_pattern():
     assert np.array_equal(every, frame_at(7, [0.12]))
     assert not np.array_equal(every, frame_at(8, [0.12]))
     assert not np.array_equal(every, frame_at(7, [0.08]))  # a new noise draw per frame
+
+
+def test_a_frame_arrives_a_latency_after_its_jittered_capture(clock):
+    timing = SensorTiming(latency_s=0.045, jitter_s=0.004)
+    asked = []
+
+    def source(t_s):
+        asked.append(t_s)
+        return shear((240, 320), 2.0 * t_s)
+
+    sensor = SimTactileSensor(MINI, clock, np.random.default_rng(3), source, timing=timing)
+    with sensor:
+        assert sensor.read_latest(0.1).t_s == pytest.approx(0.0)  # frame 0 arrives at once
+        captures, arrivals = [], []
+        for _ in range(1, 400):
+            clock.advance(0.004)
+            frame = sensor.read_latest(0.2)
+            if frame.t_s != (arrivals or [0.0])[-1]:
+                captures.append(asked[-1])
+                arrivals.append(frame.t_s)
+                assert frame.t_s <= clock.now() + 1e-12  # never from the future
+    late = np.array(arrivals) - np.array(captures)
+    assert late == pytest.approx(0.045)  # stamped on arrival, shows the gel at capture
+    nominal = -0.045 + np.arange(1, len(captures) + 1) / 25.0
+    jitter = np.array(captures) - nominal
+    assert np.abs(jitter).max() <= 0.004 + 1e-9 and jitter.std() > 0.001
+    # none skipped or lost: frame k (arriving k / 25 s +- 4 ms after connecting) by 1.596 s
+    assert 39 <= len(captures) <= 40
+    assert np.all(np.abs(np.diff(captures) - 0.04) <= 0.008 + 1e-9)
+
+
+def test_a_jitter_of_half_a_period_is_refused(clock):
+    with pytest.raises(ValueError, match="half the frame period"):
+        SimTactileSensor(MINI, clock, timing=SensorTiming(jitter_s=0.02))
 
 
 def test_a_field_of_the_wrong_shape_is_refused(clock):

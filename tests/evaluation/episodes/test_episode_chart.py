@@ -23,7 +23,8 @@ def test_the_episode_gives_the_trial_records_series(episode_path):
         if t in seen:
             np.testing.assert_array_equal(row, seen[t])
     assert episode.truth is not None and record.truth is not None
-    for name in ("t_s", "wrist_wrench_t", "contact_force_n", "tip_xyz_b", "depth_m", "hole_xy_m"):
+    names = ("t_s", "wrist_wrench_t", "contact_force_n", "insertion_force_n", "tip_xyz_b")
+    for name in (*names, "depth_m", "hole_xy_m"):
         np.testing.assert_allclose(
             getattr(episode.truth, name), getattr(record.truth, name), err_msg=name
         )

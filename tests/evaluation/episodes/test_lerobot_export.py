@@ -45,6 +45,23 @@ STATS_KEYS = {"min", "max", "mean", "std", "count", "q01", "q10", "q50", "q90", 
 DATA_PATH = "data/chunk-{chunk_index:03d}/file-{file_index:03d}.parquet"
 VIDEO_PATH = "videos/{video_key}/chunk-{chunk_index:03d}/file-{file_index:03d}.mp4"
 ARROW_TYPES = {"float32": "float", "int64": "int64"}
+FPS = 25  # the GelSight Mini's
+
+
+def export_rows(pushed_t_s: list[float]) -> tuple[np.ndarray, np.ndarray]:
+    """The export's rows by docs/EPISODES.md's rule, written out here: row k stands for
+    t_0 + k / fps up to the last frame pushed, and shows the newest frame pushed at or
+    before it (the camera's capture jitter makes some rows repeat a frame). Returns the rows'
+    times (s) and each row's frame index."""
+    pushed = np.asarray(pushed_t_s)
+    count = int(np.floor((pushed[-1] - pushed[0]) * FPS + 0.5)) + 1
+    row_t = pushed[0] + np.arange(count) / FPS
+    source = np.array([np.flatnonzero(pushed <= t + 1e-6)[-1] for t in row_t])
+    return row_t, source
+
+
+def pushed_times(episode_path) -> list[float]:
+    return [f.t_s for f in episode_streams.frames(read_episode(episode_path))]
 
 
 @pytest.fixture(scope="module")
@@ -63,8 +80,8 @@ def test_info_has_every_required_key_and_describes_each_feature(dataset, episode
     assert INFO_KEYS <= set(info)
     assert info["codebase_version"] == "v3.0"
     assert info["data_path"] == DATA_PATH and info["video_path"] == VIDEO_PATH
-    frames = read_episode(episode_path).counts["/tactile/image"]
-    assert info["fps"] == 25 and info["total_episodes"] == 2 and info["total_tasks"] == 1
+    frames = len(export_rows(pushed_times(episode_path))[0])
+    assert info["fps"] == FPS and info["total_episodes"] == 2 and info["total_tasks"] == 1
     assert info["total_frames"] == 2 * frames and info["splits"] == {"train": "0:2"}
     features = info["features"]
     for key, dtype in DEFAULT_FEATURES.items():
@@ -113,17 +130,17 @@ def test_the_data_file_holds_every_non_video_feature_with_its_dtype(dataset):
 def test_the_rows_hold_the_episodes_state_at_each_frame(dataset, episode_path):
     episode = read_episode(episode_path)
     ticks = episode_streams.ticks(episode)
-    pushed = [f.t_s for f in episode_streams.frames(episode)]
+    row_t, source = export_rows(pushed_times(episode_path))
     table = pq.read_table(dataset / DATA_PATH.format(chunk_index=0, file_index=0))
     state = np.array(table.column("observation.state").to_pylist())
-    for row in (0, 100, len(pushed) - 1):
-        tick = int(np.flatnonzero(np.isclose(ticks.t_s, pushed[row]))[0])
+    for row in (0, 100, len(row_t) - 1):  # the tick at or before the row's time
+        tick = int(np.flatnonzero(ticks.t_s <= row_t[row] + 1e-6)[-1])
         expected = [*ticks.tcp_xyz_m[tick], *ticks.tcp_rpy_rad[tick], ticks.gripper_width_m[tick]]
         np.testing.assert_allclose(state[row], expected, rtol=1e-6)
-    estimates = episode_streams.estimates(episode)
-    wrench = np.array(table.column("observation.wrench").to_pylist())[: len(pushed)]
-    np.testing.assert_allclose(wrench[:, 2], estimates.column("tau_z"), rtol=1e-6)
-    np.testing.assert_array_equal(wrench[:, -1], ~estimates.zeroing)  # valid
+    estimates = episode_streams.estimates(episode)  # one per frame pushed
+    wrench = np.array(table.column("observation.wrench").to_pylist())[: len(row_t)]
+    np.testing.assert_allclose(wrench[:, 2], estimates.column("tau_z")[source], rtol=1e-6)
+    np.testing.assert_array_equal(wrench[:, -1], ~estimates.zeroing[source])  # valid
     assert estimates.zeroing.sum() > 10 and (~estimates.zeroing).sum() > 200
 
 
@@ -181,12 +198,14 @@ def test_the_video_decodes_to_the_logged_frames_at_their_timestamps(dataset, epi
         decoded = [
             (frame.time, frame.to_ndarray(format="rgb24")) for frame in container.decode(video=0)
         ]
-    assert len(decoded) == info["total_frames"] == 2 * len(logged)
+    _, source = export_rows(pushed_times(episode_path))
+    rows = len(source)
+    assert len(decoded) == info["total_frames"] == 2 * rows
     times = np.array([t for t, _ in decoded])
     np.testing.assert_allclose(times, np.arange(len(decoded)) / info["fps"], atol=1e-9)
-    for index in (0, 150, len(logged) - 1, len(logged) + 150):
+    for index in (0, 150, rows - 1, rows + 150):
         image = decoded[index][1].astype(float)
-        error = image - logged[index % len(logged)]
+        error = image - logged[source[index % rows]]
         psnr = 10 * np.log10(255**2 / np.mean(error**2))
         assert psnr > 35, (index, psnr)
 

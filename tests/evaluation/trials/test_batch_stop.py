@@ -82,9 +82,22 @@ def _start(tmp_path: Path, workers: int, seeds: str = "0:6") -> tuple[subprocess
     out, pids = tmp_path / "out", tmp_path / "pids"
     pids.mkdir()
     process = subprocess.Popen(
-        [sys.executable, "-c", RUN_TRIALS, "--task", "usb_c", "--seeds", seeds,
-         "--workers", str(workers), "--records", "--out", str(out),
-         "--trial-function", f"{__name__}:long_trial"],  # fmt: skip
+        [
+            sys.executable,
+            "-c",
+            RUN_TRIALS,
+            "--task",
+            "usb_c",
+            "--seeds",
+            seeds,
+            "--workers",
+            str(workers),
+            "--records",
+            "--out",
+            str(out),
+            "--trial-function",
+            f"{__name__}:long_trial",
+        ],  # fmt: skip
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT), PIDS: str(pids)},
         stdout=subprocess.PIPE,
@@ -179,4 +192,3 @@ def test_a_batch_of_a_hundred_million_seeds_starts_at_once_in_bounded_memory(
     assert "interrupted by SIGINT after" in capsys.readouterr().err
     summary = json.loads((out / SUMMARY_NAME).read_text())
     assert summary["requested"] == 100_000_000 and 1 <= summary["n"] < 10  # what finished first
-

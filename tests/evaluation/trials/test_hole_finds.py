@@ -19,6 +19,7 @@ from evaluation.trials.hole_finds import (
     trial_hole_finds,
 )
 from evaluation.trials.hole_finds_cli import main
+from tests.easy_scene import easy_task
 
 
 def test_the_resting_height_is_half_the_leading_face_times_the_sine_of_the_tilt():
@@ -44,7 +45,7 @@ def test_the_attempt_ends_at_the_first_release_back_off_or_failure():
 
 
 def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
-    task = load_task("usb_c")
+    task = easy_task("usb_c")  # the tool's diagnosis, not the machine's success
     success, finds = trial_hole_finds(task, 10)  # one find, in the opening
     assert success and finds
     assert finds[-1].in_opening and finds[-1].outcome == "inserted"
@@ -76,8 +77,10 @@ def test_the_summary_counts_finds_by_place_and_end():
     [
         (["--task", "usb_c", "--seeds", "3:1"], "--seeds"),
         (["--task", "nope", "--seeds", "0:1"], "nope"),
-        (["--task", "usb_c", "--seeds", "0:1", "--set", "machine.search.pitch_m=-1"],
-         "machine.search.pitch_m"),
+        (
+            ["--task", "usb_c", "--seeds", "0:1", "--set", "machine.search.pitch_m=-1"],
+            "machine.search.pitch_m",
+        ),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(argv, message, capsys):

@@ -16,7 +16,7 @@ from controller.tactile.wrench import WrenchEstimate
 from core.config import ConfigError
 from evaluation.trials import trial
 from evaluation.trials.oracle import TRIAL_CONTROLLERS, TRUE_AXES, TrueWrench, oracle_noise_std
-from evaluation.trials.trial import CONTACT_FORCE_EXCEEDED, contact_force_violations
+from evaluation.trials.trial import INSERTION_FORCE_EXCEEDED, insertion_force_violations
 
 EASY = (
     "scene.hole_uncertainty.yaw_rad=0.0",
@@ -78,9 +78,9 @@ def test_the_oracle_noise_is_the_calibrations_measured_noise_at_rest():
 
 def test_violations_count_each_rise_above_the_limit():
     force = np.array([0.0, 25.0, 30.0, 5.0, 21.0, 1.0, 22.0])
-    assert contact_force_violations(force, 20.0) == 3
-    assert contact_force_violations(np.array([21.0, 1.0]), 20.0) == 1
-    assert contact_force_violations(np.array([]), 20.0) == 0
+    assert insertion_force_violations(force, 20.0) == 3
+    assert insertion_force_violations(np.array([21.0, 1.0]), 20.0) == 1
+    assert insertion_force_violations(np.array([]), 20.0) == 0
 
 
 def test_blind_succeeds_on_the_easy_setting_and_a_contact_violation_fails_it():
@@ -88,9 +88,9 @@ def test_blind_succeeds_on_the_easy_setting_and_a_contact_violation_fails_it():
     result = outcome.result
     assert result.success and result.failure_reason is None, result
     assert 0 < result.p99_contact_force_n <= result.max_contact_force_n < 20.0
-    assert result.contact_force_limit_n == 20.0 and result.contact_force_violations == 0
+    assert result.contact_force_limit_n == 20.0 and result.insertion_force_violations == 0
     assert result.max_contact_force_n > result.max_wrist_force_n  # the plug's, not the wrist's
     strict = trial.run(load_task("usb_c", [*EASY, "contact_force_limit_n=3.0"]), "blind", 0)
     assert not strict.result.success and strict.result.status == "failed"
-    assert strict.result.failure_reason == CONTACT_FORCE_EXCEEDED
-    assert strict.result.contact_force_violations >= 1
+    assert strict.result.failure_reason == INSERTION_FORCE_EXCEEDED
+    assert strict.result.insertion_force_violations >= 1

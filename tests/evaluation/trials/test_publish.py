@@ -103,8 +103,10 @@ def test_an_input_that_is_not_utf8_is_named_and_nothing_is_replaced(tmp_path, ca
     before = _tree(docs)
     assert main([str(second), "--docs", str(docs)]) == 2
     err = capsys.readouterr().err
-    assert err == f"publish_trials: error: '{docs / bad}': not UTF-8 text (byte 0xff at " \
+    assert (
+        err == f"publish_trials: error: '{docs / bad}': not UTF-8 text (byte 0xff at "
         "offset 13); expected a markdown file\n"
+    )
     assert _tree(docs) == before
 
 

@@ -3,11 +3,11 @@ scene"): MuJoCo rigid contacts between a grasped USB plug and a board with a rec
 the commanded TCP as a mocap body behind a compliant wrist, the plug in a stiff gel spring
 whose wrench drives the gel model and the rendered tactile frames.
 
-Modules: ``scene_config`` (the task YAML's ``scene:``, ``plug:``, ``hole:``), ``frames``,
-``mjcf`` (the model text), ``physics`` (MuJoCo stepping, the grasp's wrench, the truth
-rows), ``truth`` (``TruthLog``), ``world`` (the physics in step with the arm and gripper
-twins), ``coupling`` (grasp wrench -> gel model -> camera field), ``scene_clock``
-(``SceneClock``), ``builder`` (``build_insertion_sim``).
+Modules: ``scene_config`` (the task YAML's ``scene:``, ``plug:``, ``hole:``), ``draws`` (the
+seed's hole, board and grasp), ``frames``, ``mjcf`` (the model text), ``physics`` (MuJoCo
+stepping, the grasp's wrench, the truth rows), ``truth`` (``TruthLog``), ``world`` (the
+physics in step with the arm and gripper twins), ``coupling`` (grasp wrench -> gel model ->
+camera field), ``scene_clock`` (``SceneClock``), ``builder`` (``build_insertion_sim``).
 """
 
 from drivers.sim.scenes.insertion.builder import (
@@ -15,13 +15,13 @@ from drivers.sim.scenes.insertion.builder import (
     SimDevices,
     build_insertion_sim,
     build_world,
-    draw_hole,
 )
+from drivers.sim.scenes.insertion.draws import GraspPose, SceneDraw, draw_scene
 from drivers.sim.scenes.insertion.scene_clock import SceneClock
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TruthLog
 
 __all__ = [
-    "InsertionSceneConfig", "InsertionSim", "SceneClock", "SimDevices", "TruthLog",
-    "build_insertion_sim", "build_world", "draw_hole",
+    "GraspPose", "InsertionSceneConfig", "InsertionSim", "SceneClock", "SceneDraw",
+    "SimDevices", "TruthLog", "build_insertion_sim", "build_world", "draw_scene",
 ]  # fmt: skip

@@ -1,8 +1,9 @@
 """Building the simulated insertion: the world, its clock, the twins the controller drives,
 and the ground truth it never sees.
 
-``build_insertion_sim(scene, plug, hole_nominal, devices, seed)`` draws the true hole from
-the nominal one (``hole_uncertainty``, seeded by ``seed``), builds the physics, and the
+``build_insertion_sim(scene, plug, hole_nominal, devices, seed)`` draws the true hole, the
+board's height and tilt and the plug's pose in the grasp (``draws.draw_scene``, seeded by
+``seed``), builds the physics, and the
 twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realtime``:
 ``MonotonicClock``):
 
@@ -14,8 +15,9 @@ twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realti
   (a task whose insertion that envelope cannot reach is refused when it loads:
   ``core.envelope_checks``);
 * the SimGripper, its object width the plug's thickness;
-* the SimTactileSensor on the gel coupling (``coupling``) with the scene's appearance, its
-  noise seeded by its configuration's seed and ``seed``;
+* the SimTactileSensor on the gel coupling (``coupling``) with the scene's appearance and
+  ``sensor:`` timing and image effects (latency, capture jitter, blur, lighting drift; the
+  camera file's pixel noise), its randomness seeded by its configuration's seed and ``seed``;
 * a SimGamepad when a gamepad configuration is given.
 
 The devices carry nothing of the truth: the world reaches them only through the clock's
@@ -35,21 +37,19 @@ from core.clock import ManualClock, MonotonicClock
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import ObjectShape, gel_profile
+from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.scenes.insertion.coupling import GelCoupling
+from drivers.sim.scenes.insertion.draws import SceneDraw, draw_scene
 from drivers.sim.scenes.insertion.frames import upright_pose
 from drivers.sim.scenes.insertion.physics import InsertionPhysics
 from drivers.sim.scenes.insertion.scene_clock import SceneClock
-from drivers.sim.scenes.insertion.scene_config import (
-    HoleUncertainty,
-    InsertionSceneConfig,
-    check_fits,
-)
+from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig, check_fits
 from drivers.sim.scenes.insertion.truth import TruthLog
 from drivers.sim.scenes.insertion.world import InsertionWorld
 from drivers.sim.twins.arm import SimArm, SimArmConfig
 from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
 from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
-from drivers.sim.twins.tactile import SimTactileConfig, SimTactileSensor
+from drivers.sim.twins.tactile import SensorTiming, SimTactileConfig, SimTactileSensor
 
 
 @dataclass(frozen=True)
@@ -65,7 +65,8 @@ class SimDevices:
 @dataclass
 class InsertionSim:
     """A built scene. The controller gets ``clock``, ``arm``, ``gripper``, ``tactile`` and
-    ``gamepad``; ``truth`` goes to the run's record only. ``sync()`` brings the world to the
+    ``gamepad``; ``truth`` and ``draw`` (the seed's hole, board and grasp) go to the run's
+    record only. ``sync()`` brings the world to the
     clock's present (e.g. before reading the truth at the end of a run)."""
 
     clock: SceneClock
@@ -75,25 +76,10 @@ class InsertionSim:
     gamepad: SimGamepad | None
     truth: TruthLog
     world: InsertionWorld
+    draw: SceneDraw
 
     def sync(self) -> None:
         self.world.sync(self.clock.now())
-
-
-def draw_hole(nominal: HolePose, uncertainty: HoleUncertainty, seed: int) -> HolePose:
-    """The true hole: ``nominal`` moved by uniform draws within ``uncertainty`` (seeded)."""
-    rng = np.random.default_rng(seed)
-    dx, dy, dyaw = rng.uniform(-1.0, 1.0, 3) * (
-        uncertainty.x_m,
-        uncertainty.y_m,
-        uncertainty.yaw_rad,
-    )
-    return HolePose(
-        nominal.x_m + float(dx),
-        nominal.y_m + float(dy),
-        nominal.z_m,
-        nominal.yaw_rad + float(dyaw),
-    )
 
 
 def scene_arm_config(
@@ -131,7 +117,8 @@ def build_insertion_sim(
     """The scene for one trial (see the module docstring); ValueError if the plug does not
     fit the opening or the start pose leaves the arm's envelope."""
     check_fits(scene, plug)
-    hole = draw_hole(hole_nominal, scene.hole_uncertainty, seed)
+    draw = draw_scene(hole_nominal, scene, seed)
+    hole = draw.hole
     clock = SceneClock(MonotonicClock() if realtime else ManualClock())
     # the trials start over the nominal hole; the alignment demo (start_depth_m) in the true one
     start_hole = hole_nominal if scene.start_depth_m is None else hole
@@ -141,20 +128,29 @@ def build_insertion_sim(
     gripper_sim = dataclasses.replace(devices.gripper.sim, object_width_m=plug.thickness_m)
     gripper = SimGripper(dataclasses.replace(devices.gripper, sim=gripper_sim), clock)
     truth = TruthLog(hole=hole, hole_nominal=hole_nominal)
-    physics = InsertionPhysics(scene, plug, hole, start, clock.now(), truth)
+    physics = InsertionPhysics(
+        scene, plug, hole, start, clock.now(), truth, draw.board_tilt_rad, draw.grasp
+    )
     world = InsertionWorld(physics, arm, gripper, plug.thickness_m, start)
     clock.attach(world.sync)
     profile = gel_profile(devices.tactile.model)
     gel = GelModel(profile, ObjectShape("square_peg", plug.width_m, "y"))
+    sensor = scene.sensor
     tactile = SimTactileSensor(
         devices.tactile,
         clock,
         rng=np.random.default_rng([devices.tactile.sim.seed, seed]),
         field_source=GelCoupling(world, gel),
         appearance=scene.tactile_appearance,
+        effects=ImageEffects(
+            noise_grey=devices.tactile.sim.noise_grey,
+            blur_sigma_px=sensor.blur_sigma_px,
+            drift_gain_per_level=sensor.drift_gain_per_level,
+        ),
+        timing=SensorTiming(sensor.latency_s, sensor.jitter_s, sensor.drift_period_s),
     )
     gamepad = None if devices.gamepad is None else SimGamepad(devices.gamepad, clock)
-    return InsertionSim(clock, arm, gripper, tactile, gamepad, truth, world)
+    return InsertionSim(clock, arm, gripper, tactile, gamepad, truth, world, draw)
 
 
 def build_world(spec: Any, configs: Mapping[str, Any]) -> InsertionSim:

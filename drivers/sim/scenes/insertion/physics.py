@@ -1,13 +1,15 @@
 """The MuJoCo side of the insertion scene: the model, its stepping with the commanded TCP,
 the grasp's wrench and the ground truth.
 
-``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s)`` builds the model of
-``mjcf.scene_xml``. ``step_to(t_s, pose_t_s, pose)`` advances in fixed steps of
-``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
+``InsertionPhysics(scene, plug, hole_true, start_pose, t0_s, truth, board_tilt_rad,
+grasp)`` builds the model of ``mjcf.scene_xml`` (the board tilted and the plug placed in
+the fingers as drawn; nominal by default). ``step_to(t_s, pose_t_s, pose)`` advances in
+fixed steps of ``timestep_s`` up to ``t_s`` with the mocap TCP moving linearly (position; normalised
 linear interpolation of the quaternion) from its last pose to ``pose`` reached at
 ``pose_t_s`` and held after it. Each step keeps the grasp's wrench in a ring buffer
 (``grasp_wrench_at``: the wrench at a past step, for the tactile frames) and the ground
-truth's running contact-force maximum; a ``TruthLog`` row is written every
+truth's running contact-force maxima (the summed normal force, and the net force along the
+hole's axis); a ``TruthLog`` row is written every
 ``1 / truth_rate_hz`` s.
 
 The grasp's wrench is the wrench the gripper exerts on the plug through the gel spring,
@@ -22,13 +24,15 @@ import math
 
 import mujoco
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
-from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose
+from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
+from drivers.sim.scenes.insertion.frames import S_IN_T, quat_wxyz_from_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
-from drivers.sim.scenes.insertion.truth import TruthLog
+from drivers.sim.scenes.insertion.truth import TRUTH_WIDTH, TruthLog
 
 RING_S = 1.0  # how far back the grasp's wrench is kept, s
 _WRIST = ("wrist_x", "wrist_y", "wrist_z", "wrist_rx", "wrist_ry", "wrist_rz")
@@ -39,6 +43,15 @@ _BAD_STATE = (
     mujoco.mjtWarning.mjWARN_BADQACC,
 )
 _RELEASED_DAMPING = 1e-4  # the gel joints' damping once the fingers let go (numerical only)
+
+
+def _index(addresses: list[int]) -> slice | np.ndarray:
+    """Addresses into MuJoCo's arrays: a slice when they are consecutive (a view, as fast
+    as an attribute), else an index array."""
+    first = int(addresses[0])
+    if [int(a) for a in addresses] == list(range(first, first + len(addresses))):
+        return slice(first, first + len(addresses))
+    return np.array(addresses)
 
 
 class UnstablePhysicsError(RuntimeError):
@@ -58,8 +71,11 @@ class InsertionPhysics:
         start_pose: Pose,
         t0_s: float,
         truth: TruthLog,
+        board_tilt_rad: tuple[float, float] = (0.0, 0.0),
+        grasp: GraspPose = NOMINAL_GRASP,
     ) -> None:
-        self.model = mujoco.MjModel.from_xml_string(scene_xml(scene, plug, hole_true))
+        xml = scene_xml(scene, plug, hole_true, board_tilt_rad, grasp)
+        self.model = mujoco.MjModel.from_xml_string(xml)
         self.data = mujoco.MjData(self.model)
         self.dt_s = self.model.opt.timestep
         self._share = scene.gel_spring.load_share
@@ -68,20 +84,28 @@ class InsertionPhysics:
         m = self.model
         self._tip = m.site("tip").id
         self._plug = m.body("plug").id
+        self._gripper = m.body("gripper").id
+        self._condim = int(m.geom("plug").condim[0])
+        # The hole's axis in B (out of the board): H's z, the board tilted as mjcf builds it.
+        self._hole_axis_b = (
+            Rotation.from_euler("z", hole_true.yaw_rad) * Rotation.from_euler("xy", board_tilt_rad)
+        ).apply([0.0, 0.0, 1.0])
         force = m.sensor_adr[m.sensor("gel_force").id]
         if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
         self._grasp = slice(int(force), int(force) + 6)
         wrist = [m.joint(name) for name in _WRIST]
-        self._wrist_j = np.array([j.id for j in wrist])
-        self._wrist_q = np.array([j.qposadr[0] for j in wrist])
-        self._wrist_v = np.array([j.dofadr[0] for j in wrist])
+        self._wrist_j = _index([j.id for j in wrist])
+        self._wrist_q = _index([j.qposadr[0] for j in wrist])
+        self._wrist_v = _index([j.dofadr[0] for j in wrist])
         gel = [m.joint(name) for name in _GEL]
         self._gel_j = np.array([j.id for j in gel])
         self._gel_q = np.array([j.qposadr[0] for j in gel])
         self._gel_v = np.array([j.dofadr[0] for j in gel])
         self._gel_stiffness = m.jnt_stiffness[self._gel_j].copy()
         self._gel_damping = m.dof_damping[self._gel_v].copy()
+        self._slide_j = _index([j.id for j in gel[:3]])
+        self._slide_v = _index([j.dofadr[0] for j in gel[:3]])
         self.released = False
         self._pos = np.array(start_pose.xyz_m, float)
         self._quat = quat_wxyz_from_pose(start_pose)
@@ -96,6 +120,7 @@ class InsertionPhysics:
         self._ring[0] = self._grasp_now()
         self._truth_every = max(1, round(1.0 / (scene.truth_rate_hz * self.dt_s)))
         self._peak_force_n = 0.0
+        self._peak_axial_n = 0.0
         self._record()
 
     # ----------------------------------------------------------------- stepping
@@ -118,24 +143,47 @@ class InsertionPhysics:
         positions = self._pos + share[:, None] * (end_pos - self._pos)
         quats = self._quat + share[:, None] * (end_quat - self._quat)
         quats /= np.linalg.norm(quats, axis=1, keepdims=True)
+        # Views and counters bound once: this loop runs at 2 kHz of simulated time.
         ring, n_ring = self._ring, len(self._ring)
-        grasp, sensors = self._grasp, d.sensordata
-        every = self._truth_every
+        grasp = d.sensordata[self._grasp]  # a fixed buffer (efc_force is not: read it anew)
+        mocap_pos, mocap_quat = d.mocap_pos, d.mocap_quat
+        every, condim = self._truth_every, self._condim
+        step, total_of = mujoco.mj_step, np.add.reduce
+        # The plug's only contacts are the board's and the receptacle's, and its slide joints
+        # (relative to the gripper) are orthonormal and unlimited: their constraint forces
+        # are the net contact force on the plug along their axes (xaxis, in B).
+        slide_forces, slide_axes = d.qfrc_constraint[self._slide_v], d.xaxis[self._slide_j]
+        hole_axis = self._hole_axis_b
+        released, steps, peak = self.released, self._steps, self._peak_force_n
+        peak_axial = self._peak_axial_n
         for i in range(n):
-            d.mocap_pos[0] = positions[i]
-            d.mocap_quat[0] = quats[i]
-            mujoco.mj_step(m, d)
-            self._steps += 1
-            ring[self._steps % n_ring] = sensors[grasp]
-            if d.nefc:
-                # Pyramidal cones: a contact's normal force is the sum of its edges' forces,
-                # and every constraint row of this model is a contact's.
-                total = float(d.efc_force[: d.nefc].sum())
-                if total > self._peak_force_n:
-                    self._peak_force_n = total
-            if self._steps % every == 0:
-                self.t_s = float(times[i])
+            if released:
+                self._leave_plug(positions[i])
+            mocap_pos[0] = positions[i]
+            mocap_quat[0] = quats[i]
+            step(m, d)
+            steps += 1
+            ring[steps % n_ring] = grasp
+            ncon = d.ncon
+            if ncon:
+                # Elliptic cones: a contact's rows are its normal force, then its friction;
+                # the contacts' rows come last, and every contact has the plug's condim.
+                nefc = d.nefc
+                if ncon == 1:  # the sum of one row is that row
+                    total = float(d.efc_force[nefc - condim])
+                else:
+                    total = float(total_of(d.efc_force[nefc - ncon * condim : nefc : condim]))
+                if total > peak:
+                    peak = total
+                axial = float(slide_forces @ (slide_axes @ hole_axis))
+                if axial > peak_axial:
+                    peak_axial = axial
+            if steps % every == 0:
+                self.t_s, self._steps = float(times[i]), steps
+                self._peak_force_n, self._peak_axial_n = peak, peak_axial
                 self._record()
+                peak = peak_axial = 0.0
+        self._steps, self._peak_force_n, self._peak_axial_n = steps, peak, peak_axial
         self.t_s = float(times[-1])
         self._pos, self._quat = positions[-1].copy(), quats[-1].copy()
         if any(d.warning[w].number for w in _BAD_STATE):
@@ -165,6 +213,18 @@ class InsertionPhysics:
         self.model.jnt_stiffness[self._gel_j] = 0.0
         self.model.dof_damping[self._gel_v] = _RELEASED_DAMPING
         self.released = True
+
+    def _leave_plug(self, tcp_xyz: np.ndarray) -> None:
+        """Keep a released plug where it is as the TCP moves: MuJoCo moves a mocap body by
+        setting its position, which carries its children along without a velocity, so the
+        free plug (its joints are relative to the gripper) would be lifted with every step
+        of the retracting arm and knocked back by the board (the resting plug's contact
+        force then peaked at 16 times its weight). The gel's slide joints take up the TCP's
+        translation; its rotation (the arm holds its orientation while retracting) is not
+        taken up."""
+        d = self.data
+        axes = d.xmat[self._gripper].reshape(3, 3) @ S_IN_T  # the slides' axes in B
+        d.qpos[self._gel_q[:3]] -= axes.T @ (tcp_xyz - d.mocap_pos[0])
 
     def grasp(self) -> None:
         """The fingers close on the plug where it is: the gel spring's rest is its pose."""
@@ -197,16 +257,15 @@ class InsertionPhysics:
         return self.data.sensordata[self._grasp].copy()
 
     def _record(self) -> None:
-        tip = self.tip_xyz()
-        row = np.concatenate(
-            [
-                [self.t_s],
-                self._share * self._grasp_now(),
-                self.wrist_wrench(),
-                tip,
-                self.plug_quat(),
-                [self._hole_z - tip[2], self._peak_force_n],
-            ]
-        )
+        d = self.data
+        row = np.empty(TRUTH_WIDTH)
+        row[0] = self.t_s
+        np.multiply(self._share, d.sensordata[self._grasp], out=row[1:7])
+        row[7:13] = self.wrist_wrench()
+        row[13:16] = d.site_xpos[self._tip]
+        row[16:20] = d.xquat[self._plug]
+        row[20] = self._hole_z - row[15]
+        row[21] = self._peak_force_n
+        row[22] = self._peak_axial_n
         self._truth.append(row)
-        self._peak_force_n = 0.0
+        self._peak_force_n = self._peak_axial_n = 0.0

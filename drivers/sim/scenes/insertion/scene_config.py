@@ -60,12 +60,58 @@ class HoleUncertainty(Config):
 
 
 @config_dataclass
+class GraspUncertainty(Config):
+    """The plug's true pose in the fingers, drawn per seed; the machine knows only the
+    nominal grasp (the plug's axis along the tool axis, centred on the gel). Independent
+    uniform draws: a tilt about each of the two axes across the plug's length (S's x, the
+    plug's width, and S's z, the gel's normal) in [-tilt_rad, tilt_rad]; an offset along the
+    plug's length in [-along_m, along_m] (m; positive: the tip farther from the gel) and
+    across its width in [-across_m, across_m] (m, along S's x)."""
+
+    tilt_rad: float = number(0.0, 0.3, default=math.radians(5.0))
+    along_m: float = number(0.0, 0.01, default=0.002)
+    across_m: float = number(0.0, 0.005, default=0.001)
+
+
+@config_dataclass
+class BoardUncertainty(Config):
+    """The board's true height and tilt, drawn per seed beside the hole's x, y and yaw:
+    uniform in [-height_m, height_m] (m, along B's z) and a tilt about each of H's x and y
+    axes in [-tilt_rad, tilt_rad]."""
+
+    height_m: float = number(0.0, 0.01, default=0.001)
+    tilt_rad: float = number(0.0, 0.1, default=math.radians(1.0))
+
+
+@config_dataclass
+class SensorTiming(Config):
+    """What the tactile camera adds in the scene (drivers/sim/twins/tactile.py): a frame
+    captured at ``t`` arrives (and is stamped, as the real driver stamps it) at
+    ``t + latency_s``; each frame's capture time is moved from the nominal by a uniform draw
+    in [-jitter_s, jitter_s] (seeded). The image effects of the renderer
+    (drivers/sim/render/image_effects.py): an optical Gaussian blur of ``blur_sigma_px``
+    and a lighting drift whose level grows by one per ``drift_period_s`` after connecting,
+    each level changing the B, G, R gains by ``drift_gain_per_level``. Pixel noise is the
+    camera file's ``sim.noise_grey``."""
+
+    latency_s: float = number(0.0, 0.5, default=0.04)
+    jitter_s: float = number(0.0, 0.019, default=0.004)
+    blur_sigma_px: float = number(0.0, 5.0, default=0.3)
+    drift_period_s: float = number(1.0, 1e5, default=60.0)
+    drift_gain_per_level: tuple[float, float, float] = number(
+        -0.1, 0.1, default=(-0.0026, 0.0047, -0.0041)
+    )
+
+
+@config_dataclass
 class WristConfig(Config):
-    """The compliant wrist between the commanded TCP and the gripper (OMRON soft wrist
-    defaults): stiffness and damping per axis of the tool frame at the wrist's pivot,
-    ``pivot_above_tcp_m`` above the TCP along the tool axis. ``x/y`` translation (N/m,
-    N*s/m; the wrist is stiff there), ``z`` translation along the tool axis, ``tilt`` about
-    the tool's x and y (N*m/rad, N*m*s/rad), ``twist`` about the tool axis."""
+    """The compliant wrist between the commanded TCP and the gripper (a spring-loaded soft
+    wrist; docs/SIMULATION.md, "The compliant wrist"): stiffness and damping per axis of the
+    tool frame at the wrist's pivot, ``pivot_above_tcp_m`` above the TCP along the tool
+    axis. ``x/y`` translation (N/m, N*s/m; the wrist is stiff there), ``z`` translation
+    along the tool axis, ``tilt`` about the tool's x and y (N*m/rad, N*m*s/rad), ``twist``
+    about the tool axis. Travel: the tilt stops at +-``tilt_travel_rad`` and the z
+    translation at +-``z_travel_m`` (hard stops)."""
 
     pivot_above_tcp_m: float = number(0.0, 0.5, default=0.19)
     xy_stiffness_n_m: float = number(10.0, 1e7, default=1e5)
@@ -76,6 +122,8 @@ class WristConfig(Config):
     tilt_damping_nm_s_rad: float = number(0.0, 100.0, default=0.005)
     twist_stiffness_nm_rad: float = number(0.01, 1e4, default=5.0)
     twist_damping_nm_s_rad: float = number(0.0, 100.0, default=0.05)
+    tilt_travel_rad: float = number(1e-3, 1.5, default=0.095)
+    z_travel_m: float = number(1e-4, 0.1, default=0.01)
 
 
 @config_dataclass
@@ -131,6 +179,9 @@ class InsertionSceneConfig(Config):
     receptacle: ReceptacleConfig = ReceptacleConfig()
     board: BoardConfig = BoardConfig()
     hole_uncertainty: HoleUncertainty = HoleUncertainty()
+    board_uncertainty: BoardUncertainty = BoardUncertainty()
+    grasp_uncertainty: GraspUncertainty = GraspUncertainty()
+    sensor: SensorTiming = SensorTiming()
     wrist: WristConfig = WristConfig()
     gel_spring: GelSpringConfig = GelSpringConfig()
     contact: ContactConfig = ContactConfig()

@@ -15,7 +15,11 @@ One row every ``1 / truth_rate_hz`` s of simulated time:
 * ``depth_m``: how far the tip is below the board surface (the hole's z), m (negative
   above it);
 * ``contact_force_n``: the largest, over the physics steps since the previous row, of the
-  sum of the normal forces of the plug's contacts with the board and the receptacle, N.
+  sum of the normal forces of the plug's contacts with the board and the receptacle, N
+  (a wedged plug's squeeze counts once per wall);
+* ``insertion_force_n``: the largest, over the same steps, of the net contact force on the
+  plug along the true hole's axis (out of the board), N: the force that resists the
+  insertion, which the connectors' specifications limit (0 without contact).
 
 ``hole`` is the true hole pose in B; ``hole_nominal`` the one the task file gives.
 """
@@ -36,8 +40,9 @@ COLUMNS = {
     "plug_quat_b": 4,
     "depth_m": 1,
     "contact_force_n": 1,
+    "insertion_force_n": 1,
 }
-_WIDTH = sum(COLUMNS.values())
+TRUTH_WIDTH = sum(COLUMNS.values())
 
 
 @dataclass
@@ -50,8 +55,8 @@ class TruthLog:
 
     def append(self, row: np.ndarray) -> None:
         """One row of ``sum(COLUMNS.values())`` numbers in ``COLUMNS`` order."""
-        if row.shape != (_WIDTH,):
-            raise ValueError(f"row: expected shape ({_WIDTH},), got {row.shape}")
+        if row.shape != (TRUTH_WIDTH,):
+            raise ValueError(f"row: expected shape ({TRUTH_WIDTH},), got {row.shape}")
         self._rows.append(row)
 
     def __len__(self) -> int:
@@ -64,7 +69,7 @@ class TruthLog:
 
     def arrays(self) -> dict[str, np.ndarray]:
         """Every column as an array: (n,) for one number, (n, k) for k."""
-        table = np.array(self._rows).reshape(-1, _WIDTH)
+        table = np.array(self._rows).reshape(-1, TRUTH_WIDTH)
         out, start = {}, 0
         for name, width in COLUMNS.items():
             block = table[:, start : start + width]
@@ -75,4 +80,4 @@ class TruthLog:
     @property
     def max_contact_force_n(self) -> float:
         """The largest contact force of the whole run so far, N (0 with no rows)."""
-        return float(max((r[-1] for r in self._rows), default=0.0))
+        return float(max((r[-2] for r in self._rows), default=0.0))
