@@ -24,7 +24,7 @@ from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS, WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource
 from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
-from core.spatial import quaternion_from_rpy
+from core.spatial import quat_from_rpy
 
 # -- the tick's messages (encoded on the writer's thread) ----------------------------------
 
@@ -117,7 +117,7 @@ def tick_json(tick: TickRecord) -> bytes:
 
 
 def tcp_tf(arm: ArmStatus) -> bytes:
-    quaternion = quaternion_from_rpy(arm.tcp.rpy_rad)
+    quaternion = quat_from_rpy(arm.tcp.rpy_rad)
     return foxglove_types.transforms_bytes(arm.t_s, [("B", "T", arm.tcp.xyz_m, quaternion)])
 
 

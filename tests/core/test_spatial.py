@@ -15,7 +15,6 @@ from core.spatial import (
     DOWN_B,
     clamp_norm,
     cross,
-    quaternion_from_rpy,
     rotation_from_rpy,
     rpy_from_rotation,
     tilt_of_rotation,
@@ -105,13 +104,3 @@ def test_clamp_norm_bounds_the_norm_and_keeps_the_direction(vector, limit):
     else:
         np.testing.assert_allclose(np.cross(clamped, vector), 0.0, atol=1e-9)
         assert np.dot(clamped, vector) >= 0.0
-
-
-@settings(max_examples=200, deadline=None)
-@given(rpy=st.tuples(angles, angles, angles))
-def test_quaternion_from_rpy_is_the_rotation_of_rotation_from_rpy(rpy):
-    q = np.array(quaternion_from_rpy(rpy))
-    assert np.linalg.norm(q) == pytest.approx(1.0)
-    np.testing.assert_allclose(
-        Rotation.from_quat(q).as_matrix(), rotation_from_rpy(rpy).as_matrix(), atol=1e-12
-    )
