@@ -134,6 +134,7 @@ class InsertionMachine:
         self._autonomous_s = 0.0
         self._retries = 0
         self._regrasp = False
+        self._keep_grasp = False  # GRASP re-zeroes on the plug held (a resume): no capture
         self._released = False
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
@@ -236,6 +237,15 @@ class InsertionMachine:
             return Phase.ALIGN
         return Phase.SEARCH
 
+    def _resume(self, obs: Observation, target: Phase, guard: str) -> None:
+        """Go to ``target``; into GRASP with the plug held, keeping the grasp: settle and
+        re-zero, without capturing the open gel again (a gel pressed on the plug is no open
+        reference, and opening the fingers could drop the plug from where the operator left
+        it)."""
+        if target is Phase.GRASP and obs.gripper.holding:
+            self._keep_grasp = True
+        self._go(obs, target, guard)
+
     # -- checks common to the autonomous phases ------------------------------------------
 
     def _checks(self, obs: Observation) -> Command | None:
@@ -294,7 +304,7 @@ class InsertionMachine:
         teleop = obs.teleop
         if not teleop.estop and teleop.estop_ack:
             target = Phase.TELEOP if teleop.in_control else self._resume_phase(obs)
-            self._go(obs, target, "estop_acknowledged")
+            self._resume(obs, target, "estop_acknowledged")
         else:
             self._fire("hold")
         return _hold()
@@ -302,7 +312,7 @@ class InsertionMachine:
     def _teleop(self, obs: Observation) -> Command:
         teleop = obs.teleop
         if teleop.hand_back:
-            self._go(obs, self._resume_phase(obs), "hand_back")
+            self._resume(obs, self._resume_phase(obs), "hand_back")
             return _hold()
         self._fire("operator")
         return operator_command(teleop, self.config)
@@ -312,11 +322,12 @@ class InsertionMachine:
     def _grasp(self, obs: Observation, new: bool) -> Command:
         """Lift (after a slip), open a little (re-grasp), capture the open gel while the
         fingers travel fast to just above the plug's thickness, close, settle, re-zero,
-        baseline."""
+        baseline; resumed with the plug held (``_resume``): settle, re-zero, baseline."""
         stage, settings = self._stage, self.config.gripper
-        self._fire(stage.name or ("lift" if self._regrasp else "capture"))
+        first = "lift" if self._regrasp else ("settle" if self._keep_grasp else "capture")
+        self._fire(stage.name or first)
         if stage.name == "":
-            stage.name = "lift" if self._regrasp else "capture"
+            stage.name, self._keep_grasp = first, False
             stage.since_t_s = obs.t_s
             if stage.name == "capture":
                 return self._capture_open(obs)

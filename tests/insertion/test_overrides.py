@@ -86,6 +86,24 @@ def test_hand_back_without_a_grasp_resumes_grasp():
     assert world.rezero_count == 2
 
 
+def test_hand_back_while_holding_before_the_baseline_keeps_the_grasp_and_rezeroes():
+    world = ToyWorld()
+    machine = make_machine(world)
+    world.step(machine)
+    while machine._stage.name != "zero":  # settled on the plug, zeroing, no baseline yet
+        world.step(machine)
+    take_over(world, machine)
+    assert hand_back(world, machine).target is Phase.GRASP
+    first, rezeroes = len(world.commands), world.rezero_count
+    world.run_until(machine, Phase.APPROACH)
+    resumed = world.commands[first:]
+    # no open-gel capture on the plug held, and the fingers never let go of it
+    assert not any(c.capture_open_tactile for c in resumed)
+    assert all(c.gripper is None for c in resumed) and world.gripper_holding
+    assert world.rezero_count == rezeroes + 1
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+
+
 def test_hand_back_with_the_tip_in_the_opening_resumes_align():
     world = ToyWorld()
     machine = make_machine(world)
