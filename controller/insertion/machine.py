@@ -588,7 +588,7 @@ class InsertionMachine:
     def _heel_yaw_rate(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B yielding in yaw (about T z) to the torque about the plug's
         axis while the heel is caught (``align.heel_yaw_gain``)."""
-        about_t_z = float((self.signals.s2t @ self.signals.normalised[:3])[2])
+        about_t_z = float(self.signals.torque_t[2])
         return rotation.apply([0.0, 0.0, -self.config.align.heel_yaw_gain * about_t_z])
 
     def _align_yaw(self, obs: Observation, rotation: Rotation) -> Command:

@@ -104,6 +104,12 @@ def _quat_wxyz(rotation: Rotation) -> tuple[float, float, float, float]:
     return (w, x, y, z)
 
 
+def board_rotation(hole: HolePose, board_tilt_rad: tuple[float, float]) -> Rotation:
+    """H2B of the board as built: turned to the hole's yaw about B's z, then tilted by
+    ``board_tilt_rad`` about H's x and then its y (rad)."""
+    return Rotation.from_euler("z", hole.yaw_rad) * Rotation.from_euler("xy", board_tilt_rad)
+
+
 def scene_xml(
     scene: InsertionSceneConfig,
     plug: PlugGeometry,
@@ -120,9 +126,7 @@ def scene_xml(
     friction = f"{scene.friction:.9g} 0.005 0.0001"
     # Frictionless contacts have one dimension: a pyramid of zero friction is degenerate.
     condim = 1 if scene.friction == 0 else 3
-    board_quat = _quat_wxyz(
-        Rotation.from_euler("z", hole_true.yaw_rad) * Rotation.from_euler("xy", board_tilt_rad)
-    )
+    board_quat = _quat_wxyz(board_rotation(hole_true, board_tilt_rad))
     blocks = "\n".join(
         f'<geom name="{name}" type="box" pos="{_vec(pos)}" size="{_vec(half)}" '
         f'contype="2" conaffinity="1" condim="{condim}" friction="{friction}" solref="{solref}" '

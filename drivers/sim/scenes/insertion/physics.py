@@ -24,13 +24,12 @@ import math
 
 import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from core.devices import Pose
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
 from drivers.sim.scenes.insertion.frames import S_IN_T, quat_wxyz_from_pose
-from drivers.sim.scenes.insertion.mjcf import scene_xml
+from drivers.sim.scenes.insertion.mjcf import board_rotation, scene_xml
 from drivers.sim.scenes.insertion.scene_config import InsertionSceneConfig
 from drivers.sim.scenes.insertion.truth import TRUTH_WIDTH, TruthLog
 
@@ -86,10 +85,8 @@ class InsertionPhysics:
         self._plug = m.body("plug").id
         self._gripper = m.body("gripper").id
         self._condim = int(m.geom("plug").condim[0])
-        # The hole's axis in B (out of the board): H's z, the board tilted as mjcf builds it.
-        self._hole_axis_b = (
-            Rotation.from_euler("z", hole_true.yaw_rad) * Rotation.from_euler("xy", board_tilt_rad)
-        ).apply([0.0, 0.0, 1.0])
+        # The hole's axis in B (out of the board): H's z on the board as built.
+        self._hole_axis_b = board_rotation(hole_true, board_tilt_rad).apply([0.0, 0.0, 1.0])
         force = m.sensor_adr[m.sensor("gel_force").id]
         if m.sensor_adr[m.sensor("gel_torque").id] != force + 3:
             raise AssertionError("mjcf: the grasp's torque sensor must follow its force sensor")
@@ -106,6 +103,9 @@ class InsertionPhysics:
         self._gel_damping = m.dof_damping[self._gel_v].copy()
         self._slide_j = _index([j.id for j in gel[:3]])
         self._slide_v = _index([j.dofadr[0] for j in gel[:3]])
+        if not isinstance(self._slide_j, slice) or not isinstance(self._slide_v, slice):
+            # the step loop reads them as views bound once (an index array would be a copy)
+            raise AssertionError("mjcf: the gel's slide joints must be consecutive")
         self.released = False
         self._pos = np.array(start_pose.xyz_m, float)
         self._quat = quat_wxyz_from_pose(start_pose)
