@@ -490,7 +490,7 @@ class InsertionMachine:
         if stage.name == "width":
             return self._align_width(obs, rotation, new)
         if stage.name == "yaw":
-            return self._align_yaw(obs, rotation)
+            return self._align_yaw(obs, rotation, new)
         if new and np.linalg.norm(stage.v_tip) > 0.0:
             resistance = lateral_resistance(self.signals, rotation, stage.v_tip)[1]
             if math.isnan(stage.resistance0):
@@ -591,7 +591,7 @@ class InsertionMachine:
         about_t_z = float(self.signals.torque_t[2])
         return rotation.apply([0.0, 0.0, -self.config.align.heel_yaw_gain * about_t_z])
 
-    def _align_yaw(self, obs: Observation, rotation: Rotation) -> Command:
+    def _align_yaw(self, obs: Observation, rotation: Rotation, new: bool) -> Command:
         """ALIGN's yaw stage (upright but not in the opening): sweep the yaw about the tip
         axis, a triangle wave within +-``insert.yaw_sweep_rad`` of the opening's nominal yaw,
         pressing with SEARCH's load, until the plug enters (then the servo stage); back
@@ -602,6 +602,13 @@ class InsertionMachine:
             self._fire("entered")
             self._next_stage(obs, "servo")
             return _hold()
+        if new and self.config.align.twist_sigma > 0.0:
+            twisted = abs(float(self.signals.torque_t[2])) >= self.config.align.twist_sigma
+            stage.count = stage.count + 1 if twisted else 0
+            if stage.count >= self.config.align.frames:
+                self._fire("twist_held")  # the long walls hold the yaw: in the slot
+                self._next_stage(obs, "servo")
+                return _hold()
         yaw = _yaw_of(rotation) - self.hole.yaw_rad
         if stage.yaw_sign * yaw >= settings.yaw_sweep_rad:
             stage.yaw_sign = -stage.yaw_sign

@@ -218,7 +218,10 @@ class AlignSettings(Config):
     *Yaw*: sweep the yaw as INSERT's press does (``insert.yaw_sweep_rad``,
     ``yaw_rate_rad_s``, ``sweeps``) until the plug enters; back where the sweep began, a
     plug at least half of ``enter_m`` in goes on to the servo, any other backs off to
-    SEARCH again.
+    SEARCH again. The opening's long walls holding the plug's yaw also end the sweep (the
+    servo stage): the torque about the plug's axis at least ``twist_sigma`` noise units
+    for ``frames`` estimates (the plug is in the slot even where the depth by touch says
+    otherwise: the in-grasp pose is unknown); 0 turns this off.
 
     *Servo*: turn about the tip to null the torques, pressing: the TCP
     yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
@@ -249,6 +252,7 @@ class AlignSettings(Config):
     width_max_m: float = number(1e-5, 0.01, default=0.004)
     width_sigma: float = number(0.0, 1e4, default=1.0)
     servo_tilt_max_rad: float = number(0.0, 1.0, default=10 * _DEG)
+    twist_sigma: float = number(0.0, 1e4, default=6.0)
 
 
 @config_dataclass

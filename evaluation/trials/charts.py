@@ -2,8 +2,8 @@
 
 * ``speed_success_chart``: success rate against the insertion speed setting, one line per
   controller, the 95% Wilson interval as error bars (the insertion speed/success chart);
-* ``time_histogram``: time to insert of the successful trials, one step histogram per
-  controller on shared bins.
+* ``success_time_chart``: the share of trials inserted within a time, against that time,
+  one step curve per controller (success against time to insert).
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ from typing import Any
 
 import numpy as np
 from matplotlib.figure import Figure
-from matplotlib.ticker import MaxNLocator
 
 from evaluation.common.outputs import atomic_file
 
@@ -71,28 +70,44 @@ def speed_success_chart(
     _save(fig, path)
 
 
-def time_histogram(
-    times_s: Mapping[str, Sequence[float]], path: Path, title: str, bins: int = 20
+def inserted_within(
+    times_s: Sequence[float], trials: int, end_s: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The step curve of ``success_time_chart``: times (s, from 0 to ``end_s``) and the
+    share (%) of ``trials`` inserted by each, from the successful trials' ``times_s``."""
+    values = np.sort(np.asarray(times_s, dtype=float))
+    steps = np.concatenate([[0.0], values, [end_s]])
+    counts = np.concatenate([[0.0], np.arange(1, values.size + 1), [values.size]])
+    return steps, 100.0 * counts / max(trials, 1)
+
+
+def success_time_chart(
+    times_s: Mapping[str, Sequence[float]], trials: Mapping[str, int], path: Path, title: str
 ) -> None:
-    """``times_s``: controller -> times to insert (simulated s) of its successful trials."""
+    """Success against time to insert: for each controller, the share of its ``trials``
+    (every trial, failures included) inserted within t, against t (simulated s), a step
+    curve. ``times_s``: controller -> times to insert of its successful trials. A curve
+    ends at its success rate; one that rises earlier inserts sooner."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
-    every = np.concatenate([np.asarray(t, dtype=float) for t in times_s.values()] or [[]])
-    edges = np.histogram_bin_edges(every if every.size else [0.0, 1.0], bins=bins)
+    every = [t for times in times_s.values() for t in times]
+    end = max(every, default=1.0) * 1.05
     for controller, times in times_s.items():
-        values = np.asarray(times, dtype=float)
-        ax.hist(
-            values,
-            bins=edges,
-            histtype="step",
+        n = trials[controller]
+        steps, shares = inserted_within(times, n, end)
+        ax.step(
+            steps,
+            shares,
+            where="post",
             linewidth=1.5,
             linestyle="--" if controller == "oracle" else "-",
-            label=f"{controller_label(controller)} (n={values.size})",
+            label=f"{controller_label(controller)} ({len(times)}/{n})",
         )
     ax.set_xlabel("time to insert, s (simulated)")
-    ax.set_ylabel("trials")
-    ax.yaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel("trials inserted within that time, %")
+    ax.set_xlim(0.0, end)
+    ax.set_ylim(-2, 102)
     ax.grid(True, alpha=0.3)
-    ax.legend()
+    ax.legend(loc="upper left", fontsize=8)
     ax.set_title(title, fontsize=10)
     _save(fig, path)

@@ -12,8 +12,8 @@ overrides) on the same seeds; all the trials share one executor. OUT gets:
 * ``cells/<controller>/<speed>/{trials.csv,summary.json}``: one batch per grid cell;
 * ``speed_success.png``: success rate (95% Wilson interval) against the speed setting per
   controller -- the insertion speed/success chart;
-* ``time_to_insert_<speed>.png``: histogram of time to insert per controller, one chart per
-  speed setting;
+* ``time_to_insert_<speed>.png``: success against time to insert (the share of trials
+  inserted within t, against t) per controller, one chart per speed setting;
 * ``comparison.md``: the table and charts as a section for docs/EVALUATION.md;
   ``comparison.json``: every cell's summary.
 
@@ -47,7 +47,7 @@ from evaluation.trials.batch_cli import (
     load_trial_function,
     make_executor,
 )
-from evaluation.trials.charts import controller_label, speed_success_chart, time_histogram
+from evaluation.trials.charts import controller_label, speed_success_chart, success_time_chart
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import SeedSpecs, format_seeds
 
@@ -155,7 +155,11 @@ def comparison_markdown(
         lines += ["", f"**Incomplete:** {incomplete} cells were stopped before all their trials."]
     lines += ["", f"![success against {speed_key}]({SPEED_CHART})", ""]
     for speed in sorted({c.speed for c in cells}):
-        lines += [f"![time to insert at {speed_key}={speed:g}]({histogram_name(speed)})", ""]
+        lines += [
+            f"![success against time to insert at {speed_key}={speed:g}]"
+            f"({histogram_name(speed)})",
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -173,17 +177,20 @@ def write_comparison(
         f"{task}: success against insertion speed, seeds {seeds}",
     )
     for speed in sorted({c.speed for c in cells}):
+        at_speed = {c.controller: b for c, b in cells.items() if c.speed == speed}
         times = {
-            cell.controller: [
+            controller: [
                 r.time_to_insert_s
                 for r in batch.results
                 if r.success and r.time_to_insert_s is not None
             ]
-            for cell, batch in cells.items()
-            if cell.speed == speed
+            for controller, batch in at_speed.items()
         }
-        time_histogram(
-            times, out / histogram_name(speed), f"{task}: time to insert at {speed_key}={speed:g}"
+        success_time_chart(
+            times,
+            {controller: len(batch.results) for controller, batch in at_speed.items()},
+            out / histogram_name(speed),
+            f"{task}: success against time to insert at {speed_key}={speed:g}, seeds {seeds}",
         )
     write_text(out / TABLE, comparison_markdown(task, seeds, speed_key, cells, command) + "\n")
     every = [

@@ -72,7 +72,8 @@ def test_every_command_names_its_rule_and_the_hole_find_names_its_detector():
     assert stages[:4] == ["align.seek", "align.wall", "align.turn", "align.upright"]
     assert set(stages[4:]) <= {
         "align.width_slide", "align.end_wall", "align.width_done", "align.yaw_sweep",
-        "align.entered", "align.entering", "align.torque_servo", "align.within_tolerance",
+        "align.entered", "align.entering", "align.twist_held", "align.torque_servo",
+        "align.within_tolerance",
     }  # fmt: skip
 
 
@@ -183,6 +184,29 @@ def test_a_plug_on_the_rim_sweeps_its_yaw_then_searches_again_and_succeeds():
     assert max(yaws) >= sweep - 0.01 and min(yaws) <= -sweep + 0.01  # both ways, whole
     assert max(np.abs(yaws)) <= sweep + 0.02
     assert machine.retries >= 1
+
+
+def test_the_walls_holding_the_yaw_end_the_sweep_early_in_the_servo():
+    world = ToyWorld(rim_blocks=1, held_yaw_twist=0.01)
+    cfg = toy_config()
+    machine = make_machine(world, cfg)
+    yaws = []
+    while not any(t.source is Phase.ALIGN for t in machine.transitions) and world.t_s < 60.0:
+        world.step(machine)
+        if machine.phase is Phase.ALIGN and machine._stage.name == "yaw":
+            x_t = world.rotation.apply([1.0, 0.0, 0.0])
+            yaws.append(np.arctan2(x_t[1], x_t[0]) - world.hole.yaw_rad)
+    rules = [c.rule for c in world.commands]
+    assert "align.yaw_sweep" in rules and "align.twist_held" in rules
+    assert rules.index("align.twist_held") > rules.index("align.yaw_sweep")
+    assert "align.torque_servo" in rules[rules.index("align.twist_held"):]
+    assert max(yaws) - min(yaws) < 0.5 * cfg.insert.yaw_sweep_rad  # the sweep cut short
+    # with the rule off the same world sweeps the whole range (as on a bare rim)
+    off = replace(cfg, align=replace(cfg.align, twist_sigma=0.0))
+    world = ToyWorld(rim_blocks=1, held_yaw_twist=0.01)
+    machine = make_machine(world, off)
+    world.run_until(machine, Phase.DONE)
+    assert "align.twist_held" not in [c.rule for c in world.commands]
 
 
 def test_align_seeks_the_wall_against_the_lean_then_turns_upright_about_the_heel():

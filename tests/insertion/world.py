@@ -74,6 +74,9 @@ class ToyWorld:
     jam_torque: float = 0.03
     floor_drop_m: float = 0.0  # the supporting surface this far below the board's
     rim_blocks: int = 0  # how many times an upright plug stands on the opening's rim
+    # torque about the plug's axis while it stands on the rim (estimate units): the slot's
+    # long walls holding its yaw where the depth by touch reads it short of entered
+    held_yaw_twist: float = 0.0
     noise: float = 0.0003
     frame_every: int = 2  # ticks per new tactile estimate
     zeroing_frames: int = 3
@@ -197,6 +200,8 @@ class ToyWorld:
                 axial = self.k_board * (surface - tip[2])
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
+        if self.on_rim:
+            torque_b += self.held_yaw_twist * z_t
         if self.jammed_in_this_insert and not (
             self.jam_depth_m is not None and tip[2] < surface - self.jam_depth_m
         ):

@@ -18,7 +18,7 @@ from evaluation.common.cli_support import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
 from evaluation.trials.batch_cli import TRIAL_FUNCTION
 from evaluation.trials.batch_cli import main as batch_main
-from evaluation.trials.charts import speed_success_chart, time_histogram
+from evaluation.trials.charts import inserted_within, speed_success_chart, success_time_chart
 from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.records import keep_record, unfinished_record
@@ -523,9 +523,19 @@ def test_charts_with_an_empty_controller(tmp_path):
     speed_success_chart(
         {"dipole": [(0.01, summary)], "blind": []}, tmp_path / "a.png", "speed", "t"
     )
-    time_histogram({"dipole": [4.0, 5.0], "blind": []}, tmp_path / "b.png", "t")
+    success_time_chart(
+        {"dipole": [4.0, 5.0], "blind": []}, {"dipole": 4, "blind": 4}, tmp_path / "b.png", "t"
+    )
     assert (tmp_path / "a.png").stat().st_size > 1000
     assert (tmp_path / "b.png").stat().st_size > 1000
+
+
+def test_success_against_time_counts_every_trial_and_ends_at_the_success_rate():
+    steps, shares = inserted_within([9.0, 3.0, 5.0], 4, 20.0)
+    assert steps.tolist() == [0.0, 3.0, 5.0, 9.0, 20.0]
+    assert shares.tolist() == [0.0, 25.0, 50.0, 75.0, 75.0]  # 3 of 4 inserted: it ends at 75 %
+    steps, shares = inserted_within([], 5, 20.0)
+    assert shares.tolist() == [0.0, 0.0]
 
 
 def test_an_unreachable_ray_address_is_a_quick_one_line_error(ray_available):
