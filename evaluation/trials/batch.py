@@ -16,14 +16,21 @@ did not finish are removed, so the records, ``trials.csv`` and ``summary.json`` 
 signal that arrives while a finished trial is recorded takes effect right after it, and
 later signals are ignored while the batch stops (``evaluation.trials.stop_signals``).
 
+* ``batch.json``: what decides the batch's trials (its context without how they ran:
+  task, controller, seeds, overrides, ...; and how many were asked for), written first.
+
 The output folder must be new or empty (``check_batch_folder``), checked before any trial
-runs.
+runs. A batch stopped before its end (a signal, a crash, the machine turned off) is
+continued with ``resume``: its ``batch.json`` must equal the new run's, its finished rows
+are kept (an incomplete last row, from a kill in mid-write, is dropped), the unfinished
+records removed, and only the trials without a row run.
 """
 
 from __future__ import annotations
 
 import csv
 import dataclasses
+import io
 import json
 import math
 import os
@@ -37,7 +44,7 @@ from typing import Any, TextIO
 from tqdm import tqdm
 
 from evaluation.common.cli_support import Terminated, ToolError
-from evaluation.common.outputs import check_output_folder, write_text
+from evaluation.common.outputs import atomic_file, check_output_folder, write_text
 from evaluation.trials.executors import Executor
 from evaluation.trials.records import RECORDS, discard_unfinished_records, keep_record
 from evaluation.trials.result import TrialResult
@@ -47,6 +54,8 @@ from evaluation.trials.summary import summarize
 
 CSV_NAME = "trials.csv"
 SUMMARY_NAME = "summary.json"
+PLAN_NAME = "batch.json"
+RUN_KEYS = ("executor", "workers", "ray_address")  # how the trials ran, not which
 CSV_COLUMNS = tuple(f.name for f in dataclasses.fields(TrialResult))
 
 
@@ -80,14 +89,23 @@ def check_batch_folder(path: Path, option: str = "--out") -> None:
     )
 
 
-class TrialLog:
-    """``trials.csv`` of one batch, one row appended and synced per result."""
+def check_resume_folder(path: Path, option: str = "--out") -> None:
+    """Refuse to resume in ``path`` unless it is a folder (each batch in it is checked when
+    the run starts: ``run_batches``)."""
+    if not path.is_dir():
+        raise ToolError(f"{option} '{path}': no such folder to resume")
 
-    def __init__(self, path: Path) -> None:
+
+class TrialLog:
+    """``trials.csv`` of one batch, one row appended and synced per result; ``append``:
+    continue the file (a resumed batch), else create it."""
+
+    def __init__(self, path: Path, append: bool = False) -> None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        self._handle: TextIO = open(path, "x", newline="")
+        self._handle: TextIO = open(path, "a" if append else "x", newline="")
         self._writer = csv.DictWriter(self._handle, fieldnames=CSV_COLUMNS)
-        self._writer.writeheader()
+        if not append:
+            self._writer.writeheader()
         self._sync()
 
     def write(self, result: TrialResult) -> None:
@@ -121,6 +139,66 @@ def _json_safe(value: Any) -> Any:
     return value
 
 
+def _plan(batch: Batch) -> dict[str, Any]:
+    """What decides ``batch``'s trials (``batch.json``)."""
+    decided = {k: v for k, v in batch.context.items() if k not in RUN_KEYS}
+    return _json_safe({**decided, "requested": len(batch.specs)})
+
+
+def _rows(path: Path) -> list[dict[str, str]]:
+    """The complete rows of a ``trials.csv``: every row is written whole with its line end,
+    so a last line without one is the incomplete row of a kill in mid-write, dropped."""
+    with open(path, newline="") as handle:
+        text = handle.read()
+    reader = csv.DictReader(io.StringIO(text[: text.rfind("\n") + 1]))
+    if tuple(reader.fieldnames or ()) != CSV_COLUMNS:
+        raise ToolError(f"'{path}': not a trials.csv of this version (its columns differ)")
+    return list(reader)
+
+
+def _pending(batch: Batch, resume: bool) -> list[TrialSpec]:
+    """The trials of ``batch`` still to run: all of them (``batch.json`` written), or when
+    resuming those without a row (the rows read into ``batch.results``, ``trials.csv``
+    rewritten with them alone, the unfinished records removed)."""
+    plan, plan_path = _plan(batch), batch.out_dir / PLAN_NAME
+    if not resume:
+        write_text(plan_path, json.dumps(plan, indent=2) + "\n")
+        return list(batch.specs)
+    if not plan_path.is_file() or not (batch.out_dir / CSV_NAME).is_file():
+        raise ToolError(f"--resume: '{batch.out_dir}' holds no batch to resume ({PLAN_NAME})")
+    earlier = json.loads(plan_path.read_text())
+    for key in sorted(set(earlier) | set(plan)):
+        if earlier.get(key) != plan.get(key):
+            raise ToolError(
+                f"--resume: '{batch.out_dir}' was run with {key} {earlier.get(key)!r}, not "
+                f"{plan.get(key)!r}; resume with the same arguments"
+            )
+    by_seed = {spec.seed: spec for spec in batch.specs}
+    if len(by_seed) != len(batch.specs):
+        raise ToolError(f"--resume: '{batch.out_dir}': a resumed batch needs one trial per seed")
+    rows = _rows(batch.out_dir / CSV_NAME)
+    for row in rows:
+        try:
+            result = TrialResult.from_row(row)
+        except (KeyError, ValueError) as exc:
+            raise ToolError(f"--resume: '{batch.out_dir / CSV_NAME}': a bad row ({exc})") from None
+        spec = by_seed.get(result.seed)
+        if spec is None or (spec.task, spec.controller) != (result.task, result.controller):
+            raise ToolError(
+                f"--resume: '{batch.out_dir / CSV_NAME}': seed {result.seed} "
+                f"({result.task}, {result.controller}) is not one of this batch's trials"
+            )
+        batch.results.append(result)
+    with atomic_file(batch.out_dir / CSV_NAME) as temporary:
+        with open(temporary, "w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
+            writer.writeheader()
+            writer.writerows(rows)
+    discard_unfinished_records(batch.out_dir / RECORDS)
+    done = {r.seed for r in batch.results}
+    return [spec for spec in batch.specs if spec.seed not in done]
+
+
 def write_summary(path: Path, summary: Mapping[str, Any]) -> None:
     """``summary`` as indented JSON at ``path``, atomically."""
     write_text(path, json.dumps(_json_safe(summary), indent=2) + "\n")
@@ -132,16 +210,20 @@ def run_batches(
     executor: Executor,
     progress: bool = True,
     on_result: Callable[[TrialResult], None] | None = None,
+    resume: bool = False,
 ) -> str | None:
     """Run every batch's trials on ``executor`` and record them (module doc); fills each
     batch's ``results`` and ``summary``. Returns None when every trial finished, or the
     signal (``"SIGINT"``, ``"SIGTERM"``) that stopped the run, after the summaries of what
-    finished are written. The progress bar goes to stderr."""
+    finished are written. The progress bar goes to stderr. ``resume``: continue batches
+    stopped before their end (module doc; ToolError, before any trial runs, when one
+    cannot be)."""
     in_flight: dict[TrialSpec, Batch] = {}
+    pending = {id(b): _pending(b, resume) for b in batches}
 
     def submitted() -> Iterator[TrialSpec]:
         for batch in batches:
-            for spec in batch.specs:
+            for spec in pending[id(batch)]:
                 if spec in in_flight:
                     raise ValueError(f"trial {spec} is given twice")
                 in_flight[spec] = batch
@@ -152,12 +234,12 @@ def run_batches(
         try:
             with executor, ExitStack() as stack:
                 logs = {
-                    id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME)))
+                    id(b): stack.enter_context(closing(TrialLog(b.out_dir / CSV_NAME, resume)))
                     for b in batches
                 }
                 bar = stack.enter_context(
                     tqdm(
-                        total=sum(len(b.specs) for b in batches),
+                        total=sum(len(p) for p in pending.values()),
                         unit="trial",
                         file=sys.stderr,
                         disable=not progress,

@@ -3,6 +3,7 @@
     python scripts/run_trials.py --task usb_c --seeds 0:200 --out out/trials/usb_c
         [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle] [--workers N]
         [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records] [--episodes]
+        [--resume]
 
 Seeds run from A up to B, B excluded. ``--set`` overrides a task or scene configuration key
 by dotted path (``--set scene.friction=0.5``), validated like the YAML. ``--workers`` is the
@@ -18,7 +19,10 @@ OUT/summary.json (keys: docs/EVALUATION.md, ``evaluation.trials.summary``) is wr
 end. Ctrl-C or SIGTERM (to this process or its group) stops the batch within a second: the
 workers are killed, the unfinished trials' records removed, and summary.json holds only the
 finished trials and ``"complete": false`` (exit 130 or 143); a second signal is ignored. The
-workers die with this process even if it is killed with SIGKILL. A trial that raises is a
+workers die with this process even if it is killed with SIGKILL. ``--resume`` continues a
+batch in OUT that stopped before its end, however it stopped, when run with the same
+arguments (OUT/batch.json records them; checked): its finished trials are kept and only the
+others run (evaluation/trials/batch.py). A trial that raises is a
 failed trial of status ``error`` (``error: ...``), not the end of the batch. Bad arguments,
 an unknown task or override key, a non-empty OUT: one line ``run_trials: error: ...`` and
 exit code 2.
@@ -46,7 +50,13 @@ from evaluation.common.cli_support import (
     one_line,
     run_tool,
 )
-from evaluation.trials.batch import SUMMARY_NAME, Batch, check_batch_folder, run_batches
+from evaluation.trials.batch import (
+    SUMMARY_NAME,
+    Batch,
+    check_batch_folder,
+    check_resume_folder,
+    run_batches,
+)
 from evaluation.trials.executors import EXECUTORS, Executor, open_executor
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.records import RECORDS
@@ -118,6 +128,12 @@ def add_run_arguments(parser: argparse.ArgumentParser) -> None:
         parser, "override a task/scene configuration key by dotted path (repeatable)"
     )
     parser.add_argument("--out", type=Path, required=True, help="output folder")
+    parser.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue the run in --out that stopped before its end: the same arguments "
+        "(checked), its finished trials kept, the others run",
+    )
     parser.add_argument("--trial-function", default=TRIAL_FUNCTION, help=argparse.SUPPRESS)
 
 
@@ -213,8 +229,16 @@ def main(argv: list[str] | None = None) -> int:
     return run_tool("run_trials", lambda: _run(args))
 
 
+def check_out(args: argparse.Namespace) -> None:
+    """--out: a new or empty folder, or with --resume an earlier run's folder."""
+    if args.resume:
+        check_resume_folder(args.out)
+    else:
+        check_batch_folder(args.out)
+
+
 def _run(args: argparse.Namespace) -> int:
-    check_batch_folder(args.out)
+    check_out(args)
     function, check = load_trial_function(args.trial_function)
     records = args.out / RECORDS if args.records or args.episodes else None
     specs = SeedSpecs(
@@ -229,7 +253,7 @@ def _run(args: argparse.Namespace) -> int:
     }
     batch = Batch(specs, args.out, context)
     check_batches(check, [batch])
-    stopped = run_batches(function, [batch], make_executor(args))
+    stopped = run_batches(function, [batch], make_executor(args), resume=args.resume)
     line = describe(batch.summary)
     if stopped is not None:
         print(

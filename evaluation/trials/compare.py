@@ -4,7 +4,7 @@
         [--controllers dipole,fingervision,zero_torque,torque_only,blind,oracle]
         [--speeds 0.002,0.004,0.008]
         [--speed-key machine.insert.speed_m_s] [--workers N] [--executor local|ray]
-        [--ray-address ADDR] [--set KEY=VALUE ...]
+        [--ray-address ADDR] [--set KEY=VALUE ...] [--resume]
 
 Every controller runs every speed setting (``--set SPEED_KEY=value`` added to the trials'
 overrides) on the same seeds; all the trials share one executor. OUT gets:
@@ -21,7 +21,9 @@ The oracle controller reads the simulator's true wrench with the sensor's measur
 reference, labelled so; evaluation/trials/oracle.py says why it is not an upper bound by
 construction).
 Ctrl-C or SIGTERM stops the grid; what finished is still summarised and charted (exit 130
-or 143). Bad arguments: one line ``compare_trials: error: ...`` and exit code 2.
+or 143). ``--resume`` continues a grid stopped before its end (any way, a kill included)
+with the same arguments: each cell keeps its finished trials (evaluation/trials/batch.py).
+Bad arguments: one line ``compare_trials: error: ...`` and exit code 2.
 """
 
 from __future__ import annotations
@@ -37,11 +39,12 @@ from typing import Any
 from core.config import ConfigError, parse_override
 from evaluation.common.cli_support import distinct, number_list, run_tool
 from evaluation.common.outputs import write_text
-from evaluation.trials.batch import Batch, check_batch_folder, run_batches
+from evaluation.trials.batch import Batch, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,
     add_run_arguments,
     check_batches,
+    check_out,
     check_run_arguments,
     executor_context,
     load_trial_function,
@@ -156,8 +159,7 @@ def comparison_markdown(
     lines += ["", f"![success against {speed_key}]({SPEED_CHART})", ""]
     for speed in sorted({c.speed for c in cells}):
         lines += [
-            f"![success against time to insert at {speed_key}={speed:g}]"
-            f"({histogram_name(speed)})",
+            f"![success against time to insert at {speed_key}={speed:g}]({histogram_name(speed)})",
             "",
         ]
     return "\n".join(lines)
@@ -274,7 +276,7 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
-    check_batch_folder(args.out)
+    check_out(args)
     cells = grid(
         args.task,
         args.seeds,
@@ -287,7 +289,7 @@ def _run(args: argparse.Namespace) -> int:
     )
     function, check = load_trial_function(args.trial_function)
     check_batches(check, list(cells.values()))
-    stopped = run_batches(function, list(cells.values()), make_executor(args))
+    stopped = run_batches(function, list(cells.values()), make_executor(args), resume=args.resume)
     seeds = format_seeds(args.seeds)
     write_comparison(args.out, args.task, seeds, args.speed_key, cells, _command(args))
     print((args.out / TABLE).read_text())

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, fields
 from typing import Any, Literal, get_args
 
 TrialStatus = Literal["inserted", "failed", "error"]
@@ -64,3 +65,26 @@ class TrialResult:
     def as_row(self) -> dict[str, Any]:
         """The result as a flat dict (one CSV row)."""
         return asdict(self)
+
+    @classmethod
+    def from_row(cls, row: Mapping[str, str]) -> TrialResult:
+        """The result of one ``trials.csv`` row (``as_row`` written by the batch: an empty
+        cell is None, floats as ``repr``); ValueError (or KeyError) on a malformed row."""
+        values: dict[str, Any] = {}
+        for name in (f.name for f in fields(cls)):
+            text = row[name]
+            if name in _TEXT_FIELDS:
+                values[name] = text or None if name == "failure_reason" else text
+            elif name in _INT_FIELDS:
+                values[name] = int(text)
+            elif name == "success":
+                if text not in ("True", "False"):
+                    raise ValueError(f"success {text!r}: expected True or False")
+                values[name] = text == "True"
+            else:
+                values[name] = None if text == "" and name == "time_to_insert_s" else float(text)
+        return cls(**values)
+
+
+_TEXT_FIELDS = ("task", "controller", "status", "failure_reason")
+_INT_FIELDS = ("seed", "insertion_force_violations")

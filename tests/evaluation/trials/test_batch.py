@@ -265,6 +265,55 @@ def test_interrupt_keeps_what_finished(tmp_path):
     assert len(_read_csv(tmp_path / "batch" / CSV_NAME)) == 1
 
 
+def test_a_stopped_batch_resumes_where_it_stopped_and_ends_as_one_whole_run(tmp_path):
+    whole, _ = _run(tmp_path, LocalExecutor(1), name="whole")
+    batch = Batch(specs(range(12)), tmp_path / "batch", {"task": "usb_c", "controller": "dipole"})
+    ran = []
+
+    def stop_after_four(result):
+        ran.append(result.seed)
+        if len(ran) == 4:
+            raise KeyboardInterrupt
+
+    assert run_batches(fake_trial, [batch], LocalExecutor(1), False, stop_after_four) == "SIGINT"
+    # a kill in mid-write leaves half a row: it is dropped, and its trial runs again
+    with (tmp_path / "batch" / CSV_NAME).open("a") as handle:
+        handle.write("usb_c,dipole,4,Tr")
+    seen = []
+    again = Batch(specs(range(12)), tmp_path / "batch", {"task": "usb_c", "controller": "dipole"})
+    stopped = run_batches(
+        fake_trial, [again], LocalExecutor(1), False, lambda r: seen.append(r.seed), resume=True
+    )
+    assert stopped is None and seen == list(range(4, 12))  # only the trials without a row
+    rows = _read_csv(tmp_path / "batch" / CSV_NAME)
+    assert [int(r["seed"]) for r in rows] == list(range(12))
+    # read back as written (repr: the fake's NaN limit is not equal to itself)
+    assert [repr(TrialResult.from_row(r)) for r in rows] == [repr(r) for r in again.results]
+    summary = json.loads((tmp_path / "batch" / SUMMARY_NAME).read_text())
+    assert summary["complete"] is True and summary["n"] == 12
+    assert again.summary == whole.summary  # the same as the run that never stopped
+
+
+def test_a_resume_with_other_arguments_or_without_a_batch_is_refused(tmp_path, capsys):
+    assert run_cli(tmp_path, "--seeds", "0:4", "--set", "scene.friction=0.4") == 0
+    for args, message in [
+        (["--seeds", "0:4"], "was run with overrides ['scene.friction=0.4'], not []"),
+        (["--seeds", "0:6", "--set", "scene.friction=0.4"], "was run with requested 4, not 6"),
+    ]:
+        before = (tmp_path / "out" / CSV_NAME).read_text()
+        assert run_cli(tmp_path, *args, "--resume") == 2
+        assert message in capsys.readouterr().err
+        assert (tmp_path / "out" / CSV_NAME).read_text() == before  # untouched
+    assert run_cli(tmp_path, "--seeds", "0:4", "--resume", out="nothing") == 2
+    assert "no such folder to resume" in capsys.readouterr().err
+    (tmp_path / "empty").mkdir()
+    assert run_cli(tmp_path, "--seeds", "0:4", "--resume", out="empty") == 2
+    assert "holds no batch to resume" in capsys.readouterr().err
+    # the same arguments: nothing left to run, the summary written again
+    assert run_cli(tmp_path, "--seeds", "0:4", "--set", "scene.friction=0.4", "--resume") == 0
+    assert "3/4 succeeded" in capsys.readouterr().out
+
+
 # -- Ray -------------------------------------------------------------------------------------
 
 
@@ -496,6 +545,23 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     # the fake trial is slower at the lower speed: the histogram's data differ by speed
     slow = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
     assert slow["median_time_s"] > summary["median_time_s"]
+
+
+def test_compare_resumes_each_cell_and_rewrites_the_same_comparison(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    args = ["--task", "usb_c", "--seeds", "0:6", "--controllers", "dipole,blind"]
+    args += ["--speeds", "0.01", "--out", str(out), "--trial-function", FAKE]
+    assert compare_main(args) == 0
+    table = (out / "comparison.md").read_text()
+    # one cell lost its last two rows (stopped there): the resume runs just those
+    blind = out / "cells" / "blind" / "0.01" / CSV_NAME
+    lines = blind.read_text().splitlines(keepends=True)
+    blind.write_text("".join(lines[:-2]))
+    assert compare_main([*args, "--resume"]) == 0
+    assert (out / "comparison.md").read_text() == table
+    assert len(_read_csv(blind)) == 6
+    assert compare_main([*args[:3], "0:7", *args[4:], "--resume"]) == 2
+    assert "was run with requested 6, not 7" in capsys.readouterr().err
 
 
 def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
