@@ -22,8 +22,9 @@ later signals are ignored while the batch stops (``evaluation.trials.stop_signal
 The output folder must be new or empty (``check_batch_folder``), checked before any trial
 runs. A batch stopped before its end (a signal, a crash, the machine turned off) is
 continued with ``resume``: its ``batch.json`` must equal the new run's, its finished rows
-are kept (an incomplete last row, from a kill in mid-write, is dropped), the unfinished
-records removed, and only the trials without a row run.
+are kept (an incomplete last row, from a kill in mid-write, is dropped) with their records,
+the unfinished records removed, and only the trials without a row run. Every batch of the
+run is checked before any is changed, so a refused resume changes nothing.
 """
 
 from __future__ import annotations
@@ -43,10 +44,15 @@ from typing import Any, TextIO
 
 from tqdm import tqdm
 
-from evaluation.common.cli_support import Terminated, ToolError
+from evaluation.common.cli_support import Terminated, ToolError, one_line
 from evaluation.common.outputs import atomic_file, check_output_folder, write_text
 from evaluation.trials.executors import Executor
-from evaluation.trials.records import RECORDS, discard_unfinished_records, keep_record
+from evaluation.trials.records import (
+    RECORDS,
+    discard_unfinished_records,
+    keep_record,
+    kept_record,
+)
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 from evaluation.trials.stop_signals import StopSignals
@@ -78,11 +84,11 @@ def check_batch_folder(path: Path, option: str = "--out") -> None:
     check_output_folder(path, option=option)
     if not path.is_dir() or not any(path.iterdir()):
         return
-    for name in (CSV_NAME, SUMMARY_NAME):
+    for name in (CSV_NAME, SUMMARY_NAME, PLAN_NAME):
         if (path / name).exists():
             raise ToolError(
                 f"{option} '{path}' already holds a batch ({name}); choose a new folder "
-                "(or remove it first)"
+                "(or remove it first, or continue it with --resume)"
             )
     raise ToolError(
         f"{option} '{path}' is not empty and holds no batch; expected a new or empty folder"
@@ -146,27 +152,36 @@ def _plan(batch: Batch) -> dict[str, Any]:
 
 
 def _rows(path: Path) -> list[dict[str, str]]:
-    """The complete rows of a ``trials.csv``: every row is written whole with its line end,
-    so a last line without one is the incomplete row of a kill in mid-write, dropped."""
+    """The complete rows of a ``trials.csv`` (none when it is missing or empty: a batch
+    stopped before its first row). Every row is written whole with its line end, so a last
+    line without one, or a last row short of fields, is the row of a kill in mid-write and
+    is dropped; a short row elsewhere is a damaged file (ToolError)."""
+    if not path.is_file():
+        return []
     with open(path, newline="") as handle:
         text = handle.read()
+    if not text:
+        return []
     reader = csv.DictReader(io.StringIO(text[: text.rfind("\n") + 1]))
     if tuple(reader.fieldnames or ()) != CSV_COLUMNS:
         raise ToolError(f"'{path}': not a trials.csv of this version (its columns differ)")
-    return list(reader)
+    rows = list(reader)
+    whole = [None not in row and None not in row.values() for row in rows]
+    if rows and not whole[-1]:
+        rows.pop()
+        whole.pop()
+    if not all(whole):
+        raise ToolError(f"'{path}': row {whole.index(False) + 1} is damaged (fields missing)")
+    return rows
 
 
-def _pending(batch: Batch, resume: bool) -> list[TrialSpec]:
-    """The trials of ``batch`` still to run: all of them (``batch.json`` written), or when
-    resuming those without a row (the rows read into ``batch.results``, ``trials.csv``
-    rewritten with them alone, the unfinished records removed)."""
-    plan, plan_path = _plan(batch), batch.out_dir / PLAN_NAME
-    if not resume:
-        write_text(plan_path, json.dumps(plan, indent=2) + "\n")
-        return list(batch.specs)
-    if not plan_path.is_file() or not (batch.out_dir / CSV_NAME).is_file():
+def _finished(batch: Batch) -> list[TrialResult]:
+    """The trials of ``batch`` that finished before it stopped, read and checked for a
+    resume without changing anything (ToolError naming the problem)."""
+    plan_path = batch.out_dir / PLAN_NAME
+    if not plan_path.is_file():
         raise ToolError(f"--resume: '{batch.out_dir}' holds no batch to resume ({PLAN_NAME})")
-    earlier = json.loads(plan_path.read_text())
+    earlier, plan = json.loads(plan_path.read_text()), _plan(batch)
     for key in sorted(set(earlier) | set(plan)):
         if earlier.get(key) != plan.get(key):
             raise ToolError(
@@ -176,27 +191,60 @@ def _pending(batch: Batch, resume: bool) -> list[TrialSpec]:
     by_seed = {spec.seed: spec for spec in batch.specs}
     if len(by_seed) != len(batch.specs):
         raise ToolError(f"--resume: '{batch.out_dir}': a resumed batch needs one trial per seed")
-    rows = _rows(batch.out_dir / CSV_NAME)
-    for row in rows:
+    csv_path = batch.out_dir / CSV_NAME
+    results: list[TrialResult] = []
+    for row in _rows(csv_path):
         try:
             result = TrialResult.from_row(row)
-        except (KeyError, ValueError) as exc:
-            raise ToolError(f"--resume: '{batch.out_dir / CSV_NAME}': a bad row ({exc})") from None
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ToolError(f"--resume: '{csv_path}': a bad row ({one_line(exc)})") from None
         spec = by_seed.get(result.seed)
         if spec is None or (spec.task, spec.controller) != (result.task, result.controller):
             raise ToolError(
-                f"--resume: '{batch.out_dir / CSV_NAME}': seed {result.seed} "
-                f"({result.task}, {result.controller}) is not one of this batch's trials"
+                f"--resume: '{csv_path}': seed {result.seed} ({result.task}, "
+                f"{result.controller}) is not one of this batch's trials"
             )
-        batch.results.append(result)
+        if any(r.seed == result.seed for r in results):
+            raise ToolError(f"--resume: '{csv_path}': seed {result.seed} has two rows")
+        record = spec.out_dir
+        if record is not None and record.exists() and kept_record(record).exists():
+            raise ToolError(f"--resume: '{record}': its trial's record exists twice")
+        results.append(result)
+    return results
+
+
+def _continued(batch: Batch, finished: list[TrialResult]) -> list[TrialSpec]:
+    """Continue ``batch`` from its ``finished`` trials (``_finished``): they go into
+    ``batch.results``, ``trials.csv`` is rewritten with them alone, their records kept
+    (a kill between a row and its record's rename leaves it hidden) and the other hidden
+    records removed. Returns the trials still to run."""
+    by_seed = {spec.seed: spec for spec in batch.specs}
     with atomic_file(batch.out_dir / CSV_NAME) as temporary:
         with open(temporary, "w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
             writer.writeheader()
-            writer.writerows(rows)
+            writer.writerows({k: _cell(v) for k, v in r.as_row().items()} for r in finished)
+    for result in finished:
+        record = by_seed[result.seed].out_dir
+        if record is not None:
+            keep_record(record)
     discard_unfinished_records(batch.out_dir / RECORDS)
-    done = {r.seed for r in batch.results}
+    batch.results.extend(finished)
+    done = {r.seed for r in finished}
     return [spec for spec in batch.specs if spec.seed not in done]
+
+
+def _pending(batches: Sequence[Batch], resume: bool) -> dict[int, Sequence[TrialSpec]]:
+    """The trials still to run per batch (by ``id``): all (each batch's ``batch.json``
+    written; its specs as they are, made only when asked for), or when resuming those
+    without a row, every batch checked before any is changed (a resume holds the batch's
+    specs in memory)."""
+    if not resume:
+        for batch in batches:
+            write_text(batch.out_dir / PLAN_NAME, json.dumps(_plan(batch), indent=2) + "\n")
+        return {id(b): b.specs for b in batches}
+    finished = [_finished(b) for b in batches]
+    return {id(b): _continued(b, f) for b, f in zip(batches, finished, strict=True)}
 
 
 def write_summary(path: Path, summary: Mapping[str, Any]) -> None:
@@ -219,7 +267,7 @@ def run_batches(
     stopped before their end (module doc; ToolError, before any trial runs, when one
     cannot be)."""
     in_flight: dict[TrialSpec, Batch] = {}
-    pending = {id(b): _pending(b, resume) for b in batches}
+    pending = _pending(batches, resume)
 
     def submitted() -> Iterator[TrialSpec]:
         for batch in batches:
@@ -245,7 +293,7 @@ def run_batches(
                         disable=not progress,
                     )
                 )
-                successes = 0
+                successes = sum(r.success for b in batches for r in b.results)
                 for spec, result in executor.run(function, submitted()):
                     with signals.recording():
                         batch = in_flight.pop(spec)

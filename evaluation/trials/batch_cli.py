@@ -249,6 +249,8 @@ def _run(args: argparse.Namespace) -> int:
         "controller": args.controller,
         "seeds": format_seeds(args.seeds),
         "overrides": list(args.overrides),
+        "records": records is not None,
+        "episodes": args.episodes,
         **executor_context(args),
     }
     batch = Batch(specs, args.out, context)

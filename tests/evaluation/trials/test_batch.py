@@ -4,6 +4,7 @@ import csv
 import json
 import math
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -312,6 +313,54 @@ def test_a_resume_with_other_arguments_or_without_a_batch_is_refused(tmp_path, c
     # the same arguments: nothing left to run, the summary written again
     assert run_cli(tmp_path, "--seeds", "0:4", "--set", "scene.friction=0.4", "--resume") == 0
     assert "3/4 succeeded" in capsys.readouterr().out
+
+
+def test_a_resume_keeps_a_finished_trials_record_and_reruns_only_the_unfinished(tmp_path):
+    records = tmp_path / "out" / "records"
+    args = ["--seeds", "0:4", "--records", "--trial-function", f"{__name__}:recording_trial"]
+    out = tmp_path / "out"
+    assert batch_main(["--task", "usb_c", "--out", str(out), *args]) == 0
+    # as if killed: seed 1's row written but its record not yet renamed; seeds 2 and 3 not
+    # finished (their rows gone, seed 2's record half written)
+    (records / "dipole-1").rename(records / ".dipole-1.partial")
+    (records / "dipole-2").rename(records / ".dipole-2.partial")
+    shutil.rmtree(records / "dipole-3")
+    lines = (out / CSV_NAME).read_text().splitlines(keepends=True)
+    (out / CSV_NAME).write_text("".join(lines[:3]))
+    assert batch_main(["--task", "usb_c", "--out", str(out), *args, "--resume"]) == 0
+    assert sorted(p.name for p in records.iterdir()) == [f"dipole-{i}" for i in range(4)]
+    assert [int(r["seed"]) for r in _read_csv(out / CSV_NAME)] == [0, 1, 2, 3]
+    # seed 1's record is the first run's, kept: the trial was not run again
+    assert (records / "dipole-1" / "spec.txt").stat().st_mtime < (
+        (records / "dipole-2" / "spec.txt").stat().st_mtime
+    )
+
+
+def test_a_refused_resume_changes_nothing_and_damage_is_named(tmp_path, capsys):
+    out = tmp_path / "cmp"
+    args = ["--task", "usb_c", "--seeds", "0:4", "--controllers", "dipole,blind"]
+    args += ["--speeds", "0.01", "--out", str(out), "--trial-function", FAKE]
+    assert compare_main(args) == 0
+    dipole, blind = (out / "cells" / c / "0.01" for c in ("dipole", "blind"))
+    (dipole / CSV_NAME).write_text((dipole / CSV_NAME).read_text()[:-30])  # a half row
+    before = (dipole / CSV_NAME).read_text()
+    plan = json.loads((blind / "batch.json").read_text())
+    (blind / "batch.json").write_text(json.dumps({**plan, "requested": 9}))
+    assert compare_main([*args, "--resume"]) == 2
+    assert "was run with requested 9, not 4" in capsys.readouterr().err
+    assert (dipole / CSV_NAME).read_text() == before  # the first cell untouched
+    (blind / "batch.json").write_text(json.dumps(plan))
+    rows = (blind / CSV_NAME).read_text().splitlines(keepends=True)
+    (blind / CSV_NAME).write_text("".join([rows[0], rows[1], rows[1], *rows[2:]]))
+    assert compare_main([*args, "--resume"]) == 2
+    assert "seed 0 has two rows" in capsys.readouterr().err
+    (blind / CSV_NAME).write_text("".join([rows[0], rows[1][:40] + "\n", *rows[2:]]))
+    assert compare_main([*args, "--resume"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "row 1 is damaged" in err
+    (blind / CSV_NAME).unlink()  # stopped before its first row: the cell runs whole
+    assert compare_main([*args, "--resume"]) == 0
+    assert len(_read_csv(blind / CSV_NAME)) == 4 and len(_read_csv(dipole / CSV_NAME)) == 4
 
 
 # -- Ray -------------------------------------------------------------------------------------
