@@ -99,7 +99,7 @@ def check_resume_folder(path: Path, option: str = "--out") -> None:
     """Refuse to resume in ``path`` unless it is a folder (each batch in it is checked when
     the run starts: ``run_batches``)."""
     if not path.is_dir():
-        raise ToolError(f"{option} '{path}': no such folder to resume")
+        raise ToolError(f"{option} '{path}': not a folder holding a run to resume")
 
 
 class TrialLog:

@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 from core.config import ConfigError, parse_override
-from evaluation.common.cli_support import distinct, number_list, run_tool
+from evaluation.common.cli_support import ToolError, distinct, number_list, run_tool
 from evaluation.common.outputs import write_text
 from evaluation.trials.batch import Batch, run_batches
 from evaluation.trials.batch_cli import (
@@ -59,6 +59,7 @@ DEFAULT_SPEEDS = (0.002, 0.004, 0.008)
 SPEED_CHART = "speed_success.png"
 TABLE = "comparison.md"
 SUMMARIES = "comparison.json"
+CELLS = "cells"
 
 
 @dataclass(frozen=True)
@@ -70,7 +71,7 @@ class Cell:
 
     @property
     def folder(self) -> Path:
-        return Path("cells") / self.controller / f"{self.speed:g}"
+        return Path(CELLS) / self.controller / f"{self.speed:g}"
 
 
 def histogram_name(speed: float) -> str:
@@ -276,6 +277,11 @@ def _command(args: argparse.Namespace) -> str:
 
 
 def _run(args: argparse.Namespace) -> int:
+    if not args.resume and (args.out / CELLS).is_dir():
+        raise ToolError(
+            f"--out '{args.out}' already holds a comparison ({CELLS}/); choose a new folder "
+            "(or remove it first, or continue it with --resume)"
+        )
     check_out(args)
     cells = grid(
         args.task,

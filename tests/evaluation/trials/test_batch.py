@@ -306,7 +306,7 @@ def test_a_resume_with_other_arguments_or_without_a_batch_is_refused(tmp_path, c
         assert message in capsys.readouterr().err
         assert (tmp_path / "out" / CSV_NAME).read_text() == before  # untouched
     assert run_cli(tmp_path, "--seeds", "0:4", "--resume", out="nothing") == 2
-    assert "no such folder to resume" in capsys.readouterr().err
+    assert "not a folder holding a run to resume" in capsys.readouterr().err
     (tmp_path / "empty").mkdir()
     assert run_cli(tmp_path, "--seeds", "0:4", "--resume", out="empty") == 2
     assert "holds no batch to resume" in capsys.readouterr().err
@@ -611,6 +611,8 @@ def test_compare_resumes_each_cell_and_rewrites_the_same_comparison(tmp_path, ca
     assert len(_read_csv(blind)) == 6
     assert compare_main([*args[:3], "0:7", *args[4:], "--resume"]) == 2
     assert "was run with requested 6, not 7" in capsys.readouterr().err
+    assert compare_main(args) == 2  # without --resume: refused, named
+    assert "already holds a comparison (cells/)" in capsys.readouterr().err
 
 
 def test_compare_refuses_the_speed_key_in_set(tmp_path, capsys):
