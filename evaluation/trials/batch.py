@@ -115,7 +115,7 @@ class TrialLog:
         self._sync()
 
     def write(self, result: TrialResult) -> None:
-        self._writer.writerow({k: _cell(v) for k, v in result.as_row().items()})
+        self._writer.writerow(_csv_row(result))
         self._sync()
 
     def _sync(self) -> None:
@@ -124,6 +124,11 @@ class TrialLog:
 
     def close(self) -> None:
         self._handle.close()
+
+
+def _csv_row(result: TrialResult) -> dict[str, Any]:
+    """``result`` as ``trials.csv`` writes it."""
+    return {k: _cell(v) for k, v in result.as_row().items()}
 
 
 def _cell(value: Any) -> Any:
@@ -175,9 +180,9 @@ def _rows(path: Path) -> list[dict[str, str]]:
     return rows
 
 
-def _finished(batch: Batch) -> list[TrialResult]:
-    """The trials of ``batch`` that finished before it stopped, read and checked for a
-    resume without changing anything (ToolError naming the problem)."""
+def _finished(batch: Batch) -> list[tuple[TrialResult, TrialSpec]]:
+    """The trials of ``batch`` that finished before it stopped, with their specs, read and
+    checked for a resume without changing anything (ToolError naming the problem)."""
     plan_path = batch.out_dir / PLAN_NAME
     if not plan_path.is_file():
         raise ToolError(f"--resume: '{batch.out_dir}' holds no batch to resume ({PLAN_NAME})")
@@ -192,7 +197,8 @@ def _finished(batch: Batch) -> list[TrialResult]:
     if len(by_seed) != len(batch.specs):
         raise ToolError(f"--resume: '{batch.out_dir}': a resumed batch needs one trial per seed")
     csv_path = batch.out_dir / CSV_NAME
-    results: list[TrialResult] = []
+    finished: list[tuple[TrialResult, TrialSpec]] = []
+    seen: set[int] = set()
     for row in _rows(csv_path):
         try:
             result = TrialResult.from_row(row)
@@ -204,33 +210,32 @@ def _finished(batch: Batch) -> list[TrialResult]:
                 f"--resume: '{csv_path}': seed {result.seed} ({result.task}, "
                 f"{result.controller}) is not one of this batch's trials"
             )
-        if any(r.seed == result.seed for r in results):
+        if result.seed in seen:
             raise ToolError(f"--resume: '{csv_path}': seed {result.seed} has two rows")
         record = spec.out_dir
         if record is not None and record.exists() and kept_record(record).exists():
             raise ToolError(f"--resume: '{record}': its trial's record exists twice")
-        results.append(result)
-    return results
+        seen.add(result.seed)
+        finished.append((result, spec))
+    return finished
 
 
-def _continued(batch: Batch, finished: list[TrialResult]) -> list[TrialSpec]:
+def _continued(batch: Batch, finished: list[tuple[TrialResult, TrialSpec]]) -> list[TrialSpec]:
     """Continue ``batch`` from its ``finished`` trials (``_finished``): they go into
     ``batch.results``, ``trials.csv`` is rewritten with them alone, their records kept
     (a kill between a row and its record's rename leaves it hidden) and the other hidden
     records removed. Returns the trials still to run."""
-    by_seed = {spec.seed: spec for spec in batch.specs}
     with atomic_file(batch.out_dir / CSV_NAME) as temporary:
         with open(temporary, "w", newline="") as handle:
             writer = csv.DictWriter(handle, fieldnames=CSV_COLUMNS)
             writer.writeheader()
-            writer.writerows({k: _cell(v) for k, v in r.as_row().items()} for r in finished)
-    for result in finished:
-        record = by_seed[result.seed].out_dir
-        if record is not None:
-            keep_record(record)
+            writer.writerows(_csv_row(result) for result, _ in finished)
+    for _, spec in finished:
+        if spec.out_dir is not None:
+            keep_record(spec.out_dir)
     discard_unfinished_records(batch.out_dir / RECORDS)
-    batch.results.extend(finished)
-    done = {r.seed for r in finished}
+    batch.results.extend(result for result, _ in finished)
+    done = {spec.seed for _, spec in finished}
     return [spec for spec in batch.specs if spec.seed not in done]
 
 

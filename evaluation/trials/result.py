@@ -73,8 +73,10 @@ class TrialResult:
         values: dict[str, Any] = {}
         for name in (f.name for f in fields(cls)):
             text = row[name]
-            if name in _TEXT_FIELDS:
-                values[name] = text or None if name == "failure_reason" else text
+            if name == "failure_reason":
+                values[name] = text or None
+            elif name in _TEXT_FIELDS:
+                values[name] = text
             elif name in _INT_FIELDS:
                 values[name] = int(text)
             elif name == "success":
@@ -86,5 +88,5 @@ class TrialResult:
         return cls(**values)
 
 
-_TEXT_FIELDS = ("task", "controller", "status", "failure_reason")
+_TEXT_FIELDS = ("task", "controller", "status")
 _INT_FIELDS = ("seed", "insertion_force_violations")
