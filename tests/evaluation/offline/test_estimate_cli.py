@@ -581,12 +581,14 @@ def test_without_open_frames_the_tool_takes_the_contact_from_the_whole_recording
     whole recording and estimates it again about it, says so in one line and records the
     choice beside the CSV. A weak tilt alone never establishes a contact, and the no-contact
     gate would zero most of it: that recording is estimated without the gate, and since its
-    change is not clearly above the camera noise, on the whole grid (no support). With
+    change is not clearly above the camera noise, on the whole grid (no support) through the
+    paper's EMA. With
     --open the tool keeps the configuration and removes an old record."""
     from dataclasses import replace
 
     from evaluation.offline.estimate_cli import fallback_sidecar
     from evaluation.offline.recording_support import (
+        NOISE_EMA_ALPHA,
         SUPPORT_REASON,
         UNGATED_REASON,
         WHOLE_GRID_REASON,
@@ -617,9 +619,12 @@ def test_without_open_frames_the_tool_takes_the_contact_from_the_whole_recording
         divergences.append(first.field_divergence())
     field = first.field
     support = recording_support(divergences, field.x_mm, field.y_mm)
-    second = TactileEstimator(replace(config, noise_gate=None) if weak else config, profile)
+    if weak:  # at the noise: ungated, through the paper's EMA
+        config = replace(config, noise_gate=None, ema_alpha=NOISE_EMA_ALPHA)
+    second = TactileEstimator(config, profile)
     if weak:
         assert support is None and record["contact_support"] is None
+        assert record["ema_alpha"] == NOISE_EMA_ALPHA
     else:
         assert support is not None
         centre = record["contact_support"]["centre_mm"]
