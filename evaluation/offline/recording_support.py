@@ -164,8 +164,8 @@ def recording_fallback(
         return None
     if ungated:
         config = replace(config, noise_gate=None)
-    if support is None:
-        config = replace(config, ema_alpha=NOISE_EMA_ALPHA)
+    if support is None:  # at the noise: at least the paper's averaging over frames
+        config = replace(config, ema_alpha=min(config.ema_alpha, NOISE_EMA_ALPHA))
     estimator = TactileEstimator(
         config,
         first.profile,
@@ -184,7 +184,7 @@ def recording_fallback(
         reasons.append(SUPPORT_REASON)
     else:
         record["contact_support"] = None
-        record["ema_alpha"] = NOISE_EMA_ALPHA
+        record["ema_alpha"] = config.ema_alpha
         reasons.append(WHOLE_GRID_REASON)
     if ungated:
         record["noise_gate"] = None
