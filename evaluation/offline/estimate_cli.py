@@ -14,9 +14,10 @@ of the open gel (before the grasp, nothing touching), in the same form: the
 (without, the tool finds the contact's support from the whole recording, each cell's
 divergence power against its frame-to-frame noise (evaluation/offline/recording_support.py),
 estimates the recording again about it, or on the whole grid through the paper's EMA when no
-cell's divergence varies clearly more than the noise alone would, behind the no-contact gate unless that gate
-never saw a press from the open gel (the recording was zeroed in the grasp), says so in one line
-and records the choice in ``OUT.fallback.json``). The open frames must end before the
+cell's divergence varies clearly more than the noise alone would, behind the no-contact gate
+unless that gate never saw a press from the open gel (the recording was zeroed in the grasp),
+says so in one line and records the choice in ``OUT.fallback.json``). The open frames must
+end before the
 reference begins (overlapping or later ranges are refused); open frames that differ from
 each other or from the recording's first frame far beyond the camera noise are used with one
 warning (evaluation/offline/open_gel.py). ``--method`` names an
