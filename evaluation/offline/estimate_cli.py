@@ -17,11 +17,10 @@ estimates the recording again about it, or on the whole grid through the paper's
 cell's divergence varies clearly more than the noise alone would, behind the no-contact gate
 unless that gate never saw a press from the open gel (the recording was zeroed in the grasp),
 says so in one line and records the choice in ``OUT.fallback.json``). The open frames must
-end before the
-reference begins (overlapping or later ranges are refused); open frames that differ from
-each other or from the recording's first frame far beyond the camera noise are used with one
-warning (evaluation/offline/open_gel.py). ``--method`` names an
-estimator configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
+end before the reference begins (overlapping or later ranges are refused); open frames that
+differ from each other or from the recording's first frame far beyond the camera noise are
+used with one warning (evaluation/offline/open_gel.py). ``--method`` names an estimator
+configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
 
