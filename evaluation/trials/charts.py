@@ -1,13 +1,15 @@
 """Charts of trial batches (PNG, matplotlib's Agg canvas, written atomically).
 
 * ``speed_success_chart``: success rate against the insertion speed setting, one line per
-  controller, the 95% Wilson interval as error bars (the insertion speed/success chart);
+  controller, the 95% Wilson interval as error bars (the insertion speed/success chart); with
+  a single speed, one point per controller side by side;
 * ``success_time_chart``: the share of trials inserted within a time, against that time,
   one step curve per controller (success against time to insert).
 """
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -19,6 +21,7 @@ from evaluation.common.outputs import atomic_file
 
 DPI = 90
 DODGE = 0.012  # relative horizontal shift between controllers, so equal points stay visible
+TITLE_WIDTH = 75  # characters per title line: a longer title wraps rather than being cut off
 
 
 def _save(fig: Figure, path: Path) -> None:
@@ -40,15 +43,21 @@ def speed_success_chart(
 ) -> None:
     """``series``: controller -> [(speed setting, batch summary)]; each point is the
     summary's ``success_rate`` with its ``success_ci95`` as the error bar (the controllers'
-    points shifted apart by a hair, so that equal ones stay visible)."""
+    points shifted apart by a hair, so that equal ones stay visible). When every point is at
+    one speed the controllers stand side by side, named on the horizontal axis."""
     fig = Figure(figsize=(7.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     middle = (len(series) - 1) / 2
+    speeds_run = {s for points in series.values() for s, p in points if p.get("n")}
+    single = len(speeds_run) == 1
     for index, (controller, points) in enumerate(series.items()):
         ordered = sorted((s, p) for s, p in points if p.get("n"))
         if not ordered:
             continue
-        speeds = np.array([s for s, _ in ordered]) * (1 + DODGE * (index - middle))
+        if single:
+            speeds = np.full(len(ordered), float(index))
+        else:
+            speeds = np.array([s for s, _ in ordered]) * (1 + DODGE * (index - middle))
         rates = np.array([p["success_rate"] for _, p in ordered]) * 100
         lows = np.array([p["success_ci95"][0] for _, p in ordered]) * 100
         highs = np.array([p["success_ci95"][1] for _, p in ordered]) * 100
@@ -61,12 +70,18 @@ def speed_success_chart(
             linestyle="--" if controller == "oracle" else "-",
             label=controller_label(controller),
         )
-    ax.set_xlabel(speed_label)
+    if single:
+        ax.set_xticks(range(len(series)))
+        ax.set_xticklabels([controller_label(c) for c in series], rotation=20, ha="right")
+        ax.set_xlim(-0.5, len(series) - 0.5)
+        ax.set_xlabel(f"controller ({speed_label} = {next(iter(speeds_run)):g})")
+    else:
+        ax.set_xlabel(speed_label)
+        ax.legend(loc="lower left")
     ax.set_ylabel("success rate, % (95% Wilson interval)")
     ax.set_ylim(-2, 102)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="lower left")
-    ax.set_title(title, fontsize=10)
+    ax.set_title(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
     _save(fig, path)
 
 
@@ -109,5 +124,5 @@ def success_time_chart(
     ax.set_ylim(-2, 102)
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", fontsize=8)
-    ax.set_title(title, fontsize=10)
+    ax.set_title(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
     _save(fig, path)

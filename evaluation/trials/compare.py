@@ -11,7 +11,7 @@ overrides) on the same seeds; all the trials share one executor. OUT gets:
 
 * ``cells/<controller>/<speed>/{trials.csv,summary.json}``: one batch per grid cell;
 * ``speed_success.png``: success rate (95% Wilson interval) against the speed setting per
-  controller -- the insertion speed/success chart;
+  controller -- the insertion speed/success chart (with one speed: per controller);
 * ``time_to_insert_<speed>.png``: success against time to insert (the share of trials
   inserted within t, against t) per controller, one chart per speed setting;
 * ``comparison.md``: the table and charts as a section for docs/EVALUATION.md;
@@ -173,11 +173,9 @@ def write_comparison(
     series: dict[str, list[tuple[float, dict[str, Any]]]] = {}
     for cell, batch in cells.items():
         series.setdefault(cell.controller, []).append((cell.speed, batch.summary))
+    against = "per controller" if len({c.speed for c in cells}) == 1 else "against insertion speed"
     speed_success_chart(
-        series,
-        out / SPEED_CHART,
-        speed_key,
-        f"{task}: success against insertion speed, seeds {seeds}",
+        series, out / SPEED_CHART, speed_key, f"{task}: success {against}, seeds {seeds}"
     )
     for speed in sorted({c.speed for c in cells}):
         at_speed = {c.controller: b for c, b in cells.items() if c.speed == speed}
