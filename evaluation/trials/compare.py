@@ -173,11 +173,12 @@ def write_comparison(
     series: dict[str, list[tuple[float, dict[str, Any]]]] = {}
     for cell, batch in cells.items():
         series.setdefault(cell.controller, []).append((cell.speed, batch.summary))
-    against = "per controller" if len({c.speed for c in cells}) == 1 else "against insertion speed"
+    speeds = sorted({c.speed for c in cells})
+    against = "per controller" if len(speeds) == 1 else "against insertion speed"
     speed_success_chart(
         series, out / SPEED_CHART, speed_key, f"{task}: success {against}, seeds {seeds}"
     )
-    for speed in sorted({c.speed for c in cells}):
+    for speed in speeds:
         at_speed = {c.controller: b for c, b in cells.items() if c.speed == speed}
         times = {
             controller: [
