@@ -14,7 +14,8 @@ overrides) on the same seeds; all the trials share one executor. OUT gets:
   controller -- the insertion speed/success chart (with one speed: per controller);
 * ``time_to_insert_<speed>.png``: success against time to insert (the share of trials
   inserted within t, against t) per controller, one chart per speed setting;
-* ``comparison.md``: the table and charts as a section for docs/EVALUATION.md;
+* ``comparison.md``: the table, the product's targets judged at each speed
+  (evaluation/trials/targets.py) and the charts, as a section for docs/EVALUATION.md;
   ``comparison.json``: every cell's summary.
 
 The oracle controller reads the simulator's true wrench with the sensor's measured noise (a
@@ -53,6 +54,7 @@ from evaluation.trials.batch_cli import (
 from evaluation.trials.charts import controller_label, speed_success_chart, success_time_chart
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import SeedSpecs, format_seeds
+from evaluation.trials.targets import targets_markdown
 
 DEFAULT_SPEED_KEY = "machine.insert.speed_m_s"
 DEFAULT_SPEEDS = (0.002, 0.004, 0.008)
@@ -157,6 +159,9 @@ def comparison_markdown(
     incomplete = sum(not b.summary["complete"] for b in cells.values())
     if incomplete:
         lines += ["", f"**Incomplete:** {incomplete} cells were stopped before all their trials."]
+    for speed in sorted({c.speed for c in cells}):
+        at_speed = {c.controller: b.summary for c, b in cells.items() if c.speed == speed}
+        lines += ["", *targets_markdown(at_speed, f"{speed_key}={speed:g}")]
     lines += ["", f"![success against {speed_key}]({SPEED_CHART})", ""]
     for speed in sorted({c.speed for c in cells}):
         lines += [

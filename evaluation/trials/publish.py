@@ -52,7 +52,10 @@ HEADER = [
     "`zero_torque` and `torque_only` are the machine with the torques, or the forces, "
     "zeroed, `blind` has no tactile feedback. A trial fails when the plug's true contact "
     "force exceeds the connector's insertion-force specification (USB-C 20 N, USB-A 35 N; "
-    "sources in docs/SIMULATION.md, \"Contact-force limits\").",
+    "sources in docs/SIMULATION.md, \"Contact-force limits\"). Each task's section ends "
+    "with the product's targets judged on its trials (evaluation/trials/targets.py); the "
+    "commit and machine each report ran on, and when its seeds were named, are in "
+    "docs/BENCHMARKS.md, \"Insertion trials\".",
     "",
 ]
 

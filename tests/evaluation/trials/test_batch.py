@@ -584,7 +584,12 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     for name in ("speed_success.png", "time_to_insert_0.01.png", "time_to_insert_0.02.png"):
         assert (out / name).stat().st_size > 1000
     table = (out / "comparison.md").read_text()
-    assert table.count("\n| ") == 1 + 6  # header and one row per cell
+    results, targets = table.split("### Targets at", 1)
+    assert results.count("\n| ") == 1 + 6  # header and one row per cell
+    # the product's targets judged at each speed, a controller not in the grid not judged
+    assert targets.count("### Targets at") == 1  # the second speed's
+    assert "machine.insert.speed_m_s=0.01\n" in targets and "=0.02\n" in targets
+    assert "| `zero_torque` falls short of `dipole` | – | not run |" in targets
     assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
