@@ -180,6 +180,33 @@ def _rows(path: Path) -> list[dict[str, str]]:
     return rows
 
 
+def read_batch(folder: Path) -> tuple[dict[str, Any], list[TrialResult]]:
+    """A batch folder's plan (``batch.json``) and the results of its finished rows, for the
+    tools that read a batch after it ran; ToolError naming the file if either is missing or
+    not this version's."""
+    plan_path = folder / PLAN_NAME
+    if not plan_path.is_file():
+        raise ToolError(f"'{folder}' holds no {PLAN_NAME}; expected a batch's folder")
+    try:
+        plan = json.loads(plan_path.read_text())
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ToolError(f"'{plan_path}': not a batch plan ({one_line(exc)})") from None
+    if not isinstance(plan, dict) or not isinstance(plan.get("task"), str):
+        raise ToolError(f"'{plan_path}': not a batch plan (no task named)")
+    csv_path = folder / CSV_NAME
+    try:
+        rows = _rows(csv_path)
+    except UnicodeDecodeError:
+        raise ToolError(f"'{csv_path}': not UTF-8 text; expected a trials.csv") from None
+    results = []
+    for number, row in enumerate(rows, start=1):
+        try:
+            results.append(TrialResult.from_row(row))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ToolError(f"'{csv_path}': row {number} is bad ({one_line(exc)})") from None
+    return plan, results
+
+
 def _finished(batch: Batch) -> list[tuple[TrialResult, TrialSpec]]:
     """The trials of ``batch`` that finished before it stopped, with their specs, read and
     checked for a resume without changing anything (ToolError naming the problem)."""
