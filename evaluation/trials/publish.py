@@ -6,7 +6,7 @@ published before and not in OUT stay as they are. ``DOCS/TRIALS.md`` is then wri
 every ``DOCS/trials/<task>/comparison.md``, one section per task in name order, image paths
 made relative to DOCS: publishing one task never drops another. The page is the last section
 of DOCS/EVALUATION.md: ``make evaluate`` includes it, and publishing replaces that section of
-an existing report, so the report always shows the latest trials.
+an existing report (what follows it kept), so the report always shows the latest trials.
 
 Every input is read and checked before anything is replaced: each comparison (new or
 published) is UTF-8 text and every chart it links is a file in its folder; the report, if
@@ -39,6 +39,7 @@ PAGE = "TRIALS.md"
 REPORT = "EVALUATION.md"
 SECTION = "## 5. Insertion trials"
 TRIALS = "trials"
+HEADING = re.compile(r"#+ ")
 IMAGE_LINK = re.compile(r"(!\[[^\]]*\]\()([^)]*)(\))")
 HEADER = [
     "# Insertion trials",
@@ -145,14 +146,14 @@ def trials_page(comparisons: Mapping[str, Comparison]) -> str:
 
 def section_lines(page: str | None) -> list[str]:
     """The report's section on the insertion trials: the ``page`` (TRIALS.md) included as it
-    is, its headings one level down, or a line saying how to make it (None: not made yet)."""
+    is, its headings (every level) one level down, or a line saying how to make it (None: not made yet)."""
     lines = [SECTION, ""]
     if page is None:
         return lines + ["Not run yet: `make trials` writes docs/TRIALS.md, included here."]
     body = page.split("\n", 1)[1]  # without its title
     return lines + [
         "From docs/TRIALS.md (`make trials`, a separate run, which also refreshes this section):",
-        *("#" + line if line.startswith("## ") else line for line in body.splitlines()),
+        *("#" + line if HEADING.match(line) else line for line in body.splitlines()),
     ]
 
 
@@ -163,12 +164,15 @@ def trials_section(docs: Path) -> list[str]:
 
 
 def refreshed_report(report: str, page: str) -> str | None:
-    """The ``report`` (DOCS/EVALUATION.md) with its trials section (the last) replaced by
-    the ``page``'s; None when it has no such section (then it is left as it is)."""
+    """The ``report`` (DOCS/EVALUATION.md) with its trials section (up to the next section of
+    its level, or the end) replaced by the ``page``'s; what follows it is kept. None when it
+    has no such section (then it is left as it is)."""
     at = report.find("\n" + SECTION + "\n")
     if at < 0:
         return None
-    return report[: at + 1] + "\n".join(section_lines(page)) + "\n"
+    after = report.find("\n## ", at + len(SECTION) + 1)
+    rest = "" if after < 0 else "\n" + report[after + 1 :]
+    return report[: at + 1] + "\n".join(section_lines(page)) + "\n" + rest
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,6 +37,19 @@ def test_publish_writes_the_page_and_the_charts_and_refreshes_the_reports_sectio
     assert report.count(SECTION) == 1
 
 
+def test_a_section_after_the_trials_is_kept(tmp_path):
+    out, docs = tmp_path / "out", tmp_path / "docs"
+    _comparison(out, "usb_c")
+    docs.mkdir()
+    (docs / REPORT).write_text(REPORT_BEFORE + "\n## 6. Later\n\nhand-written\n")
+    publish(out, docs)
+    report = (docs / REPORT).read_text()
+    assert "old trials" not in report and "controllers compared (usb_c)" in report
+    assert report.endswith("\n\n## 6. Later\n\nhand-written\n")
+    publish(out, docs)  # a second publish changes nothing more
+    assert (docs / REPORT).read_text() == report
+
+
 def test_publish_leaves_a_report_without_the_section_and_creates_none(tmp_path):
     out, docs = tmp_path / "out", tmp_path / "docs"
     _comparison(out, "usb_a")
