@@ -146,7 +146,8 @@ def trials_page(comparisons: Mapping[str, Comparison]) -> str:
 
 def section_lines(page: str | None) -> list[str]:
     """The report's section on the insertion trials: the ``page`` (TRIALS.md) included as it
-    is, its headings (every level) one level down, or a line saying how to make it (None: not made yet)."""
+    is, its headings (every level) one level down, or a line saying how to make it (None:
+    not made yet)."""
     lines = [SECTION, ""]
     if page is None:
         return lines + ["Not run yet: `make trials` writes docs/TRIALS.md, included here."]

@@ -55,19 +55,30 @@ def _median(summary: Summary) -> str:
 
 
 def falls_short(other: Summary, product: Summary) -> tuple[bool, str]:
-    """Whether ``other`` falls short of ``product`` by the issue's rule, and how."""
+    """Whether ``other`` falls short of ``product`` by the issue's rule, and how the two
+    compare (the intervals, then the medians: a shorter one is said even when it falls
+    short)."""
     ci_other, ci_product = other["success_ci95"], product["success_ci95"]
     m_other, m_product = other["median_time_s"], product["median_time_s"]
-    if ci_other is not None and ci_product is not None and ci_other[1] < ci_product[0]:
-        if m_other is not None and m_product is not None and m_product >= SLOWER_FACTOR * m_other:
-            return True, (
-                f"the intervals do not overlap; yet its median is {m_product / m_other:.2f}x "
-                "shorter"
-            )
-        return True, "the intervals do not overlap"
-    if m_other is not None and m_product is not None and m_other >= SLOWER_FACTOR * m_product:
-        return True, f"median {m_other / m_product:.2f}x longer"
-    return False, "the intervals overlap and the median is less than 30% longer"
+    below = ci_other is not None and ci_product is not None and ci_other[1] < ci_product[0]
+    above = ci_other is not None and ci_product is not None and ci_other[0] > ci_product[1]
+    if below:
+        rates = "the intervals do not overlap"
+    elif above:
+        rates = "it does better: its interval lies above"
+    else:
+        rates = "the intervals overlap"
+    if m_other is None or m_product is None:
+        return below, rates
+    ratio = m_other / m_product
+    slower = ratio >= SLOWER_FACTOR
+    if slower:
+        medians = f"its median {ratio:.2f}x longer"
+    elif m_product >= SLOWER_FACTOR * m_other:
+        medians = f"its median {1 / ratio:.2f}x shorter"
+    else:
+        medians = "the medians within 30%"
+    return below or slower, f"{rates}; {medians}"
 
 
 def verdicts(summaries: Mapping[str, Summary]) -> list[Verdict]:

@@ -49,13 +49,25 @@ def test_the_products_own_targets_are_judged_with_their_margins():
 
 def test_falling_short_is_intervals_apart_or_a_median_30_percent_longer():
     product = _summary(150, 200, 10.0)
-    assert falls_short(_summary(10, 200, 10.0), product) == (True, "the intervals do not overlap")
+    assert falls_short(_summary(10, 200, 10.0), product) == (
+        True,
+        "the intervals do not overlap; the medians within 30%",
+    )
+    assert falls_short(_summary(0, 200, 10.0), product) == (True, "the intervals do not overlap")
     # overlapping intervals: only the median can decide
-    assert falls_short(_summary(145, 200, 13.0), product)[0] is True
+    assert falls_short(_summary(145, 200, 13.0), product) == (
+        True,
+        "the intervals overlap; its median 1.30x longer",
+    )
     assert falls_short(_summary(145, 200, 12.9), product)[0] is False
     # apart, but faster where it succeeds: said beside the verdict
     short, how = falls_short(_summary(100, 200, 5.0), product)
-    assert short and "2.00x shorter" in how
+    assert short and how.endswith("its median 2.00x shorter")
+    # better than the product: not short, and said so
+    assert falls_short(_summary(190, 200, 5.0), product) == (
+        False,
+        "it does better: its interval lies above; its median 2.00x shorter",
+    )
 
 
 def test_the_ablation_beside_is_reported_not_judged_and_the_oracle_within_its_interval():
