@@ -159,11 +159,12 @@ def comparison_markdown(
     incomplete = sum(not b.summary["complete"] for b in cells.values())
     if incomplete:
         lines += ["", f"**Incomplete:** {incomplete} cells were stopped before all their trials."]
-    for speed in sorted({c.speed for c in cells}):
+    speeds = sorted({c.speed for c in cells})
+    for speed in speeds:
         at_speed = {c.controller: b.summary for c, b in cells.items() if c.speed == speed}
         lines += ["", *targets_markdown(at_speed, f"{speed_key}={speed:g}")]
     lines += ["", f"![success against {speed_key}]({SPEED_CHART})", ""]
-    for speed in sorted({c.speed for c in cells}):
+    for speed in speeds:
         lines += [
             f"![success against time to insert at {speed_key}={speed:g}]({histogram_name(speed)})",
             "",
