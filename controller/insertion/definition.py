@@ -73,6 +73,7 @@ def _insertion_edges() -> tuple[Edge, ...]:
         Edge(Phase.ALIGN, Phase.INSERT, "aligned"),
         Edge(Phase.ALIGN, Phase.BACKOFF, "no_wall"),
         Edge(Phase.ALIGN, Phase.BACKOFF, "not_entered"),
+        Edge(Phase.ALIGN, Phase.BACKOFF, "align_timeout"),
         Edge(Phase.INSERT, Phase.BACKOFF, "jam"),
         Edge(Phase.INSERT, Phase.BACKOFF, "not_engaged"),
         Edge(Phase.INSERT, Phase.RELEASE, "depth_reached"),

@@ -252,9 +252,11 @@ class InsertionMachine:
         """FAILED for a timeout or an exceeded hard limit, else None."""
         timeouts = self.config.timeouts
         in_phase = obs.t_s - self._stage.entered_t_s
-        if self._autonomous_s > timeouts.total_s or in_phase > getattr(
-            timeouts, _TIMEOUT_KEYS[self._phase]
-        ):
+        if self._autonomous_s > timeouts.total_s:
+            return self._fail(obs, FailureReason.TIMEOUT)
+        if in_phase > getattr(timeouts, _TIMEOUT_KEYS[self._phase]):
+            if self._phase is Phase.ALIGN:  # a plug that would not align: lift, catch again
+                return self._back_off(obs, "align_timeout")
             return self._fail(obs, FailureReason.TIMEOUT)
         if self._phase in _HOLDING and self._limit_exceeded(obs):
             return self._fail(obs, FailureReason.LIMIT_EXCEEDED)
@@ -755,7 +757,7 @@ class InsertionMachine:
         if self._retries >= self.config.backoff.max_retries:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
-        self._search_again = guard in ("not_engaged", "no_wall", "not_entered")
+        self._search_again = guard in ("not_engaged", "no_wall", "not_entered", "align_timeout")
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 
