@@ -763,9 +763,14 @@ class InsertionMachine:
 
     def _backoff(self, obs: Observation, new: bool) -> Command:
         """Lift the tip straight up by the back-off distance, then ALIGN again (after a jam)
-        or APPROACH and SEARCH again (after a press that never engaged)."""
+        or APPROACH and SEARCH again (after a press that never engaged; then also until the
+        tip's lowest edge is the back-off distance above the surface found)."""
         settings = self.config.backoff
-        if obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.distance_m:
+        lifted = obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.distance_m
+        if lifted and self._search_again:
+            # SEARCH again from clear of the board: the tip's lowest edge above the surface
+            lifted = -self._depth(obs, rotation_from_rpy(obs.arm.tcp.rpy_rad)) >= settings.distance_m
+        if lifted:
             if self._search_again:
                 self._go(obs, Phase.APPROACH, "search_again")
             else:
