@@ -299,7 +299,9 @@ class InsertSettings(Config):
 @config_dataclass
 class BackoffSettings(Config):
     """BACKOFF: lift the tip ``distance_m`` at ``speed_m_s``, then ALIGN again (after a jam)
-    or APPROACH and SEARCH again (after a press that never engaged). More than
+    or APPROACH and SEARCH again (after a press that never engaged, a catch that was not the
+    opening or an ALIGN timeout; then only once the tip's lowest edge is also ``distance_m``
+    above the surface found). More than
     ``max_retries`` back-offs and re-grasps in one run: too many retries."""
 
     distance_m: float = number(1e-5, 0.02, default=0.001)
@@ -349,7 +351,8 @@ class Limits(Config):
 @config_dataclass
 class Timeouts(Config):
     """Longest time in each autonomous phase, and in all of them together (time under TELEOP
-    or ESTOP does not count): exceeded -> FAILED (timeout)."""
+    or ESTOP does not count): exceeded -> FAILED (timeout); ``align_s`` exceeded -> BACKOFF
+    (``align_timeout``) and SEARCH again, a retry."""
 
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)

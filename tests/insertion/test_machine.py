@@ -266,6 +266,29 @@ def test_search_timeout():
     assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(2.0, abs=0.02)
 
 
+def test_an_align_timeout_lifts_clear_of_the_surface_then_searches_again():
+    world = ToyWorld()
+    cfg = config(
+        timeouts=replace(Timeouts(), align_s=0.3),  # too short for any alignment
+        backoff=replace(BackoffSettings(), max_retries=1),
+    )
+    machine = make_machine(world, cfg)
+    world.run_until(machine, Phase.BACKOFF)
+    assert path(machine)[-1] == ("ALIGN", "BACKOFF", "align_timeout")
+    caught = world.observe()
+    assert machine._depth(caught, world.rotation) > 0.0  # the tip's edge in the opening
+    world.run_until(machine, Phase.APPROACH)
+    assert path(machine)[-1] == ("BACKOFF", "APPROACH", "search_again")
+    lifted = world.observe()
+    # lifted clear: the lowest edge the back-off distance above the surface found, which
+    # is more than the back-off distance for a tip that was below the surface
+    assert -machine._depth(lifted, world.rotation) >= cfg.backoff.distance_m
+    lift_m = lifted.arm.tcp.xyz_m[2] - caught.arm.tcp.xyz_m[2]
+    assert lift_m > cfg.backoff.distance_m + 0.5 * machine._depth(caught, world.rotation)
+    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED  # the next one: no retry left
+    assert path(machine)[-1] == ("ALIGN", "FAILED", "too_many_retries")
+
+
 @pytest.mark.parametrize("pattern", ["spiral", "raster"])
 def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
     world = ToyWorld(hole_offset_m=(0.02, 0.0), seed=5)
