@@ -769,7 +769,8 @@ class InsertionMachine:
         lifted = obs.arm.tcp.xyz_m[2] >= self._stage.z0_m + settings.distance_m
         if lifted and self._search_again:
             # SEARCH again from clear of the board: the tip's lowest edge above the surface
-            lifted = -self._depth(obs, rotation_from_rpy(obs.arm.tcp.rpy_rad)) >= settings.distance_m
+            rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+            lifted = -self._depth(obs, rotation) >= settings.distance_m
         if lifted:
             if self._search_again:
                 self._go(obs, Phase.APPROACH, "search_again")
