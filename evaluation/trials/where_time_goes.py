@@ -23,6 +23,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from itertools import pairwise
 from pathlib import Path
+from statistics import median
 
 from evaluation.common.cli_support import ToolError, number, run_tool
 from evaluation.trials.records import RECORDS
@@ -87,8 +88,7 @@ def tick_seconds(
     """Seconds per (phase, rule) from the ticks before ``until_s`` (each lasting until the
     next tick; the last one the median period)."""
     times = [t for t, _, _ in ticks]
-    periods = sorted(b - a for a, b in pairwise(times))
-    last = periods[len(periods) // 2] if periods else 0.0
+    last = median(b - a for a, b in pairwise(times)) if len(times) > 1 else 0.0
     seconds: defaultdict[tuple[str, str], float] = defaultdict(float)
     for i, (t_s, phase, rule) in enumerate(ticks):
         if t_s >= until_s:
