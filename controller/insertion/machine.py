@@ -138,6 +138,7 @@ class InsertionMachine:
         self._released = False
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
+        self._yaw_passes_from_m: float | None = None  # that length at SEARCH's first timeout
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
         self._surface_z: float | None = None  # the board surface's height found by touch (m)
         self._rule = ""  # the rule deciding this tick's command (Command.rule)
@@ -257,6 +258,10 @@ class InsertionMachine:
         if in_phase > getattr(timeouts, _TIMEOUT_KEYS[self._phase]):
             if self._phase is Phase.ALIGN:  # a plug that would not align: lift, catch again
                 return self._back_off(obs, "align_timeout")
+            if self._phase is Phase.SEARCH:  # no catch: search again, at other yaws
+                if self._yaw_passes_from_m is None:
+                    self._yaw_passes_from_m = self._search_s_m
+                return self._back_off(obs, "search_timeout")
             return self._fail(obs, FailureReason.TIMEOUT)
         if self._phase in _HOLDING and self._limit_exceeded(obs):
             return self._fail(obs, FailureReason.LIMIT_EXCEEDED)
@@ -380,9 +385,10 @@ class InsertionMachine:
         resume = self._planar(self._pattern.offset(self._search_s_m))
         target_tip = self._hole_xyz + resume + np.array([0.0, 0.0, settings.height_m])
         if stage.name == "":
-            target_tcp = target_tip - self._approach_rot.apply([0.0, 0.0, self.plug.length_m])
+            target_rot = self._search_rotation()
+            target_tcp = target_tip - target_rot.apply([0.0, 0.0, self.plug.length_m])
             error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
-            turn = rotation_error(rotation, self._approach_rot)
+            turn = rotation_error(rotation, target_rot)
             tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
             if tip_z < target_tip[2] - settings.pose_tol_m:
                 # the tip straight up to its height first, not turning (it may be in the
@@ -757,7 +763,9 @@ class InsertionMachine:
         if self._retries >= self.config.backoff.max_retries:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
-        self._search_again = guard in ("not_engaged", "no_wall", "not_entered", "align_timeout")
+        self._search_again = guard in (
+            "not_engaged", "no_wall", "not_entered", "align_timeout", "search_timeout"
+        )
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 
@@ -848,11 +856,21 @@ class InsertionMachine:
             w = w - min(0.0, float(w @ upright)) * upright
         return w
 
+    def _search_rotation(self) -> Rotation:
+        """The approach rotation, turned about B's z by the present pass's yaw once SEARCH
+        has run out of time (config.SearchSettings, ``retry_yaw_rad``)."""
+        start, length = self._yaw_passes_from_m, self._pattern.length_m
+        if start is None or length <= 0.0:
+            return self._approach_rot
+        passes = int((self._search_s_m - start) // length)
+        yaw = self.config.search.retry_yaw_rad * (1.0, -1.0, 0.0)[passes % 3]
+        return Rotation.from_euler("z", yaw) * self._approach_rot
+
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
-        """Angular velocity in B servoing the TCP to the approach rotation."""
+        """Angular velocity in B servoing the TCP to the search rotation."""
         settings = self.config.approach
         return clamp_norm(
-            settings.pose_gain_1_s * rotation_error(rotation, self._approach_rot),
+            settings.pose_gain_1_s * rotation_error(rotation, self._search_rotation()),
             settings.rotate_speed_rad_s,
         )
 

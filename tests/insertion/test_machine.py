@@ -258,12 +258,41 @@ def test_too_many_jams_fail_with_too_many_retries():
     assert path(machine)[-1] == ("INSERT", "FAILED", "too_many_retries")
 
 
-def test_search_timeout():
+def _yaw_from_approach(machine, world) -> float:
+    """The TCP's turn about B's z from the approach rotation (rad)."""
+    turn = world.rotation * machine._approach_rot.inv()
+    return float(turn.as_rotvec()[2])
+
+
+def test_a_search_out_of_time_searches_again_with_each_pass_at_another_yaw():
     world = ToyWorld(hole_offset_m=(0.02, 0.0))  # outside the searched square
-    machine = make_machine(world, config(timeouts=replace(Timeouts(), search_s=2.0)))
-    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
-    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(2.0, abs=0.02)
+    search = replace(SearchSettings(), uncertainty_xy_m=0.001)  # a short pattern
+    cfg = config(
+        search=search,
+        timeouts=replace(Timeouts(), search_s=6.0),
+        backoff=replace(BackoffSettings(), max_retries=2),
+    )
+    machine = make_machine(world, cfg)
+    length_s = SearchPattern("spiral", search.pitch_m, 0.001).length_m / search.speed_m_s
+    assert 1.5 < length_s < 2.5  # so each SEARCH after the first runs two passes and more
+    yaws = []  # (SEARCH's path length since its first timeout, m; yaw, rad) while dragging
+    while machine.phase is not Phase.FAILED and world.t_s < 60.0:
+        world.step(machine)
+        if machine.phase is Phase.SEARCH and machine._yaw_passes_from_m is None:
+            assert abs(_yaw_from_approach(machine, world)) < 1e-3  # the nominal yaw
+        elif machine.phase is Phase.SEARCH:
+            yaws.append((machine._search_s_m - machine._yaw_passes_from_m,
+                         _yaw_from_approach(machine, world)))
+    reasons = [r for _, _, r in path(machine)]
+    assert reasons.count("search_timeout") == 2  # each a retry, not a failure
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
+    length_m = length_s * search.speed_m_s
+    step = search.retry_yaw_rad
+    for k, expected in enumerate((step, -step, 0.0, step)):
+        # the yaw of the pass's second half: the servo has turned the plug by then
+        held = [y for s, y in yaws if (k + 0.5) * length_m < s < (k + 1) * length_m]
+        assert held, f"pass {k} not searched"
+        assert np.allclose(held, expected, atol=0.003), (k, min(held), max(held))
 
 
 def test_an_align_timeout_lifts_clear_of_the_surface_then_searches_again():
@@ -295,8 +324,9 @@ def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
     search = replace(SearchSettings(), pattern=pattern)
     cfg = config(search=search, timeouts=replace(Timeouts(), search_s=24.0))
     machine = make_machine(world, cfg)
-    world.run_until(machine, Phase.FAILED, max_s=60.0)
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
+    world.run_until(machine, Phase.BACKOFF, max_s=60.0)
+    assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")
+    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(24.0, abs=0.02)
     covered = SearchPattern(pattern, search.pitch_m, search.uncertainty_xy_m).length_m
     assert 24.0 * search.speed_m_s > covered  # the whole pattern was dragged
 
@@ -372,8 +402,8 @@ def test_losing_contact_then_touching_the_surface_again_drags_on():
     while machine.phase is Phase.SEARCH and machine._stage.name == "probe":
         world.step(machine)
     assert machine.phase is Phase.SEARCH and machine._stage.name == ""
-    world.run_until(machine, Phase.FAILED)
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")  # it searched on
+    world.run_until(machine, Phase.BACKOFF)
+    assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")  # it searched on
 
 
 def test_contact_lost_during_search():
