@@ -141,6 +141,8 @@ class InsertionMachine:
         self._yaw_passes_from_m: float | None = None  # that length at SEARCH's first timeout
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
         self._surface_z: float | None = None  # the board surface's height found by touch (m)
+        self._last_jam_z: float | None = None  # the lowest edge's height at the last jam (m)
+        self._rim_z: float | None = None  # ... at a jam no deeper than the one before it (m)
         self._rule = ""  # the rule deciding this tick's command (Command.rule)
 
     # -- the Machine protocol ------------------------------------------------------------
@@ -216,6 +218,8 @@ class InsertionMachine:
         self._fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target
         self._stage_or_none = _Stage.entered(obs)
+        if guard == "hole_found":  # a new catch: no jam there yet
+            self._last_jam_z = self._rim_z = None
         if target is Phase.RELEASE:
             self._released = True
 
@@ -635,8 +639,25 @@ class InsertionMachine:
 
     def _entered(self, obs: Observation, rotation: Rotation) -> bool:
         """True when the plug is in the opening: its tip face's lowest edge at least
-        ``align.enter_m`` below the surface (``_depth``)."""
-        return self._depth(obs, rotation) >= self.config.align.enter_m
+        ``align.enter_m`` below the surface (``_depth``), and as far below the rim it stood
+        on at repeated jams (``_note_jam``)."""
+        enter_m = self.config.align.enter_m
+        if self._depth(obs, rotation) < enter_m:
+            return False
+        return self._rim_z is None or (
+            self._rim_z - float(self._lowest_edge(obs, rotation)[2]) >= enter_m
+        )
+
+    def _note_jam(self, obs: Observation, rotation: Rotation) -> None:
+        """A jam no deeper (by ``align.enter_m``) than the jam before it at this catch: the
+        plug stands on the opening's rim, whatever the depth by touch says (that depth
+        assumes the nominal grasp; an unknown in-grasp tilt moves the lowest edge by up to
+        a millimetre). From then on the plug has entered only ``align.enter_m`` below where
+        it stood, so ALIGN's width and yaw stages and INSERT's press run again."""
+        edge_z = float(self._lowest_edge(obs, rotation)[2])
+        last, self._last_jam_z = self._last_jam_z, edge_z
+        if last is not None and edge_z > last - self.config.align.enter_m:
+            self._rim_z = edge_z
 
     def _depth(self, obs: Observation, rotation: Rotation) -> float:
         """How far the tip face's lowest edge is below the board surface found by touch (the
@@ -708,6 +729,7 @@ class InsertionMachine:
             stage.stall_z_m, stage.since_t_s = z_tcp, obs.t_s
         stalled = obs.t_s - stage.since_t_s >= settings.stall_s
         if stage.count >= settings.jam_frames or stalled:
+            self._note_jam(obs, rotation)
             return self._back_off(obs, "jam")
         self._fire("push")
         w = clamp_norm(
