@@ -628,7 +628,7 @@ class InsertionMachine:
         if stage.reversals >= 2 * settings.sweeps and (
             stage.yaw_sign * (yaw - stage.start_yaw_rad) >= 0.0
         ):
-            if self._depth(obs, rotation) >= 0.5 * self.config.align.enter_m:
+            if self._depth_in(obs, rotation) >= 0.5 * self.config.align.enter_m:
                 self._fire("entering")  # on its way in as the sweep ends: the servo
                 self._next_stage(obs, "servo")
                 return _hold()
@@ -638,15 +638,16 @@ class InsertionMachine:
         return self._tip_command(obs, np.array([0.0, 0.0, -self._press_rate()]), w)
 
     def _entered(self, obs: Observation, rotation: Rotation) -> bool:
-        """True when the plug is in the opening: its tip face's lowest edge at least
-        ``align.enter_m`` below the surface (``_depth``), and as far below the rim it stood
-        on at repeated jams (``_note_jam``)."""
-        enter_m = self.config.align.enter_m
-        if self._depth(obs, rotation) < enter_m:
-            return False
-        return self._rim_z is None or (
-            self._rim_z - float(self._lowest_edge(obs, rotation)[2]) >= enter_m
-        )
+        """True when the plug is in the opening: ``_depth_in`` at least ``align.enter_m``."""
+        return self._depth_in(obs, rotation) >= self.config.align.enter_m
+
+    def _depth_in(self, obs: Observation, rotation: Rotation) -> float:
+        """How far the plug is into the opening, m: ``_depth``, or less, how far its lowest
+        edge is below the rim it stood on at repeated jams (``_note_jam``)."""
+        depth = self._depth(obs, rotation)
+        if self._rim_z is None:
+            return depth
+        return min(depth, self._rim_z - float(self._lowest_edge(obs, rotation)[2]))
 
     def _note_jam(self, obs: Observation, rotation: Rotation) -> None:
         """A jam no deeper (by ``align.enter_m``) than the jam before it at this catch: the

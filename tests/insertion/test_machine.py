@@ -186,6 +186,26 @@ def test_a_plug_on_the_rim_sweeps_its_yaw_then_searches_again_and_succeeds():
     assert machine.retries >= 1
 
 
+def test_jams_at_one_height_mean_the_rim_whatever_the_depth_by_touch_says():
+    # the upright plug stands on the rim sunk 1.5 mm (one end in the opening): the depth by
+    # touch reads it entered, and every push jams there
+    world = ToyWorld(rim_blocks=1, rim_sink_m=0.0015)
+    machine = make_machine(world, toy_config())
+    world.run_until(machine, Phase.DONE, max_s=90.0)
+    reasons = [r for _, _, r in path(machine)]
+    first_jam = reasons.index("jam")
+    assert reasons[first_jam:first_jam + 3] == ["jam", "backed_off", "aligned"]
+    second_jam = reasons.index("jam", first_jam + 1)
+    assert "hole_found" not in reasons[first_jam:second_jam]  # both at the one catch
+    # after the second jam at that height the plug no longer counts as entered there: no
+    # third push; ALIGN's yaw stage finds it not over the opening, and it searches again
+    next_catch = reasons.index("hole_found", second_jam)
+    assert reasons[second_jam:next_catch] == [
+        "jam", "backed_off", "not_entered", "search_again", "surface_contact"
+    ]
+    assert machine.phase is Phase.DONE
+
+
 def test_the_walls_holding_the_yaw_end_the_sweep_early_in_the_servo():
     world = ToyWorld(rim_blocks=1, held_yaw_twist=0.01)
     cfg = toy_config()
