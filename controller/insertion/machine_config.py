@@ -211,7 +211,11 @@ class AlignSettings(Config):
     when the tilt of T z from straight down is within ``tilt_tol_rad`` (the arm's upright,
     which is the plug's only for a nominal grasp). If the tip face's lowest edge is then
     ``enter_m`` below the surface found by touch, the plug is in the opening (the servo
-    stage); otherwise the *width* stage first, then the *yaw* stage.
+    stage); otherwise the *width* stage first, then the *yaw* stage. That depth assumes the
+    nominal grasp: a plug standing on the rim with one end in the opening can read
+    entered. So after two jams at one height at a catch (INSERT's push; the second no
+    deeper by ``enter_m``) the plug is in the opening only ``enter_m`` below where it
+    jammed, too.
 
     *Width*: an in-grasp tilt about T y leaves one end of the plug's tip low: that corner
     catches in the opening with the plug's centre off toward the other end, and the
