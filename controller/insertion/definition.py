@@ -70,6 +70,7 @@ def _insertion_edges() -> tuple[Edge, ...]:
         Edge(Phase.GRASP, Phase.APPROACH, "grasped_and_zeroed"),
         Edge(Phase.APPROACH, Phase.SEARCH, "surface_contact"),
         Edge(Phase.SEARCH, Phase.ALIGN, "hole_found"),
+        Edge(Phase.SEARCH, Phase.BACKOFF, "search_timeout"),
         Edge(Phase.ALIGN, Phase.INSERT, "aligned"),
         Edge(Phase.ALIGN, Phase.BACKOFF, "no_wall"),
         Edge(Phase.ALIGN, Phase.BACKOFF, "not_entered"),

@@ -138,8 +138,11 @@ class InsertionMachine:
         self._released = False
         self._preload = config.approach.contact_sigma  # SEARCH's axial load (noise units)
         self._search_s_m = 0.0  # SEARCH's path length so far (kept when searching again)
+        self._yaw_passes_from_m: float | None = None  # that length at SEARCH's first timeout
         self._search_again = False  # BACKOFF: a press that never engaged ends in APPROACH
         self._surface_z: float | None = None  # the board surface's height found by touch (m)
+        self._last_jam_z: float | None = None  # the lowest edge's height at the last jam (m)
+        self._rim_z: float | None = None  # ... at a jam no deeper than the one before it (m)
         self._rule = ""  # the rule deciding this tick's command (Command.rule)
 
     # -- the Machine protocol ------------------------------------------------------------
@@ -215,6 +218,8 @@ class InsertionMachine:
         self._fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target
         self._stage_or_none = _Stage.entered(obs)
+        if guard == "hole_found":  # a new catch: no jam there yet
+            self._last_jam_z = self._rim_z = None
         if target is Phase.RELEASE:
             self._released = True
 
@@ -257,6 +262,10 @@ class InsertionMachine:
         if in_phase > getattr(timeouts, _TIMEOUT_KEYS[self._phase]):
             if self._phase is Phase.ALIGN:  # a plug that would not align: lift, catch again
                 return self._back_off(obs, "align_timeout")
+            if self._phase is Phase.SEARCH:  # no catch: search again, at other yaws
+                if self._yaw_passes_from_m is None:
+                    self._yaw_passes_from_m = self._search_s_m
+                return self._back_off(obs, "search_timeout")
             return self._fail(obs, FailureReason.TIMEOUT)
         if self._phase in _HOLDING and self._limit_exceeded(obs):
             return self._fail(obs, FailureReason.LIMIT_EXCEEDED)
@@ -380,9 +389,10 @@ class InsertionMachine:
         resume = self._planar(self._pattern.offset(self._search_s_m))
         target_tip = self._hole_xyz + resume + np.array([0.0, 0.0, settings.height_m])
         if stage.name == "":
-            target_tcp = target_tip - self._approach_rot.apply([0.0, 0.0, self.plug.length_m])
+            target_rot = self._search_rotation()
+            target_tcp = target_tip - target_rot.apply([0.0, 0.0, self.plug.length_m])
             error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
-            turn = rotation_error(rotation, self._approach_rot)
+            turn = rotation_error(rotation, target_rot)
             tip_z = tip_position(obs.arm.tcp, self.plug.length_m)[2]
             if tip_z < target_tip[2] - settings.pose_tol_m:
                 # the tip straight up to its height first, not turning (it may be in the
@@ -618,7 +628,7 @@ class InsertionMachine:
         if stage.reversals >= 2 * settings.sweeps and (
             stage.yaw_sign * (yaw - stage.start_yaw_rad) >= 0.0
         ):
-            if self._depth(obs, rotation) >= 0.5 * self.config.align.enter_m:
+            if self._depth_in(obs, rotation) >= 0.5 * self.config.align.enter_m:
                 self._fire("entering")  # on its way in as the sweep ends: the servo
                 self._next_stage(obs, "servo")
                 return _hold()
@@ -628,9 +638,27 @@ class InsertionMachine:
         return self._tip_command(obs, np.array([0.0, 0.0, -self._press_rate()]), w)
 
     def _entered(self, obs: Observation, rotation: Rotation) -> bool:
-        """True when the plug is in the opening: its tip face's lowest edge at least
-        ``align.enter_m`` below the surface (``_depth``)."""
-        return self._depth(obs, rotation) >= self.config.align.enter_m
+        """True when the plug is in the opening: ``_depth_in`` at least ``align.enter_m``."""
+        return self._depth_in(obs, rotation) >= self.config.align.enter_m
+
+    def _depth_in(self, obs: Observation, rotation: Rotation) -> float:
+        """How far the plug is into the opening, m: ``_depth``, or less, how far its lowest
+        edge is below the rim it stood on at repeated jams (``_note_jam``)."""
+        depth = self._depth(obs, rotation)
+        if self._rim_z is None:
+            return depth
+        return min(depth, self._rim_z - float(self._lowest_edge(obs, rotation)[2]))
+
+    def _note_jam(self, obs: Observation, rotation: Rotation) -> None:
+        """A jam no deeper (by ``align.enter_m``) than the jam before it at this catch: the
+        plug stands on the opening's rim, whatever the depth by touch says (that depth
+        assumes the nominal grasp; an unknown in-grasp tilt moves the lowest edge by up to
+        a millimetre). From then on the plug has entered only ``align.enter_m`` below where
+        it stood, so ALIGN's width and yaw stages and INSERT's press run again."""
+        edge_z = float(self._lowest_edge(obs, rotation)[2])
+        last, self._last_jam_z = self._last_jam_z, edge_z
+        if last is not None and edge_z > last - self.config.align.enter_m:
+            self._rim_z = edge_z
 
     def _depth(self, obs: Observation, rotation: Rotation) -> float:
         """How far the tip face's lowest edge is below the board surface found by touch (the
@@ -702,6 +730,7 @@ class InsertionMachine:
             stage.stall_z_m, stage.since_t_s = z_tcp, obs.t_s
         stalled = obs.t_s - stage.since_t_s >= settings.stall_s
         if stage.count >= settings.jam_frames or stalled:
+            self._note_jam(obs, rotation)
             return self._back_off(obs, "jam")
         self._fire("push")
         w = clamp_norm(
@@ -757,7 +786,9 @@ class InsertionMachine:
         if self._retries >= self.config.backoff.max_retries:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
-        self._search_again = guard in ("not_engaged", "no_wall", "not_entered", "align_timeout")
+        self._search_again = guard in (
+            "not_engaged", "no_wall", "not_entered", "align_timeout", "search_timeout"
+        )
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
 
@@ -848,11 +879,21 @@ class InsertionMachine:
             w = w - min(0.0, float(w @ upright)) * upright
         return w
 
+    def _search_rotation(self) -> Rotation:
+        """The approach rotation, turned about B's z by the present pass's yaw once SEARCH
+        has run out of time (config.SearchSettings, ``retry_yaw_rad``)."""
+        start, length = self._yaw_passes_from_m, self._pattern.length_m
+        if start is None or length <= 0.0:
+            return self._approach_rot
+        passes = int((self._search_s_m - start) // length)
+        yaw = self.config.search.retry_yaw_rad * (1.0, -1.0, 0.0)[passes % 3]
+        return Rotation.from_euler("z", yaw) * self._approach_rot
+
     def _hold_rotation(self, rotation: Rotation) -> np.ndarray:
-        """Angular velocity in B servoing the TCP to the approach rotation."""
+        """Angular velocity in B servoing the TCP to the search rotation."""
         settings = self.config.approach
         return clamp_norm(
-            settings.pose_gain_1_s * rotation_error(rotation, self._approach_rot),
+            settings.pose_gain_1_s * rotation_error(rotation, self._search_rotation()),
             settings.rotate_speed_rad_s,
         )
 

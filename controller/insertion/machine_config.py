@@ -163,7 +163,13 @@ class SearchSettings(Config):
     ``reference_alpha`` while the load is not dropping. ``hole_drop_ratio`` 0 turns the rule
     off.
     ``in_hole_depth_m``: a tip in contact this far below the board surface is in the opening
-    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH)."""
+    (used when autonomy resumes after TELEOP or ESTOP: ALIGN rather than SEARCH).
+    Out of time (``timeouts.search_s``) without finding the hole: BACKOFF and SEARCH again
+    (``search_timeout``, a retry), and from then on each pass of the pattern (its whole
+    length, out or back) turns the plug about B's z by the next of +``retry_yaw_rad``,
+    -``retry_yaw_rad`` and 0 from the approach's yaw: a tilted plug's long leading edge
+    drops into the opening only when it lies within the opening's width, so a search that
+    never caught at the nominal yaw is not repeated at it."""
 
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-4, 0.01, default=0.0008)
@@ -181,6 +187,7 @@ class SearchSettings(Config):
     contact_lost_sigma: float = number(0.0, 1e4, default=3.0)
     contact_lost_frames: int = number(1, 1000, default=15)
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
+    retry_yaw_rad: float = number(0.0, 0.5, default=0.035)
 
 
 @config_dataclass
@@ -204,7 +211,11 @@ class AlignSettings(Config):
     when the tilt of T z from straight down is within ``tilt_tol_rad`` (the arm's upright,
     which is the plug's only for a nominal grasp). If the tip face's lowest edge is then
     ``enter_m`` below the surface found by touch, the plug is in the opening (the servo
-    stage); otherwise the *width* stage first, then the *yaw* stage.
+    stage); otherwise the *width* stage first, then the *yaw* stage. That depth assumes the
+    nominal grasp: a plug standing on the rim with one end in the opening can read
+    entered. So after two jams at one height at a catch (INSERT's push; the second no
+    deeper by ``enter_m``) the plug is in the opening only ``enter_m`` below where it
+    jammed, too.
 
     *Width*: an in-grasp tilt about T y leaves one end of the plug's tip low: that corner
     catches in the opening with the plug's centre off toward the other end, and the
@@ -351,8 +362,9 @@ class Limits(Config):
 @config_dataclass
 class Timeouts(Config):
     """Longest time in each autonomous phase, and in all of them together (time under TELEOP
-    or ESTOP does not count): exceeded -> FAILED (timeout); ``align_s`` exceeded -> BACKOFF
-    (``align_timeout``) and SEARCH again, a retry."""
+    or ESTOP does not count): exceeded -> FAILED (timeout); ``align_s`` or ``search_s``
+    exceeded -> BACKOFF (``align_timeout``, ``search_timeout``) and SEARCH again, a retry
+    (SearchSettings: a search retried for time turns its passes to other yaws)."""
 
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)

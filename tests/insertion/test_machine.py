@@ -186,6 +186,26 @@ def test_a_plug_on_the_rim_sweeps_its_yaw_then_searches_again_and_succeeds():
     assert machine.retries >= 1
 
 
+def test_jams_at_one_height_mean_the_rim_whatever_the_depth_by_touch_says():
+    # the upright plug stands on the rim sunk 1.5 mm (one end in the opening): the depth by
+    # touch reads it entered, and every push jams there
+    world = ToyWorld(rim_blocks=1, rim_sink_m=0.0015)
+    machine = make_machine(world, toy_config())
+    world.run_until(machine, Phase.DONE, max_s=90.0)
+    reasons = [r for _, _, r in path(machine)]
+    first_jam = reasons.index("jam")
+    assert reasons[first_jam:first_jam + 3] == ["jam", "backed_off", "aligned"]
+    second_jam = reasons.index("jam", first_jam + 1)
+    assert "hole_found" not in reasons[first_jam:second_jam]  # both at the one catch
+    # after the second jam at that height the plug no longer counts as entered there: no
+    # third push; ALIGN's yaw stage finds it not over the opening, and it searches again
+    next_catch = reasons.index("hole_found", second_jam)
+    assert reasons[second_jam:next_catch] == [
+        "jam", "backed_off", "not_entered", "search_again", "surface_contact"
+    ]
+    assert machine.phase is Phase.DONE
+
+
 def test_the_walls_holding_the_yaw_end_the_sweep_early_in_the_servo():
     world = ToyWorld(rim_blocks=1, held_yaw_twist=0.01)
     cfg = toy_config()
@@ -251,19 +271,48 @@ def test_the_force_budget_counts_as_a_jam():
 
 def test_too_many_jams_fail_with_too_many_retries():
     world = ToyWorld(jam_depth_m=0.002, jams=100)
-    machine = make_machine(world, config(backoff=replace(BackoffSettings(), max_retries=2)))
+    machine = make_machine(world, config(backoff=replace(BackoffSettings(), max_retries=1)))
     assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
     reasons = [r for _, _, r in path(machine)]
-    assert reasons.count("jam") == 2
+    assert reasons.count("jam") == 1  # the second: no retry left
     assert path(machine)[-1] == ("INSERT", "FAILED", "too_many_retries")
 
 
-def test_search_timeout():
+def _yaw_from_approach(machine, world) -> float:
+    """The TCP's turn about B's z from the approach rotation (rad)."""
+    turn = world.rotation * machine._approach_rot.inv()
+    return float(turn.as_rotvec()[2])
+
+
+def test_a_search_out_of_time_searches_again_with_each_pass_at_another_yaw():
     world = ToyWorld(hole_offset_m=(0.02, 0.0))  # outside the searched square
-    machine = make_machine(world, config(timeouts=replace(Timeouts(), search_s=2.0)))
-    assert world.run_until(machine, Phase.FAILED) is Phase.FAILED
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
-    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(2.0, abs=0.02)
+    search = replace(SearchSettings(), uncertainty_xy_m=0.001)  # a short pattern
+    cfg = config(
+        search=search,
+        timeouts=replace(Timeouts(), search_s=6.0),
+        backoff=replace(BackoffSettings(), max_retries=2),
+    )
+    machine = make_machine(world, cfg)
+    length_s = SearchPattern("spiral", search.pitch_m, 0.001).length_m / search.speed_m_s
+    assert 1.5 < length_s < 2.5  # so each SEARCH after the first runs two passes and more
+    yaws = []  # (SEARCH's path length since its first timeout, m; yaw, rad) while dragging
+    while machine.phase is not Phase.FAILED and world.t_s < 60.0:
+        world.step(machine)
+        if machine.phase is Phase.SEARCH and machine._yaw_passes_from_m is None:
+            assert abs(_yaw_from_approach(machine, world)) < 1e-3  # the nominal yaw
+        elif machine.phase is Phase.SEARCH:
+            yaws.append((machine._search_s_m - machine._yaw_passes_from_m,
+                         _yaw_from_approach(machine, world)))
+    reasons = [r for _, _, r in path(machine)]
+    assert reasons.count("search_timeout") == 2  # each a retry, not a failure
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
+    length_m = length_s * search.speed_m_s
+    step = search.retry_yaw_rad
+    for k, expected in enumerate((step, -step, 0.0, step)):
+        # the yaw of the pass's second half: the servo has turned the plug by then
+        held = [y for s, y in yaws if (k + 0.5) * length_m < s < (k + 1) * length_m]
+        assert held, f"pass {k} not searched"
+        assert np.allclose(held, expected, atol=0.003), (k, min(held), max(held))
 
 
 def test_an_align_timeout_lifts_clear_of_the_surface_then_searches_again():
@@ -295,8 +344,9 @@ def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
     search = replace(SearchSettings(), pattern=pattern)
     cfg = config(search=search, timeouts=replace(Timeouts(), search_s=24.0))
     machine = make_machine(world, cfg)
-    world.run_until(machine, Phase.FAILED, max_s=60.0)
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")
+    world.run_until(machine, Phase.BACKOFF, max_s=60.0)
+    assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")
+    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(24.0, abs=0.02)
     covered = SearchPattern(pattern, search.pitch_m, search.uncertainty_xy_m).length_m
     assert 24.0 * search.speed_m_s > covered  # the whole pattern was dragged
 
@@ -372,8 +422,8 @@ def test_losing_contact_then_touching_the_surface_again_drags_on():
     while machine.phase is Phase.SEARCH and machine._stage.name == "probe":
         world.step(machine)
     assert machine.phase is Phase.SEARCH and machine._stage.name == ""
-    world.run_until(machine, Phase.FAILED)
-    assert path(machine)[-1] == ("SEARCH", "FAILED", "timeout")  # it searched on
+    world.run_until(machine, Phase.BACKOFF)
+    assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")  # it searched on
 
 
 def test_contact_lost_during_search():

@@ -77,6 +77,9 @@ class ToyWorld:
     # torque about the plug's axis while it stands on the rim (estimate units): the slot's
     # long walls holding its yaw where the depth by touch reads it short of entered
     held_yaw_twist: float = 0.0
+    # how far below the surface the plug standing on the rim sinks (one end of its leading
+    # edge in the opening): the depth by touch then reads it entered
+    rim_sink_m: float = 0.0
     noise: float = 0.0003
     frame_every: int = 2  # ticks per new tactile estimate
     zeroing_frames: int = 3
@@ -197,7 +200,8 @@ class ToyWorld:
                 elif tip[2] < surface - 0.001:
                     force_t[2] = self.slide_load  # the walls' friction on a plug pushed in
             else:
-                axial = self.k_board * (surface - tip[2])
+                support = surface - (self.rim_sink_m if self.on_rim else 0.0)
+                axial = self.k_board * max(0.0, support - tip[2])
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
         if self.on_rim:
