@@ -346,7 +346,8 @@ def test_friction_alone_never_reads_as_the_hole_over_a_whole_pattern(pattern):
     machine = make_machine(world, cfg)
     world.run_until(machine, Phase.BACKOFF, max_s=60.0)
     assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")
-    assert machine.transitions[-1].t_s - machine.transitions[-2].t_s == pytest.approx(24.0, abs=0.02)
+    searched_s = machine.transitions[-1].t_s - machine.transitions[-2].t_s
+    assert searched_s == pytest.approx(24.0, abs=0.02)
     covered = SearchPattern(pattern, search.pitch_m, search.uncertainty_xy_m).length_m
     assert 24.0 * search.speed_m_s > covered  # the whole pattern was dragged
 
