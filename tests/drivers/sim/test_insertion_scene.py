@@ -251,6 +251,32 @@ def test_a_released_plug_rests_with_its_weight_as_the_arm_retracts():
     assert arrays["contact_force_n"][after] == pytest.approx(weight, rel=0.05)
 
 
+@pytest.mark.parametrize("opening", ("loosen", "release"))
+def test_fingers_opened_a_little_keep_a_pressed_plug_square_between_them(opening):
+    section = task("usb_c")
+    plug = section.plug
+    truth = TruthLog(HOLE, HOLE)
+    tilt = (0.26, 0.0, 0.0)  # 15 degrees about T x: the tip's edge on the board, 5 mm off
+
+    def pose(height):
+        return tilted_pose(HOLE, plug.length_m, (0.0, 0.005, height), tilt)
+
+    physics = InsertionPhysics(section.scene, plug, HOLE, pose(0.001), 0.0, truth)
+    for k in range(1, 51):  # pressed 2 mm into the wrist
+        physics.step_to(0.01 * k, 0.01 * k, pose(0.001 - 0.003 * k / 50))
+    def out_of_plane_rad():  # the plug's turn in the fingers about x_S and y_S
+        return float(np.hypot(*physics.data.qpos[physics._gel_q[3:5]]))
+
+    held = out_of_plane_rad()
+    getattr(physics, opening)()
+    physics.step_to(0.8, 0.8, pose(-0.002))  # 0.3 s open, as a re-grasp's
+    turned = abs(out_of_plane_rad() - held)
+    if opening == "loosen":
+        assert turned < math.radians(0.5)  # the pads hold it square
+    else:
+        assert turned > math.radians(5.0)  # let go: it turns on the board (what a re-grasp did)
+
+
 @pytest.mark.parametrize("friction", (0.0, 2.0))
 def test_the_extremes_of_friction_stay_stable(friction):
     truth, depth = lower("usb_c", 0.0, (0.05, 0.05, 0.0), friction=friction)

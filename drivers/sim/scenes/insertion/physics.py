@@ -36,6 +36,7 @@ from drivers.sim.scenes.insertion.truth import TRUTH_WIDTH, TruthLog
 RING_S = 1.0  # how far back the grasp's wrench is kept, s
 _WRIST = ("wrist_x", "wrist_y", "wrist_z", "wrist_rx", "wrist_ry", "wrist_rz")
 _GEL = ("gel_x", "gel_y", "gel_z", "gel_rx", "gel_ry", "gel_rz")
+_IN_PAD_PLANE = [0, 1, 5]  # gel_x, gel_y, gel_rz: slides along x_S, y_S and the turn about z_S
 _BAD_STATE = (
     mujoco.mjtWarning.mjWARN_BADQPOS,
     mujoco.mjtWarning.mjWARN_BADQVEL,
@@ -107,6 +108,7 @@ class InsertionPhysics:
             # the step loop reads them as views bound once (an index array would be a copy)
             raise AssertionError("mjcf: the gel's slide joints must be consecutive")
         self.released = False
+        self.loose = False  # the fingers slightly open: the pads bound the plug (``loosen``)
         self._pos = np.array(start_pose.xyz_m, float)
         self._quat = quat_wxyz_from_pose(start_pose)
         self.data.mocap_pos[0] = self._pos
@@ -214,6 +216,19 @@ class InsertionPhysics:
         self.model.dof_damping[self._gel_v] = _RELEASED_DAMPING
         self.released = True
 
+    def loosen(self) -> None:
+        """The fingers open a little (a re-grasp): the plug is free in the pads' plane (it
+        slides along x_S and y_S and turns about z_S), while the pads, a fraction of a
+        millimetre off its faces, still hold it square to them and between them (the scene
+        has no finger geometry: freeing every joint let a re-grasped plug turn 80 degrees
+        out of the pads' plane before they closed again)."""
+        if self.released or self.loose:
+            return
+        free_j, free_v = self._gel_j[_IN_PAD_PLANE], self._gel_v[_IN_PAD_PLANE]
+        self.model.jnt_stiffness[free_j] = 0.0
+        self.model.dof_damping[free_v] = _RELEASED_DAMPING
+        self.loose = True
+
     def _leave_plug(self, tcp_xyz: np.ndarray) -> None:
         """Keep a released plug where it is as the TCP moves: MuJoCo moves a mocap body by
         setting its position, which carries its children along without a velocity, so the
@@ -228,12 +243,12 @@ class InsertionPhysics:
 
     def grasp(self) -> None:
         """The fingers close on the plug where it is: the gel spring's rest is its pose."""
-        if not self.released:
+        if not (self.released or self.loose):
             return
         self.model.qpos_spring[self._gel_q] = self.data.qpos[self._gel_q]
         self.model.jnt_stiffness[self._gel_j] = self._gel_stiffness
         self.model.dof_damping[self._gel_v] = self._gel_damping
-        self.released = False
+        self.released = self.loose = False
 
     # ----------------------------------------------------------------- truth
 

@@ -10,7 +10,10 @@ The grasp follows the gripper twin's status (read at each sync): while the finge
 the plug (``GripperStatus.holding``) the gel spring holds it, squeezed with the gripper's
 ``commanded_force_n`` (``grip_force_n``). Once the fingers open wider than the plug after
 having held it, the spring lets go (the plug is free: it stays in the receptacle, or falls);
-closing on it again grasps it where it is. Before the first grasp the plug sits between the
+opened by at most ``PADS_BOUND_GAP_M`` beyond the plug (a re-grasp), it is free only in
+the pads' plane (``InsertionPhysics.loosen``: in that gap it could tilt out of the plane by
+a few degrees at most, which the scene neglects); closing on it again grasps it where it
+is. Before the first grasp the plug sits between the
 fingers in the spring, unsqueezed (grip force 0, no tactile contact): the scene starts with
 the plug placed there.
 """
@@ -22,6 +25,10 @@ from core.errors import DeviceError
 from drivers.sim.scenes.insertion.physics import InsertionPhysics
 from drivers.sim.twins.arm import SimArm
 from drivers.sim.twins.gripper import SimGripper
+
+PADS_BOUND_GAP_M = 0.001
+"""Fingers open by at most this beyond the plug's thickness still hold it square between
+them, m: a 20 mm plug could tilt out of their plane by 3 degrees at most."""
 
 
 class InsertionWorld:
@@ -71,5 +78,7 @@ class InsertionWorld:
             self.grip_force_n = self._gripper.commanded_force_n
             return
         self.grip_force_n = 0.0
-        if self._held and status.width_m > self._thickness_m:
+        if self._held and status.width_m > self._thickness_m + PADS_BOUND_GAP_M:
             self.physics.release()
+        elif self._held and status.width_m > self._thickness_m:
+            self.physics.loosen()
