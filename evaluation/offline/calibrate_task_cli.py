@@ -32,7 +32,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="calibrate_task", description=__doc__.splitlines()[0])
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument(
-        "--seed", type=integer(0, MAX_SEED), default=0, help="the scene's seed (pixel noise)"
+        "--seed",
+        type=integer(0, MAX_SEED),
+        default=0,
+        help="the scene's seed (its draws, the plug's pose in the grasp among them, and the "
+        "pixel noise)",
     )
     add_override_argument(parser, "override a task key by dotted path (repeatable)")
     parser.add_argument("--out", type=Path, required=True, help="calibration YAML to write")
