@@ -315,6 +315,23 @@ def test_a_search_out_of_time_searches_again_with_each_pass_at_another_yaw():
         assert np.allclose(held, expected, atol=0.003), (k, min(held), max(held))
 
 
+def test_a_search_without_a_pattern_retries_at_the_nominal_yaw():
+    # no positional uncertainty: no pattern to pass along, so no yawed passes either
+    world = ToyWorld(hole_offset_m=(0.02, 0.0))
+    cfg = config(
+        search=replace(SearchSettings(), uncertainty_xy_m=0.0),
+        timeouts=replace(Timeouts(), search_s=2.0),
+        backoff=replace(BackoffSettings(), max_retries=1),
+    )
+    machine = make_machine(world, cfg)
+    while machine.phase is not Phase.FAILED and world.t_s < 30.0:
+        world.step(machine)
+        if machine.phase is Phase.SEARCH:
+            assert abs(_yaw_from_approach(machine, world)) < 1e-3
+    assert [r for _, _, r in path(machine)].count("search_timeout") == 1
+    assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
+
+
 def test_an_align_timeout_lifts_clear_of_the_surface_then_searches_again():
     world = ToyWorld()
     cfg = config(
