@@ -18,6 +18,9 @@ The quantities (all about the nominal the machine knows; mm and degrees):
 * ``board tilt deg (abs)``: the larger of the board's two tilts;
 * ``grasp tilt x deg (abs)``, ``grasp tilt z deg (abs)``: the plug turned in the fingers about x_S
   (its width) and z_S (the gel's normal);
+* ``grasp tilt x deg``: the first with its sign (positive turns the plug's axis, y_S, toward
+  z_S), since the approach leans the plug about the same axis and a tilt adds to the lean
+  or takes from it;
 * ``grasp along mm``, ``grasp across mm``: the plug moved in the fingers along its axis
   (positive: toward its tip) and across it, along x_S;
 * ``reach shortfall mm``: ``-(grasp along + board height)``, how much deeper than nominal the
@@ -51,6 +54,7 @@ QUANTITIES: dict[str, Quantity] = {
     "board height mm": lambda d, n: 1e3 * (d.hole.z_m - n.z_m),
     "board tilt deg (abs)": lambda d, n: max(abs(math.degrees(t)) for t in d.board_tilt_rad),
     "grasp tilt x deg (abs)": lambda d, n: abs(math.degrees(d.grasp.tilt_x_rad)),
+    "grasp tilt x deg": lambda d, n: math.degrees(d.grasp.tilt_x_rad),
     "grasp tilt z deg (abs)": lambda d, n: abs(math.degrees(d.grasp.tilt_z_rad)),
     "grasp along mm": lambda d, n: 1e3 * d.grasp.along_m,
     "grasp across mm": lambda d, n: 1e3 * d.grasp.across_m,

@@ -102,3 +102,23 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     (tmp_path / "u" / "batch.json").write_text(json.dumps({"task": "usb_z"}))
     assert main([str(tmp_path / "u")]) == 2
     assert "usb_z" in capsys.readouterr().err
+
+
+def _grasp_tilt_x_deg(seed: int) -> float:
+    task = load_task("usb_c", with_calibration=False)
+    return math.degrees(draw_scene(task.config.hole, task.scene, seed).grasp.tilt_x_rad)
+
+
+def test_failures_on_one_side_of_the_grasp_tilt_show_in_its_signed_row_only(tmp_path, capsys):
+    _batch(tmp_path / "b", lambda seed: _grasp_tilt_x_deg(seed) < 0.0)
+    assert main([str(tmp_path / "b"), "--bins", "2"]) == 0
+    text = capsys.readouterr().out
+    low, high = (cell.split(": ") for cell in _row(text, "grasp tilt x deg").split("|")[2:-1])
+    assert float(low[0].split("..")[0]) < 0.0 < float(high[0].split("..")[1])
+    failed, trials = map(int, high[1].split("/"))
+    assert failed == 0 < trials  # every positive tilt inserted
+    # the absolute row mixes both signs in its bins
+    assert all(
+        0 < int(c.split(": ")[1].split("/")[0])
+        for c in _row(text, "grasp tilt x deg (abs)").split("|")[2:-1]
+    )
