@@ -86,7 +86,13 @@ class ArmState(Enum):
 class ArmStatus:
     """One reading of the arm: TCP pose in B, joint angles (rad), the motion ``mode`` and
     ``state``, and the controller's own ``error_code``/``warning_code`` (0 = none; look them
-    up in the vendor's manual, as the gripper's fault codes)."""
+    up in the vendor's manual, as the gripper's fault codes).
+
+    ``external_force_n``: the external force on the tool, in B, N, as the arm measures it at
+    its flange (the force the environment applies to whatever hangs below the flange: on
+    our cell the compliant wrist, the gripper and the plug), the tool's own weight
+    compensated; None when the arm has no force reading (no force/torque sensor fitted or
+    enabled)."""
 
     t_s: float
     tcp: Pose
@@ -95,6 +101,7 @@ class ArmStatus:
     state: ArmState
     error_code: int = 0
     warning_code: int = 0
+    external_force_n: Vector3 | None = None
 
 
 class GripperObject(IntEnum):

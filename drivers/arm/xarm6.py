@@ -49,7 +49,7 @@ import numpy as np
 
 from core.clock import Clock, MonotonicClock
 from core.config import Config, config_dataclass, number
-from core.devices import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.devices import ArmMode, ArmStatus, ContextManagedDevice, Pose, Twist, Vector3
 from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import (
     DeviceError,
@@ -99,7 +99,12 @@ class XArm6Config(Config):
     the longest a velocity command may be held (watchdog ceiling). ``move_timeout_s``: the
     longest a waited position move may take. ``connect_timeout_s``: the longest
     ``connect()`` waits for the controller to answer. ``io_timeout_s``: the longest any
-    request waits for its reply.
+    request waits for its reply. ``ft_sensor``: UFACTORY's six-axis force/torque sensor is
+    fitted at the flange; ``connect()`` enables it (``set_ft_sensor_enable(1)``) and
+    ``read_status()`` reports its filtered, load-compensated force
+    (``get_ft_sensor_data()``, N) turned into B as ``ArmStatus.external_force_n``, its axes
+    taken as the flange's (T's without the TCP offset's rotation; UFACTORY does not document
+    the frame: check the sign on the robot with a known push).
     """
 
     ip: str
@@ -111,6 +116,7 @@ class XArm6Config(Config):
     name: str = "xarm6"
     connect_timeout_s: float = number(0.5, 60.0, default=5.0)
     io_timeout_s: float = number(0.05, 10.0, default=2.0)
+    ft_sensor: bool = False
 
     def __post_init__(self) -> None:
         try:
@@ -193,6 +199,8 @@ class XArm6(ContextManagedDevice):
             error, warning = self._read_controller_codes()
             if error or warning:
                 self._latch(self._controller_fault(error, warning))
+            if cfg.ft_sensor:
+                self._check(self._api.set_ft_sensor_enable(1), "set_ft_sensor_enable(1)")
             if self.fault is None:
                 self._arm(ArmMode.POSITION)
                 self._configure_tcp()
@@ -215,13 +223,15 @@ class XArm6(ContextManagedDevice):
     # ----------------------------------------------------------------- reading
 
     def read_status(self) -> ArmStatus:
-        """TCP pose in B (m, rad), joint angles (rad), mode, state and the controller's
-        error/warning codes. Works while a fault is latched."""
+        """TCP pose in B (m, rad), joint angles (rad), mode, state, the controller's
+        error/warning codes and, with ``ft_sensor``, the external force in B (N). Works while
+        a fault is latched."""
         self._require_connected()
         tcp = self._read_pose()
         t_s = self._clock.now()
         code, joints = self._api.get_servo_angle(is_radian=True)
         self._check_reply(code, joints, "get_servo_angle(is_radian=True)")
+        force = self._read_external_force(tcp) if self.config.ft_sensor else None
         return ArmStatus(
             t_s=t_s,
             tcp=tcp,
@@ -230,6 +240,7 @@ class XArm6(ContextManagedDevice):
             state=xarm_codes.state_from_code(int(self._api.state)),
             error_code=int(self._api.error_code),
             warning_code=int(self._api.warn_code),
+            external_force_n=force,
         )
 
     # ----------------------------------------------------------------- motion
@@ -401,6 +412,19 @@ class XArm6(ContextManagedDevice):
         code, pose = self._api.get_position(is_radian=True)
         self._check_reply(code, pose, "get_position(is_radian=True)")
         return _pose_from_sdk(pose)
+
+    def _read_external_force(self, tcp: Pose) -> Vector3:
+        """The F/T sensor's force (``get_ft_sensor_data()``: Fx, Fy, Fz in N, then torques,
+        in the flange's axes) turned into B with the flange's rotation at ``tcp``."""
+        code, wrench = self._api.get_ft_sensor_data()
+        self._check_reply(code, wrench, "get_ft_sensor_data()")
+        offset = self.config.tcp
+        tcp_in_flange = rotation_from_rpy(
+            (offset.offset_roll_rad, offset.offset_pitch_rad, offset.offset_yaw_rad)
+        )
+        flange = rotation_from_rpy(tcp.rpy_rad) * tcp_in_flange.inv()
+        fx, fy, fz = (float(v) for v in flange.apply([float(v) for v in wrench[:3]]))
+        return (fx, fy, fz)
 
     def _read_controller_codes(self) -> tuple[int, int]:
         code, codes = self._api.get_err_warn_code()

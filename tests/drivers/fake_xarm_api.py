@@ -31,6 +31,10 @@ It keeps the SDK's signatures and return conventions, as read in the SDK's sourc
   ``is_radian``. Commands convert angles with ``to_radian(v, is_radian or i <= 2)``.
 * ``vc_set_cartesian_velocity`` sends ``duration`` only with firmware >= 1.8.0, else -1
   (``XArm.vc_set_cartesian_velocity``).
+* ``set_ft_sensor_enable(on_off)`` returns a code and ``get_ft_sensor_data(is_raw=False)``
+  ``(code, [Fx, Fy, Fz (N), Tx, Ty, Tz (N*m)])``, the sensor's filtered, load-compensated
+  wrench (``XArmAPI.get_ft_sensor_data``; ``XArm.get_ft_sensor_data`` returns the reply's
+  six values after the code).
 * ``state``: 1 moving, 2 sleeping (ready), 3 paused, 4 stopped; initially 4, mode 0
   (``Base._init``).
 
@@ -84,6 +88,8 @@ class FakeXArmAPI:
         self.pose = [300.0, 0.0, 200.0, math.pi, 0.0, 0.0]  # mm and rad, as the SDK holds it
         self.joints = [0.1, -0.2, 0.3, -0.4, 0.5, -0.6, 0.0]  # rad; the 7th is unused on xArm6
         self.version_number = (2, 3, 0)
+        self.ft_wrench = [0.0] * 6  # the F/T sensor's reading: N, N*m in the flange's axes
+        self.ft_enabled = False
         self.tcp_offset: list[float] | None = None  # mm and rad
         self.tcp_load: tuple[float, list[float]] | None = None  # kg, mm
         self.refuse_connection = False
@@ -244,6 +250,12 @@ class FakeXArmAPI:
         if self._connected and not self.ignore_stop:
             self._state = 4
 
+    def set_ft_sensor_enable(self, on_off) -> int:
+        code = self._begin("set_ft_sensor_enable", (on_off,), {})
+        if code is None:
+            self.ft_enabled = bool(on_off)
+        return 0 if code is None else code
+
     def set_tcp_offset(self, offset, is_radian=None, wait=True, **kwargs) -> int:
         sent = self._angles_to_radian(offset, is_radian)
         code = self._begin("set_tcp_offset", (offset,), dict(is_radian=is_radian, wait=wait), sent)
@@ -334,6 +346,10 @@ class FakeXArmAPI:
         return self._reply(
             code, [float(f"{q if is_rad else math.degrees(q):.6f}") for q in self.joints]
         )
+
+    def get_ft_sensor_data(self, is_raw=False) -> tuple[int, Any]:
+        code = self._begin("get_ft_sensor_data", (), dict(is_raw=is_raw))
+        return self._reply(code, [float(v) for v in self.ft_wrench])
 
     def get_err_warn_code(self, show=False, lang="en") -> tuple[int, Any]:
         code = self._begin("get_err_warn_code", (), dict(show=show, lang=lang))

@@ -179,6 +179,48 @@ def test_readings_convert_mm_to_m_and_keep_radians():
     assert fake.named("get_position")[-1].kwargs == {"is_radian": True}
 
 
+def test_without_the_ft_sensor_the_status_has_no_force_and_the_sensor_is_never_asked():
+    arm, fake, _ = make()
+    assert arm.read_status().external_force_n is None
+    assert not fake.named("set_ft_sensor_enable") and not fake.named("get_ft_sensor_data")
+
+
+def ft_arm() -> tuple[XArm6, FakeXArmAPI]:
+    fake = FakeXArmAPI(CONFIG.ip, is_radian=True, do_not_open=True)
+    arm = XArm6(dataclasses.replace(CONFIG, ft_sensor=True), fake, clock=ManualClock(100.0))
+    arm.connect()
+    return arm, fake
+
+
+def test_the_ft_sensor_is_enabled_before_arming_and_its_force_is_turned_into_b():
+    arm, fake = ft_arm()
+    names = names_since(fake, 0)
+    assert fake.ft_enabled and names.index("set_ft_sensor_enable") < names.index("motion_enable")
+    fake.pose = [300.0, 0.0, 200.0, math.pi - 0.1, 0.05, 0.3]
+    fake.ft_wrench = [1.0, 2.0, -3.0, 0.1, 0.2, 0.3]
+    force = arm.read_status().external_force_n
+    flange = Rotation.from_euler("xyz", fake.pose[3:]) * Rotation.from_euler("z", 0.5).inv()
+    assert force == pytest.approx(tuple(flange.apply([1.0, 2.0, -3.0])), abs=1e-5)  # 6-decimal pose
+
+
+def test_a_push_up_on_a_tool_pointing_down_reads_up_in_b():
+    fake = FakeXArmAPI(CONFIG.ip, is_radian=True, do_not_open=True)
+    tcp = dataclasses.replace(TCP, offset_yaw_rad=0.0)
+    config = dataclasses.replace(CONFIG, tcp=tcp, ft_sensor=True)
+    arm = XArm6(config, fake, clock=ManualClock(100.0))
+    arm.connect()
+    fake.pose = [300.0, 0.0, 200.0, math.pi, 0.0, 0.0]  # the flange's z points down
+    fake.ft_wrench = [0.0, 0.0, -4.0, 0.0, 0.0, 0.0]  # along -z of the flange: up
+    assert arm.read_status().external_force_n == pytest.approx((0.0, 0.0, 4.0), abs=1e-5)
+
+
+def test_a_failed_ft_reading_raises_naming_the_call():
+    arm, fake = ft_arm()
+    fake.fail_next("get_ft_sensor_data", 11)
+    with pytest.raises(DeviceFaultError, match="get_ft_sensor_data"):
+        arm.read_status()
+
+
 def test_commands_convert_m_to_mm_and_round_trip():
     arm, fake, _ = make()
     fake.pose = [312.5, -20.25, 150.0, math.pi - 0.1, 0.05, 0.3]
