@@ -64,6 +64,7 @@ def arm_json(arm: ArmStatus) -> bytes:
             "state": arm.state.name.lower(),
             "error_code": arm.error_code,
             "warning_code": arm.warning_code,
+            "external_force_n": arm.external_force_n,
         }
     )
 

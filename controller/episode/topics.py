@@ -148,7 +148,8 @@ ARM_STATUS = Topic(
     "every tick (the status the machine saw)",
     "``t_s`` (read time), ``tcp_xyz_m``, ``tcp_rpy_rad`` (T2B, xArm rpy), ``joints_rad`` (6; "
     "null where unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
-    "``warning_code``.",
+    "``warning_code``, ``external_force_n`` (N, B: the F/T sensor's force on the tool; null "
+    "without one).",
 )
 GRIPPER_STATUS = Topic(
     "/gripper/status",
@@ -303,6 +304,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "state": _STR,
             "error_code": _INT,
             "warning_code": _INT,
+            "external_force_n": _VEC3_OR_NULL,
         },
         ("t_s", "tcp_xyz_m", "tcp_rpy_rad"),
     ),

@@ -26,6 +26,14 @@ clock's ``now()`` at the start of every call (see ``core.clock``). ``move_to`` w
 (code 100, as the SDK's wait) after ``move_timeout_s``. ``ArmState.t_s`` is the time of the
 last integration step.
 
+Force. With ``ft_sensor`` (the arm YAML's key, as for the real driver)
+``ArmStatus.external_force_n`` is the force of the attached **force source**
+(``attach_force_source``: a callable giving the external force on the tool in B, N; the
+insertion world attaches the wrist's reaction on the flange) at the time of the reading,
+plus independent Gaussian noise per component (``sim.force_noise_n``) drawn from the
+generator attached with it; the zero force before one is attached. Without ``ft_sensor``
+it is None, as on an arm without the sensor.
+
 Errors and states are the real driver's: DeviceNotConnectedError before ``connect()``;
 ``emergency_stop()`` and ``inject_fault()`` latch a DeviceFaultError that motion commands
 raise until ``clear_fault()``. ``ArmStatus.mode`` is ``ArmMode.POSITION``, ``SERVO`` or
@@ -36,12 +44,23 @@ rest at the goal) or ``STOPPED`` (not armed, or a fault latched).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from core.clock import Clock, MonotonicClock
 from core.config import Config, config_dataclass, number
-from core.devices import ArmMode, ArmState, ArmStatus, ContextManagedDevice, Pose, Twist
+from core.devices import (
+    ArmMode,
+    ArmState,
+    ArmStatus,
+    ContextManagedDevice,
+    Pose,
+    Twist,
+    Vector3,
+)
 from core.envelope import clamp_pose, limit_twist, require_finite
 from core.errors import DeviceFaultError, DeviceNotConnectedError, DeviceTimeoutError
 from core.spatial import quat_from_rpy, rotation_from_rpy, tilt_of_rotation
@@ -49,6 +68,14 @@ from drivers.arm.arm_envelope import timed_servo_target
 from drivers.arm.xarm6 import XArm6Config
 from drivers.arm.xarm_codes import WAIT_FINISH_TIMEOUT
 from drivers.sim.twins.tcp_motion import TcpMotion
+
+ForceSource = Callable[[], Vector3]
+"""Gives the external force on the tool in B, N, now."""
+
+
+def _no_force() -> Vector3:
+    return (0.0, 0.0, 0.0)
+
 
 ARRIVED_M = 1e-6  # a position goal counts as reached within this distance ...
 ARRIVED_RAD = 1e-6  # ... and this angle, with the TCP at rest
@@ -62,7 +89,8 @@ class SimArmSettings(Config):
     ``control_rate_hz``: integration rate of the motion. ``max_accel_m_s2`` and
     ``max_angular_accel_rad_s2``: limits on the norm of the TCP's linear and angular
     acceleration. ``start_*``: the TCP pose in B at start-up (m, rad; must lie inside the
-    envelope).
+    envelope). ``force_noise_n``: the standard deviation of the force reading's noise per
+    component, N (with ``ft_sensor``).
     """
 
     control_rate_hz: float = number(50.0, 2000.0)
@@ -74,6 +102,7 @@ class SimArmSettings(Config):
     start_roll_rad: float = number(-math.pi, math.pi)
     start_pitch_rad: float = number(-math.pi, math.pi)
     start_yaw_rad: float = number(-math.pi, math.pi)
+    force_noise_n: float = number(0.0, 10.0)
 
     @property
     def start_pose(self) -> Pose:
@@ -136,6 +165,8 @@ class SimArm(ContextManagedDevice):
         self._fault: DeviceFaultError | None = None
         self._servo_reference: Pose | None = None
         self._servo_time_s: float | None = None
+        self._force_source: ForceSource = _no_force
+        self._force_rng = np.random.default_rng(0)
 
     @classmethod
     def from_config(
@@ -144,6 +175,12 @@ class SimArm(ContextManagedDevice):
         """The twin on ``clock`` (real time when None), not connected yet; ``api`` is
         accepted for the same call as ``XArm6.from_config`` and ignored."""
         return cls(config, clock)
+
+    def attach_force_source(self, source: ForceSource, rng: np.random.Generator) -> None:
+        """Read the external force from ``source`` and its noise from ``rng`` (see the
+        module docstring)."""
+        self._force_source = source
+        self._force_rng = rng
 
     # ----------------------------------------------------------------- lifecycle
 
@@ -184,7 +221,13 @@ class SimArm(ContextManagedDevice):
             mode=self._last_mode,
             state=self._state(),
             error_code=(self._fault.code or 0) if self._fault is not None else 0,
+            external_force_n=self._read_force() if self.config.ft_sensor else None,
         )
+
+    def _read_force(self) -> Vector3:
+        noise = self._force_rng.normal(0.0, self.config.sim.force_noise_n, 3)
+        fx, fy, fz = (float(f + n) for f, n in zip(self._force_source(), noise, strict=True))
+        return (fx, fy, fz)
 
     # ----------------------------------------------------------------- motion
 

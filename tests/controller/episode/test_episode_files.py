@@ -10,9 +10,11 @@ import pytest
 from mcap.writer import Writer
 
 from controller.episode import EpisodeError, read_episode
+from controller.episode.recorder import arm_json
 from controller.episode.repair import repair
-from controller.episode.topics import LOOP_TICK, TRANSITION
+from controller.episode.topics import ARM_STATUS, JSON_SCHEMAS, LOOP_TICK, TRANSITION
 from controller.episode.writer import EpisodeWriter, json_bytes
+from core.devices import ArmMode, ArmState, ArmStatus, Pose
 
 
 def _writer(path, **options):
@@ -119,3 +121,18 @@ def test_a_record_its_encoder_refuses_is_dropped_and_counted_and_writing_goes_on
 def test_json_writes_a_non_finite_number_as_null_and_numpy_values_as_numbers():
     payload = {"a": float("nan"), "b": np.array([1.5, np.inf]), "c": np.float32(0.25)}
     assert json.loads(json_bytes(payload)) == {"a": None, "b": [1.5, None], "c": 0.25}
+
+
+@pytest.mark.parametrize("force", [(0.5, -1.0, 4.25), None])
+def test_the_arm_status_carries_the_external_force_or_null(force):
+    status = ArmStatus(
+        t_s=1.0,
+        tcp=Pose((0.3, 0.0, 0.2), (3.0, 0.0, 0.1)),
+        joints_rad=(0.0,) * 6,
+        mode=ArmMode.SERVO,
+        state=ArmState.MOVING,
+        external_force_n=force,
+    )
+    message = json.loads(arm_json(status))
+    assert message["external_force_n"] == (None if force is None else list(force))
+    assert set(message) <= set(JSON_SCHEMAS[ARM_STATUS.schema]["properties"])

@@ -180,6 +180,15 @@ def test_a_plug_lowered_3_mm_off_stays_on_the_surface_and_pushes(name):
     assert truth["gel_wrench_s"][-1, 1] > 0.5
 
 
+@pytest.mark.parametrize("name", TASKS)
+def test_the_flange_force_is_the_push_on_the_board_seen_from_the_arm(name):
+    _, _, physics = lower_physics(name, 0.003, below_m=0.002)  # pressed beside the opening
+    force = np.array(physics.external_force_b())
+    contact = net_contact_force_b(physics)
+    assert force[2] > 1.0  # the board pushes the tool up
+    np.testing.assert_allclose(force, contact, atol=0.05 + 0.05 * np.linalg.norm(contact))
+
+
 def drag(scene: InsertionSceneConfig, press_m=0.0003, speed_m_s=0.004):
     """The USB-C plug tilted 0.26 rad about x_T (the search's tilt) pressed ``press_m``
     below the surface and dragged along H's x at ``speed_m_s`` for 1.5 s, truth at 2 kHz;

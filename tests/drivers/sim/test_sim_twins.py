@@ -114,6 +114,31 @@ def test_move_to_reaches_the_clamped_target_and_reports_ready(clock, arm):
     assert all(math.isnan(q) for q in state.joints_rad) and len(state.joints_rad) == 6
 
 
+def test_the_arm_reports_a_force_only_with_the_ft_sensor(clock, arm):
+    assert arm.read_status().external_force_n is None
+
+
+def test_the_arm_force_is_its_source_plus_seeded_noise_of_the_configured_size(clock):
+    sim = dataclasses.replace(ARM.sim, force_noise_n=0.0)
+    exact = SimArm(dataclasses.replace(ARM, ft_sensor=True, sim=sim), clock)
+    with exact:
+        assert exact.read_status().external_force_n == (0.0, 0.0, 0.0)  # no source: no load
+        exact.attach_force_source(lambda: (1.0, -2.0, 3.0), np.random.default_rng(0))
+        assert exact.read_status().external_force_n == (1.0, -2.0, 3.0)
+
+    def readings(seed):
+        noisy = SimArm(dataclasses.replace(ARM, ft_sensor=True), clock)
+        noisy.attach_force_source(lambda: (1.0, -2.0, 3.0), np.random.default_rng(seed))
+        with noisy:
+            return np.array([noisy.read_status().external_force_n for _ in range(4000)])
+
+    first = readings(7)
+    np.testing.assert_array_equal(first, readings(7))
+    assert not np.array_equal(first, readings(8))
+    np.testing.assert_allclose(first.mean(axis=0), (1.0, -2.0, 3.0), atol=0.05)
+    np.testing.assert_allclose(first.std(axis=0), ARM.sim.force_noise_n, rtol=0.05)
+
+
 def test_move_to_times_out_with_the_sdk_code(clock):
     config = dataclasses.replace(ARM, move_timeout_s=0.5)
     with SimArm(config, clock) as arm:

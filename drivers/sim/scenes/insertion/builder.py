@@ -14,6 +14,9 @@ twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realti
   the robot configuration's, unchanged
   (a task whose insertion that envelope cannot reach is refused when it loads:
   ``core.envelope_checks``);
+* the SimArm's force reading (with the arm file's ``ft_sensor``): the wrist's reaction on
+  the flange (``InsertionPhysics.external_force_b``), its noise seeded by ``seed`` on a
+  stream of its own, so no other draw changes with it;
 * the SimGripper, its object width the plug's thickness;
 * the SimTactileSensor on the gel coupling (``coupling``) with the scene's appearance and
   ``sensor:`` timing and image effects (latency, capture jitter, blur, lighting drift; the
@@ -50,6 +53,9 @@ from drivers.sim.twins.arm import SimArm, SimArmConfig
 from drivers.sim.twins.gamepad import SimGamepad, SimGamepadConfig
 from drivers.sim.twins.gripper import SimGripper, SimGripperConfig
 from drivers.sim.twins.tactile import SensorTiming, SimTactileConfig, SimTactileSensor
+
+FORCE_NOISE_STREAM = 0xF0
+"""The first word of the arm's force-noise generator's seed (the second is the trial's)."""
 
 
 @dataclass(frozen=True)
@@ -132,6 +138,9 @@ def build_insertion_sim(
         scene, plug, hole, start, clock.now(), truth, draw.board_tilt_rad, draw.grasp
     )
     world = InsertionWorld(physics, arm, gripper, plug.thickness_m, start)
+    arm.attach_force_source(
+        physics.external_force_b, np.random.default_rng([FORCE_NOISE_STREAM, seed])
+    )
     clock.attach(world.sync)
     profile = gel_profile(devices.tactile.model)
     gel = GelModel(profile, ObjectShape("square_peg", plug.width_m, "y"))

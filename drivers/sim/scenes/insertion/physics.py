@@ -260,6 +260,17 @@ class InsertionPhysics:
         k = m.jnt_stiffness[self._wrist_j]
         return -(k * q + m.dof_damping[self._wrist_v] * d.qvel[self._wrist_v])
 
+    def external_force_b(self) -> tuple[float, float, float]:
+        """The external force on the tool as a force sensor at the flange (the mocap TCP)
+        reads it, in B, N: the reaction of the wrist's springs and dampers on the flange
+        (``-wrist_wrench``'s force, turned from T's axes into B). The tool's weight is not in
+        it (the scene compensates it, as the arm's payload setting does)."""
+        force_t = -self.wrist_wrench()[:3]
+        rotation = np.empty(9)
+        mujoco.mju_quat2Mat(rotation, self.data.mocap_quat[0])
+        fx, fy, fz = (float(v) for v in rotation.reshape(3, 3) @ force_t)
+        return (fx, fy, fz)
+
     def tip_xyz(self) -> np.ndarray:
         """The plug's tip in B, m."""
         return self.data.site_xpos[self._tip].copy()
