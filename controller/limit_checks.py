@@ -11,8 +11,9 @@ naming the file and the key.
   above the tighter of the two could never trip.
 * **The envelopes must reach the insertion.** With the hole's opening at height
   ``hole.z_m`` (in B), a plug of ``plug.length_m`` from the TCP to the tip, driven
-  ``tip_depth_m`` below the opening (the deepest the task's controllers drive it: the
-  machine's ``insert.depth_m``, the blind baseline's ``press_m``), puts the TCP at
+  ``tip_depth_m`` below the opening (the deepest the task's controllers target: the
+  machine's ``insert.depth_m``; the blind baseline pushes until its force limit, as deep as
+  the opening lets the plug, which the press margin below covers), puts the TCP at
   ``hole.z_m + plug.length_m - tip_depth_m``; pressing it in through the compliant wrist
   takes the TCP up to ``PRESS_MARGIN_M`` lower. Both the arm's ``envelope.z_min_m`` and the
   task's ``limits.z_min_m`` must allow that height, or a run stops at the board. The check

@@ -41,6 +41,7 @@ the real gamepad, the serial Hand-E and the real xArm.
 
 from __future__ import annotations
 
+import dataclasses
 import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -318,15 +319,31 @@ def scene_config(raw: Mapping[str, Any], source: str) -> Any:
 
 
 def build_device_set(
-    files: Mapping[str, Path], backend: str, world: WorldSpec | None = None
+    files: Mapping[str, Path],
+    backend: str,
+    world: WorldSpec | None = None,
+    arm_force: bool = False,
 ) -> DeviceSet:
     """The devices of ``files`` (kind -> device YAML, for the kinds of
     ``RUN_DEVICE_KINDS``; a missing gamepad is none) on ``backend``: each real driver on one
     ``MonotonicClock``, or the simulated world described by ``world`` with the files' twins
-    (see the module doc). ConfigError for a bad file; ValueError for a sim without a world."""
+    (see the module doc). ``arm_force``: the run needs the arm's force reading: the twin's
+    F/T sensor is switched on; a real arm's file must have it (``ft_sensor: true``).
+    ConfigError for a bad file or a real arm without its force; ValueError for a sim without
+    a world."""
     specs = {
         kind: load_device_config(path, backend=backend, kind=kind) for kind, path in files.items()
     }
+    if arm_force:
+        arm = specs["arm"]
+        if backend == "real" and not arm.config.ft_sensor:
+            raise ConfigError(
+                f"{files['arm']}: key 'ft_sensor': this controller needs the arm's force "
+                "reading; expected true (UFACTORY's F/T sensor fitted), got false"
+            )
+        specs["arm"] = dataclasses.replace(
+            arm, config=dataclasses.replace(arm.config, ft_sensor=True)
+        )
     if backend == "real":
         clock = MonotonicClock()
         # each kind's drivers implement its Protocol (PROTOCOLS; tests/drivers/test_registry.py)

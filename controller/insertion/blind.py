@@ -1,29 +1,45 @@
 """The blind baseline: the strongest search an integrator would build without touch.
 
-It grasps (close and settle, no tactile zeroing), moves the plug upright above the nominal
-opening and then sweeps the search pattern (``SearchPattern``: spiral or raster over the
-pose uncertainty) *pressed*: the tip target is ``press_m`` below the board surface, so the
-compliant wrist's spring holds the tip on the board with a light, bounded force and, where
-the tip passes over the opening, pushes it in (passive compliance: the classic force-
-limited spiral search, with the wrist's spring in place of a force loop). The sweep is
-continuous, at ``sweep_speed_m_s`` along the path. The opening's yaw is uncertain and the
-connectors' clearances leave about a degree, so the pattern is swept once per yaw in
-``yaw_offsets`` (0, +step, -step, +2 step, ... within ``yaw_range_rad``); between passes the
-tip rises to ``hover_m`` and turns. After the last pass it releases and retracts.
+A force-threshold spiral with yaw steps on the arm's own status: the TCP pose and the force
+of the F/T sensor at the flange (``ArmStatus.external_force_n``, in B; the arm file's
+``ft_sensor``). No tactile signal. It grasps (close and settle), moves the plug upright above
+the nominal opening and, for each yaw in ``yaw_offsets`` (0, +step, -step, +2 step, ...
+within ``yaw_range_rad``; the connectors' clearances leave about a degree):
 
-It has no sensing but the arm's own status (the commanded pose the arm reports): it cannot
-know when the plug went in, so it finishes its passes. A trial scores it as every
-controller (evaluation/trials/trial.py): DONE and the tip reached the depth at some time,
-which credits an insertion the sweep then dragged on from; so its success rate is an
-optimistic bound on position-only search.
+* **tare**: holds still at ``hover_m`` above the board for ``tare_s`` and takes the mean force
+  as the sensor's zero (the F/T sensor drifts; the integrator tares before each contact);
+* **touch**: descends at ``descend_speed_m_s`` until the tared upward force F (z in B)
+  reaches ``touch_force_n``;
+* **sweep**: runs the search pattern (``SearchPattern``, spiral or raster over the pose
+  uncertainty) at ``sweep_speed_m_s`` while an admittance on z holds the press:
+  v_z = ``force_gain_m_s_n`` x (F - ``press_force_n``). The press's height (the TCP's when F
+  first settles within ``settle_band`` of the press) is the reference. When F falls below
+  ``catch_ratio`` x the press (the tip over the opening) the pattern pauses (**probe**) and the
+  admittance lowers the TCP; once the tip is ``catch_drop_m`` below its height at the press
+  (the TCP's drop less the wrist's compression, F - press over ``wrist_z_stiffness_n_m``) it
+  is caught (INSERT); if F recovers first, or after ``probe_s``, the pattern goes on;
+* **insert**: holds the caught x, y and pushes down at ``push_speed_m_s`` until F reaches
+  ``stop_force_n`` or the TCP stops going lower for ``stall_s`` (the arm's workspace
+  floor): ``entry_m`` or more below the reference the plug is in (RELEASE,
+  ``bottomed``: the push ends on the receptacle's floor or the plug's shoulder, however long
+  the plug sticks out of the grasp); less, it jammed on the rim: it lifts back to the press
+  and the pattern goes on ``jam_skip_m`` further along (``jammed``).
 
-Phases: GRASP -> APPROACH -> SEARCH -> RELEASE -> RETRACT -> DONE; FAILED on a device fault
-or the timeout. The baseline ignores the gamepad (it runs only in batch comparisons).
+After the last yaw's pattern it releases and retracts (``pattern_done``). A trial scores it as
+every controller (evaluation/trials/trial.py): DONE with the tip at the depth at some time.
+Every command names its rule (``blind.tare``, ``blind.touch``, ``blind.sweep``,
+``blind.probe``, ``blind.push``, ...), recorded with each tick.
+
+Phases: GRASP -> APPROACH -> SEARCH <-> INSERT -> RELEASE -> RETRACT -> DONE; FAILED on a
+device fault, the timeout, or an arm without a force reading (``device_fault``, its rule
+``no_force``: the arm file's ``ft_sensor`` is off). The baseline ignores the gamepad (it runs
+only in batch comparisons).
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from typing import Literal
 
 import numpy as np
@@ -49,25 +65,48 @@ from core.task_geometry import HolePose, PlugGeometry
 
 @config_dataclass
 class BlindConfig(Config):
-    """The task file's ``blind:`` section. Lengths in m, speeds in m/s, angles in rad, times
-    in s.
+    """The task file's ``blind:`` section. Lengths in m, speeds in m/s, angles in rad, forces
+    in N (the tared upward force on the tool, z in B), times in s.
 
     ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
-    ``press_m``: the tip target below the board surface while sweeping (the wrist's spring
-    takes it up on the board: the press; in the opening: the push to the depth);
-    ``sweep_speed_m_s``: along the path; ``descend_speed_m_s``: down to the press, from
-    the hover height (slow: the tip meets the board on the way); ``yaw_step_rad``,
-    ``yaw_range_rad``: the yaw offsets of the passes (``yaw_offsets``); ``hover_m``: tip
-    height above the board between passes;
-    ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
-    x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
+    ``touch_force_n``: the board is met; ``press_force_n``: held while sweeping;
+    ``force_gain_m_s_n``: the admittance, z speed per N of force error; ``force_window``: the
+    force is the mean of this many readings; ``wrist_z_stiffness_n_m``: the compliant
+    wrist's axial stiffness, as the integrator measures it on the cell (the tip's drop is
+    the TCP's less the wrist's compression); ``settle_band``: the press has settled within
+    this share of it; ``catch_ratio``: the force under this share of the press pauses the
+    pattern; ``catch_drop_m``: the tip this far below its height at the press is a catch;
+    ``probe_s``: the longest a pause lasts; ``push_speed_m_s``, ``stop_force_n``: the push
+    and the force that ends it; ``stall_s``: a push whose TCP has gone no lower for this
+    long has ended too (the arm's own limit); ``entry_m``: the least drop of the tip below
+    its height at the press that counts as in; ``jam_skip_m``: after a jam the pattern goes
+    on this much further along; ``tare_s``: the sensor's zero is averaged over this at the
+    hover; ``sweep_speed_m_s``: along the path; ``descend_speed_m_s``: down to the touch;
+    ``yaw_step_rad``, ``yaw_range_rad``: the passes' yaw offsets (``yaw_offsets``);
+    ``hover_m``: tip height above the board between passes; ``move_speed_m_s``,
+    ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain x error),
+    ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
     ``timeout_s``: the whole run."""
 
     gripper: GripperSettings
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-5, 0.01, default=0.0004)
     half_width_m: float = number(0.0, 0.05, default=0.003)
-    press_m: float = number(0.0, 0.05, default=0.006)
+    touch_force_n: float = number(0.05, 50.0, default=1.0)
+    press_force_n: float = number(0.05, 50.0, default=2.0)
+    force_gain_m_s_n: float = number(1e-5, 0.05, default=0.005)
+    force_window: int = number(1, 100, default=5)
+    wrist_z_stiffness_n_m: float = number(10.0, 1e6, default=1000.0)
+    settle_band: float = number(0.01, 1.0, default=0.2)
+    catch_ratio: float = number(0.0, 1.0, default=0.4)
+    catch_drop_m: float = number(1e-5, 0.02, default=0.001)
+    probe_s: float = number(0.01, 10.0, default=0.5)
+    push_speed_m_s: float = number(1e-4, 0.05, default=0.004)
+    stop_force_n: float = number(0.1, 100.0, default=8.0)
+    stall_s: float = number(0.01, 10.0, default=0.3)
+    entry_m: float = number(0.0, 0.05, default=0.002)
+    jam_skip_m: float = number(0.0, 0.05, default=0.001)
+    tare_s: float = number(0.0, 5.0, default=0.2)
     sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)
     descend_speed_m_s: float = number(1e-4, 0.1, default=0.005)
     yaw_step_rad: float = number(1e-4, 0.5, default=0.02)
@@ -79,6 +118,13 @@ class BlindConfig(Config):
     pose_tol_m: float = number(1e-6, 0.01, default=0.0002)
     retract_m: float = number(0.0, 0.2, default=0.03)
     timeout_s: float = number(1.0, 3600.0, default=120.0)
+
+    def __post_init__(self) -> None:
+        if not self.touch_force_n < self.press_force_n < self.stop_force_n:
+            raise ValueError(
+                "keys 'touch_force_n', 'press_force_n', 'stop_force_n': expected increasing "
+                f"forces, got {self.touch_force_n}, {self.press_force_n}, {self.stop_force_n}"
+            )
 
     @property
     def yaw_offsets(self) -> tuple[float, ...]:
@@ -93,6 +139,8 @@ class BlindConfig(Config):
 
 LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s
 TURN_TOL_RAD = 0.002  # a pass's yaw is reached within this, rad
+STALL_M = 1e-4  # the push is moving while the TCP goes this much lower within stall_s, m
+NO_FORCE = "no_force"  # the FAILED transition's rule when the arm reports no force
 
 F = FailureReason
 BLIND = Definition(
@@ -100,6 +148,7 @@ BLIND = Definition(
         Phase.GRASP,
         Phase.APPROACH,
         Phase.SEARCH,
+        Phase.INSERT,
         Phase.RELEASE,
         Phase.RETRACT,
         Phase.DONE,
@@ -110,6 +159,9 @@ BLIND = Definition(
     edges=(
         Edge(Phase.GRASP, Phase.APPROACH, "grasped"),
         Edge(Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
+        Edge(Phase.SEARCH, Phase.INSERT, "caught"),
+        Edge(Phase.INSERT, Phase.SEARCH, "jammed"),
+        Edge(Phase.INSERT, Phase.RELEASE, "bottomed"),
         Edge(Phase.SEARCH, Phase.RELEASE, "pattern_done"),
         Edge(Phase.RELEASE, Phase.RETRACT, "released"),
         Edge(Phase.RETRACT, Phase.DONE, "retracted"),
@@ -119,6 +171,7 @@ BLIND = Definition(
                 Phase.GRASP,
                 Phase.APPROACH,
                 Phase.SEARCH,
+                Phase.INSERT,
                 Phase.RELEASE,
                 Phase.RETRACT,
             )  # fmt: skip
@@ -140,8 +193,17 @@ class BlindMachine:
         self._yaws = config.yaw_offsets
         self._start_t_s: float | None = None
         self._since_t_s = 0.0
+        self._last_t_s = 0.0
         self._stage = ""
         self._pass = 0
+        self._s_m = 0.0  # the pattern's path length swept in this pass
+        self._tare: list[float] = []
+        self._forces: deque[float] = deque(maxlen=config.force_window)
+        self._bias_n = 0.0
+        self._press_z_m: float | None = None  # the TCP's height at the settled press
+        self._hold_xy: np.ndarray | None = None  # INSERT's x, y (the TCP's at the catch)
+        self._stall_z_m = math.inf  # the push's lowest TCP height so far, and when
+        self._stall_t_s = 0.0
         self._z0_m = 0.0
 
     @property
@@ -156,11 +218,16 @@ class BlindMachine:
         if self._phase in (Phase.DONE, Phase.FAILED):
             return Command(twist=Twist())
         if self._start_t_s is None:
-            self._start_t_s = obs.t_s
+            self._start_t_s = self._last_t_s = obs.t_s
+        dt_s, self._last_t_s = obs.t_s - self._last_t_s, obs.t_s
         if obs.fault or obs.arm.error_code or obs.gripper.fault_code:
             return self._go(obs, Phase.FAILED, F.DEVICE_FAULT.value)
+        if obs.arm.external_force_n is None:
+            return self._go(obs, Phase.FAILED, F.DEVICE_FAULT.value, NO_FORCE)
         if obs.t_s - self._start_t_s > self.config.timeout_s:
             return self._go(obs, Phase.FAILED, F.TIMEOUT.value)
+        if self._phase is Phase.SEARCH:
+            return self._search(obs, dt_s)
         return getattr(self, f"_{self._phase.value}")(obs)
 
     # -- phases ------------------------------------------------------------------------------
@@ -171,55 +238,103 @@ class BlindMachine:
             self._stage = "preclose"
             target = g.preclose_target(self.plug.thickness_m, obs.gripper.width_m)
             if target is not None:
-                return Command(twist=Twist(), gripper=target)
+                return Command(twist=Twist(), gripper=target, rule="grasp.preclose")
         if self._stage == "preclose":
             if obs.gripper.moving:
-                return Command(twist=Twist())
+                return Command(twist=Twist(), rule="grasp.preclose")
             self._stage, self._since_t_s = "settle", obs.t_s
             return Command(
                 twist=Twist(),
                 gripper=GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n),
+                rule="grasp.close",
             )
         if not (obs.gripper.holding and not obs.gripper.moving):
             self._since_t_s = obs.t_s
         elif obs.t_s - self._since_t_s >= g.settle_s:
             return self._go(obs, Phase.APPROACH, "grasped")
-        return Command(twist=Twist())
+        return Command(twist=Twist(), rule="grasp.close")
 
     def _approach(self, obs: Observation) -> Command:
         target = self._tip_target(0.0, self.config.hover_m)
         if self._reach(obs, target):
             return self._go(obs, Phase.SEARCH, "above_the_opening")
-        return self._servo(obs, target)
+        return self._servo(obs, target, rule="approach.move")
 
-    def _search(self, obs: Observation) -> Command:
-        """Each pass: down to the press at the pattern's start, the pressed sweep, up to the
-        hover height; then the next yaw's pass, or the release after the last."""
+    def _search(self, obs: Observation, dt_s: float) -> Command:
+        """Each pass: tare, touch, the pressed sweep with its probes, up to the hover height;
+        then the next yaw's pass, or the release after the last."""
         cfg = self.config
-        if self._stage == "":
-            self._stage = "press"
-        if self._stage == "press":
-            target = self._tip_target(0.0, -cfg.press_m)
-            if self._reach(obs, target):
+        stage = self._stage or "tare"
+        self._stage = stage
+        if stage == "tare":
+            self._tare.append(self._raw_force(obs))
+            if obs.t_s - self._since_t_s >= cfg.tare_s:
+                self._bias_n = float(np.mean(self._tare))
+                self._tare, self._stage, self._press_z_m = [], "touch", None
+            return self._servo(obs, self._tip_target(self._s_m, cfg.hover_m), rule="blind.tare")
+        force = self._raw_force(obs) - self._bias_n
+        if stage == "touch":
+            if force >= cfg.touch_force_n:
                 self._stage, self._since_t_s = "sweep", obs.t_s
-            return self._servo(obs, target, cfg.descend_speed_m_s)
-        if self._stage == "sweep":
-            s_m = cfg.sweep_speed_m_s * (obs.t_s - self._since_t_s)
-            if s_m >= self._pattern.length_m:
-                self._stage = "rise"
-            return self._sweep(obs, s_m)
-        if self._stage == "turn":  # to the pattern's start at the next yaw
+                return self._pressed(obs, force, rule="blind.touch")
+            return self._descend(obs, cfg.descend_speed_m_s, rule="blind.touch")
+        if stage in ("sweep", "probe"):
+            return self._sweep_or_probe(obs, force, dt_s)
+        if stage == "turn":  # to the pattern's start at the next yaw
             target = self._tip_target(0.0, cfg.hover_m)
             if self._reach(obs, target) and self._turned(obs):
-                self._stage = "press"
-            return self._servo(obs, target)
-        target = self._tip_target(self._pattern.length_m, cfg.hover_m)  # rise
+                self._stage, self._since_t_s = "tare", obs.t_s
+            return self._servo(obs, target, rule="blind.turn")
+        target = self._tip_target(self._s_m, cfg.hover_m)  # rise
         if self._reach(obs, target):
             if self._pass + 1 >= len(self._yaws):
                 return self._go(obs, Phase.RELEASE, "pattern_done")
-            self._pass += 1
+            self._pass, self._s_m = self._pass + 1, 0.0
             self._stage = "turn"
-        return self._servo(obs, target)
+        return self._servo(obs, target, rule="blind.rise")
+
+    def _sweep_or_probe(self, obs: Observation, force: float, dt_s: float) -> Command:
+        cfg = self.config
+        z = obs.arm.tcp.xyz_m[2]
+        if self._press_z_m is None and abs(force - cfg.press_force_n) <= (
+            cfg.settle_band * cfg.press_force_n
+        ):
+            self._press_z_m = z
+        if self._stage == "probe":
+            if self._press_z_m is not None and self._tip_drop_m(obs, force) >= cfg.catch_drop_m:
+                self._hold_xy = np.asarray(obs.arm.tcp.xyz_m[:2])
+                return self._go(obs, Phase.INSERT, "caught")
+            if force >= cfg.press_force_n or obs.t_s - self._since_t_s >= cfg.probe_s:
+                self._stage = "sweep"
+            return self._pressed(obs, force, rule="blind.probe")
+        if self._press_z_m is not None and force < cfg.catch_ratio * cfg.press_force_n:
+            self._stage, self._since_t_s = "probe", obs.t_s
+            return self._pressed(obs, force, rule="blind.probe")
+        self._s_m += cfg.sweep_speed_m_s * dt_s
+        if self._s_m >= self._pattern.length_m:
+            self._stage = "rise"
+        return self._pressed(obs, force, moving=True, rule="blind.sweep")
+
+    def _insert(self, obs: Observation) -> Command:
+        cfg = self.config
+        force = self._raw_force(obs) - self._bias_n
+        if self._stage == "lift":  # back to the press after a jam, then the sweep goes on
+            if force <= cfg.press_force_n:
+                self._go(obs, Phase.SEARCH, "jammed")
+                self._stage, self._s_m = "sweep", self._s_m + cfg.jam_skip_m
+                return self._pressed(obs, force, rule="blind.lift")
+            return self._descend(obs, -cfg.push_speed_m_s, rule="blind.lift", hold=True)
+        z = obs.arm.tcp.xyz_m[2]
+        if self._stage == "" or z < self._stall_z_m - STALL_M:
+            self._stage, self._stall_z_m, self._stall_t_s = "push", z, obs.t_s
+        stalled = obs.t_s - self._stall_t_s >= cfg.stall_s
+        if force >= cfg.stop_force_n or stalled:
+            assert self._press_z_m is not None  # set before any catch
+            if self._tip_drop_m(obs, force) >= cfg.entry_m:
+                return self._go(obs, Phase.RELEASE, "bottomed", "stall" if stalled else "force")
+            self._stage = "lift"
+            return self._descend(obs, -cfg.push_speed_m_s, rule="blind.lift", hold=True)
+        return self._descend(obs, cfg.push_speed_m_s, rule="blind.push", hold=True)
 
     def _release(self, obs: Observation) -> Command:
         g = self.config.gripper
@@ -228,25 +343,42 @@ class BlindMachine:
             return Command(
                 twist=Twist(),
                 gripper=GripperTarget(g.open_width_m, g.open_speed_m_s, g.close_force_n),
+                rule="release.open",
             )
         if obs.t_s - self._since_t_s >= g.settle_s and not obs.gripper.moving:
             self._z0_m = obs.arm.tcp.xyz_m[2]
             return self._go(obs, Phase.RETRACT, "released")
-        return Command(twist=Twist())
+        return Command(twist=Twist(), rule="release.open")
 
     def _retract(self, obs: Observation) -> Command:
         if obs.arm.tcp.xyz_m[2] >= self._z0_m + self.config.retract_m:
             return self._go(obs, Phase.DONE, "retracted")
-        return Command(twist=Twist((0.0, 0.0, self.config.move_speed_m_s)))
+        return Command(twist=Twist((0.0, 0.0, self.config.move_speed_m_s)), rule="retract.lift")
 
     # -- helpers -----------------------------------------------------------------------------
 
-    def _go(self, obs: Observation, target: Phase, reason: str) -> Command:
+    def _go(self, obs: Observation, target: Phase, reason: str, rule: str = "") -> Command:
         if not BLIND.allows(self._phase, target, reason):
             raise RuntimeError(f"blind machine: no edge {self._phase} -> {target} ({reason})")
-        self._transitions.append(Transition(obs.t_s, self._phase, target, reason))
+        self._transitions.append(Transition(obs.t_s, self._phase, target, reason, rule))
         self._phase, self._stage, self._since_t_s = target, "", obs.t_s
         return Command(twist=Twist())
+
+    def _raw_force(self, obs: Observation) -> float:
+        """The sensor's upward force on the tool (z in B), N, untared: the mean of the last
+        ``force_window`` readings."""
+        force = obs.arm.external_force_n
+        assert force is not None  # step() fails the run without one
+        self._forces.append(float(force[2]))
+        return float(np.mean(self._forces))
+
+    def _tip_drop_m(self, obs: Observation, force: float) -> float:
+        """How far the tip has gone below its height at the settled press, m: the TCP's drop
+        less the wrist's extra compression (force above the press over its stiffness)."""
+        assert self._press_z_m is not None
+        cfg = self.config
+        tcp_drop = self._press_z_m - obs.arm.tcp.xyz_m[2]
+        return tcp_drop - (force - cfg.press_force_n) / cfg.wrist_z_stiffness_n_m
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw."""
@@ -255,7 +387,7 @@ class BlindMachine:
 
     def _tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B at path length ``s_m`` of the pattern, ``height_m`` above the
-        board."""
+        nominal board."""
         u, v = self._pattern.offset(s_m)
         planar = Rotation.from_euler("z", self.hole.yaw_rad).apply([u, v, 0.0])
         return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
@@ -271,23 +403,44 @@ class BlindMachine:
         turn = rotation_error(rotation_from_rpy(obs.arm.tcp.rpy_rad), self._upright())
         return bool(np.linalg.norm(turn) <= TURN_TOL_RAD)
 
-    def _sweep(self, obs: Observation, s_m: float) -> Command:
-        """Follow the pattern's moving target: its velocity ahead (finite difference over
-        ``LEAD_S``) plus the servo's correction."""
+    def _pressed(self, obs: Observation, force: float, rule: str, moving: bool = False) -> Command:
+        """x, y on the pattern at the swept length (its velocity ahead when ``moving``), z by
+        the admittance on the press."""
         cfg = self.config
-        now = self._tcp_target(self._tip_target(s_m, -cfg.press_m))
-        ahead = self._tcp_target(self._tip_target(s_m + cfg.sweep_speed_m_s * LEAD_S, -cfg.press_m))
-        v = (ahead - now) / LEAD_S + cfg.pose_gain_1_s * (now - np.asarray(obs.arm.tcp.xyz_m))
-        return self._command(obs, v, cfg.move_speed_m_s)
+        now = self._tcp_target(self._tip_target(self._s_m, 0.0))
+        v = cfg.pose_gain_1_s * (now - np.asarray(obs.arm.tcp.xyz_m))
+        if moving:
+            ahead = self._tcp_target(
+                self._tip_target(self._s_m + cfg.sweep_speed_m_s * LEAD_S, 0.0)
+            )
+            v += (ahead - now) / LEAD_S
+        v[2] = cfg.force_gain_m_s_n * (force - cfg.press_force_n)
+        return self._command(obs, v, cfg.move_speed_m_s, rule)
 
-    def _servo(self, obs: Observation, tip: np.ndarray, speed_m_s: float | None = None) -> Command:
+    def _descend(
+        self, obs: Observation, speed_m_s: float, rule: str, hold: bool = False
+    ) -> Command:
+        """Down at ``speed_m_s`` (up when negative), x, y held on the pattern's point (or at
+        the catch's with ``hold``)."""
+        cfg = self.config
+        if hold and self._hold_xy is not None:
+            xy = self._hold_xy
+        else:
+            xy = self._tcp_target(self._tip_target(self._s_m, 0.0))[:2]
+        v = np.zeros(3)
+        v[:2] = cfg.pose_gain_1_s * (xy - np.asarray(obs.arm.tcp.xyz_m[:2]))
+        v[2] = -speed_m_s
+        return self._command(obs, v, cfg.move_speed_m_s, rule)
+
+    def _servo(self, obs: Observation, tip: np.ndarray, rule: str) -> Command:
         cfg = self.config
         error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
-        return self._command(obs, cfg.pose_gain_1_s * error, speed_m_s or cfg.move_speed_m_s)
+        return self._command(obs, cfg.pose_gain_1_s * error, cfg.move_speed_m_s, rule)
 
-    def _command(self, obs: Observation, v: np.ndarray, speed_m_s: float) -> Command:
+    def _command(self, obs: Observation, v: np.ndarray, speed_m_s: float, rule: str) -> Command:
         cfg = self.config
         v = clamp_norm(v, speed_m_s)
         turn = rotation_error(rotation_from_rpy(obs.arm.tcp.rpy_rad), self._upright())
         w = clamp_norm(cfg.pose_gain_1_s * turn, cfg.rotate_speed_rad_s)
-        return Command(twist=bounded_twist(v, w, cfg.move_speed_m_s, cfg.rotate_speed_rad_s))
+        twist = bounded_twist(v, w, cfg.move_speed_m_s, cfg.rotate_speed_rad_s)
+        return Command(twist=twist, rule=rule)

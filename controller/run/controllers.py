@@ -11,9 +11,9 @@ keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
   the forces kept (``zero_torques``): what the machine does without the torques;
 * ``torque_only`` (ablation): the same machine with the shear and the normal force forced
   to zero, the torques kept (``torques_only``);
-* ``blind``: the strongest search without touch (``BlindMachine``: a pressed spiral with
-  yaw steps on the arm's own status); the estimator still runs, and its estimates are
-  recorded, never used.
+* ``blind``: the strongest search without touch (``BlindMachine``: a force-threshold
+  spiral with yaw steps on the arm's own status, its F/T sensor's force and its pose); the
+  estimator still runs, and its estimates are recorded, never used.
 """
 
 from __future__ import annotations
@@ -52,11 +52,14 @@ class Controller:
     ``wrench_source(estimator, world, seed)`` the source of the estimates it sees (``world``:
     the simulated world, None on hardware; only simulation-only controllers may read it;
     ``seed``: the run's seed, for a source's own randomness). ``sim_only``: refused on the
-    real backend."""
+    real backend. ``arm_force``: the machine reads the arm's force
+    (``ArmStatus.external_force_n``): the run switches the twin's F/T sensor on, and refuses
+    a real arm whose file has none."""
 
     machine: Callable[[TaskConfig], Machine]
     wrench_source: Callable[[TactileEstimator, Any, int], WrenchSource]
     sim_only: bool = False
+    arm_force: bool = False
 
 
 def _insertion_machine(config: TaskConfig) -> Machine:
@@ -87,5 +90,5 @@ CONTROLLERS: Mapping[str, Controller] = {
     "fingervision": Controller(_insertion_machine, _transformed(fingervision_torques)),
     "zero_torque": Controller(_insertion_machine, _transformed(zero_torques)),
     "torque_only": Controller(_insertion_machine, _transformed(torques_only)),
-    "blind": Controller(_blind_machine, _the_estimator),
+    "blind": Controller(_blind_machine, _the_estimator, arm_force=True),
 }

@@ -103,7 +103,9 @@ def run_task(
     world = None
     if backend == "sim":
         world = registry.WorldSpec(task.scene, config.plug, config.hole, seed, realtime)
-    device_set = registry.build_device_set(task.device_files, backend, world)
+    device_set = registry.build_device_set(
+        task.device_files, backend, world, arm_force=entry.arm_force
+    )
     if prepare is not None:
         replaced = prepare(device_set)
         if isinstance(replaced, registry.DeviceSet):

@@ -165,7 +165,7 @@ def load_task(
         arm_envelope=devices["arm"].config.envelope,
         plug=config.plug,
         hole=config.hole,
-        tip_depth_m=max(config.machine.insert.depth_m, config.blind.press_m),
+        tip_depth_m=config.machine.insert.depth_m,
         search_half_width_m=max(config.machine.search.uncertainty_xy_m, config.blind.half_width_m),
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
