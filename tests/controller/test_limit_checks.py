@@ -57,20 +57,20 @@ def test_a_machine_tilt_limit_beyond_the_arm_envelope_is_refused(tmp_path):
 def test_an_arm_envelope_that_stops_above_the_insertion_is_refused(tmp_path):
     robot = robot_with(tmp_path, "  z_min_m: 0.011 ", "  z_min_m: 0.02 ")
     message = refusal("usb_c", [f"devices.arm={robot}"])
-    # USB-C: 20 mm plug, tip driven 5.5 mm deep (the blind's press): TCP at 14.5 mm, less 2 mm
+    # USB-C: 20 mm plug, tip driven 5 mm deep (the machine's depth): TCP at 15 mm, less 2 mm
     assert message == (
-        f"{robot}: key 'envelope.z_min_m': expected at most 0.0125 (the TCP's height with the "
+        f"{robot}: key 'envelope.z_min_m': expected at most 0.0130 (the TCP's height with the "
         f"plug of {task_path('usb_c')} inserted, less 0.002 m to press it home), got 0.02: the "
         "TCP would stop above the insertion"
     )
 
 
 def test_task_limits_that_stop_above_the_insertion_are_refused():
-    message = refusal("usb_a", ["limits.z_min_m=0.013"])
-    # USB-A: 25 mm plug, tip driven 10.5 mm deep (the blind's press): TCP at 14.5 mm, less 2 mm
+    message = refusal("usb_a", ["limits.z_min_m=0.0135"])
+    # USB-A: 25 mm plug, tip driven 10 mm deep (the machine's depth): TCP at 15 mm, less 2 mm
     assert re.fullmatch(
-        re.escape(f"{task_path('usb_a')}: key 'limits.z_min_m': expected at most 0.0125 ")
-        + r".* got 0\.013: the TCP would stop above the insertion",
+        re.escape(f"{task_path('usb_a')}: key 'limits.z_min_m': expected at most 0.0130 ")
+        + r".* got 0\.0135: the TCP would stop above the insertion",
         message,
     )
 

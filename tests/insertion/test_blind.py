@@ -1,5 +1,6 @@
-"""The blind baseline: its definition, its pressed sweeps (one per yaw offset), and its
-failure paths, in the toy world (kinematic TCP; the blind machine reads no tactile signal)."""
+"""The blind baseline: its definition, its force-threshold sweeps (one per yaw offset), the
+catch, the push and the jam, and its failure paths, in the toy world (kinematic TCP; the
+blind machine reads no tactile signal, only the arm's pose and its F/T force)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.insertion.blind import BLIND, BlindConfig, BlindMachine
+from controller.insertion.blind import BLIND, NO_FORCE, BlindConfig, BlindMachine
 from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
 from controller.insertion.machine_config import GripperSettings
@@ -16,25 +17,31 @@ from controller.run.task import load_task
 from core.config import ConfigError
 from tests.insertion.world import ToyWorld
 
-SMALL = BlindConfig(GripperSettings(), pitch_m=0.001, half_width_m=0.001, press_m=0.004,
-                    sweep_speed_m_s=0.005, descend_speed_m_s=0.005, yaw_step_rad=0.02,
-                    yaw_range_rad=0.02,
+SMALL = BlindConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002, touch_force_n=1.0,
+                    press_force_n=2.0, stop_force_n=6.0, sweep_speed_m_s=0.01,
+                    descend_speed_m_s=0.005, yaw_step_rad=0.02, yaw_range_rad=0.02,
                     timeout_s=60.0)  # fmt: skip
+NO_OPENING = dict(hole_offset_m=(0.01, 0.01))  # outside the pattern: the board everywhere
 
 
 def run(world: ToyWorld, machine: BlindMachine, max_s: float = 80.0) -> list[tuple]:
-    """Step to a terminal phase; (tip position, yaw offset) of every tick of a sweep."""
+    """Step to a terminal phase; (tip, yaw offset, force) of every tick of a sweep."""
     swept = []
     while world.t_s < max_s and machine.phase not in (Phase.DONE, Phase.FAILED):
         world.step(machine)
-        if machine._stage == "sweep":
-            swept.append((world.tip.copy(), machine.config.yaw_offsets[machine._pass]))
+        if machine.phase is Phase.SEARCH and machine._stage == "sweep":
+            force = world.observe().arm.external_force_n[2]
+            swept.append((world.tip.copy(), machine.config.yaw_offsets[machine._pass], force))
     return swept
+
+
+def reasons(machine: BlindMachine) -> list[str]:
+    return [t.reason for t in machine.transitions]
 
 
 def test_the_definition_is_checked_and_sound():
     check_definition(BLIND)
-    assert {Phase.GRASP, Phase.DONE, Phase.FAILED} <= set(BLIND.phases)
+    assert {Phase.GRASP, Phase.INSERT, Phase.DONE, Phase.FAILED} <= set(BLIND.phases)
 
 
 def test_the_yaw_offsets_alternate_within_the_range():
@@ -43,22 +50,76 @@ def test_the_yaw_offsets_alternate_within_the_range():
     assert replace(SMALL, yaw_range_rad=0.05).yaw_offsets == (0.0, 0.02, -0.02, 0.04, -0.04)
 
 
-def test_it_sweeps_the_pattern_pressed_once_per_yaw_then_releases_and_retracts():
-    world = ToyWorld()
+def test_without_an_opening_it_sweeps_pressed_once_per_yaw_then_releases_and_retracts():
+    world = ToyWorld(**NO_OPENING)
     machine = BlindMachine(SMALL, world.plug, world.hole)
     swept = run(world, machine)
-    assert [t.target for t in machine.transitions] == [
-        Phase.APPROACH, Phase.SEARCH, Phase.RELEASE, Phase.RETRACT, Phase.DONE,
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "pattern_done", "released", "retracted",
     ]  # fmt: skip
-    assert {yaw for _, yaw in swept} == set(SMALL.yaw_offsets)
+    assert {yaw for _, yaw, _ in swept} == set(SMALL.yaw_offsets)
+    forces = np.array([force for _, _, force in swept])
+    # the admittance holds the press (after each pass's first settling)
+    assert np.median(forces) == pytest.approx(SMALL.press_force_n, abs=0.2)
     hole = np.array([world.hole.x_m, world.hole.y_m])
-    tips = np.array([tip for tip, _ in swept])
-    # pressed: the tip target press_m below the surface (the kinematic toy has no board)
-    assert np.median(tips[:, 2]) == pytest.approx(world.hole.z_m - SMALL.press_m, abs=3e-4)
-    reach = np.linalg.norm(tips[:, :2] - hole, axis=1)
+    reach = np.linalg.norm(np.array([tip[:2] for tip, _, _ in swept]) - hole, axis=1)
     assert reach.max() <= SMALL.half_width_m * np.sqrt(2) + 3e-4  # within the pattern
     assert reach.max() >= SMALL.half_width_m  # and out to its edge
     assert not world.gripper_holding  # released at the end
+
+
+def test_over_the_opening_it_catches_pushes_to_the_floor_and_releases():
+    world = ToyWorld()  # the opening 1.5 mm off the nominal, 12 mm deep
+    machine = BlindMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    bottomed = machine.transitions[3]
+    assert bottomed.rule == "force"
+    rules = [c.rule for c in world.commands]
+    assert {"blind.tare", "blind.touch", "blind.sweep", "blind.probe", "blind.push"} <= set(rules)
+    # the push ended on the floor: the tip was held down to it, the force at the stop
+    assert min(c for c in world_tip_heights(world)) == pytest.approx(
+        world.hole.z_m - world.depth_limit_m - SMALL.stop_force_n / world.k_arm_n_m, abs=3e-4
+    )
+
+
+def world_tip_heights(world: ToyWorld) -> list[float]:
+    """The tip's heights the toy went through (from the commanded twists, replayed)."""
+    heights, z = [], world.hole.z_m + 0.04
+    for command in world.commands:
+        if command.twist is not None:
+            z += command.twist.linear_m_s[2] * 0.01
+        heights.append(z)
+    return heights
+
+
+def test_a_catch_that_stops_short_of_the_entry_is_a_jam_and_the_sweep_goes_on():
+    world = ToyWorld(depth_limit_m=0.0015)  # an opening 1.5 mm deep: never entry_m (2 mm) in
+    machine = BlindMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert "caught" in reasons(machine) and "jammed" in reasons(machine)
+    assert "bottomed" not in reasons(machine)
+    assert reasons(machine)[-3:] == ["pattern_done", "released", "retracted"]
+
+
+def test_the_tare_takes_up_the_sensor_bias():
+    world = ToyWorld(force_bias_n=3.0)  # above the touch force: untared it would "touch" at once
+    machine = BlindMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert "bottomed" in reasons(machine)
+
+
+def test_an_arm_without_a_force_reading_fails_at_once_naming_it():
+    world = ToyWorld(arm_force=False)
+    machine = BlindMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert machine.phase is Phase.FAILED
+    assert (machine.transitions[-1].reason, machine.transitions[-1].rule) == (
+        "device_fault",
+        NO_FORCE,
+    )
 
 
 def test_its_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
@@ -87,5 +148,10 @@ def test_it_fails_on_the_timeout_and_on_a_device_fault():
 
 
 def test_a_bad_value_names_its_key():
-    with pytest.raises(ConfigError, match="key 'blind.press_m'"):
-        load_task("usb_c", ["blind.press_m=-1"])
+    with pytest.raises(ConfigError, match="key 'blind.press_force_n'"):
+        load_task("usb_c", ["blind.press_force_n=-1"])
+
+
+def test_forces_out_of_order_are_refused_naming_the_keys():
+    with pytest.raises(ConfigError, match="'touch_force_n', 'press_force_n', 'stop_force_n'"):
+        load_task("usb_c", ["blind.stop_force_n=1.5"])

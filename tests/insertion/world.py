@@ -81,6 +81,12 @@ class ToyWorld:
     # edge in the opening): the depth by touch then reads it entered
     rim_sink_m: float = 0.0
     noise: float = 0.0003
+    # the arm's F/T reading (ArmStatus.external_force_n, N in B), for the blind baseline: the
+    # board (or the opening's floor under the tip) pushing up k_arm_n_m per m of the tip's
+    # depth below it, as through a wrist of that stiffness; plus a constant bias
+    arm_force: bool = True
+    k_arm_n_m: float = 1000.0
+    force_bias_n: float = 0.0
     frame_every: int = 2  # ticks per new tactile estimate
     zeroing_frames: int = 3
     seed: int = 0
@@ -142,6 +148,7 @@ class ToyWorld:
                 ArmMode.VELOCITY,
                 ArmState.READY,
                 self.arm_error,
+                external_force_n=self._arm_force(),
             ),
             gripper=GripperStatus(
                 self.t_s,
@@ -157,6 +164,15 @@ class ToyWorld:
             teleop=self.teleop,
             fault=self.fault,
         )
+
+    def _arm_force(self) -> tuple[float, float, float] | None:
+        if not self.arm_force:
+            return None
+        tip, surface = self.tip, self.hole.z_m - self.floor_drop_m
+        over_opening = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        support = surface - self.depth_limit_m if over_opening else surface
+        push = self.k_arm_n_m * max(0.0, support - tip[2]) if self.board else 0.0
+        return (0.0, 0.0, push + self.force_bias_n)
 
     def _estimate(self) -> WrenchEstimate:
         if self.zeroing_left > 0:
