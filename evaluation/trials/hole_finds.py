@@ -34,7 +34,9 @@ DROP_M = 1e-4  # a tip this far below its resting height is in the opening (m)
 
 @dataclass(frozen=True)
 class HoleFind:
-    """One ``hole_found``: ``t_s`` simulated time; ``tip_o_m`` the true tip centre in O (m);
+    """One ``hole_found``: ``t_s`` simulated time; ``rule`` the rule that fired it
+    (``torque_catch``, ``load_drop``, both joined by ``+``); ``tip_o_m`` the true tip centre
+    in O (m);
     ``in_opening`` the tip dropped at least ``DROP_M`` below its resting height; ``outcome``
     what ended the attempt: ``inserted``, ``not_engaged``, ``jam``, or the failure or other
     guard that ended it; ``pivot_error_m`` the pivot error (m) at the find and when the
@@ -42,6 +44,7 @@ class HoleFind:
 
     seed: int
     t_s: float
+    rule: str
     tip_o_m: tuple[float, float, float]
     in_opening: bool
     outcome: str
@@ -90,6 +93,7 @@ def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
             HoleFind(
                 seed,
                 tr.t_s,
+                tr.rule,
                 tuple(float(x) for x in tip),
                 bool(tip[2] <= resting - DROP_M),
                 _attempt_outcome(later),
@@ -122,8 +126,8 @@ def _attempt_outcome(later) -> str:
 
 
 def summary_lines(finds: list[HoleFind]) -> list[str]:
-    """Counts of hole finds by where the tip was and how the attempt ended; the pivot
-    errors' median and range."""
+    """Counts of hole finds by where the tip was and how the attempt ended, then by the rule
+    that fired them and where the tip was; the pivot errors' median and range."""
     lines = []
     for where, flag in (("in the opening", True), ("on the surface", False)):
         group = [f for f in finds if f.in_opening is flag]
@@ -132,6 +136,10 @@ def summary_lines(finds: list[HoleFind]) -> list[str]:
             counts[f.outcome] = counts.get(f.outcome, 0) + 1
         detail = ", ".join(f"{k} {v}" for k, v in sorted(counts.items(), key=lambda x: -x[1]))
         lines.append(f"{where}: {len(group)}" + (f" ({detail})" if detail else ""))
+    for rule in sorted({f.rule for f in finds}):
+        group = [f for f in finds if f.rule == rule]
+        inside = sum(f.in_opening for f in group)
+        lines.append(f"by {rule or 'no rule'}: {len(group)} ({inside} in the opening)")
     for when, column in (("at the finds", 0), ("when ALIGN ended", 1)):
         errors = np.array([f.pivot_error_m[column] for f in finds], dtype=float)
         errors = 1e3 * errors[np.isfinite(errors)]

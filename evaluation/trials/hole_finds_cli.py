@@ -3,9 +3,10 @@ that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
 
     hole_finds.py --task usb_c|usb_a|PATH.yaml --seeds A:B [--workers N] [--set KEY=VALUE ...]
 
-Prints one line per hole find (seed, time, the true tip centre in the opening's frame in
-mm, in the opening or on the surface, the pivot error at the find and when ALIGN ended, the
-attempt's end) and the counts. Writes nothing; Ctrl-C stops the trials at once.
+Prints one line per hole find (seed, time, the rule that fired it, the true tip centre in
+the opening's frame in mm, in the opening or on the surface, the pivot error at the find and
+when ALIGN ended, the attempt's end) and the counts, by place and end and by rule. Writes
+nothing; Ctrl-C stops the trials at once.
 Bad arguments, an unknown task or key: one line and exit code 2.
 """
 
@@ -60,7 +61,10 @@ def _run(args: argparse.Namespace) -> int:
 def _report(results, trials: int) -> None:
     finds: list[HoleFind] = []
     successes = 0
-    print("seed  t (s)  tip u / v / z (mm)       where           pivot error (mm)  attempt ended")
+    print(
+        "seed  t (s)  rule          tip u / v / z (mm)       where           pivot error (mm)"
+        "  attempt ended"
+    )
     for success, trial in results:
         successes += success
         for f in trial:
@@ -68,7 +72,7 @@ def _report(results, trials: int) -> None:
             where = "in the opening" if f.in_opening else "on the surface"
             found, aligned = (1e3 * e for e in f.pivot_error_m)
             print(
-                f"{f.seed:4d} {f.t_s:6.2f}  {u:6.2f} {v:6.2f} {z:6.2f}   {where}  "
+                f"{f.seed:4d} {f.t_s:6.2f}  {f.rule:12s} {u:6.2f} {v:6.2f} {z:6.2f}   {where}  "
                 f"{found:5.2f} / {aligned:5.2f}     {f.outcome}"
             )
         finds.extend(trial)

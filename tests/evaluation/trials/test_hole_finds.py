@@ -51,6 +51,7 @@ def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
     assert finds[-1].in_opening and finds[-1].outcome == "inserted"
     resting = resting_height_m(task)
     for f in finds:
+        assert f.rule in ("torque_catch", "load_drop", "torque_catch+load_drop")
         assert f.in_opening == (f.tip_o_m[2] <= resting - DROP_M)
         assert np.all(np.isfinite(f.tip_o_m))
         # every find of this trial was aligned; the wrist keeps the true tip within 5 mm
@@ -60,13 +61,15 @@ def test_a_simulated_trial_ends_with_a_hole_find_in_the_opening_that_inserts():
 
 def test_the_summary_counts_finds_by_place_and_end():
     finds = [
-        HoleFind(0, 1.0, (0.0, 0.0, -1e-4), True, "inserted", (1e-3, 2e-3)),
-        HoleFind(0, 2.0, (0.0, 0.0, 3e-4), False, "not_engaged", (2e-3, math.nan)),
-        HoleFind(1, 1.0, (0.0, 0.0, 3e-4), False, "not_engaged", (3e-3, 4e-3)),
+        HoleFind(0, 1.0, "load_drop", (0.0, 0.0, -1e-4), True, "inserted", (1e-3, 2e-3)),
+        HoleFind(0, 2.0, "load_drop", (0.0, 0.0, 3e-4), False, "not_engaged", (2e-3, math.nan)),
+        HoleFind(1, 1.0, "torque_catch", (0.0, 0.0, 3e-4), False, "not_engaged", (3e-3, 4e-3)),
     ]
     assert summary_lines(finds) == [
         "in the opening: 1 (inserted 1)",
         "on the surface: 2 (not_engaged 2)",
+        "by load_drop: 2 (1 in the opening)",
+        "by torque_catch: 1 (0 in the opening)",
         "pivot error at the finds (3): median 2.00 mm, 1.00-3.00 mm",
         "pivot error when ALIGN ended (2): median 3.00 mm, 2.00-4.00 mm",
     ]
