@@ -103,7 +103,7 @@ def success_time_chart(
     (every trial, failures included) inserted within t, against t (simulated s), a step
     curve. ``times_s``: controller -> times to insert of its successful trials. A curve
     ends at its success rate; one that rises earlier inserts sooner."""
-    fig = Figure(figsize=(7.0, 4.5), layout="constrained")
+    fig = Figure(figsize=(9.0, 4.5), layout="constrained")
     ax = fig.add_subplot()
     every = [t for times in times_s.values() for t in times]
     end = max(every, default=1.0) * 1.05
@@ -123,6 +123,6 @@ def success_time_chart(
     ax.set_xlim(0.0, end)
     ax.set_ylim(-2, 102)
     ax.grid(True, alpha=0.3)
-    ax.legend(loc="upper left", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # beside: hides no curve
     ax.set_title(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
     _save(fig, path)
