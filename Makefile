@@ -3,8 +3,8 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# make trials: issue 24's next held-out seeds (named before any run on them; 1000:1200, the
-# first report's, have been seen) at the default insert speed
+# make trials: issue 24's report, on its held-out seeds (named before its run; a new machine
+# gets new seeds, docs/BENCHMARKS.md "Insertion trials"), at the default insert speed
 SEEDS  ?= 4000:4200
 SPEEDS ?= 0.004
 
