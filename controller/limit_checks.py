@@ -19,6 +19,16 @@ naming the file and the key.
   task's ``limits.z_min_m`` must allow that height, or a run stops at the board. The check
   reads only the product's own configuration, so it holds for the robot and the simulator
   alike (the simulated arm uses the robot file's envelope unchanged).
+* **A task tightens the arm's envelope, never loosens it.** The task's ``limits:`` (the
+  loop's limiter) may not allow more than the robot file's ``envelope:`` (the driver's, on
+  every command): a box reaching outside the arm's sides or above its top, a faster linear
+  or angular speed, a larger tilt. The driver would hold the arm's envelope anyway; a looser
+  task limit is refused so that no setting appears to loosen a safety rule. The floor is the
+  exception: the arm's ``z_min_m`` is the hard floor that the blind baseline pushes down to,
+  and the task's own floor may lie below it so that the loop does not report the driver's
+  floor as its limit holding the machine back (the driver keeps the arm's floor whatever
+  the task says). The same holds one level up: the teleop speeds (``teleop:``) may not
+  exceed the task's limits.
 * **The boxes must hold the search.** The hole's nominal x and y, widened by the search's
   half width (``search_half_width_m``: the farthest the task's controllers search from the
   nominal hole), must lie inside both workspace boxes, or the machine would search and
@@ -29,6 +39,7 @@ from __future__ import annotations
 
 from controller.insertion.machine_config import Limits
 from controller.safety import LimitsConfig
+from controller.teleop import TeleopConfig
 from core.config import ConfigError
 from core.envelope import Envelope
 from core.task_geometry import HolePose, PlugGeometry
@@ -49,6 +60,7 @@ def check_task_limits(
     hole: HolePose,
     tip_depth_m: float,
     search_half_width_m: float,
+    teleop: TeleopConfig,
 ) -> None:
     """ConfigError (one line) unless the task's limits agree (module doc). ``source``: the
     task file; ``arm_file``: the robot file its ``devices.arm`` names, and ``arm_envelope``
@@ -68,6 +80,8 @@ def check_task_limits(
     _check_reaches(source, "limits.z_min_m", limits, lowest_m, source)
     _check_holds_search(arm_file, "envelope.", arm_envelope, hole, search_half_width_m)
     _check_holds_search(source, "limits.", limits, hole, search_half_width_m)
+    _check_no_looser(source, "limits.", limits, f"envelope.* of {arm_file}", arm_envelope)
+    _check_teleop_within(source, teleop, limits)
 
 
 def inserted_tcp_z_m(plug: PlugGeometry, hole: HolePose, tip_depth_m: float) -> float:
@@ -83,6 +97,42 @@ def _check_reaches(file: str, key: str, envelope: Envelope, lowest_m: float, tas
             f"plug of {task} inserted, less {PRESS_MARGIN_M} m to press it home), got "
             f"{envelope.z_min_m}: the TCP would stop above the insertion"
         )
+
+
+def _check_no_looser(
+    source: str, prefix: str, limits: Envelope, bound_name: str, bound: Envelope
+) -> None:
+    """``limits`` no looser than ``bound``: inside its box (the floor aside: module doc), no
+    faster, no more tilted."""
+    for key, looser in (
+        ("x_min_m", limits.x_min_m < bound.x_min_m),
+        ("y_min_m", limits.y_min_m < bound.y_min_m),
+        ("x_max_m", limits.x_max_m > bound.x_max_m),
+        ("y_max_m", limits.y_max_m > bound.y_max_m),
+        ("z_max_m", limits.z_max_m > bound.z_max_m),
+        ("max_linear_speed_m_s", limits.max_linear_speed_m_s > bound.max_linear_speed_m_s),
+        ("max_angular_speed_rad_s",
+         limits.max_angular_speed_rad_s > bound.max_angular_speed_rad_s),
+        ("max_tilt_rad", limits.max_tilt_rad > bound.max_tilt_rad),
+    ):  # fmt: skip
+        if looser:
+            raise ConfigError(
+                f"{source}: key '{prefix}{key}': expected within {bound_name} "
+                f"({getattr(bound, key)}), got {getattr(limits, key)}: a setting may tighten "
+                "a safety limit, never loosen it"
+            )
+
+
+def _check_teleop_within(source: str, teleop: TeleopConfig, limits: Envelope) -> None:
+    for key, limit in (
+        ("max_linear_speed_m_s", limits.max_linear_speed_m_s),
+        ("max_angular_speed_rad_s", limits.max_angular_speed_rad_s),
+    ):
+        if getattr(teleop, key) > limit:
+            raise ConfigError(
+                f"{source}: key 'teleop.{key}': expected at most limits.{key} ({limit}), got "
+                f"{getattr(teleop, key)}: a setting may tighten a safety limit, never loosen it"
+            )
 
 
 def _check_holds_search(

@@ -12,8 +12,9 @@ names the actions; this module reads them by name and needs nothing else of the 
 Rules (``TeleopArbiter.update``, once per control tick):
 
 * **Takeover**: any axis past ``takeover_threshold`` (0: any value the pad's dead zone lets
-  through) gives the operator control at once (``in_control``). With ``require_deadman`` the
-  deadman button must be held as well, and the twist is zero while it is released.
+  through) while the ``deadman`` button is held gives the operator control at once
+  (``in_control``). The twist is zero while the deadman is released. The deadman is a safety
+  rule, not a setting: no file or override can switch it off (``TeleopConfig.safety_rules``).
 * **Twist**: linear actions times ``max_linear_speed_m_s``, angular ones times
   ``max_angular_speed_rad_s``; each vector's norm is then capped at that speed, so a diagonal
   is no faster than an axis. Zero unless in control.
@@ -29,11 +30,15 @@ Rules (``TeleopArbiter.update``, once per control tick):
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from typing import ClassVar
+
 import numpy as np
 
 from controller.insertion.interface import TeleopInput
 from core.config import Config, config_dataclass, number
 from core.devices import GamepadState, Twist
+from core.envelope import MAX_ANGULAR_SPEED_RAD_S, MAX_LINEAR_SPEED_M_S
 
 LINEAR_ACTIONS = ("vx", "vy", "vz")
 ANGULAR_ACTIONS = ("wx", "wy", "wz")
@@ -48,13 +53,16 @@ class TeleopConfig(Config):
     ``max_angular_speed_rad_s``: TCP angular speed at full deflection (rad/s, in B).
     ``takeover_threshold``: action magnitude (after the pad's dead zone, 0..1) above which an
     axis takes over; 0 means any input the dead zone lets through.
-    ``require_deadman``: takeover and motion need the ``deadman`` button held.
+    Takeover and motion always need the ``deadman`` button held (module doc).
     """
 
-    max_linear_speed_m_s: float = number(0.0, 0.25, default=0.02)
-    max_angular_speed_rad_s: float = number(0.0, 1.0, default=0.2)
+    safety_rules: ClassVar[Mapping[str, str]] = {
+        "require_deadman": "takeover and motion always need the deadman held",
+    }
+
+    max_linear_speed_m_s: float = number(0.0, MAX_LINEAR_SPEED_M_S, default=0.02)
+    max_angular_speed_rad_s: float = number(0.0, MAX_ANGULAR_SPEED_RAD_S, default=0.2)
     takeover_threshold: float = number(0.0, 0.9, default=0.0)
-    require_deadman: bool = False
 
 
 def lost_in_control(teleop: TeleopInput) -> bool:
@@ -84,8 +92,7 @@ class TeleopArbiter:
         edges = {name: bool(buttons.get(name, False)) and not self._pressed[name]
                  for name in EDGE_BUTTONS}  # fmt: skip
         self._pressed = {name: bool(buttons.get(name, False)) for name in EDGE_BUTTONS}
-        held = bool(buttons.get("deadman", False))
-        deadman = held or not self.config.require_deadman
+        deadman = bool(buttons.get("deadman", False))
 
         linear = np.array([float(axes.get(a, 0.0)) for a in LINEAR_ACTIONS])
         angular = np.array([float(axes.get(a, 0.0)) for a in ANGULAR_ACTIONS])
@@ -117,7 +124,7 @@ class TeleopArbiter:
             hand_back=edges["hand_back"],
             estop=bool(buttons.get("estop", False)),
             estop_ack=edges["estop_ack"],
-            deadman=held,
+            deadman=deadman,
         )
 
 

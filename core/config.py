@@ -26,6 +26,11 @@ not files), and an error names the file, the dotted key path and what was expect
 Command-line overrides (``--set scene.friction=0.5``) go through ``apply_overrides`` on the
 raw mapping before ``build``, so an overridden value is validated exactly as one from YAML.
 
+**Safety rules are not settings.** A ``Config`` class names, in its ``safety_rules``, the
+keys that once switched a safety rule and no longer exist, each with the rule it keeps
+(``TeleopConfig``: the deadman). A file or an override that sets one is refused in one line
+that states the rule, rather than as an unknown key: no setting can loosen a safety rule.
+
 ``config_dataclass`` is ``dataclasses.dataclass(frozen=True)`` at run time. It is declared a
 PEP 681 dataclass transform with ``number`` as a field specifier, so the type checker (mypy,
 ``make typecheck``) knows that ``number(low, high)`` declares a required key and
@@ -47,7 +52,7 @@ import types
 import typing
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Literal, TypeVar
+from typing import Any, ClassVar, Literal, TypeVar
 
 import yaml
 
@@ -113,6 +118,9 @@ class Config:
     Values are normalised on the way: an int given for a ``float`` becomes a float, a list
     for a tuple a tuple, a mapping a read-only mapping.
     """
+
+    safety_rules: ClassVar[Mapping[str, str]] = {}
+    """Keys that no file or override may set (module doc), each with the rule it keeps."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)
@@ -430,6 +438,10 @@ def build(cls: type[T], data: Mapping[str, Any], source: str, prefix: str = "") 
         raise ConfigError(f"{source}: {where}expected a mapping, got {show(data)}")
     hints = typing.get_type_hints(cls)
     fields = [f.name for f in dataclasses.fields(cls) if f.init]
+    for key in data:
+        if key in cls.safety_rules:
+            where = f"key '{prefix}{key}'"
+            raise ConfigError(safety_rule_message(source, where, cls.safety_rules[key]))
     unknown = sorted((key for key in data if key not in fields), key=str)
     if unknown:
         raise ConfigError(
@@ -510,17 +522,42 @@ def parse_override(item: str) -> tuple[str, Any]:
     return key, value
 
 
-def apply_overrides(raw: Mapping[str, Any], items: Sequence[str], source: str) -> dict[str, Any]:
+def safety_rule_message(source: str, where: str, rule: str) -> str:
+    """The one-line refusal of a file or an override that sets a safety rule's key."""
+    return f"{source}: {where}: a safety rule, not a setting ({rule}); no setting can loosen it"
+
+
+def safety_rule_keys(cls: type, prefix: str = "") -> dict[str, str]:
+    """The dotted keys of the ``Config`` class ``cls`` and its nested sections that name a
+    safety rule (``Config.safety_rules``), each with its rule."""
+    keys = {prefix + name: rule for name, rule in getattr(cls, "safety_rules", {}).items()}
+    hints = typing.get_type_hints(cls)
+    for field in dataclasses.fields(cls):
+        for hint in (hints[field.name], *typing.get_args(hints[field.name])):
+            if isinstance(hint, type) and issubclass(hint, Config):
+                keys.update(safety_rule_keys(hint, f"{prefix}{field.name}."))
+    return keys
+
+
+def apply_overrides(
+    raw: Mapping[str, Any],
+    items: Sequence[str],
+    source: str,
+    safety_rules: Mapping[str, str] | None = None,
+) -> dict[str, Any]:
     """A deep copy of the raw mapping ``raw`` (as ``load_yaml`` returns it) with each
     ``KEY=VALUE`` of ``items`` set at its dotted path, in order.
 
     Only keys already in the mapping may be set (a typo is an error, not a new key); the
     values are not checked here but when the mapping is built into its ``Config`` class, as
-    for a file. ConfigError (one line, naming ``source`` and the key) otherwise.
+    for a file. A key of ``safety_rules`` (``safety_rule_keys``) is refused with its rule.
+    ConfigError (one line, naming ``source`` and the key) otherwise.
     """
     result = copy.deepcopy(dict(raw))
     for item in items:
         key, value = parse_override(item)
+        if safety_rules and key in safety_rules:
+            raise ConfigError(safety_rule_message(source, f"override '{key}'", safety_rules[key]))
         node: Any = result
         path = key.split(".")
         for depth, name in enumerate(path):

@@ -58,6 +58,10 @@ from core.spatial import (
 
 T = TypeVar("T")
 
+MAX_LINEAR_SPEED_M_S = 0.25
+"""The product's ceiling on any TCP speed limit (m/s): ISO 10218-1's reduced speed."""
+MAX_ANGULAR_SPEED_RAD_S = 1.0
+"""The product's ceiling on any TCP angular speed limit (rad/s)."""
 ROUNDING_RAD = 1e-12  # tilts this close to the limit count as within (float round-off)
 _TWIST_TILT_SAMPLES = 8  # points along a twist's horizon at which the tilt is checked
 
@@ -95,7 +99,11 @@ class WorkspaceBox:
 class Envelope(WorkspaceBox, Config):
     """The keys every envelope has (the robot YAML's ``envelope:``, a task's ``limits:``):
     the TCP's box in B (m), its linear and angular speed (norms, m/s and rad/s) and its tilt
-    from the downward vertical (rad). The code defaults are the shipped task limits."""
+    from the downward vertical (rad). The code defaults are the shipped task limits.
+
+    The speeds' ranges are the product's ceilings, which no file can exceed: 0.25 m/s, the
+    reduced speed of ISO 10218-1 for a robot with a person beside it (the teleop demo's
+    case), and 1 rad/s, which keeps a point 0.25 m from the TCP within that speed."""
 
     x_min_m: float = number(-2.0, 2.0, default=0.20)
     x_max_m: float = number(-2.0, 2.0, default=0.55)
@@ -103,8 +111,8 @@ class Envelope(WorkspaceBox, Config):
     y_max_m: float = number(-2.0, 2.0, default=0.25)
     z_min_m: float = number(-2.0, 2.0, default=0.02)
     z_max_m: float = number(-2.0, 2.0, default=0.40)
-    max_linear_speed_m_s: float = number(0.0, 1.0, default=0.05)
-    max_angular_speed_rad_s: float = number(0.0, math.pi, default=0.5)
+    max_linear_speed_m_s: float = number(0.0, MAX_LINEAR_SPEED_M_S, default=0.05)
+    max_angular_speed_rad_s: float = number(0.0, MAX_ANGULAR_SPEED_RAD_S, default=0.5)
     max_tilt_rad: float = number(0.0, math.pi / 2, default=0.35)
 
 

@@ -41,6 +41,7 @@ from core.config import (
     load_yaml_extending,
     number,
     resolve_config_path,
+    safety_rule_keys,
 )
 from core.sensor_profile import sensor_profile
 from core.task_geometry import HolePose, PlugGeometry
@@ -151,7 +152,9 @@ def load_task(
         raise ConfigError(f"backend {backend!r}: expected one of {', '.join(BACKENDS)}")
     path = task_path(name_or_path)
     source = str(path)
-    raw = apply_overrides(load_yaml_extending(path), overrides, source)
+    raw = apply_overrides(
+        load_yaml_extending(path), overrides, source, safety_rule_keys(TaskConfig)
+    )
     if SCENE_KEY not in raw:
         raise ConfigError(f"{source}: missing key '{SCENE_KEY}'")
     sections = {key: value for key, value in raw.items() if key != SCENE_KEY}
@@ -167,6 +170,7 @@ def load_task(
         hole=config.hole,
         tip_depth_m=config.machine.insert.depth_m,
         search_half_width_m=max(config.machine.search.uncertainty_xy_m, config.blind.half_width_m),
+        teleop=config.teleop,
     )
     scene = registry.scene_config(raw[SCENE_KEY], source) if backend == "sim" else None
     task = Task(config, scene, path, tuple(overrides), raw, devices)

@@ -16,7 +16,7 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
 * ``--backend real``: the configured devices, the same code.
 * ``--autonomy``: the insertion machine from the trials' start; the pad overrides it at any
   moment and ``hand_back`` resumes autonomy from a phase fitting the contact state.
-* The deadman is required (``teleop.require_deadman=true`` is forced); the e-stop latches
+* The deadman is required for takeover and motion (a safety rule, not a setting); the e-stop latches
   until released and acknowledged; the commands pass the task's limits; an unplugged pad
   while in control trips the watchdog (a safe stop within the tick).
 * The episode (every stream, docs/EPISODES.md) goes to ``DIR/episode.mcap``; the live view
@@ -98,9 +98,9 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def demo_overrides(args: argparse.Namespace) -> list[str]:
-    """The task overrides the demo needs, before the user's ``--set``: the deadman, the
-    duration, and (without ``--autonomy``, in simulation) the partly inserted start."""
-    overrides = ["teleop.require_deadman=true", f"machine.timeouts.total_s={args.duration}"]
+    """The task overrides the demo needs, before the user's ``--set``: the duration and
+    (without ``--autonomy``, in simulation) the partly inserted start."""
+    overrides = [f"machine.timeouts.total_s={args.duration}"]
     if not args.autonomy and args.backend == "sim":
         overrides.append(f"scene.start_depth_m={START_DEPTH_M}")
     return [*overrides, *args.overrides]

@@ -6,9 +6,10 @@ import pytest
 import yaml
 
 from controller.loop import LoopConfig
+from controller.run.task import TaskConfig, load_task
 from controller.safety import LimitsConfig
 from controller.teleop import TeleopConfig
-from core.config import ConfigError, build
+from core.config import CONFIG_ROOT, ConfigError, build, safety_rule_keys
 
 TASK_SECTIONS = """
 loop:
@@ -40,7 +41,6 @@ teleop:
   max_linear_speed_m_s: 0.02
   max_angular_speed_rad_s: 0.2
   takeover_threshold: 0.0
-  require_deadman: false
 """
 
 CLASSES = {"loop": LoopConfig, "limits": LimitsConfig, "teleop": TeleopConfig}
@@ -61,7 +61,7 @@ def test_the_sections_load_and_match_the_defaults():
         ("loop", "rt_priority", 100, "key 'loop.rt_priority'"),
         ("limits", "over_budget", "retreat", "key 'limits.over_budget': expected one of"),
         ("limits", "max_normal", -1, "key 'limits.max_normal'"),
-        ("teleop", "require_deadman", "yes", "key 'teleop.require_deadman'"),
+        ("teleop", "takeover_threshold", 2, "key 'teleop.takeover_threshold'"),
     ],
 )
 def test_a_bad_value_names_the_file_and_key(section, key, value, message):
@@ -69,3 +69,31 @@ def test_a_bad_value_names_the_file_and_key(section, key, value, message):
     data[key] = value
     with pytest.raises(ConfigError, match=f"task.yaml: {message}"):
         build(CLASSES[section], data, "task.yaml", f"{section}.")
+
+
+@pytest.mark.parametrize("value", [False, True, "no"])
+def test_a_file_setting_the_deadman_is_refused_as_a_safety_rule(value):
+    data = yaml.safe_load(TASK_SECTIONS)["teleop"]
+    data["require_deadman"] = value
+    with pytest.raises(ConfigError, match="task.yaml: key 'teleop.require_deadman': a safety rule"):
+        build(TeleopConfig, data, "task.yaml", "teleop.")
+
+
+@pytest.mark.parametrize("backend", ["sim", "real"])
+def test_an_override_of_the_deadman_is_refused_by_every_task_load(backend):
+    with pytest.raises(ConfigError, match="override 'teleop.require_deadman': a safety rule"):
+        load_task("usb_c", ["teleop.require_deadman=false"], backend=backend)
+
+
+def test_a_task_file_that_sets_the_deadman_is_refused(tmp_path):
+    task = tmp_path / "task.yaml"
+    base = CONFIG_ROOT / "tasks" / "usb_c.yaml"
+    task.write_text(f"extends: {base}\nteleop:\n  require_deadman: false\n")
+    with pytest.raises(ConfigError, match=r"key 'teleop.require_deadman': a safety rule"):
+        load_task(str(task))
+
+
+def test_every_safety_rule_key_is_found_in_the_task():
+    assert safety_rule_keys(TaskConfig) == {
+        "teleop.require_deadman": "takeover and motion always need the deadman held"
+    }

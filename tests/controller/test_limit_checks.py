@@ -89,3 +89,53 @@ def test_an_arm_envelope_that_excludes_the_search_is_refused(tmp_path):
     message = refusal("usb_a", [f"devices.arm={robot}"])
     assert message.startswith(f"{robot}: keys 'envelope.y_min_m', 'envelope.y_max_m': ")
     assert "the hole's y 0.0 m with the search's +-0.003 m, got [-0.25, 0.002]" in message
+
+
+@pytest.mark.parametrize(
+    ("override", "key", "bound"),
+    [
+        ("limits.max_linear_speed_m_s=0.2", "limits.max_linear_speed_m_s", "0.1"),
+        ("limits.max_angular_speed_rad_s=0.6", "limits.max_angular_speed_rad_s", "0.5"),
+        ("limits.x_max_m=0.6", "limits.x_max_m", "0.55"),
+        ("limits.y_min_m=-0.3", "limits.y_min_m", "-0.25"),
+        ("limits.z_max_m=0.5", "limits.z_max_m", "0.4"),
+    ],
+)
+@pytest.mark.parametrize("backend", ["sim", "real"])
+def test_a_task_limit_looser_than_the_arm_envelope_is_refused(override, key, bound, backend):
+    with pytest.raises(ConfigError) as error:
+        load_task("usb_c", [override], backend=backend)
+    message = str(error.value)
+    assert "\n" not in message
+    assert message.startswith(f"{task_path('usb_c')}: key '{key}': expected within envelope.*")
+    assert f"({bound}), got" in message and "never loosen it" in message
+
+
+def test_a_task_tilt_beyond_the_arm_envelope_is_refused_by_one_of_the_checks():
+    message = refusal("usb_c", ["limits.max_tilt_rad=0.4"])
+    assert "max_tilt_rad" in message
+
+
+@pytest.mark.parametrize("key", ["max_linear_speed_m_s=0.06", "max_angular_speed_rad_s=0.6"])
+def test_teleop_faster_than_the_task_limits_is_refused(key):
+    message = refusal("usb_c", [f"teleop.{key}"])
+    assert f"key 'teleop.{key.split('=')[0]}': expected at most limits." in message
+    assert "never loosen it" in message
+
+
+def test_a_task_may_tighten_the_limits():
+    load_task("usb_c", ["limits.max_linear_speed_m_s=0.03", "teleop.max_linear_speed_m_s=0.01"])
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "key"),
+    [
+        ("max_linear_speed_m_s: 0.10 ", "max_linear_speed_m_s: 0.30 ", "max_linear_speed_m_s"),
+        ("max_angular_speed_rad_s: 0.5", "max_angular_speed_rad_s: 1.5", "max_angular_speed_rad_s"),
+    ],
+)
+def test_no_robot_file_can_exceed_the_product_speed_ceilings(tmp_path, old, new, key):
+    robot = robot_with(tmp_path, old, new)
+    message = refusal("usb_c", [f"devices.arm={robot}"])
+    ceiling = {"max_linear_speed_m_s": 0.25, "max_angular_speed_rad_s": 1.0}[key]
+    assert f"key 'envelope.{key}': expected a number in [0.0, {ceiling}]" in message

@@ -32,10 +32,12 @@ def pad(clock):
         yield device
 
 
-def run(pad, clock, events, seconds, config=CONFIG):
-    """Arbitrate the script for ``seconds`` at 100 Hz; the TeleopInput of every tick. Events
-    are played half a tick early, so the clock's round-off cannot move them a tick later."""
-    pad.play([dataclasses.replace(e, t_s=max(0.0, e.t_s - TICK / 2)) for e in events])
+def run(pad, clock, events, seconds, config=CONFIG, deadman=True):
+    """Arbitrate the script for ``seconds`` at 100 Hz, the deadman held from the start unless
+    ``deadman`` is False; the TeleopInput of every tick. Events are played half a tick early,
+    so the clock's round-off cannot move them a tick later."""
+    held = [PadEvent(0.0, buttons={"deadman": True})] if deadman else []
+    pad.play(held + [dataclasses.replace(e, t_s=max(0.0, e.t_s - TICK / 2)) for e in events])
     arbiter = TeleopArbiter(config)
     out = []
     for _ in range(round(seconds / TICK)):
@@ -119,24 +121,23 @@ def test_a_lost_pad_not_in_control_is_not_a_trip(pad, clock):
     assert not any(lost_in_control(i) for i in inputs)
 
 
-def test_the_deadman_when_required(pad, clock):
-    config = TeleopConfig(max_linear_speed_m_s=0.02, require_deadman=True)
+def test_the_deadman_is_always_required(pad, clock):
     events = [
         PadEvent(0.1, axes={"vx": 1.0}),
         PadEvent(0.2, buttons={"deadman": True}),
         PadEvent(0.3, buttons={"deadman": False}),
     ]
-    inputs = run(pad, clock, events, 0.4, config)
-    assert not at(inputs, 0.15).in_control
+    inputs = run(pad, clock, events, 0.4, deadman=False)
+    assert not at(inputs, 0.15).in_control and at(inputs, 0.15).twist.linear_m_s == (0, 0, 0)
     assert at(inputs, 0.25).in_control and at(inputs, 0.25).twist.linear_m_s[0] == 0.02
     assert at(inputs, 0.35).in_control and at(inputs, 0.35).twist.linear_m_s[0] == 0.0
 
 
 def test_the_takeover_threshold():
     arbiter = TeleopArbiter(TeleopConfig(takeover_threshold=0.2))
-    state = GamepadState(0.0, True, {"vx": 0.1}, {})
-    assert not arbiter.update(state).in_control
-    assert arbiter.update(GamepadState(0.0, True, {"vx": 0.3}, {})).in_control
+    held = {"deadman": True}
+    assert not arbiter.update(GamepadState(0.0, True, {"vx": 0.1}, held)).in_control
+    assert arbiter.update(GamepadState(0.0, True, {"vx": 0.3}, held)).in_control
 
 
 def test_no_pad_configured():

@@ -125,3 +125,33 @@ def test_with_autonomy_the_pad_overrides_and_hand_back_resumes_from_the_contact_
         ("approach", "search", "surface_contact"),  # autonomy carries on
     ]
     assert episode.info["controller"] == "dipole"
+
+
+@pytest.mark.parametrize("backend", ["sim", "real"])
+@pytest.mark.parametrize("value", ["false", "true"])
+def test_the_deadman_cannot_be_set_in_any_mode(tmp_path, capsys, backend, value):
+    """The deadman is a safety rule, not a setting: ``--set`` naming it is refused in one
+    line with exit 2, whatever its value and backend, and nothing is written."""
+    out = tmp_path / "o"
+    override = f"teleop.require_deadman={value}"
+    code = demo_cli.main(
+        ["--no-view", "--backend", backend, "--set", override, "--out", str(out)]
+    )
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1
+    assert "teleop.require_deadman" in err and "safety rule" in err
+    assert not out.exists()
+
+
+def test_a_stick_without_the_deadman_never_moves_the_arm(tmp_path):
+    """The issue's exact probe: a full stick from the start, the deadman never held."""
+    script = tmp_path / "pad.yaml"
+    script.write_text("events:\n  - {t_s: 0.0, axes: {vy: 1.0}}\n")
+    out = tmp_path / "out"
+    args = ["--no-view", "--fast", "--duration", "5", "--script", str(script)]
+    assert demo_cli.main([*args, "--out", str(out)]) == 0
+    episode = read_episode(out / "episode.mcap")
+    teleop = [m.value for m in episode.messages("/teleop/input")]
+    assert teleop and not any(t["in_control_by"] == "operator" for t in teleop)
+    y = [m.value["tcp_xyz_m"][1] for m in episode.messages("/arm/status")]
+    assert max(y) - min(y) < 1e-6

@@ -93,7 +93,7 @@ def test_a_driver_fault_mid_insertion_stops_safely_within_one_period():
 def test_an_operator_takes_over_and_hands_back_through_the_gamepad():
     task = easy_task("usb_c")  # the hand-back must still lead to an insertion
     script = [
-        PadEvent(1.5, axes={"vz": 0.5}),  # during GRASP (settling): the stick up takes over
+        PadEvent(1.5, axes={"vz": 0.5}, buttons={"deadman": True}),  # during GRASP (settling)
         PadEvent(2.5, axes={"vz": 0.0}),
         PadEvent(3.5, buttons={"hand_back": True}),
         PadEvent(3.6, buttons={"hand_back": False}),
