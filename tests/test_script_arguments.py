@@ -1,18 +1,9 @@
 """Every script refuses nonsense counts, seeds and outputs with exit code 2 before any work."""
 
-import importlib
-import re
-from pathlib import Path
 
 import pytest
 
-SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
-
-
-def script_main(name: str):
-    """The ``main`` of the tool the script runs (``run_main("package.module")``)."""
-    module = re.search(r'run_main\(\s*"([\w.]+)"', (SCRIPTS / f"{name}.py").read_text())
-    return importlib.import_module(module.group(1)).main
+from tests.script_runs import script_main
 
 
 @pytest.mark.parametrize(

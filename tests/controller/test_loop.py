@@ -7,10 +7,7 @@ import dataclasses
 import math
 import os
 import signal
-import subprocess
-import sys
 import threading
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -24,6 +21,7 @@ from core.clock import MonotonicClock
 from core.devices import ArmState, Pose, Twist
 from drivers.sim.twins.gamepad import PadEvent
 from tests.controller.conftest import ScriptedEstimator, ScriptedMachine, sim_devices
+from tests.script_runs import exit_code
 
 PERIOD = 0.01
 
@@ -449,19 +447,12 @@ def test_a_refused_rt_priority_is_a_one_line_error_before_any_tick(devices, cloc
     assert machine.steps == 0
 
 
-def test_the_bench_script_runs():
-    root = Path(__file__).resolve().parents[2]
-    result = subprocess.run(
-        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--duration-s", "0.3"],
-        capture_output=True, text=True, cwd=root, timeout=120,
-    )  # fmt: skip
-    assert result.returncode == 0, result.stderr
-    assert "tick-start lateness" in result.stdout and "Machine:" in result.stdout
-    bad = subprocess.run(
-        [sys.executable, str(root / "scripts" / "bench_loop.py"), "--rate-hz", "0"],
-        capture_output=True, text=True, cwd=root, timeout=120,
-    )  # fmt: skip
-    assert bad.returncode == 2 and "--rate-hz" in bad.stderr
+def test_the_bench_script_runs(capsys):
+    assert exit_code("bench_loop", ["--duration-s", "0.3"]) == 0
+    out = capsys.readouterr().out
+    assert "tick-start lateness" in out and "Machine:" in out
+    assert exit_code("bench_loop", ["--rate-hz", "0"]) == 2
+    assert "--rate-hz" in capsys.readouterr().err
 
 
 def test_a_limit_holding_the_machine_back_trips_the_watchdog(devices, clock):

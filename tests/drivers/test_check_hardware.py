@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 from drivers import check_hardware
+from tests.script_runs import exit_code
 
 ROOT = Path(__file__).resolve().parents[2]
 SCRIPT = ROOT / "scripts" / "check_hardware.py"
@@ -44,22 +45,17 @@ def variant(tmp_path: Path, source: Path, name: str, **changes) -> str:
     return str(path)
 
 
-def test_the_sim_configs_all_report_ok_from_the_command_line():
-    result = subprocess.run(
-        [sys.executable, str(SCRIPT), *map(str, SIM_CONFIGS)],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
-    assert result.returncode == 0, result.stdout + result.stderr
-    lines = result.stdout.splitlines()
+def test_the_sim_configs_all_report_ok_from_the_command_line(capsys):
+    code = exit_code("check_hardware", list(map(str, SIM_CONFIGS)))
+    captured = capsys.readouterr()
+    assert code == 0, captured.out + captured.err
+    lines = captured.out.splitlines()
     assert len(lines) == len(SIM_CONFIGS)
     for line, path in zip(lines, SIM_CONFIGS, strict=True):
         assert line.startswith("OK ") and str(path.relative_to(ROOT)) in line
     assert "TCP at (0.350, 0.000, 0.200) m" in lines[0]
     assert "320x240 frame" in lines[2] and "240x320 frame" in lines[3]
-    assert result.stderr == ""
+    assert captured.err == ""
 
 
 def test_default_configs_are_the_robot_set(capsys):

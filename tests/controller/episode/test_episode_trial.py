@@ -22,32 +22,34 @@ from mcap.reader import make_reader
 
 from controller.episode import TOPICS, decode_image, grid_arrays, read_episode
 from controller.episode.repair import repair
-from controller.episode.session import EPISODE_FILE, EpisodeOptions
+from controller.episode.session import EPISODE_FILE
 from controller.run import load_task
 from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import Calibration
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.trials.trial import run
+from tests.conftest import RECORDED_SEED, RECORDED_TASK
 
 ROOT = Path(__file__).resolve().parents[3]
 
 
 @pytest.fixture(scope="module")
-def trial(tmp_path_factory):
-    out = tmp_path_factory.mktemp("episode") / "trial"
-    task = load_task("usb_c")
-    outcome = run(task, "dipole", 3, out_dir=out, episode=EpisodeOptions(image_format="png"))
-    return task, outcome, out
+def trial(recorded_trial):
+    """The suite's recorded trial (tests/conftest.py): its task and record folder."""
+    return load_task(RECORDED_TASK), recorded_trial
 
 
 def test_every_stream_round_trips(trial):
-    task, outcome, out = trial
+    task, out = trial
+    record = json.loads((out / "trial.json").read_text())
+    transitions_record = [json.loads(line) for line in
+                          (out / "transitions.jsonl").read_text().splitlines()]  # fmt: skip
+    truth_record = np.load(out / "truth.npz")
     ep = read_episode(out / EPISODE_FILE)
     assert ep.complete and ep.finished and ep.read_bytes == ep.size_bytes
     assert set(TOPICS) - set(ep.counts) == {"/episode/drops"}  # nothing dropped
-    assert ep.info["seed"] == "3" and ep.info["controller"] == "dipole"
+    assert ep.info["seed"] == str(RECORDED_SEED) and ep.info["controller"] == "dipole"
     assert ep.info["tactile_image_format"] == "png"
-    assert json.loads(ep.outcome["result"])["success"] == outcome.result.success
+    assert json.loads(ep.outcome["result"])["success"] == record["result"]["success"]
     assert ep.outcome["dropped_total"] == "0"
     assert b"task: usb_c" in ep.attachments["task.yaml"]
 
@@ -79,8 +81,8 @@ def test_every_stream_round_trips(trial):
 
     transitions = [m.value for m in ep.messages("/machine/transition")]
     assert [(t["from"], t["to"], t["reason"], t["rule"]) for t in transitions] == [
-        (t.source.value, t.target.value, t.reason, t.rule) for t in outcome.transitions
-    ]
+        (t["from"], t["to"], t["reason"], t["rule"]) for t in transitions_record
+    ] and transitions
 
     tf = [m.value.transforms[0] for m in ep.messages("/tf")]
     assert (tf[0].parent_frame_id, tf[0].child_frame_id) == ("B", "T")
@@ -101,14 +103,14 @@ def test_every_stream_round_trips(trial):
     assert grid["u_mm"].shape == (12, 16) and np.isfinite(grid["div"]).all()
 
     truth = [m.value for m in ep.messages("/sim/truth")]
-    assert len(truth) == len(outcome.truth["t_s"])
-    assert np.allclose([r["depth_m"] for r in truth], outcome.truth["depth_m"])
+    assert len(truth) == len(truth_record["t_s"])
+    assert np.allclose([r["depth_m"] for r in truth], truth_record["depth_m"])
     hole = [m.value.transforms[1] for m in ep.messages("/sim/tf")][-1]
     assert hole.child_frame_id == "H"
 
 
 def test_lossless_frames_re_estimate_the_logged_estimates_exactly(trial):
-    task, _, out = trial
+    task, out = trial
     ep = read_episode(out / EPISODE_FILE)
     attached = yaml.safe_load(ep.attachments["calibration.yaml"])
     calibration = Calibration.from_document(attached, "calibration.yaml")

@@ -1,5 +1,4 @@
-"""One real recorded episode for the replay tools' tests: a simulated USB-C trial (seed 0,
-the dipole controller) recorded once per session with lossless (PNG) frames."""
+"""The replay tools' tests read the suite's recorded trial (tests/conftest.py)."""
 
 from __future__ import annotations
 
@@ -7,17 +6,10 @@ from pathlib import Path
 
 import pytest
 
-from controller.episode.session import EPISODE_FILE, EpisodeOptions
-from controller.run import load_task
-from evaluation.trials.trial import run
+from controller.episode.session import EPISODE_FILE
 
 
 @pytest.fixture(scope="session")
-def episode_path(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("trial")
-    episode = EpisodeOptions(image_format="png")
-    outcome = run(load_task("usb_c"), "dipole", 0, out_dir=folder, episode=episode)
-    assert outcome.result.success
-    path = folder / EPISODE_FILE
-    path.chmod(0o444)  # the tools never write over their input
-    return path
+def episode_path(recorded_trial) -> Path:
+    """The recorded trial's episode: USB-C, seed 0, dipole, lossless frames, read-only."""
+    return recorded_trial / EPISODE_FILE

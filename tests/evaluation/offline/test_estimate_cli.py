@@ -21,6 +21,7 @@ from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
 from evaluation.offline.estimate_cli import CSV_COLUMNS, main
+from tests.script_runs import exit_code
 from tests.video_faults import corrupt_frame, truncate_inside_frame, write_mjpg
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -115,9 +116,8 @@ def test_mismatched_frame_size_is_named(folder, tmp_path, capsys):
     assert code == 2 and "frame 6" in err and "does not match the reference" in err
 
 
-def test_missing_required_argument_is_a_usage_error():
-    result = run_cli("somewhere")
-    assert result.returncode == 2 and "--out" in result.stderr
+def test_missing_required_argument_is_a_usage_error(capsys):
+    assert exit_code("estimate", ["somewhere"]) == 2 and "--out" in capsys.readouterr().err
 
 
 # --- outputs never clobber inputs or earlier results -----------------------------------------
@@ -539,11 +539,12 @@ def _damaged_inputs(folder, tmp_path):
     return [[str(folder)], [str(tmp_path / "cut.avi")]]
 
 
-def test_the_decoders_own_messages_never_reach_the_terminal(folder, tmp_path):
+def test_the_decoders_own_messages_never_reach_the_terminal(folder, tmp_path, capfd):
+    """Read at the file descriptors: a decoder writes to descriptor 2 itself, past Python."""
     for inputs in _damaged_inputs(folder, tmp_path):
-        result = run_cli(*inputs, "--out", str(tmp_path / "x.csv"))
-        err = result.stderr.strip()
-        assert result.returncode == 2 and err.startswith("estimate: error:"), err
+        code = exit_code("estimate", [*inputs, "--out", str(tmp_path / "x.csv")])
+        err = capfd.readouterr().err.strip()
+        assert code == 2 and err.startswith("estimate: error:"), err
         assert "\n" not in err, err
 
 

@@ -1,0 +1,29 @@
+"""Running a script's tool in the test's own process: the ``main`` that ``scripts/NAME.py``
+runs (its ``run_main("package.module")``). A test about the process itself (signals, exit
+codes of a real process, imports) starts the script in a subprocess instead."""
+
+from __future__ import annotations
+
+import importlib
+import re
+from collections.abc import Callable
+from pathlib import Path
+
+SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"
+
+
+def script_main(name: str) -> Callable[..., int | None]:
+    """The ``main`` of the tool that ``scripts/<name>.py`` runs."""
+    module = re.search(r'run_main\(\s*"([\w.]+)"', (SCRIPTS / f"{name}.py").read_text())
+    assert module is not None, f"scripts/{name}.py does not call run_main"
+    return importlib.import_module(module.group(1)).main
+
+
+def exit_code(name: str, argv: list[str]) -> int:
+    """The exit code of ``scripts/<name>.py argv`` run in this process: ``main``'s return
+    value (None: 0), or the code of the SystemExit it raised (argparse's usage errors)."""
+    try:
+        code = script_main(name)(argv)
+    except SystemExit as stop:
+        code = stop.code
+    return 0 if code is None else int(code)
