@@ -3,10 +3,13 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# make trials: issue 24's report, on its held-out seeds (named before its run; a new machine
-# gets new seeds, docs/BENCHMARKS.md "Insertion trials"), at the default insert speed
-SEEDS  ?= 4000:4200
-SPEEDS ?= 0.004
+# make trials: the held-out report (docs/BENCHMARKS.md "Insertion trials" names its seeds
+# before any run on them) of the product's controller, the oracle and the blind baseline, at
+# the default insert speed, on every core; run it again to resume where it stopped
+SEEDS       ?= 4000:4200
+SPEEDS      ?= 0.004
+CONTROLLERS ?= dipole,oracle,blind
+WORKERS     ?= $(shell nproc 2>/dev/null || echo 2)
 
 .PHONY: install demo estimator-demo test typecheck bench evaluate trials calibrations lint clean
 
@@ -42,9 +45,12 @@ calibrations: $(STAMP)
 	$(BIN)/python scripts/calibrate_task.py --task usb_a --out configs/calibrations/usb_a.yaml
 
 trials: $(STAMP)
-	rm -rf out/trials
-	MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task usb_c --seeds $(SEEDS) --speeds $(SPEEDS) --workers 2 --out out/trials/usb_c
-	MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task usb_a --seeds $(SEEDS) --speeds $(SPEEDS) --workers 2 --out out/trials/usb_a
+	@for task in usb_c usb_a; do \
+	  resume=$$(test -f out/trials/$$task/comparison.json -o -d out/trials/$$task/cells && echo --resume); \
+	  MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task $$task --controllers $(CONTROLLERS) \
+	    --seeds $(SEEDS) --speeds $(SPEEDS) --workers $(WORKERS) --out out/trials/$$task $$resume \
+	    || exit $$?; \
+	done
 	$(BIN)/python scripts/publish_trials.py out/trials --docs docs
 
 lint: $(STAMP)

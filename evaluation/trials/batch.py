@@ -279,6 +279,12 @@ def _pending(batches: Sequence[Batch], resume: bool) -> dict[int, Sequence[Trial
     return {id(b): _continued(b, f) for b, f in zip(batches, finished, strict=True)}
 
 
+def success_so_far(successes: int, done: int) -> str:
+    """The progress bar's note: the trials inserted of those finished (a resumed run's
+    earlier ones included), as a count and a percentage."""
+    return f"inserted {successes}/{done} ({100.0 * successes / done:.1f}%)"
+
+
 def write_summary(path: Path, summary: Mapping[str, Any]) -> None:
     """``summary`` as indented JSON at ``path``, atomically."""
     write_text(path, json.dumps(_json_safe(summary), indent=2) + "\n")
@@ -295,9 +301,10 @@ def run_batches(
     """Run every batch's trials on ``executor`` and record them (module doc); fills each
     batch's ``results`` and ``summary``. Returns None when every trial finished, or the
     signal (``"SIGINT"``, ``"SIGTERM"``) that stopped the run, after the summaries of what
-    finished are written. The progress bar goes to stderr. ``resume``: continue batches
-    stopped before their end (module doc; ToolError, before any trial runs, when one
-    cannot be)."""
+    finished are written. The progress bar goes to stderr: the trials done of those to run,
+    the time so far and tqdm's estimate of the time left, and ``success_so_far``. ``resume``:
+    continue batches stopped before their end (module doc; ToolError, before any trial
+    runs, when one cannot be)."""
     in_flight: dict[TrialSpec, Batch] = {}
     pending = _pending(batches, resume)
 
@@ -326,6 +333,7 @@ def run_batches(
                     )
                 )
                 successes = sum(r.success for b in batches for r in b.results)
+                done = sum(len(b.results) for b in batches)
                 for spec, result in executor.run(function, submitted()):
                     with signals.recording():
                         batch = in_flight.pop(spec)
@@ -334,7 +342,8 @@ def run_batches(
                         if spec.out_dir is not None:
                             keep_record(spec.out_dir)
                     successes += result.success
-                    bar.set_postfix(succeeded=successes, refresh=False)
+                    done += 1
+                    bar.set_postfix_str(success_so_far(successes, done), refresh=False)
                     bar.update(1)
                     if on_result is not None:
                         on_result(result)

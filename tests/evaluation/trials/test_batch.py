@@ -4,6 +4,7 @@ import csv
 import json
 import math
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -234,6 +235,15 @@ def test_csv_streams_each_result_as_it_arrives(tmp_path):
     batch = Batch(specs(range(4)), tmp_path / "batch")
     run_batches(fake_trial, [batch], LocalExecutor(1), progress=False, on_result=check)
     assert seen == [1, 2, 3, 4]  # on disk before the next trial starts
+
+
+def test_the_progress_bar_shows_trials_done_success_so_far_and_time_left(tmp_path, capsys):
+    batch = Batch(specs(range(4)), tmp_path / "batch")  # seed 3 times out
+    run_batches(fake_trial, [batch], LocalExecutor(1), progress=True)
+    bar = capsys.readouterr().err.replace("\r", "\n").splitlines()
+    final = [line for line in bar if "4/4" in line][-1]
+    assert "inserted 3/4 (75.0%)" in final
+    assert re.search(r"\[\d\d:\d\d<\d\d:\d\d", final)  # time so far < time left
 
 
 def test_a_folder_holding_a_batch_is_refused(tmp_path):
