@@ -57,7 +57,6 @@ from evaluation.common.cli_support import (
     run_tool,
 )
 from evaluation.common.outputs import check_output_folder
-from evaluation.teleop.pad_script import load_pad_script
 from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
 
@@ -115,6 +114,9 @@ def _run(args: argparse.Namespace) -> int:
         raise ToolError(f"{task.path}: key 'devices.gamepad': the demo needs a gamepad")
     script = None
     if args.backend == "sim" and (args.script or args.fast or not real_pad_attached()):
+        # imported here: a script plays the simulated pad, which a real run never loads
+        from evaluation.teleop.pad_script import load_pad_script
+
         script = load_pad_script(args.script or DEFAULT_SCRIPT)
     args.out.mkdir(parents=True, exist_ok=True)
     return run_demo(task, args, script)

@@ -20,11 +20,14 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from controller.episode import Episode
-from drivers.sim.twins.gamepad import PadEvent
+
+if TYPE_CHECKING:  # the scripted pad's events: the simulated pad, never loaded on the robot
+    from drivers.sim.twins.gamepad import PadEvent
 
 AXES = {"vy": ("tau_x", 1.0), "wz": ("tau_y", -1.0)}
 """Pad action -> (the torque it drives, the sign of that torque per unit of the action)."""

@@ -25,7 +25,6 @@ from controller.loop import LoopResult
 from controller.run import RunOutcome, Task, load_task, run_task
 from core.atomic_files import atomic_file
 from evaluation.common.cli_support import Terminated
-from evaluation.trials.episode_truth import SimTruthLogger
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
@@ -131,7 +130,13 @@ def _run(
     recording: EpisodeRecording | None,
     run_options: dict[str, Any],
 ) -> TrialOutcome:
-    truth_logger = SimTruthLogger(recording) if recording is not None else None
+    truth_logger = None
+    if recording is not None and run_options.get("backend", "sim") == "sim":
+        # imported here: the truth's columns come from the simulator, which a real run
+        # never loads
+        from evaluation.trials.episode_truth import SimTruthLogger
+
+        truth_logger = SimTruthLogger(recording)
     if truth_logger is not None:
         prepare = run_options.pop("prepare", None)
 

@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _run(args: argparse.Namespace) -> int:
-    task = load_task(args.task, args.overrides)
+    task = load_task(args.task, args.overrides, args.backend)
     check_output_folder(args.out, [task.path], option="--out")
     if args.out.exists() and any(args.out.iterdir()):
         raise ToolError(f"--out '{args.out}': the folder is not empty")
