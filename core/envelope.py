@@ -51,7 +51,7 @@ from core.spatial import (
     rpy_from_quat,
     tilt_of_quat,
     tilt_of_rotation,
-    tilt_of_tool_axis,
+    tilts_of_tool_axes,
     tool_z_in_base,
     vec3,
 )
@@ -242,8 +242,10 @@ def limit_twist(twist: Twist, pose: Pose, duration_s: float, envelope: Envelope)
 def _tilts_beyond(pose: Pose, angular: np.ndarray, duration_s: float, max_tilt_rad: float) -> bool:
     """Whether turning at ``angular`` (rad/s, in B) from ``pose`` tilts the tool beyond
     ``max_tilt_rad`` (or beyond its present tilt, if larger) within ``duration_s``."""
+    if angular[0] == 0.0 and angular[1] == 0.0:
+        return False  # about the vertical only: the tilt stays (ROUNDING_RAD covers round-off)
     rotation = rotation_from_rpy(pose.rpy_rad)
     allowed = max(max_tilt_rad, tilt_of_rotation(rotation)) + ROUNDING_RAD
     times = np.linspace(duration_s / _TWIST_TILT_SAMPLES, duration_s, _TWIST_TILT_SAMPLES)
     z_path = Rotation.from_rotvec(np.outer(times, angular)).apply(tool_z_in_base(rotation))
-    return any(tilt_of_tool_axis(z_T_in_B)[0] > allowed for z_T_in_B in z_path)
+    return bool(np.any(tilts_of_tool_axes(z_path) > allowed))

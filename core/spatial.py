@@ -114,6 +114,13 @@ def tilt_of_tool_axis(z_T_in_B: np.ndarray) -> tuple[float, np.ndarray]:
     return angle, axis
 
 
+def tilts_of_tool_axes(z_T_in_B: np.ndarray) -> np.ndarray:
+    """The tilts (rad, in [0, pi]) of tools whose z-axes in B are the rows of ``z_T_in_B``
+    (N x 3, unit rows): ``tilt_of_tool_axis``'s angle for each row, computed at once."""
+    horizontal = np.hypot(z_T_in_B[:, 0], z_T_in_B[:, 1])  # |z_T x -z_B|
+    return np.arctan2(horizontal, -z_T_in_B[:, 2])  # z_T . -z_B
+
+
 def tilt_of_rotation(T2B: Rotation) -> float:
     """The tilt (rad, in [0, pi]) of the tool oriented by R_T2B."""
     return tilt_of_tool_axis(tool_z_in_base(T2B))[0]

@@ -19,6 +19,7 @@ from core.spatial import (
     rpy_from_rotation,
     tilt_of_rotation,
     tilt_of_tool_axis,
+    tilts_of_tool_axes,
     tool_z_in_base,
 )
 
@@ -104,3 +105,13 @@ def test_clamp_norm_bounds_the_norm_and_keeps_the_direction(vector, limit):
     else:
         np.testing.assert_allclose(np.cross(clamped, vector), 0.0, atol=1e-9)
         assert np.dot(clamped, vector) >= 0.0
+
+
+def test_the_tilts_of_many_tool_axes_are_each_axis_tilt():
+    rng = np.random.default_rng(3)
+    axes = rng.normal(size=(200, 3))
+    axes /= np.linalg.norm(axes, axis=1, keepdims=True)
+    axes[0], axes[1] = (0.0, 0.0, -1.0), (0.0, 0.0, 1.0)  # straight down, straight up
+    expected = [tilt_of_tool_axis(axis)[0] for axis in axes]
+    np.testing.assert_allclose(tilts_of_tool_axes(axes), expected, rtol=0, atol=1e-15)
+    assert tilts_of_tool_axes(axes)[0] == 0.0 and tilts_of_tool_axes(axes)[1] == math.pi
