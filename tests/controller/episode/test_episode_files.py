@@ -92,7 +92,7 @@ def test_a_truncated_file_reads_to_its_last_whole_record_and_says_how_much(tmp_p
     report = repair(cut, tmp_path / "fixed.mcap")
     assert (report.read_bytes, report.source_bytes) == (ep.read_bytes, ep.size_bytes)
     assert read_episode(tmp_path / "fixed.mcap").counts == ep.counts
-    with pytest.raises(EpisodeError, match="already finished"):
+    with pytest.raises(EpisodeError, match="already finished and whole"):
         repair(path, tmp_path / "again.mcap")
     with pytest.raises(EpisodeError, match="is the episode itself"):
         repair(cut, cut)
