@@ -29,9 +29,11 @@ from __future__ import annotations
 
 import argparse
 import csv
+import itertools
 import math
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from controller.episode import Episode, EpisodeError, read_episode
@@ -51,8 +53,8 @@ from evaluation.common.outputs import atomic_text, check_output_file, check_outp
 from evaluation.episodes import episode_streams, reestimation
 from evaluation.episodes.episode_chart import write_episode_chart
 from evaluation.episodes.episode_summary import summary_lines
-from evaluation.episodes.lerobot_alignment import AlignmentError, align
-from evaluation.episodes.lerobot_dataset import write_dataset
+from evaluation.episodes.lerobot_alignment import AlignedEpisode, AlignmentError, align
+from evaluation.episodes.lerobot_dataset import DatasetEpisode, write_dataset
 from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
 
 PROG = "replay"
@@ -203,30 +205,54 @@ def _task_sentence(episode: Episode, given: str | None) -> str:
 def export(args: argparse.Namespace) -> int:
     distinct(build_parser(), "EP", [str(p.resolve()) for p in args.episodes])
     check_output_folder(args.lerobot, args.episodes, "--lerobot", must_not_exist=True)
-    aligned = []
-    for path in args.episodes:
-        episode = open_episode(path, args.allow_truncated)
-        try:
-            aligned.append(align(episode, _task_sentence(episode, args.task)))
-        except AlignmentError as exc:
-            raise ToolError(f"episode '{path}': {exc}") from None
-        first = aligned[0]
-        if (aligned[-1].fps, aligned[-1].frame_hw) != (first.fps, first.frame_hw):
-            raise ToolError(
-                f"episode '{path}': {aligned[-1].fps} fps, frames {aligned[-1].frame_hw}; the "
-                f"first episode has {first.fps} fps, frames {first.frame_hw}: one dataset "
-                "holds one rate and one frame size"
-            )
-    written = write_dataset(
-        [a.dataset for a in aligned], args.lerobot, aligned[0].fps, aligned[0].frame_hw
-    )
-    repeated = sum(a.repeated for a in aligned)
+    aligned = _aligned_episodes(args.episodes, args.allow_truncated, args.task)
+    first = next(aligned)  # the dataset's rate, frame size and window
+    fps, frame_hw, window = first.fps, first.frame_hw, first.window
+    repeated = 0
+
+    def each() -> Iterator[DatasetEpisode]:
+        nonlocal repeated
+        for item in itertools.chain([first], aligned):
+            repeated += item.repeated
+            yield item.dataset  # its frames are read while the video is written, then freed
+
+    try:
+        written = write_dataset(each(), args.lerobot, fps, frame_hw)
+    except ValueError as exc:  # an episode the dataset cannot hold (named in the message)
+        raise ToolError(f"--lerobot '{args.lerobot}': {exc}") from None
     print(
         f"{PROG}: wrote a LeRobot v3.0 dataset of {written.episodes} episodes, "
-        f"{written.frames} frames at {written.fps} fps ({aligned[0].window} control ticks "
+        f"{written.frames} frames at {written.fps} fps ({window} control ticks "
         f"per frame; {repeated} rows repeat an older frame) to {args.lerobot}"
     )
     return 0
+
+
+def _aligned_episodes(
+    paths: list[Path], allow_truncated: bool, task: str | None
+) -> Iterator[AlignedEpisode]:
+    """Each episode read and aligned only when the export asks for it (one in memory at a
+    time); ToolError naming the file for one the first one's dataset cannot hold (another
+    camera rate, frame size, or loop rate: the window of ticks per frame)."""
+    first: AlignedEpisode | None = None
+    for path in paths:
+        episode = open_episode(path, allow_truncated)
+        try:
+            item = align(episode, _task_sentence(episode, task))
+        except AlignmentError as exc:
+            raise ToolError(f"episode '{path}': {exc}") from None
+        del episode  # the aligned episode's frames keep what they need
+        if first is None:
+            first = item
+        elif (item.fps, item.frame_hw, item.window) != (first.fps, first.frame_hw, first.window):
+            raise ToolError(
+                f"episode '{path}': {item.fps} fps, frames {item.frame_hw}, "
+                f"{item.window} control ticks per frame (loop {item.loop_rate_hz:.0f} Hz); the "
+                f"first episode has {first.fps} fps, frames {first.frame_hw}, {first.window} "
+                f"ticks per frame (loop {first.loop_rate_hz:.0f} Hz): one dataset holds one "
+                "camera rate, frame size and loop rate; export them separately"
+            )
+        yield item
 
 
 def repair(args: argparse.Namespace) -> int:
