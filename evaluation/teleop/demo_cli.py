@@ -115,7 +115,8 @@ def _run(args: argparse.Namespace) -> int:
         raise ToolError(f"{task.path}: key 'devices.gamepad': the demo needs a gamepad")
     script = None
     if args.backend == "sim" and (args.script or args.fast or not real_pad_attached()):
-        script = load_pad_script(args.script or DEFAULT_SCRIPT)
+        mapping = pad_mapping(task)
+        script = load_pad_script(args.script or DEFAULT_SCRIPT, mapping.axes, mapping.buttons)
     args.out.mkdir(parents=True, exist_ok=True)
     return run_demo(task, args, script)
 
@@ -250,10 +251,14 @@ def _pad_preparation(task: Task, script: Any) -> Callable[[registry.DeviceSet], 
     return prepare
 
 
+def pad_mapping(task: Task) -> Any:
+    """The gamepad's mapping (its device file's ``axes`` and ``buttons`` by action)."""
+    return registry.load_device_config(task.device_files["gamepad"], "real", "gamepad").config
+
+
 def mapping_lines(task: Task) -> list[str]:
     """The pad's mapping as the view lists it."""
-    spec = registry.load_device_config(task.device_files["gamepad"], "real", "gamepad")
-    config = spec.config
+    config = pad_mapping(task)
     lines = [f"{action}: {b.axis}{' (inverted)' if b.invert else ''}"
              for action, b in config.axes.items()]  # fmt: skip
     lines.append(", ".join(f"{action}: {button}" for action, button in config.buttons.items()))

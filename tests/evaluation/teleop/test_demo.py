@@ -62,6 +62,30 @@ def test_a_bad_script_is_one_line_naming_the_event(tmp_path, capsys):
     assert code == 2 and "events[0]" in err and "axes.vy" in err and err.count("\n") == 1
 
 
+@pytest.mark.parametrize(
+    "events, said",
+    [
+        ("  - {t_s: 0.0, axes: {vx_typo: 0.5}}\n",
+         "events[0] (t_s 0): key 'axes': unknown action 'vx_typo'"),
+        ("  - {t_s: 0.0, buttons: {turbo: true}}\n",
+         "events[0] (t_s 0): key 'buttons': unknown action 'turbo'"),
+        ("  - {t_s: 3.0, axes: {vy: 0.5}}\n  - {t_s: 1.0, axes: {vy: 0.0}}\n",
+         "events[1] (t_s 1): expected times in increasing order"),
+    ],
+)  # fmt: skip
+def test_a_script_naming_an_unknown_action_or_out_of_order_is_one_line_and_no_out(
+    events, said, tmp_path, capsys
+):
+    script = tmp_path / "pad.yaml"
+    script.write_text("events:\n" + events)
+    out = tmp_path / "o"
+    code = demo_cli.main(["--no-view", "--fast", "--script", str(script), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.count("\n") == 1 and "Traceback" not in err, err
+    assert err.startswith(f"teleop_demo: error: {script}: {said}"), err
+    assert not out.exists()
+
+
 class QuittingView:
     """Stands in for the view process: after ``after`` frames it sends 'rezero', then
     'quit', as the window's keys would (from the writer's thread, as the real watcher's)."""
