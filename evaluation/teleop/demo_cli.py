@@ -23,8 +23,14 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
   (a window, its own process) shows it as it is written; ``--foxglove`` serves the same
   streams on ws://HOST:PORT (a port already taken: one line, exit 2).
 
+Times printed (the timeline, the sign table) are seconds from the run's start, on its
+clock. ``--duration S`` ends the demo after S s on that clock.
+
 Exit: 0 when the demo ended (hand-back, the duration, the window closed); 130 / 143 on
-SIGINT / SIGTERM after the safe stop; 2 for bad input; 1 if a device could not be reached.
+SIGINT / SIGTERM after the safe stop; 2 for bad input; 1 if a device could not be reached
+or the run ended in a fault (a watchdog trip: an unplugged pad while the operator drives,
+late ticks; after the safe stop, one line naming it; a simulated real-time run on a loaded
+machine is told to need an idle core, evaluation/common/run_outcome.py).
 """
 
 from __future__ import annotations
@@ -57,6 +63,7 @@ from evaluation.common.cli_support import (
     run_tool,
 )
 from evaluation.common.outputs import check_output_folder
+from evaluation.common.run_outcome import fault_exit, pace_line
 from evaluation.teleop.pad_script import load_pad_script
 from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
@@ -180,9 +187,11 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
                 args.seed,
                 backend=args.backend,
                 realtime=not args.fast,
+                paced=True,
                 controllers=table,
                 prepare=_pad_preparation(task, script),
                 episode=recording,
+                max_duration_s=args.duration,
             )
         except BaseException as error:
             recording.close({"error": f"{type(error).__name__}: {error}"})
@@ -196,7 +205,7 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     print(f"teleop_demo: episode {args.out / EPISODE_FILE}")
     if outcome.loop.reason == "signal" and not quit_asked:
         return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
-    return 0
+    return fault_exit("teleop_demo", outcome.loop)
 
 
 def controller_table(machines: list[Any]) -> dict[str, Controller]:
@@ -244,7 +253,9 @@ def _pad_preparation(task: Task, script: Any) -> Callable[[registry.DeviceSet], 
             twin: Any = device_set.devices.gamepad  # the simulated pad (drivers/sim/twins)
             twin.play(script)
             return None
-        pad: Any = registry.load_device(task.device_files["gamepad"], "real", kind="gamepad")
+        pad: Any = registry.load_device(  # on the world's clock, as every device of the run
+            task.device_files["gamepad"], "real", kind="gamepad", clock=device_set.clock
+        )
         devices = dataclasses.replace(device_set.devices, gamepad=pad)
         return dataclasses.replace(device_set, devices=devices)
 
@@ -294,6 +305,9 @@ def summary(outcome: RunOutcome, view: Any) -> str:
                  f"{outcome.loop.phase.value}")  # fmt: skip
     lines.append(f"loop: {stats.ticks} ticks, {stats.overruns} overruns, period p99 "
                  f"{stats.period_p99_s * 1e3:.2f} ms")  # fmt: skip
+    pace = pace_line(outcome.devices.clock)
+    if pace is not None:
+        lines.append(pace)
     if view is not None:
         lines.append(f"view: {view.offered} frames offered, {view.dropped} dropped")
     return "\n".join(lines)

@@ -149,3 +149,42 @@ def test_with_autonomy_the_pad_overrides_and_hand_back_resumes_from_the_contact_
         ("approach", "search", "surface_contact"),  # autonomy carries on
     ]
     assert episode.info["controller"] == "dipole"
+
+
+def test_duration_is_the_longest_the_demo_runs(tmp_path):
+    out = tmp_path / "out"
+    assert demo_cli.main(["--no-view", "--fast", "--duration", "5", "--out", str(out)]) == 0
+    episode = read_episode(out / "episode.mcap")
+    assert episode.outcome["reason"] == "max_duration"
+    assert episode.counts["/loop/tick"] == 500  # 5 s at 100 Hz, not 10 s
+
+
+def test_an_unplugged_pad_while_the_operator_drives_is_a_fault_and_exit_1(tmp_path, capsys):
+    script = tmp_path / "pad.yaml"
+    script.write_text(
+        "events:\n"
+        "  - {t_s: 0.0, buttons: {deadman: true}}\n"
+        "  - {t_s: 3.0, axes: {vy: 0.5}}\n"
+        "  - {t_s: 4.0, attached: false}\n"
+    )
+    out = tmp_path / "out"
+    code = demo_cli.main(["--no-view", "--fast", "--script", str(script), "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1, err
+    assert err.startswith("teleop_demo: error: the run ended in a fault (safe stop done): gamepad")
+    assert read_episode(out / "episode.mcap").outcome["reason"] == "fault"
+
+
+def test_a_real_time_demo_prints_times_from_its_start_and_checks_its_signs(tmp_path, capsys):
+    """Real time (the default): on the paced clock from 0, so the timeline and the sign
+    checks read the run's own times, and a busy machine slows it without a fault."""
+    out = tmp_path / "out"
+    assert demo_cli.main(["--no-view", "--duration", "6", "--out", str(out)]) == 0
+    printed = capsys.readouterr().out
+    timeline = printed.splitlines()[1]
+    assert timeline.endswith("grasp -> teleop (grasped_and_zeroed)")
+    assert 0.0 < float(timeline.split()[0]) < 6.0
+    assert "real time: the simulation" in printed
+    first = next(line for line in printed.splitlines() if line.startswith("vy +1.00 (  4.0"))
+    assert first.endswith("yes"), printed
+    assert read_episode(out / "episode.mcap").time_range_s()[0] < 6.0
