@@ -124,8 +124,14 @@ def _run(args: argparse.Namespace) -> int:
     if args.backend == "sim" and (args.script or args.fast or not real_pad_attached()):
         mapping = pad_mapping(task)
         script = load_pad_script(args.script or DEFAULT_SCRIPT, mapping.axes, mapping.buttons)
+    created = not args.out.exists()
     args.out.mkdir(parents=True, exist_ok=True)
-    return run_demo(task, args, script)
+    try:
+        return run_demo(task, args, script)
+    except BaseException:  # nothing recorded yet (a stream that cannot listen, no devices)
+        if created and not any(args.out.iterdir()):
+            args.out.rmdir()  # no empty folder left that looks like a run's
+        raise
 
 
 def real_pad_attached() -> bool:

@@ -50,6 +50,8 @@ def test_a_taken_foxglove_port_is_one_line_and_exit_2(tmp_path, capsys):
         taken.close()
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1 and f"127.0.0.1:{taken.port}" in err
+    assert "the port is taken" in err
+    assert not (tmp_path / "o").exists()  # no empty folder that looks like a run's
 
 
 def test_a_bad_script_is_one_line_naming_the_event(tmp_path, capsys):
@@ -188,3 +190,12 @@ def test_a_real_time_demo_prints_times_from_its_start_and_checks_its_signs(tmp_p
     first = next(line for line in printed.splitlines() if line.startswith("vy +1.00 (  4.0"))
     assert first.endswith("yes"), printed
     assert read_episode(out / "episode.mcap").time_range_s()[0] < 6.0
+
+
+def test_a_real_run_without_devices_leaves_no_output_folder_and_no_sdk_banner(tmp_path, capsys):
+    out = tmp_path / "o"
+    assert demo_cli.main(["--backend", "real", "--no-view", "--out", str(out)]) == 1
+    captured = capsys.readouterr()
+    assert "SDK_VERSION" not in captured.out + captured.err
+    assert captured.err.startswith("teleop_demo: error: ") and captured.err.count("\n") == 1
+    assert not out.exists()
