@@ -284,13 +284,14 @@ def mapping_lines(task: Task) -> list[str]:
 
 def sign_table(episode: Episode, script: list[Manoeuvre]) -> str:
     """Each scripted manoeuvre, the torque it drives, the expected sign and the change
-    the episode recorded (docs/TELEOP.md, "Signs")."""
-    lines = ["manoeuvre (script s)          torque  expected  measured change  ok"]
+    the episode recorded, with its unit (docs/TELEOP.md, "Signs")."""
+    lines = ["manoeuvre (script s)          torque  expected  measured change        ok"]
     for check in measured_signs(episode, script):
         m = check.manoeuvre
+        change = f"{check.change:+.2e} {check.unit}"
         lines.append(f"{m.action} {m.value:+.2f} ({m.start_s:5.1f}-{m.end_s:5.1f})"
-                     f"{'':8}{m.torque}  {m.expected_sign:+d}        {check.change:+.2e}"
-                     f"        {verdict(check)}")  # fmt: skip
+                     f"{'':8}{m.torque}  {m.expected_sign:+d}        {change:<22} "
+                     f"{verdict(check)}")  # fmt: skip
     return "\n".join(lines)
 
 
