@@ -35,6 +35,8 @@ class SubprotocolRelay:
     """Listen on ``host``:``port`` (0: any free port; ``port`` then says which) and relay
     each client to the Foxglove server at ws://127.0.0.1:``upstream_port``."""
 
+    port: int
+
     def __init__(self, host: str, port: int, upstream_port: int) -> None:
         self._upstream = f"ws://127.0.0.1:{upstream_port}"
         self._loop = asyncio.new_event_loop()
