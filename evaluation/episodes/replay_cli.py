@@ -111,6 +111,8 @@ def summary(args: argparse.Namespace) -> int:
 
 
 def plot(args: argparse.Namespace) -> int:
+    if args.out.suffix.lower() != ".png":
+        raise ToolError(f"--out '{args.out}': expected a .png file (the chart is a PNG)")
     check_output_file(args.out, [args.episode])
     episode = open_episode(args.episode, args.allow_truncated)
     if not episode.counts.get(LOOP_TICK.name):

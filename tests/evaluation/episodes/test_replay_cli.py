@@ -51,7 +51,14 @@ def test_plot_draws_the_chart_and_never_writes_over_the_episode(episode_path, tm
     before = episode_path.read_bytes()
     capsys.readouterr()
     assert main(["plot", str(episode_path), "--out", str(episode_path)]) == 2
+    assert "expected a .png file" in one_error_line(capsys)
+    link = tmp_path / "link.png"
+    link.symlink_to(episode_path)
+    assert main(["plot", str(episode_path), "--out", str(link)]) == 2
     assert "never writes over its inputs" in one_error_line(capsys)
+    assert main(["plot", str(episode_path), "--out", str(tmp_path / "chart.txt")]) == 2
+    assert "expected a .png file" in one_error_line(capsys)
+    assert not (tmp_path / "chart.txt").exists()
     assert episode_path.read_bytes() == before
 
 
