@@ -1,5 +1,7 @@
 """What ``run_trial`` and ``teleop_demo`` say about how a run went, beyond its timeline.
 
+* ``signal_exit``: a run stopped by SIGINT or SIGTERM (the loop's safe path) says so in one
+  stderr line, as every tool does, naming what it kept, and exits 130 or 143;
 * ``fault_exit``: a run that ended in a fault (a watchdog trip, an exception in a tick;
   always after a safe stop, controller/loop.py) prints one stderr line naming it and exits
   with ``EXIT_DEVICE`` (1: a device could not be reached or failed); other ends are 0.
@@ -17,7 +19,18 @@ import sys
 from typing import Any
 
 from controller.loop import LoopResult
-from evaluation.common.cli_support import EXIT_DEVICE, one_line
+from evaluation.common.cli_support import EXIT_DEVICE, EXIT_SIGINT, EXIT_SIGTERM, one_line
+
+
+def signal_exit(prog: str, loop: LoopResult, kept: str) -> int | None:
+    """130 or 143 after one stderr line if ``loop`` was stopped by SIGINT or SIGTERM (``kept``:
+    what the run kept, e.g. its episode), else None."""
+    if loop.reason != "signal":
+        return None
+    term = "SIGTERM" in loop.message
+    word = "ended by SIGTERM" if term else "interrupted by SIGINT"
+    print(f"{prog}: {word} (safe stop done); {kept}", file=sys.stderr)
+    return EXIT_SIGTERM if term else EXIT_SIGINT
 
 
 def fault_exit(prog: str, loop: LoopResult) -> int:

@@ -55,15 +55,13 @@ from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
 from drivers import registry
 from evaluation.common.cli_support import (
-    EXIT_SIGINT,
-    EXIT_SIGTERM,
     ToolError,
     integer,
     number,
     run_tool,
 )
 from evaluation.common.outputs import check_output_folder
-from evaluation.common.run_outcome import fault_exit, pace_line
+from evaluation.common.run_outcome import fault_exit, pace_line, signal_exit
 from evaluation.teleop.pad_script import load_pad_script
 from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
@@ -209,8 +207,11 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     if script is not None and not args.autonomy:
         print(sign_table(read_episode(args.out / EPISODE_FILE), manoeuvres(script)))
     print(f"teleop_demo: episode {args.out / EPISODE_FILE}")
-    if outcome.loop.reason == "signal" and not quit_asked:
-        return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
+    if not quit_asked:
+        kept = f"the episode is complete up to then: {args.out / EPISODE_FILE}"
+        stopped = signal_exit("teleop_demo", outcome.loop, kept)
+        if stopped is not None:
+            return stopped
     return fault_exit("teleop_demo", outcome.loop)
 
 

@@ -25,9 +25,9 @@ from pathlib import Path
 
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run.task import load_task
-from evaluation.common.cli_support import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
+from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.common.outputs import check_output_folder
-from evaluation.common.run_outcome import fault_exit
+from evaluation.common.run_outcome import fault_exit, signal_exit
 from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED
@@ -85,8 +85,11 @@ def _run(args: argparse.Namespace) -> int:
     episode = args.out / EPISODE_FILE
     print(f"run_trial: episode {episode}; summarise it with:")
     print(f"  .venv/bin/python scripts/replay.py summary {episode}")
-    if outcome.loop.reason == "signal":
-        return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
+    stopped = signal_exit(
+        "run_trial", outcome.loop, f"the record is complete up to then: {args.out}"
+    )
+    if stopped is not None:
+        return stopped
     return fault_exit("run_trial", outcome.loop)
 
 

@@ -1,6 +1,9 @@
 """The scripted sim demo end to end (no view, as fast as the simulation goes): every
 manoeuvre's tilt torque has the documented sign, the episode records it all; bad input."""
 
+import os
+import signal
+
 import pytest
 
 from controller.episode import read_episode
@@ -206,3 +209,24 @@ def test_a_real_run_without_devices_leaves_no_output_folder_and_no_sdk_banner(tm
     assert "SDK_VERSION" not in captured.out + captured.err
     assert captured.err.startswith("teleop_demo: error: ") and captured.err.count("\n") == 1
     assert not out.exists()
+
+
+class InterruptingView(QuittingView):
+    """Sends the process SIGINT after ``after`` frames, as Ctrl-C in the terminal would."""
+
+    def offer(self, snapshot):
+        self.offered += 1
+        if self.offered == self.after:
+            os.kill(os.getpid(), signal.SIGINT)
+
+
+def test_ctrl_c_mid_run_is_a_safe_stop_one_line_and_130(tmp_path, monkeypatch, capsys):
+    from controller.view import window
+
+    monkeypatch.setattr(window, "LiveView", InterruptingView)
+    out = tmp_path / "out"
+    assert demo_cli.main(["--fast", "--out", str(out)]) == 130
+    err = capsys.readouterr().err
+    assert err.startswith("teleop_demo: interrupted by SIGINT (safe stop done); the episode")
+    assert err.count("\n") == 1
+    assert read_episode(out / "episode.mcap").outcome["reason"] == "signal"
