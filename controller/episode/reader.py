@@ -72,7 +72,8 @@ class Episode:
     ``read_bytes`` / ``size_bytes``: where the file's readable records end, and its size;
     ``lost``: the byte ranges that held no readable record (damage), in file order;
     ``expected_messages``: the message count the writer's statistics give (None when they
-    were not read).
+    were not read); ``data_crc_matches``: the data section's CRC against its bytes (None
+    when not recorded; see ``unverified_change``).
     """
 
     path: Path
@@ -89,6 +90,13 @@ class Episode:
     lost: tuple[LostRange, ...] = ()
     expected_messages: int | None = None
     attachment_media: dict[str, str] = field(default_factory=dict)
+    data_crc_matches: bool | None = None
+
+    @property
+    def unverified_change(self) -> bool:
+        """No byte range was lost, yet the data section's CRC does not match its bytes: a
+        byte changed outside the chunks (metadata, message indexes), read as it stands."""
+        return not self.lost and self.data_crc_matches is False
 
     @property
     def damaged(self) -> bool:
@@ -205,7 +213,9 @@ def read_episode(path: str | Path) -> Episode:
             raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
         except OSError as error:
             raise EpisodeError(f"episode '{path}': cannot read: {error.strerror}") from None
-    return state.episode(scan.read_bytes, scan.finished, tuple(scan.lost))
+    episode = state.episode(scan.read_bytes, scan.finished, tuple(scan.lost))
+    episode.data_crc_matches = scan.data_crc_matches
+    return episode
 
 
 @dataclass

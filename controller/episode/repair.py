@@ -49,7 +49,12 @@ def repair(path: str | Path, out: str | Path) -> RepairReport:
         raise EpisodeError(f"episode '{path}': already finished and whole, nothing to repair")
     schemas, channels, messages = episode.records()
     with atomic_file(out) as staging, staging.open("wb") as stream:
-        writer = Writer(stream, chunk_size=CHUNK_SIZE_BYTES, compression=CompressionType.ZSTD)
+        writer = Writer(
+            stream,
+            chunk_size=CHUNK_SIZE_BYTES,
+            compression=CompressionType.ZSTD,
+            enable_data_crcs=True,
+        )
         writer.start(profile=PROFILE, library=LIBRARY)
         schema_ids = {
             old: writer.register_schema(s.name, s.encoding, s.data) for old, s in schemas.items()

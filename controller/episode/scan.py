@@ -13,7 +13,11 @@ and reads on past damage:
   place before the closing magic) and reads on from there.
   The bytes between are lost;
 * the file's end inside a record, with nothing readable after it (a killed writer's last
-  flush), is a cut, not a loss: ``read_bytes`` ends at the last whole record.
+  flush), is a cut, not a loss: ``read_bytes`` ends at the last whole record;
+* a byte changed outside the chunks (metadata, message indexes: MCAP gives them no CRC of
+  their own) parses as it stands; the data section's CRC (its ``DataEnd`` record) then
+  differs from the bytes', and ``data_crc_matches`` says so (None when there is no
+  ``DataEnd`` or no CRC in it).
 
 Offsets are bytes from the file's start; a range is ``[start, end)``.
 """
@@ -23,12 +27,13 @@ from __future__ import annotations
 import io
 import mmap
 import re
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from mcap.opcode import Opcode
-from mcap.records import Chunk, Footer, Header
+from mcap.records import Chunk, DataEnd, Footer, Header
 from mcap.stream_reader import MAGIC_SIZE, StreamReader, breakup_chunk
 from mcap.writer import MCAP0_MAGIC
 
@@ -62,13 +67,15 @@ class LostRange:
 @dataclass
 class ScanResult:
     """What ``scan_records`` found: the ``header``, whether the ``footer`` was read, the
-    ``lost`` byte ranges in file order, and ``read_bytes``: where the readable records end
-    (the file's size unless it is cut short)."""
+    ``lost`` byte ranges in file order, ``read_bytes``: where the readable records end
+    (the file's size unless it is cut short), and ``data_crc_matches``: whether the data
+    section's CRC matches its bytes (None: not recorded)."""
 
     header: Header
     finished: bool
     read_bytes: int
     lost: list[LostRange] = field(default_factory=list)
+    data_crc_matches: bool | None = None
 
 
 class _Broken(Exception):
@@ -121,6 +128,8 @@ def scan_records(handle: io.BufferedReader, take: Callable[[Any], None]) -> Scan
                     take(item)
             else:
                 take(record)
+            if isinstance(record, DataEnd) and record.data_section_crc != 0:
+                result.data_crc_matches = zlib.crc32(data[:pos]) == record.data_section_crc
             pos = end
             if isinstance(record, Footer):
                 result.finished = True

@@ -18,6 +18,18 @@ RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_rev
 
 
 def _state(episode: Episode) -> str:
+    if episode.unverified_change:
+        return f"{_whole_state(episode)}; but the data section's CRC does not match: {CRC_NOTE}"
+    return _whole_state(episode)
+
+
+CRC_NOTE = (
+    "a byte outside the chunks changed (metadata or indexes, which MCAP does not check one "
+    "by one): the run's metadata may be wrong"
+)
+
+
+def _whole_state(episode: Episode) -> str:
     if episode.complete:
         return "complete"
     if episode.damaged:

@@ -52,7 +52,7 @@ from evaluation.common.cli_support import (
 from evaluation.common.outputs import atomic_text, check_output_file, check_output_folder
 from evaluation.episodes import episode_streams, reestimation
 from evaluation.episodes.episode_chart import write_episode_chart
-from evaluation.episodes.episode_summary import summary_lines
+from evaluation.episodes.episode_summary import CRC_NOTE, summary_lines
 from evaluation.episodes.lerobot_alignment import AlignedEpisode, AlignmentError, align
 from evaluation.episodes.lerobot_dataset import DatasetEpisode, write_dataset
 from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
@@ -95,6 +95,8 @@ def open_episode(path: Path, allow_truncated: bool = False) -> Episode:
                 "--allow-truncated",
             )
         )
+    if episode.unverified_change:
+        _warn(f"episode '{path}': the data section's CRC does not match: {CRC_NOTE}")
     for problem, switch in problems:
         if not allow_truncated:
             raise ToolError(

@@ -22,7 +22,9 @@ def _episode(path, compression=CompressionType.ZSTD):
     """A small finished episode: /loop/tick messages in many chunks, its metadata and a
     task attachment, as the writer lays them out."""
     with path.open("wb") as stream:
-        writer = Writer(stream, chunk_size=CHUNK_BYTES, compression=compression)
+        writer = Writer(
+            stream, chunk_size=CHUNK_BYTES, compression=compression, enable_data_crcs=True
+        )
         writer.start(profile=PROFILE, library="test")
         writer.add_metadata(METADATA_EPISODE, {"format_version": "1", "task": "usb_c"})
         writer.add_attachment(0, 0, "task.yaml", "application/yaml", b"task: usb_c\n")
@@ -154,3 +156,16 @@ def test_a_message_that_is_not_json_is_one_line_naming_topic_and_time(tmp_path):
     with pytest.raises(EpisodeError, match=r"topic /loop/tick, message at 1.500000 s") as error:
         list(read_episode(path).messages())
     assert "\n" not in str(error.value)
+
+
+def test_a_byte_changed_outside_the_chunks_is_noticed_by_the_data_sections_crc(tmp_path):
+    path = _episode(tmp_path / "e.mcap")
+    data = bytearray(path.read_bytes())
+    where = data.index(b"done")  # the outcome's metadata: no CRC of its own
+    data[where] = ord("D")
+    path.write_bytes(bytes(data))
+    ep = read_episode(path)
+    assert not ep.lost and ep.data_crc_matches is False and ep.unverified_change
+    assert ep.outcome == {"reason": "Done"}  # read as it stands, and said to be unverified
+    clean = read_episode(_episode(tmp_path / "clean.mcap"))
+    assert clean.data_crc_matches is True and not clean.unverified_change
