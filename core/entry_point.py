@@ -9,7 +9,10 @@ or MuJoCo load is handled like one during the work: the tool's own handler
 ``run_main`` reports what reaches it (``PROG: interrupted by SIGINT``, exit 130;
 ``PROG: ended by SIGTERM``, exit 143; no traceback). Once ``main`` has returned, its outputs
 are complete and a signal during the interpreter's shutdown ends the process at once with
-the same code, silently. Only the interpreter's own start-up (before the script's first line
+the same code, silently. A signal inside an extension module's initialisation (SciPy's
+``_highspy``: pybind11 turns the KeyboardInterrupt into ``ImportError: initialization
+failed``, the KeyboardInterrupt as its cause) is the same stop (``stop_behind``). Only the
+interpreter's own start-up (before the script's first line
 runs, some tens of milliseconds) is beyond reach. Importing this module loads only the
 standard library.
 
@@ -32,6 +35,7 @@ from typing import NoReturn
 
 EXIT_SIGINT = 128 + signal.SIGINT  # 130
 EXIT_SIGTERM = 128 + signal.SIGTERM  # 143
+EXIT_SIGPIPE = 128 + signal.SIGPIPE  # 141: the reader of stdout left (``| head``)
 
 
 class Terminated(BaseException):
@@ -41,6 +45,17 @@ class Terminated(BaseException):
 def raise_terminated(signum: int, frame: object) -> None:
     """A SIGTERM handler: raise ``Terminated`` where the main thread is."""
     raise Terminated()
+
+
+def silence_closed_stdout() -> None:
+    """Point stdout at /dev/null once its reader has left, so the interpreter's own flush
+    at exit raises nothing (Python's advice for SIGPIPE, docs of ``signal``)."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):  # no stdout file descriptor at all
+        pass
 
 
 def _exit_at_once(signum: int, frame: object) -> None:
@@ -67,6 +82,20 @@ def _redeliver_lost_stops(previous_hook):
     return hook
 
 
+def stop_behind(error: BaseException) -> type[BaseException] | None:
+    """KeyboardInterrupt or ``Terminated`` if ``error`` was caused by one (an extension
+    module whose initialisation a signal interrupted: pybind11 reports it as
+    ``ImportError: initialization failed`` from the KeyboardInterrupt), else None."""
+    seen: set[int] = set()
+    cause: BaseException | None = error
+    while cause is not None and id(cause) not in seen:
+        seen.add(id(cause))
+        if isinstance(cause, (KeyboardInterrupt, Terminated)):
+            return type(cause)
+        cause = cause.__cause__ or cause.__context__
+    return None
+
+
 def run_main(module: str, first: str | None = None) -> NoReturn:
     """Exit with the code of ``module.main()`` (None: 0), 130 on SIGINT, 143 on SIGTERM.
     ``first``: ``"module:function"`` to call before ``module`` is imported (e.g. to limit
@@ -85,13 +114,28 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
         code, stopped_by = EXIT_SIGINT, "interrupted by SIGINT"
     except Terminated:
         code, stopped_by = EXIT_SIGTERM, "ended by SIGTERM"
+    except ImportError as error:  # a signal inside an extension module's initialisation
+        stop = stop_behind(error)
+        if stop is None:
+            raise
+        code, stopped_by = (
+            (EXIT_SIGINT, "interrupted by SIGINT")
+            if stop is KeyboardInterrupt
+            else (EXIT_SIGTERM, "ended by SIGTERM")
+        )
     signal.signal(signal.SIGINT, _exit_at_once)
     signal.signal(signal.SIGTERM, _exit_at_once)
     if stopped_by is not None:
         print(f"{prog}: {stopped_by}", file=sys.stderr)
     try:  # before a signal could end the process without flushing them
         sys.stdout.flush()
+    except BrokenPipeError:  # the reader left (``| head``): quietly, as SIGPIPE would
+        silence_closed_stdout()
+        code = EXIT_SIGPIPE if code == 0 else code
+    except (OSError, ValueError):
+        pass
+    try:
         sys.stderr.flush()
-    except (OSError, ValueError):  # a closed pipe: Python reports it at exit
+    except (OSError, ValueError):
         pass
     sys.exit(code)

@@ -15,7 +15,7 @@ exception from one device is reported as a failure of that device, so the others
 checked.
 
 Standard output holds exactly these lines (the xArm SDK's version banner, printed when the
-SDK is imported, goes to standard error). A silent device fails within its YAML's timeouts
+SDK is imported, is dropped by the driver). A silent device fails within its YAML's timeouts
 (the arm's ``connect_timeout_s``, the gripper's ``timeout_s`` x (1 + ``retries``), the
 camera's ``connect_timeout_s``); Ctrl-C stops the check at once.
 

@@ -291,13 +291,16 @@ class WorldSpec:
     """What the simulated world needs beyond the device files: the task's ``scene:``
     configuration (``scene_config``), the plug (``core.task_geometry.PlugGeometry``), the
     nominal hole in B (``HolePose``), the scene's ``seed`` and whether the world's clock
-    follows the wall clock (``realtime``; else as fast as possible)."""
+    follows the wall clock (``realtime``; else as fast as possible), and with ``paced``
+    whether it waits for the controller (``core.clock.PacedClock``) rather than running
+    on regardless (``MonotonicClock``)."""
 
     scene: Any
     plug: Any
     hole: Any
     seed: int
     realtime: bool = False
+    paced: bool = False
 
 
 @dataclass(frozen=True)
@@ -345,7 +348,7 @@ def build_device_set(
             arm, config=dataclasses.replace(arm.config, ft_sensor=True)
         )
     if backend == "real":
-        clock = MonotonicClock()
+        clock = MonotonicClock.from_now()  # the run's times start at 0
         # each kind's drivers implement its Protocol (PROTOCOLS; tests/drivers/test_registry.py)
         built = cast(_RunDevices, {kind: spec.build(clock) for kind, spec in specs.items()})
         return DeviceSet(Devices(**built), clock)

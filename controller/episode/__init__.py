@@ -4,7 +4,8 @@ Product code at the edge: the run path (``controller.run``) hooks the writer in 
 observer and a tap on the wrench source; the state machine never imports it.
 
 * ``topics``: every topic, its schema, encoding, frame and units (the format's contract);
-* ``reader``: ``read_episode(path) -> Episode`` (finished or cut files alike);
+* ``reader``: ``read_episode(path) -> Episode`` (finished, cut or damaged files alike;
+  ``scan`` reads the records past damage);
 * ``repair``: ``repair(path, out) -> RepairReport`` (finishes a killed run's file; import it
   from ``controller.episode.repair``);
 * ``writer``, ``recorder``, ``session``: the writing side (``EpisodeRecording``).

@@ -1,23 +1,26 @@
 """Reading an episode file: ``read_episode(path) -> Episode``.
 
-The file is read once, front to back, record by record (MCAP's stream reader), so the same
-code reads a finished file and one cut short by a killed process: reading stops at the last
-whole record (a record cut in half, a chunk whose bytes or CRC are wrong), and the episode
-says how much of the file it read (``read_bytes`` of ``size_bytes``) and whether the file was
-finished (``finished``: its footer was read) and complete (``complete``: finished by the
-writer, not by ``repair``). Messages are kept as bytes and decoded when iterated:
-``json`` topics to dicts, Foxglove's ``protobuf`` topics to the protobuf messages of the
-schemas the file carries (``mcap-protobuf-support``). Times are on the loop's clock, in s.
+The file is read once, front to back, record by record (controller/episode/scan.py, each
+record parsed by ``mcap``), so the same code reads a finished file, one cut short by a
+killed process and one damaged in the middle: reading stops at the file's cut (a record
+cut in half) and reads on past damage (a chunk whose bytes or CRC are wrong is skipped
+whole; after a broken record, reading resumes where records read whole again). The
+episode says how much of the file it read (``read_bytes`` of ``size_bytes``), which byte
+ranges were lost (``lost``), whether the file was finished (``finished``: its footer was
+read) and complete (``complete``: finished by the writer, not by ``repair``, nothing
+lost). Messages are kept as bytes and decoded when iterated: ``json`` topics to dicts,
+Foxglove's ``protobuf`` topics to the protobuf messages of the schemas the file carries
+(``mcap-protobuf-support``). Times are on the loop's clock, in s.
 
 Errors are ``EpisodeError`` (a ValueError), one line naming the file: a missing or
-unreadable file, a file that is not MCAP, an MCAP file that is not an episode.
+unreadable file, a file that is not MCAP, an MCAP file that is not an episode, a message
+that does not decode.
 """
 
 from __future__ import annotations
 
 import json
 import math
-import struct
 from collections import Counter
 from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
@@ -26,11 +29,10 @@ from typing import Any
 
 import cv2
 import numpy as np
-from mcap.exceptions import McapError
-from mcap.records import Attachment, Channel, Chunk, Footer, Header, Message, Metadata, Schema
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.records import Attachment, Channel, Header, Message, Metadata, Schema, Statistics
 from mcap_protobuf.decoder import DecoderFactory
 
+from controller.episode.scan import LostRange, NotMcap, scan_records
 from controller.episode.topics import (
     FORMAT_VERSION,
     METADATA_EPISODE,
@@ -64,9 +66,14 @@ class Episode:
 
     ``metadata``: the MCAP metadata records by name (``episode`` at the start, ``outcome``
     at the end, ``repair`` if repaired: controller/episode/topics.py); ``attachments``: by
-    name (``task.yaml``); ``counts``: messages per topic; ``finished``: the footer was read;
-    ``complete``: finished by the writer (``outcome`` written, not repaired);
-    ``read_bytes`` / ``size_bytes``: how much of the file held whole records, and its size.
+    name (``task.yaml``; ``attachment_media``: their media types); ``counts``: messages
+    per topic; ``finished``: the footer was read;
+    ``complete``: finished by the writer (``outcome`` written, not repaired, nothing lost);
+    ``read_bytes`` / ``size_bytes``: where the file's readable records end, and its size;
+    ``lost``: the byte ranges that held no readable record (damage), in file order;
+    ``expected_messages``: the message count the writer's statistics give (None when they
+    were not read); ``data_crc_matches``: the data section's CRC against its bytes (None
+    when not recorded; see ``unverified_change``).
     """
 
     path: Path
@@ -80,6 +87,31 @@ class Episode:
     _channels: dict[int, Channel] = field(repr=False)
     _messages: list[Message] = field(repr=False)
     _decoders: dict[int, Callable[[bytes], Any]] = field(default_factory=dict, repr=False)
+    lost: tuple[LostRange, ...] = ()
+    expected_messages: int | None = None
+    attachment_media: dict[str, str] = field(default_factory=dict)
+    data_crc_matches: bool | None = None
+
+    @property
+    def unverified_change(self) -> bool:
+        """No byte range was lost, yet the data section's CRC does not match its bytes: a
+        byte changed outside the chunks (metadata, message indexes), read as it stands."""
+        return not self.lost and self.data_crc_matches is False
+
+    @property
+    def damaged(self) -> bool:
+        """Some bytes held no readable record (``lost`` is not empty)."""
+        return bool(self.lost)
+
+    @property
+    def lost_bytes(self) -> int:
+        return sum(r.size for r in self.lost)
+
+    def lost_text(self, most: int = 3) -> str:
+        """The lost ranges in words: ``bytes A..B (N bytes: REASON)``, the first ``most``."""
+        shown = [f"bytes {r.start}..{r.end} ({r.size} bytes: {r.reason})" for r in self.lost[:most]]
+        more = len(self.lost) - most
+        return "; ".join(shown) + (f"; and {more} more ranges" if more > 0 else "")
 
     @property
     def complete(self) -> bool:
@@ -87,6 +119,7 @@ class Episode:
             self.finished
             and METADATA_OUTCOME in self.metadata
             and METADATA_REPAIR not in self.metadata
+            and not self.lost
         )
 
     @property
@@ -120,12 +153,23 @@ class Episode:
         chosen.sort(key=lambda m: (m.log_time, m.sequence))
         for record in chosen:
             channel = self._channels[record.channel_id]
-            yield EpisodeMessage(
-                channel.topic,
-                record.log_time / NS_PER_S,
-                record.sequence,
-                self._decoder(channel)(record.data),
-            )
+            try:
+                value = self._decoder(channel)(record.data)
+            except EpisodeError:
+                raise
+            except Exception as error:  # noqa: BLE001 -- a decoder's own errors, any type
+                raise EpisodeError(
+                    f"episode '{self.path}': topic {channel.topic}, message at "
+                    f"{record.log_time / NS_PER_S:.6f} s: does not decode as "
+                    f"{channel.message_encoding} ({' '.join(str(error).split())[:160]})"
+                ) from None
+            if channel.message_encoding == "json" and not isinstance(value, dict):
+                raise EpisodeError(
+                    f"episode '{self.path}': topic {channel.topic}, message at "
+                    f"{record.log_time / NS_PER_S:.6f} s: expected a JSON object, got "
+                    f"{type(value).__name__}"
+                )
+            yield EpisodeMessage(channel.topic, record.log_time / NS_PER_S, record.sequence, value)
 
     def records(self) -> tuple[dict[int, Schema], dict[int, Channel], list[Message]]:
         """The raw MCAP schemas and channels by id and the messages in file order (what
@@ -155,25 +199,23 @@ def read_episode(path: str | Path) -> Episode:
     """Read the episode at ``path`` (see the module doc); EpisodeError if it is missing, not
     MCAP, or not an episode."""
     path = Path(path)
+    if path.is_dir():
+        raise EpisodeError(f"episode '{path}': a folder; expected an episode file (.mcap)")
     try:
         handle = path.open("rb")
     except OSError as error:
         raise EpisodeError(f"episode '{path}': cannot open: {error.strerror}") from None
+    state = _Scan(path)
     with handle:
-        size = path.stat().st_size
-        state = _Scan(path)
-        reader = StreamReader(handle, emit_chunks=True, validate_crcs=True)
         try:
-            for record in reader.records:
-                state.take(record)
-                state.read_bytes = handle.tell()
-        except McapError as error:
-            if state.header is None:
-                raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
-        except (ValueError, EOFError, struct.error) as error:  # a record cut or garbled
-            if state.header is None:
-                raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
-    return state.episode(size)
+            scan = scan_records(handle, state.take)
+        except NotMcap as error:
+            raise EpisodeError(f"episode '{path}': not an MCAP file ({error})") from None
+        except OSError as error:
+            raise EpisodeError(f"episode '{path}': cannot read: {error.strerror}") from None
+    episode = state.episode(scan.read_bytes, scan.finished, tuple(scan.lost))
+    episode.data_crc_matches = scan.data_crc_matches
+    return episode
 
 
 @dataclass
@@ -181,14 +223,13 @@ class _Scan:
     """What one pass over the file's records collects."""
 
     path: Path
-    header: Header | None = None
-    finished: bool = False
-    read_bytes: int = 0
     metadata: dict[str, dict[str, str]] = field(default_factory=dict)
     attachments: dict[str, bytes] = field(default_factory=dict)
+    attachment_media: dict[str, str] = field(default_factory=dict)
     schemas: dict[int, Schema] = field(default_factory=dict)
     channels: dict[int, Channel] = field(default_factory=dict)
     messages: list[Message] = field(default_factory=list)
+    statistics: Statistics | None = None
 
     def take(self, record: Any) -> None:
         if isinstance(record, Header):
@@ -197,10 +238,6 @@ class _Scan:
                     f"episode '{self.path}': an MCAP file but not an episode "
                     f"(profile {record.profile!r}, expected {PROFILE!r})"
                 )
-            self.header = record
-        elif isinstance(record, Chunk):
-            for inner in breakup_chunk(record, validate_crc=True):
-                self.take(inner)
         elif isinstance(record, Schema):
             self.schemas[record.id] = record
         elif isinstance(record, Channel):
@@ -211,30 +248,35 @@ class _Scan:
             self.metadata[record.name] = dict(record.metadata)
         elif isinstance(record, Attachment):
             self.attachments[record.name] = bytes(record.data)
-        elif isinstance(record, Footer):
-            self.finished = True
+            self.attachment_media[record.name] = record.media_type
+        elif isinstance(record, Statistics):
+            self.statistics = record
 
-    def episode(self, size: int) -> Episode:
-        if self.header is None:
-            raise EpisodeError(f"episode '{self.path}': not an MCAP file (no header)")
+    def episode(self, read_bytes: int, finished: bool, lost: tuple[LostRange, ...]) -> Episode:
         version = self.metadata.get(METADATA_EPISODE, {}).get("format_version")
         if version is not None and version.split(".")[0] != FORMAT_VERSION.split(".")[0]:
             raise EpisodeError(
                 f"episode '{self.path}': format version {version}, this reader reads "
                 f"{FORMAT_VERSION}"
             )
-        counts = Counter(self.channels[m.channel_id].topic for m in self.messages)
+        known = [m for m in self.messages if m.channel_id in self.channels]
+        counts = Counter(self.channels[m.channel_id].topic for m in known)
         return Episode(
             self.path,
             self.metadata,
             self.attachments,
             dict(counts),
-            self.finished,
-            size if self.finished else self.read_bytes,
-            size,
+            finished,
+            read_bytes,
+            self.path.stat().st_size,
             self.schemas,
             self.channels,
-            self.messages,
+            known,
+            lost=lost,
+            expected_messages=(
+                None if self.statistics is None else int(self.statistics.message_count)
+            ),
+            attachment_media=self.attachment_media,
         )
 
 

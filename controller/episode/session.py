@@ -23,7 +23,12 @@ from typing import Any
 import yaml
 
 from controller.episode.recorder import RecordingSource, TickLogger
-from controller.episode.topics import ATTACHMENT_CALIBRATION, ATTACHMENT_TASK, FORMAT_VERSION
+from controller.episode.topics import (
+    ATTACHMENT_CALIBRATION,
+    ATTACHMENT_MEDIA_TYPE,
+    ATTACHMENT_TASK,
+    FORMAT_VERSION,
+)
 from controller.episode.writer import FLUSH_INTERVAL_S, QUEUE_SIZE, EpisodeWriter, Listener
 from controller.tactile.calibration import Calibration
 from controller.tactile.wrench_source import WrenchSource
@@ -117,13 +122,13 @@ class EpisodeRecording:
         }
         self._attachments = {
             ATTACHMENT_TASK: (
-                "application/yaml",
+                ATTACHMENT_MEDIA_TYPE,
                 yaml.safe_dump(plain(task_raw), sort_keys=False).encode(),
             )
         }
         if calibration is not None:
             self._attachments[ATTACHMENT_CALIBRATION] = (
-                "application/yaml",
+                ATTACHMENT_MEDIA_TYPE,
                 calibration.to_yaml().encode(),
             )
 

@@ -329,8 +329,14 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "twist_angular_rad_s": _VEC3,
             **{
                 k: _BOOL
-                for k in ("gripper_open", "gripper_close", "hand_back", "estop", "estop_ack",
-                          "deadman")  # fmt: skip
+                for k in (
+                    "gripper_open",
+                    "gripper_close",
+                    "hand_back",
+                    "estop",
+                    "estop_ack",
+                    "deadman",
+                )  # fmt: skip
             },
         },
         ("in_control", "in_control_by"),
@@ -385,12 +391,16 @@ METADATA_OUTCOME = "outcome"
 exception that ended the run, else "")."""
 
 METADATA_REPAIR = "repair"
-"""Written by ``repair``: ``complete`` "false", ``source_bytes`` (the killed file's size),
-``read_bytes`` (the bytes of it that held whole records), ``messages`` (recovered)."""
+"""Written by ``repair``: ``complete`` "false", ``source_bytes`` (the source file's size),
+``read_bytes`` (where its readable records end), ``messages`` (recovered), ``lost_bytes``
+and ``lost_ranges`` (the damaged byte ranges skipped, ``START..END`` separated by spaces)."""
+
+ATTACHMENT_MEDIA_TYPE = "application/yaml"
+"""The media type of every attachment (both are YAML)."""
 
 ATTACHMENT_TASK = "task.yaml"
 """The attachment holding the resolved task configuration (the merged, overridden task file
-as YAML; media type ``application/yaml``)."""
+as YAML; ``ATTACHMENT_MEDIA_TYPE``)."""
 ATTACHMENT_CALIBRATION = "calibration.yaml"
 """The attachment holding the calibration the run applied to the estimates (the task's
 ``calibration:`` file's content, controller/tactile/calibration.py's format; absent when the

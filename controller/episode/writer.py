@@ -83,7 +83,6 @@ def schema_of(topic: Topic) -> tuple[str, str, bytes]:
     return found.name, found.encoding, found.data
 
 
-
 class EpisodeWriter:
     """Writes one episode to ``path`` (a new file; FileExistsError if it exists).
 
@@ -108,8 +107,11 @@ class EpisodeWriter:
         self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
         self._stream: IO[bytes] = self.path.open("xb")
-        self._mcap = Writer(
-            self._stream, chunk_size=CHUNK_SIZE_BYTES, compression=CompressionType.ZSTD
+        self._mcap = Writer(  # the data section's CRC: damage outside the chunks shows
+            self._stream,
+            chunk_size=CHUNK_SIZE_BYTES,
+            compression=CompressionType.ZSTD,
+            enable_data_crcs=True,
         )
         self._mcap.start(profile=PROFILE, library=LIBRARY)
         self._mcap.add_metadata(METADATA_EPISODE, dict(info))

@@ -212,8 +212,10 @@ class InsertionMachine:
     def _go(self, obs: Observation, target: Phase, guard: str, rule: str = "") -> None:
         """Move to ``target`` under ``guard`` (``rule``: which of the guard's rules fired)."""
         if not self.definition.allows(self._phase, target, guard):
-            raise RuntimeError(f"transition {self._phase.name} -> {target.name} ({guard}) "
-                               "is not in the machine's definition")
+            raise RuntimeError(
+                f"transition {self._phase.name} -> {target.name} ({guard}) "
+                "is not in the machine's definition"
+            )
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
         self._fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target
@@ -435,9 +437,9 @@ class InsertionMachine:
         if stage.name == "probe":
             return self._probe(obs, new)
         if new:
-            stage.count = stage.count + 1 if (
-                self.signals.magnitude < settings.contact_lost_sigma
-            ) else 0
+            stage.count = (
+                stage.count + 1 if (self.signals.magnitude < settings.contact_lost_sigma) else 0
+            )
             if stage.count >= settings.contact_lost_frames:
                 self._next_stage(obs, "probe")
                 return _hold()
@@ -529,8 +531,9 @@ class InsertionMachine:
         self._fire("seek")
         v_edge = settings.seek_speed_m_s * stage.v_tip
         v_edge[2] = -self._press_rate()
-        v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge,
-                               self._heel_yaw_rate(rotation))
+        v_tcp, w = pivot_twist(
+            np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, self._heel_yaw_rate(rotation)
+        )
         return self._command(v_tcp, w)
 
     def _align_turn(self, obs: Observation, rotation: Rotation) -> Command:
@@ -547,8 +550,10 @@ class InsertionMachine:
         hold = float(np.clip(1.0 - stage.rise / settings.wall_sigma, -1.0, 1.0))
         v_edge = settings.seek_speed_m_s * hold * stage.v_tip
         v_edge[2] = self.config.approach.pose_gain_1_s * (stage.point[2] - edge[2])
-        w = clamp_norm(settings.upright_gain_1_s * angle * axis + self._heel_yaw_rate(rotation),
-                       settings.max_angular_speed_rad_s)
+        w = clamp_norm(
+            settings.upright_gain_1_s * angle * axis + self._heel_yaw_rate(rotation),
+            settings.max_angular_speed_rad_s,
+        )
         v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
         return self._command(v_tcp, w)
 
@@ -749,9 +754,7 @@ class InsertionMachine:
         z_tcp = float(obs.arm.tcp.xyz_m[2])
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         yaw = _yaw_of(rotation) - self.hole.yaw_rad
-        if math.isnan(stage.stall_z_m) and not (
-            self.signals.axial_force_n < 0.8 * target_load
-        ):
+        if math.isnan(stage.stall_z_m) and not (self.signals.axial_force_n < 0.8 * target_load):
             stage.stall_z_m = z_tcp
             stage.start_yaw_rad = yaw
         reference = stage.z0_m if math.isnan(stage.stall_z_m) else stage.stall_z_m
@@ -774,8 +777,10 @@ class InsertionMachine:
                 return self._back_off(obs, "not_engaged")
             w[2] = stage.yaw_sign * settings.yaw_rate_rad_s
         self._fire("press" if w[2] == 0.0 else "yaw_sweep")
-        w[:2] = clamp_norm(self._align_rate(rotation, settings.compliance_scale),
-                           self.config.align.max_angular_speed_rad_s)[:2]
+        w[:2] = clamp_norm(
+            self._align_rate(rotation, settings.compliance_scale),
+            self.config.align.max_angular_speed_rad_s,
+        )[:2]
         shortfall = (target_load - self.signals.axial_force_n) / target_load
         v_tip = np.array([0.0, 0.0, -settings.speed_m_s * float(np.clip(shortfall, -1.0, 1.0))])
         return self._tip_command(obs, v_tip, w)
@@ -787,7 +792,11 @@ class InsertionMachine:
             return self._fail(obs, FailureReason.TOO_MANY_RETRIES)
         self._retries += 1
         self._search_again = guard in (
-            "not_engaged", "no_wall", "not_entered", "align_timeout", "search_timeout"
+            "not_engaged",
+            "no_wall",
+            "not_entered",
+            "align_timeout",
+            "search_timeout",
         )
         self._go(obs, Phase.BACKOFF, guard)
         return _hold()
@@ -817,8 +826,9 @@ class InsertionMachine:
         self._fire("open")
         if stage.name == "":
             self._next_stage(obs, "opening")
-            return Command(twist=Twist(), gripper=self._open_target(
-                self.config.gripper.open_width_m))
+            return Command(
+                twist=Twist(), gripper=self._open_target(self.config.gripper.open_width_m)
+            )
         if obs.t_s - stage.since_t_s >= self.config.release.settle_s and not obs.gripper.moving:
             self._go(obs, Phase.RETRACT, "released")
         return _hold()

@@ -133,8 +133,9 @@ class HoleDetector:
         dropped = self._dropped(signals.axial_force_n, elapsed_s)
         horizontal = np.array([commanded[0], commanded[1], 0.0])
         self._drag = self._alpha * horizontal + (1.0 - self._alpha) * self._drag
-        return "+".join(name for name, fired in (("torque_catch", caught),
-                                                  ("load_drop", dropped)) if fired)
+        return "+".join(
+            name for name, fired in (("torque_catch", caught), ("load_drop", dropped)) if fired
+        )
 
     @property
     def load_reference(self) -> float | None:
@@ -149,8 +150,10 @@ class HoleDetector:
             return False
         ref = self._load_ref
         self._load_samples += 1
-        if ref is None or self._load_samples <= settings.hole_frames or (
-            elapsed_s < settings.settle_s
+        if (
+            ref is None
+            or self._load_samples <= settings.hole_frames
+            or (elapsed_s < settings.settle_s)
         ):
             previous = load if ref is None else ref
             self._load_ref = self._alpha * load + (1.0 - self._alpha) * previous
@@ -180,8 +183,10 @@ class HoleDetector:
         load = max(signals.axial_force_n, 1.0)
         ratio = self._ratios[a]
         self._learned[a] += 1
-        if ratio is None or self._learned[a] <= settings.hole_frames or (
-            elapsed_s < settings.settle_s
+        if (
+            ratio is None
+            or self._learned[a] <= settings.hole_frames
+            or (elapsed_s < settings.settle_s)
         ):
             previous = resistance / load if ratio is None else ratio
             self._ratios[a] = self._alpha * resistance / load + (1.0 - self._alpha) * previous

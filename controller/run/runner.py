@@ -82,27 +82,34 @@ def run_task(
     *,
     backend: str = "sim",
     realtime: bool = False,
+    paced: bool = False,
     out_dir: Path | None = None,
     observers: Sequence[Observer] = (),
     controllers: Mapping[str, Controller] = CONTROLLERS,
     prepare: Callable[[registry.DeviceSet], Any] | None = None,
     episode: EpisodeRecording | None = None,
+    max_duration_s: float | None = None,
 ) -> RunOutcome:
     """Run ``task`` with ``controller`` on ``backend`` (see the module doc). ``seed``: the
     simulated world's seed (recorded only on hardware); ``realtime``: pace the simulated
-    world to the wall clock (hardware always is); ``out_dir``: where the run's record goes
+    world to the wall clock (hardware always is); ``paced``: with ``realtime``, the world
+    waits for a late tick (``core.clock.PacedClock``: a busy machine slows the run, the
+    ticks are never late on its clock) instead of following the wall clock regardless;
+    ``out_dir``: where the run's record goes
     (``RunRecorder``); ``observers``: more tick observers; ``prepare``: called with the built
     devices before they connect (e.g. a scripted gamepad); a ``DeviceSet`` it returns
     replaces them (e.g. a real gamepad in the simulated world); ``episode``: the run's episode
     (controller/episode), started once the devices are connected, that taps the wrench
-    source and observes every tick; the caller closes it with the outcome."""
+    source and observes every tick; the caller closes it with the outcome;
+    ``max_duration_s``: the loop's cap on its clock, s (default: the machine's
+    ``timeouts.total_s`` plus ``LOOP_MARGIN_S``)."""
     entry = controller_entry(controller, backend, controllers)
     if backend == "sim" and task.scene is None:
         raise ConfigError(f"{task.path}: the task was loaded without its scene (backend real)")
     config = task.config
     world = None
     if backend == "sim":
-        world = registry.WorldSpec(task.scene, config.plug, config.hole, seed, realtime)
+        world = registry.WorldSpec(task.scene, config.plug, config.hole, seed, realtime, paced)
     device_set = registry.build_device_set(
         task.device_files, backend, world, arm_force=entry.arm_force
     )
@@ -135,7 +142,8 @@ def run_task(
             config.teleop,
             observer=ticks,
         )
-        loop_result = loop.run(max_duration_s=config.machine.timeouts.total_s + LOOP_MARGIN_S)
+        cap_s = config.machine.timeouts.total_s + LOOP_MARGIN_S
+        loop_result = loop.run(max_duration_s=cap_s if max_duration_s is None else max_duration_s)
         wall_s = time.perf_counter() - began
     return RunOutcome(loop_result, machine, device_set, wall_s, recorder)
 

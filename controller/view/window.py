@@ -10,6 +10,10 @@ Frames: ``LiveView.offer`` puts a snapshot on a queue of ``QUEUE_FRAMES`` withou
 when the view has not taken the previous ones the snapshot is dropped and counted
 (``dropped``), so the view shows the newest frames it can draw, never a backlog.
 
+Without a display the view says so once ('error ...' to the run's side, which prints one
+line and goes on without it): when the window cannot open, and when SDL silently falls back
+to a driver that draws to no window (its 'offscreen' driver, ``WINDOWLESS_DRIVERS``).
+
 Keys (``KEYS``): ``z`` re-zero the tactile reference, ``p`` or space pause the picture
 (the run goes on), ``s`` save a screenshot (``screenshot-NNN.png`` in the output folder,
 written atomically), ``q`` or Esc quit. Quitting, or closing the window, sends ``quit``:
@@ -18,16 +22,21 @@ the run's side ends the run safely (``LiveView.watch``'s callback).
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
+import os
 import queue
 import threading
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from controller.view.snapshot import ViewSnapshot
 
+WINDOWLESS_DRIVERS = ("offscreen", "dummy")
+"""SDL video drivers that draw to no window; SDL falls back to 'offscreen' without a
+display, which the view reports as it does a failed open (unless asked for by name)."""
 QUEUE_FRAMES = 2
 KEYS = ("z: re-zero", "p / space: pause", "s: screenshot", "q / Esc: quit")
 JOIN_S = 3.0
@@ -106,19 +115,23 @@ class LiveView:
 
 def run_window(snapshots: Any, commands: Any, mapping: Sequence[str], out_dir: str) -> None:
     """The view process: open the window, draw each snapshot, send key commands."""
-    import os
-
     os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
     import pygame
 
     from controller.view.view_drawing import SIZE, ViewState, draw
 
     try:
-        pygame.display.init()
-        pygame.font.init()
-        screen = pygame.display.set_mode(SIZE)
+        with _stderr_quiet():  # SDL's own lines (XDG_RUNTIME_DIR ...): the tool says it once
+            pygame.display.init()
+            pygame.font.init()
+            screen = pygame.display.set_mode(SIZE)
     except pygame.error as error:  # no display: say so once, the run goes on without a view
         commands.put(f"error {error}")
+        return
+    driver = pygame.display.get_driver()
+    if driver in WINDOWLESS_DRIVERS and os.environ.get("SDL_VIDEODRIVER") != driver:
+        pygame.quit()  # SDL fell back to drawing nowhere: no window appeared
+        commands.put(f"error no display: SDL fell back to its '{driver}' video driver")
         return
     pygame.display.set_caption("tactile-insertion: teleop live view")
     state = ViewState.new([*mapping, "keys: " + ", ".join(KEYS)])
@@ -158,6 +171,20 @@ def run_window(snapshots: Any, commands: Any, mapping: Sequence[str], out_dir: s
                 pygame.display.flip()
     finally:
         pygame.quit()
+
+
+@contextlib.contextmanager
+def _stderr_quiet() -> Iterator[None]:
+    """File descriptor 2 pointed at /dev/null for the block (SDL writes there itself)."""
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
 
 
 def save_screenshot(surface: Any, out_dir: Path, number: int) -> Path:

@@ -20,20 +20,21 @@ Facts about the SDK (xarm-python-sdk 1.18, read in its source) that this module 
   ``InterruptibleApi`` runs each call made from the main thread on a short-lived daemon
   thread and waits for it interruptibly: Ctrl-C raises KeyboardInterrupt in the caller at
   once, and the call itself ends in the background within its own timeout.
-* Importing the SDK prints its version on stdout, and the SDK logs to stdout through its own
-  logger (``xarm.core.utils.log.logger``), e.g. a hundred "xArm is not connected" lines after
-  an abandoned connect. ``import_sdk`` sends the banner to stderr and gives that logger a
-  ``NullHandler`` in place of its stdout handler: the drivers report every failure as a
-  ``DeviceError`` with the SDK's code. An application that wants the SDK's log adds its own
-  handler to that logger.
+* Importing the SDK prints its version on stdout (``SDK_VERSION: 1.18.4``), and the SDK logs
+  to stdout through its own logger (``xarm.core.utils.log.logger``), e.g. a hundred "xArm is
+  not connected" lines after an abandoned connect. ``import_sdk`` keeps the banner off the
+  terminal (the version is the installed package's, ``importlib.metadata``) and gives that
+  logger a ``NullHandler`` in place of its stdout handler: the drivers report every failure
+  as a ``DeviceError`` with the SDK's code. An application that wants the SDK's log adds its
+  own handler to that logger.
 """
 
 from __future__ import annotations
 
 import functools
 import inspect
+import io
 import logging
-import sys
 import threading
 import weakref
 from contextlib import redirect_stdout
@@ -48,11 +49,11 @@ _attempts: weakref.WeakKeyDictionary[Any, threading.Thread] = weakref.WeakKeyDic
 
 
 def import_sdk() -> None:
-    """Import the SDK once: its version banner to stderr, its log off the terminal."""
+    """Import the SDK once: its version banner and its log off the terminal."""
     global _imported
     if _imported:
         return
-    with redirect_stdout(sys.stderr):
+    with redirect_stdout(io.StringIO()):  # the banner, dropped at the driver's boundary
         import xarm  # noqa: F401  (prints 'SDK_VERSION: ...')
     from xarm.core.utils.log import logger
 

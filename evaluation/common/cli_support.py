@@ -7,6 +7,8 @@ Exit codes (docs/ARCHITECTURE.md, "Failure behaviour"):
   device that was not ready and what to check;
 * 2 -- bad input (argument, file, configuration) or an output that cannot be written: one
   line ``PROG: error: ...`` on stderr, never a traceback;
+* 141 -- its standard output was closed early (``replay summary EP | head -1``): nothing
+  more is written, no message, the code of a tool ended by SIGPIPE as standard tools are;
 * 130 -- interrupted by SIGINT (Ctrl-C), 143 -- ended by SIGTERM: one line
   ``PROG: interrupted by SIGINT ...``. Outputs in progress are discarded (they are written
   to temporary files and renamed into place only when complete, ``evaluation.common.outputs``), so
@@ -28,7 +30,15 @@ from collections.abc import Callable
 from pathlib import Path
 
 from core.config import CONFIG_ROOT, ConfigError
-from core.entry_point import EXIT_SIGINT, EXIT_SIGTERM, Terminated, raise_terminated
+from core.entry_point import (
+    EXIT_SIGINT,
+    EXIT_SIGPIPE,
+    EXIT_SIGTERM,
+    Terminated,
+    raise_terminated,
+    silence_closed_stdout,
+    stop_behind,
+)
 from core.errors import DeviceError
 
 EXIT_ERROR = 2
@@ -62,6 +72,9 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
         previous = signal.signal(signal.SIGTERM, raise_terminated)
     try:
         return body()
+    except BrokenPipeError:  # the reader of stdout left (``| head``): end quietly
+        silence_closed_stdout()
+        return EXIT_SIGPIPE
     except (ToolError, ConfigError) as exc:
         print(f"{prog}: error: {one_line(exc)}", file=sys.stderr)
         return EXIT_ERROR
@@ -80,6 +93,13 @@ def run_tool(prog: str, body: Callable[[], int]) -> int:
     except Terminated:
         print(f"{prog}: ended by SIGTERM; {_DISCARDED}", file=sys.stderr)
         return EXIT_SIGTERM
+    except ImportError as exc:  # a signal inside an extension module's initialisation
+        stop = stop_behind(exc)
+        if stop is None:
+            raise
+        stopped = "interrupted by SIGINT" if stop is KeyboardInterrupt else "ended by SIGTERM"
+        print(f"{prog}: {stopped}; {_DISCARDED}", file=sys.stderr)
+        return EXIT_SIGINT if stop is KeyboardInterrupt else EXIT_SIGTERM
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
@@ -150,6 +170,18 @@ def number_list(low: float, high: float, unit: str) -> Callable[[str], tuple[flo
 
 
 SEED = integer(0, 2**32 - 1)
+
+
+def nonblank(what: str) -> Callable[[str], str]:
+    """argparse type: a text that is not empty or only spaces (``--task ''`` refused);
+    ``what`` says what was expected, e.g. 'a task sentence'."""
+
+    def parse(text: str) -> str:
+        if not text.strip():
+            raise argparse.ArgumentTypeError(f"expected {what}, got an empty text")
+        return text
+
+    return parse
 
 
 def distinct(parser: argparse.ArgumentParser, option: str, values: list[str]) -> None:

@@ -3,17 +3,23 @@ LeRobot export) read from an ``Episode`` (controller/episode, docs/EPISODES.md).
 
 Times are s on the loop's clock: a tick's is its messages' log time; an estimate's is its
 frame's capture time (``t_s``). Missing numbers (a null in the file) are NaN.
+
+A message without a field these functions need, or with a value of the wrong type (a
+hand-made file, another program's), is an ``EpisodeError`` naming the file, the function's
+streams and the field: one line, never a traceback.
 """
 
 from __future__ import annotations
 
+import functools
 import json
-from collections.abc import Iterator
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
 
 import numpy as np
 
-from controller.episode import Episode, decode_image
+from controller.episode import Episode, EpisodeError, decode_image
 from controller.episode.topics import (
     ARM_STATUS,
     COMMAND,
@@ -32,6 +38,31 @@ from evaluation.trials.trial_chart import ChartTruth
 
 HOLE_FRAME = "H"
 """The true hole's child frame on ``/sim/tf``."""
+
+_Result = TypeVar("_Result")
+
+
+def _fields_checked(what: str) -> Callable[[Callable[..., _Result]], Callable[..., _Result]]:
+    """Turn a missing field or a wrong type in ``what`` (the streams read) into one
+    ``EpisodeError`` line naming the episode (see the module doc)."""
+
+    def decorate(function: Callable[..., _Result]) -> Callable[..., _Result]:
+        @functools.wraps(function)
+        def checked(episode: Episode, *args: Any, **kwargs: Any) -> _Result:
+            try:
+                return function(episode, *args, **kwargs)
+            except EpisodeError:
+                raise
+            except (KeyError, TypeError, ValueError, IndexError, AttributeError) as error:
+                detail = f"no field {error}" if isinstance(error, KeyError) else str(error)
+                raise EpisodeError(
+                    f"episode '{episode.path}': {what}: a message lacks what this package's "
+                    f"writer writes ({type(error).__name__}: {' '.join(detail.split())[:160]})"
+                ) from None
+
+        return checked
+
+    return decorate
 
 
 def _number(value: object) -> float:
@@ -64,6 +95,7 @@ class Ticks:
         return len(self.t_s)
 
 
+@_fields_checked("/loop/tick, /arm/status, /gripper/status, /control/command")
 def ticks(episode: Episode) -> Ticks:
     """The episode's ticks: times (each tick's start) and phases from ``/loop/tick``, the
     state and command of the same log time from ``/arm/status``, ``/gripper/status`` and
@@ -110,7 +142,8 @@ class Estimates:
     """The logged estimates, one per frame pushed: ``push_index`` (n,), ``t_s`` (n,: the
     frame's capture time), ``values`` (n, len(VALUE_FIELDS): raw, NaN where null), the
     ``contact`` flags and the ``zeroing`` flags (n,: no reference yet, values all 0);
-    ``calibrated``: every estimate after zeroing is in N*m and N."""
+    ``calibrated``: every estimate after zeroing is in N*m and N; ``tick_t_s`` (n,: the
+    time of the tick that made it, the message's log time; empty when not given)."""
 
     push_index: np.ndarray
     t_s: np.ndarray
@@ -118,14 +151,17 @@ class Estimates:
     contact: np.ndarray
     zeroing: np.ndarray
     calibrated: bool = False
+    tick_t_s: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     def column(self, name: str) -> np.ndarray:
         return self.values[:, VALUE_FIELDS.index(name)]
 
 
+@_fields_checked("/tactile/wrench")
 def estimates(episode: Episode) -> Estimates:
     """The ``/tactile/wrench`` messages as arrays."""
-    rows = [m.value for m in episode.messages(TACTILE_WRENCH.name)]
+    messages = list(episode.messages(TACTILE_WRENCH.name))
+    rows = [m.value for m in messages]
     return Estimates(
         np.array([r["push_index"] for r in rows], dtype=int),
         np.array([r["t_s"] for r in rows], dtype=float),
@@ -136,6 +172,7 @@ def estimates(episode: Episode) -> Estimates:
         np.array([bool(r.get("zeroing", False)) for r in rows]),
         any(not r.get("zeroing") for r in rows)
         and all(r.get("calibrated", False) for r in rows if not r.get("zeroing")),
+        np.array([m.t_s for m in messages], dtype=float),
     )
 
 
@@ -151,6 +188,7 @@ class SourceCall:
     n_frames: int | None
 
 
+@_fields_checked("/tactile/push")
 def source_calls(episode: Episode) -> list[SourceCall]:
     """The calls into the wrench source, in the order made."""
     return [
@@ -178,7 +216,7 @@ def frames(episode: Episode) -> Iterator[LoggedFrame]:
     """The ``/tactile/image`` frames in the order pushed, decoded only when asked."""
     for message in episode.messages(TACTILE_IMAGE.name):
         stamp = message.value.timestamp
-        capture = stamp.seconds + stamp.nanos * 1e-9
+        capture = stamp.seconds + stamp.nanos * 1e-9  # a protobuf message: always there
         yield LoggedFrame(message.t_s, capture, message.value.format, message.value)
 
 
@@ -191,6 +229,7 @@ class Transition:
     rule: str = ""  # which of the guard's rules fired ("" in files from before the field)
 
 
+@_fields_checked("/machine/transition")
 def transitions(episode: Episode) -> list[Transition]:
     """The machine's phase changes with their reasons and rules."""
     return [
@@ -209,6 +248,7 @@ class Truth:
     chart: ChartTruth
 
 
+@_fields_checked("/sim/truth, /sim/tf")
 def truth(episode: Episode) -> Truth | None:
     """The truth rows and the true hole (from ``/sim/tf``), None outside simulation."""
     rows = [m.value for m in episode.messages(SIM_TRUTH.name)]
@@ -236,6 +276,7 @@ def truth(episode: Episode) -> Truth | None:
     return Truth(t, column("gel_wrench_s", 6), chart)
 
 
+@_fields_checked("the drops (outcome, /episode/drops)")
 def drops(episode: Episode) -> tuple[int, dict[str, int]]:
     """The records the writer dropped: the total and the count by topic, from the outcome,
     else (a file cut short) from the last ``/episode/drops`` message; (0, {}) if none."""

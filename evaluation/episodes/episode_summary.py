@@ -10,7 +10,7 @@ from collections import defaultdict
 import numpy as np
 
 from controller.episode import Episode
-from controller.episode.topics import METADATA_REPAIR
+from controller.episode.topics import LOOP_TICK, METADATA_REPAIR
 from evaluation.episodes import episode_streams
 
 RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_revision",
@@ -18,13 +18,35 @@ RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_rev
 
 
 def _state(episode: Episode) -> str:
+    if episode.unverified_change:
+        return f"{_whole_state(episode)}; but the data section's CRC does not match: {CRC_NOTE}"
+    return _whole_state(episode)
+
+
+CRC_NOTE = (
+    "a byte outside the chunks changed (metadata or indexes, which MCAP does not check one "
+    "by one): the run's metadata may be wrong"
+)
+
+
+def _whole_state(episode: Episode) -> str:
     if episode.complete:
         return "complete"
+    if episode.damaged:
+        expected = episode.expected_messages
+        read = sum(episode.counts.values())
+        return (
+            f"damaged: {episode.lost_bytes} of {episode.size_bytes} bytes could not be read "
+            f"({episode.lost_text()}); {read} messages read"
+            + (f" of the {expected} written" if expected else "")
+            + ("" if episode.finished else "; no footer (cut short)")
+        )
     if episode.finished and METADATA_REPAIR in episode.metadata:
         repair = episode.metadata[METADATA_REPAIR]
         return (
-            f"incomplete: repaired from a file cut short ({repair.get('read_bytes', '?')} of "
-            f"{repair.get('source_bytes', '?')} bytes held whole records)"
+            f"incomplete: repaired from a file cut short or damaged "
+            f"({repair.get('read_bytes', '?')} of {repair.get('source_bytes', '?')} bytes read, "
+            f"{repair.get('lost_bytes', '0')} bytes lost to damage)"
         )
     if episode.finished:
         return "finished without an outcome"
@@ -58,8 +80,12 @@ def summary_lines(episode: Episode) -> list[str]:
     start, end = episode.time_range_s()
     lines = [f"episode: {episode.path}", f"file: {_state(episode)}"]
     lines += [f"{key}: {info[key]}" for key in RUN_KEYS if key in info]
-    duration = end - start if np.isfinite(start) else math.nan
-    lines.append(f"duration: {duration:.3f} s (loop clock {start:.3f} .. {end:.3f} s)")
+    if np.isfinite(start):
+        lines.append(f"duration: {end - start:.3f} s (loop clock {start:.3f} .. {end:.3f} s)")
+    else:
+        lines.append("duration: none: no messages (the run ended before its first tick)")
+    if not episode.counts.get(LOOP_TICK.name):
+        lines.append(f"ticks: none ({LOOP_TICK.name}: the run ended before its first tick)")
     rates = topic_rates(episode)
     lines.append("topics:")
     width = max((len(topic) for topic in episode.topics), default=0)

@@ -54,14 +54,15 @@ class AlignmentError(ValueError):
 @dataclass(frozen=True)
 class AlignedEpisode:
     """An episode as dataset rows: the ``dataset`` episode, its ``fps``, the frames' size
-    (``frame_hw``: height, width px), the ticks per row ``window`` and how many rows
-    ``repeated`` an older frame."""
+    (``frame_hw``: height, width px), the ticks per row ``window``, how many rows
+    ``repeated`` an older frame, and the control loop's rate (``loop_rate_hz``, Hz)."""
 
     dataset: DatasetEpisode
     fps: int
     frame_hw: tuple[int, int]
     window: int
     repeated: int
+    loop_rate_hz: float = math.nan
 
 
 def camera_fps(push_t_s: np.ndarray) -> int:
@@ -142,7 +143,7 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
     frame_hw = (int(first.shape[0]), int(first.shape[1]))
     repeated = int(rows - len(np.unique(source)))
     dataset = DatasetEpisode(task, rows, _rgb_frames(logged, source), features)
-    return AlignedEpisode(dataset, fps, frame_hw, window, repeated)
+    return AlignedEpisode(dataset, fps, frame_hw, window, repeated, loop_rate)
 
 
 def _wrench(episode: Episode, logged: list[LoggedFrame], source: np.ndarray) -> np.ndarray:

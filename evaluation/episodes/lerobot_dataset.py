@@ -22,6 +22,11 @@ Every episode goes into chunk 0, file 0 (one export is far below LeRobot's 100 M
 they are taken, as LeRobot does, on up to ``IMAGE_STAT_FRAMES`` evenly spaced frames per
 episode, per RGB channel, scaled to [0, 1], shape (3, 1, 1).
 
+Memory: the episodes are taken one at a time from any iterable (a generator that reads
+each episode file when asked): each one's frames go to the video encoder as they come and
+its sampled frames into per-channel histograms (evaluation/episodes/image_stats.py), so
+only the numeric rows of the episodes already written stay in memory.
+
 The dataset is built in a hidden folder beside DIR and renamed to DIR only when complete
 (``evaluation.common.outputs``): an error or an interruption leaves no DIR.
 """
@@ -29,7 +34,7 @@ The dataset is built in a hidden folder beside DIR and renamed to DIR only when 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -40,6 +45,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
+from evaluation.episodes.image_stats import QUANTILES, ImageStats
 from evaluation.episodes.lerobot_video import open_video, video_info
 
 CODEBASE_VERSION = "v3.0"
@@ -60,7 +66,6 @@ INDEX_FEATURES = {
     "task_index": "int64",
 }
 """The columns every LeRobot v3.0 data file has, with their dtypes."""
-QUANTILES = (0.01, 0.10, 0.50, 0.90, 0.99)
 IMAGE_STAT_FRAMES = 100
 
 
@@ -115,85 +120,114 @@ class WrittenDataset:
 
 
 def write_dataset(
-    episodes: Sequence[DatasetEpisode],
+    episodes: Iterable[DatasetEpisode],
     root: Path,
     fps: int,
     frame_hw: tuple[int, int],
     robot_type: str | None = None,
 ) -> WrittenDataset:
     """Write ``episodes`` (frames of ``frame_hw`` = (height, width) px, at ``fps`` frames
-    per second, sharing their features' keys and names) as a LeRobot v3.0 dataset at
-    ``root``, which must not exist. ValueError (naming the episode) on a mismatch."""
-    if not episodes:
-        raise ValueError("no episodes to write")
-    layout = [(f.key, f.names) for f in episodes[0].features]
-    for number, episode in enumerate(episodes):
-        if [(f.key, f.names) for f in episode.features] != layout:
-            raise ValueError(f"episode {number}: its features differ from episode 0's")
+    per second, sharing their features' keys and names; taken one at a time, see the module
+    doc) as a LeRobot v3.0 dataset at ``root``, which must not exist. ValueError (naming the
+    episode) on a mismatch; what the iterable raises propagates. Either way no ``root``
+    and no partial folder is left."""
     partial = partial_folder(root)
     try:
-        _write(episodes, partial, fps, frame_hw, robot_type)
+        written = _write(iter(episodes), partial, fps, frame_hw, robot_type)
         publish_folder(partial, root, replace=False)
     except BaseException:
         discard_folder(partial)
         raise
-    return WrittenDataset(root, len(episodes), sum(e.length for e in episodes), fps)
+    return WrittenDataset(root, written.episodes, written.frames, fps)
 
 
 def _location(template: str, **keys: Any) -> str:
     return template.format(chunk_index=0, file_index=0, **keys)
 
 
+@dataclass
+class _Written:
+    """What is kept of each episode written: its task, length, numeric rows and image
+    statistics (never its frames)."""
+
+    layout: list[tuple[str, tuple[str, ...]]]
+    features: tuple[VectorFeature, ...]
+    tasks: list[str]
+    lengths: list[int]
+    tables: list[pa.Table]
+    images: list[ImageStats]
+
+    @property
+    def episodes(self) -> int:
+        return len(self.lengths)
+
+    @property
+    def frames(self) -> int:
+        return sum(self.lengths)
+
+
 def _write(
-    episodes: Sequence[DatasetEpisode],
+    episodes: Iterable[DatasetEpisode],
     root: Path,
     fps: int,
     frame_hw: tuple[int, int],
     robot_type: str | None,
-) -> None:
-    tasks = list(dict.fromkeys(e.task for e in episodes))
+) -> _Written:
     height, width = frame_hw
     video_path = root / _location(VIDEO_PATH, video_key=IMAGE_KEY)
     video_path.parent.mkdir(parents=True)
-    rows: list[pa.Table] = []
-    samples: list[list[np.ndarray]] = []
-    first = 0
+    written: _Written | None = None
+    task_order: dict[str, int] = {}
     with open_video(video_path, fps, width, height) as video:
         for number, episode in enumerate(episodes):
-            samples.append(_encode_frames(episode, number, video))
-            rows.append(_data_table(episode, number, first, tasks.index(episode.task), fps))
-            first += episode.length
+            layout = [(f.key, f.names) for f in episode.features]
+            if written is None:
+                written = _Written(layout, episode.features, [], [], [], [])
+            elif layout != written.layout:
+                raise ValueError(f"episode {number}: its features differ from episode 0's")
+            task_index = task_order.setdefault(episode.task, len(task_order))
+            written.images.append(_encode_frames(episode, number, video))
+            written.tables.append(_data_table(episode, number, written.frames, task_index, fps))
+            written.tasks.append(episode.task)
+            written.lengths.append(episode.length)
+            del episode  # its frames (and the episode file behind them) may go now
+    if written is None:
+        raise ValueError("no episodes to write")
     data_path = root / _location(DATA_PATH)
     data_path.parent.mkdir(parents=True)
-    table = pa.concat_tables(rows)
+    table = pa.concat_tables(written.tables)
     pq.write_table(table, data_path, compression="snappy")
-    features = _features_info(episodes[0], frame_hw, video_info(video_path))
-    _write_episodes(root, episodes, rows, samples, fps)
+    features = _features_info(written.features, frame_hw, video_info(video_path))
+    _write_episodes(root, written, fps)
+    tasks = list(task_order)
     pd.DataFrame({"task_index": range(len(tasks))}, index=tasks).to_parquet(root / TASKS_PATH)
-    stats = _stats(table, episodes[0], [s for episode in samples for s in episode])
-    _write_json(root / "meta" / "stats.json", stats)
+    images = ImageStats()
+    for sample in written.images:
+        images.merge(sample)
+    _write_json(root / "meta" / "stats.json", _stats(table, written.features, images))
     info = {
         "codebase_version": CODEBASE_VERSION,
         "robot_type": robot_type,
-        "total_episodes": len(episodes),
+        "total_episodes": written.episodes,
         "total_frames": int(table.num_rows),
         "total_tasks": len(tasks),
         "chunks_size": CHUNKS_SIZE,
         "data_files_size_in_mb": DATA_FILES_SIZE_IN_MB,
         "video_files_size_in_mb": VIDEO_FILES_SIZE_IN_MB,
         "fps": fps,
-        "splits": {"train": f"0:{len(episodes)}"},
+        "splits": {"train": f"0:{written.episodes}"},
         "data_path": DATA_PATH,
         "video_path": VIDEO_PATH,
         "features": features,
     }
     _write_json(root / "meta" / "info.json", info)
+    return written
 
 
-def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> list[np.ndarray]:
-    """Encode the episode's frames; the evenly spaced ones kept for the image statistics."""
+def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> ImageStats:
+    """Encode the episode's frames; the statistics of the evenly spaced ones."""
     keep = set(np.linspace(0, episode.length - 1, IMAGE_STAT_FRAMES).round().astype(int))
-    kept = []
+    sampled = ImageStats()
     count = 0
     for frame in episode.frames:
         if count >= episode.length:
@@ -203,11 +237,11 @@ def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> list[np.
         except ValueError as exc:
             raise ValueError(f"episode {number}, frame {count}: {exc}") from None
         if count in keep:
-            kept.append(frame)
+            sampled.add(np.asarray(frame, dtype=np.uint8))
         count += 1
     if count != episode.length:
         raise ValueError(f"episode {number}: {count} frames for a length of {episode.length}")
-    return kept
+    return sampled
 
 
 def _data_table(
@@ -235,7 +269,7 @@ def _column(values: np.ndarray) -> pa.Array:
 
 
 def _features_info(
-    episode: DatasetEpisode, frame_hw: tuple[int, int], video: dict[str, object]
+    vectors: tuple[VectorFeature, ...], frame_hw: tuple[int, int], video: dict[str, object]
 ) -> dict[str, dict[str, Any]]:
     features: dict[str, dict[str, Any]] = {
         IMAGE_KEY: {
@@ -245,7 +279,7 @@ def _features_info(
             "info": video,
         }
     }
-    for feature in episode.features:
+    for feature in vectors:
         features[feature.key] = {
             "dtype": "float32",
             "shape": [len(feature.names)],
@@ -270,13 +304,6 @@ def _numeric_stats(values: np.ndarray) -> dict[str, np.ndarray]:
     return stats
 
 
-def _image_stats(frames: list[np.ndarray]) -> dict[str, np.ndarray]:
-    """Per-channel statistics of RGB frames in [0, 1], each of shape (3, 1, 1)."""
-    stats = _numeric_stats(np.stack(frames).reshape(-1, 3) / 255.0)
-    stats = {k: v.reshape(3, 1, 1) for k, v in stats.items() if k != "count"}
-    return stats | {"count": np.array([len(frames)])}
-
-
 def _table_values(table: pa.Table, key: str) -> np.ndarray:
     """The column ``key`` as an (n, k) array."""
     column = table.column(key).combine_chunks()
@@ -286,45 +313,41 @@ def _table_values(table: pa.Table, key: str) -> np.ndarray:
 
 
 def _stats(
-    table: pa.Table, layout: DatasetEpisode, frames: list[np.ndarray]
+    table: pa.Table, vectors: tuple[VectorFeature, ...], images: ImageStats
 ) -> dict[str, dict[str, Any]]:
-    keys = [f.key for f in layout.features] + list(INDEX_FEATURES)
+    keys = [f.key for f in vectors] + list(INDEX_FEATURES)
     stats = {key: _numeric_stats(_table_values(table, key)) for key in keys}
-    stats[IMAGE_KEY] = _image_stats(frames)
+    stats[IMAGE_KEY] = images.stats()
     return {key: {k: v.tolist() for k, v in values.items()} for key, values in stats.items()}
 
 
-def _write_episodes(
-    root: Path,
-    episodes: Sequence[DatasetEpisode],
-    tables: list[pa.Table],
-    samples: list[list[np.ndarray]],
-    fps: int,
-) -> None:
+def _write_episodes(root: Path, written: _Written, fps: int) -> None:
     rows: list[dict[str, Any]] = []
     first = 0
-    for number, (episode, table, frames) in enumerate(zip(episodes, tables, samples, strict=True)):
+    for number, (task, length, table, images) in enumerate(
+        zip(written.tasks, written.lengths, written.tables, written.images, strict=True)
+    ):
         video = f"videos/{IMAGE_KEY}/"
         row: dict[str, Any] = {
             "episode_index": number,
-            "tasks": [episode.task],
-            "length": episode.length,
+            "tasks": [task],
+            "length": length,
             "data/chunk_index": 0,
             "data/file_index": 0,
             "dataset_from_index": first,
-            "dataset_to_index": first + episode.length,
+            "dataset_to_index": first + length,
             video + "chunk_index": 0,
             video + "file_index": 0,
             video + "from_timestamp": first / fps,
-            video + "to_timestamp": (first + episode.length) / fps,
+            video + "to_timestamp": (first + length) / fps,
             "meta/episodes/chunk_index": 0,
             "meta/episodes/file_index": 0,
         }
-        for key, values in _stats(table, episode, frames).items():
+        for key, values in _stats(table, written.features, images).items():
             for name, value in values.items():
                 row[f"stats/{key}/{name}"] = value
         rows.append(row)
-        first += episode.length
+        first += length
     path = root / _location(EPISODES_PATH)
     path.parent.mkdir(parents=True)
     pq.write_table(pa.Table.from_pylist(rows), path)

@@ -15,7 +15,10 @@
 EP is an episode file (MCAP, ``episode.mcap`` in a run's folder). A file cut short by a
 killed process (no footer) is refused, saying how much of it holds whole records, unless
 ``--allow-truncated`` (then what was read is used, with one warning line); ``repair`` makes
-a finished copy. Outputs are checked before any work, never written over an input, and
+a finished copy. A file damaged in the middle (bytes overwritten) is read past the damage
+(controller/episode/scan.py): the lost byte ranges are named, and the file is refused in the
+same way unless ``--allow-damaged`` (the same switch); ``repair`` keeps every readable
+chunk. Outputs are checked before any work, never written over an input, and
 written atomically (a temporary file or folder renamed into place when complete). Expected
 failures (a missing, foreign or truncated file, a bad configuration, an output that cannot
 be written) print one line ``replay: error: ...`` and exit with code 2; SIGINT and SIGTERM
@@ -26,23 +29,32 @@ from __future__ import annotations
 
 import argparse
 import csv
+import itertools
 import math
 import sys
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from controller.episode import Episode, EpisodeError, read_episode
 from controller.episode.repair import repair as repair_file
+from controller.episode.topics import LOOP_TICK
 from controller.tactile import estimator_for_sensor
 from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
-from evaluation.common.cli_support import ToolError, distinct, resolved_config_path, run_tool
+from evaluation.common.cli_support import (
+    ToolError,
+    distinct,
+    nonblank,
+    resolved_config_path,
+    run_tool,
+)
 from evaluation.common.outputs import atomic_text, check_output_file, check_output_folder
 from evaluation.episodes import episode_streams, reestimation
 from evaluation.episodes.episode_chart import write_episode_chart
-from evaluation.episodes.episode_summary import summary_lines
-from evaluation.episodes.lerobot_alignment import AlignmentError, align
-from evaluation.episodes.lerobot_dataset import write_dataset
+from evaluation.episodes.episode_summary import CRC_NOTE, summary_lines
+from evaluation.episodes.lerobot_alignment import AlignedEpisode, AlignmentError, align
+from evaluation.episodes.lerobot_dataset import DatasetEpisode, write_dataset
 from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
 
 PROG = "replay"
@@ -53,26 +65,43 @@ def _warn(message: str) -> None:
 
 
 def open_episode(path: Path, allow_truncated: bool = False) -> Episode:
-    """The episode at ``path``; ToolError (one line) if it is missing, not an episode, or
-    cut short (unless ``allow_truncated``: then one warning line)."""
+    """The episode at ``path``; ToolError (one line) if it is missing, not an episode, cut
+    short or damaged (unless ``allow_truncated``: then one warning line)."""
     if path.is_dir():
         raise ToolError(f"episode '{path}' is a folder; expected an episode file (.mcap)")
     try:
         episode = read_episode(path)
     except EpisodeError as exc:
         raise ToolError(str(exc)) from None
+    problems = []  # (what is wrong, the switch that accepts it)
+    messages = sum(episode.counts.values())
+    expected = f" of the {episode.expected_messages} written" if episode.expected_messages else ""
+    if episode.damaged:
+        problems.append(
+            (
+                f"episode '{path}' is damaged: {episode.lost_bytes} bytes could not be read "
+                f"({episode.lost_text()}); read {messages} messages{expected} from the rest",
+                "--allow-damaged",
+            )
+        )
     if not episode.finished:
-        messages = sum(episode.counts.values())
         _, last = episode.time_range_s()
         until = f", up to {last:.3f} s on the loop clock" if math.isfinite(last) else ""
-        problem = (
-            f"episode '{path}' is truncated (no footer: the process writing it was killed?): "
-            f"read {episode.read_bytes} of {episode.size_bytes} bytes, {messages} messages"
-            f"{until}"
+        problems.append(
+            (
+                f"episode '{path}' is truncated (no footer: the process writing it was killed?): "
+                f"read {episode.read_bytes} of {episode.size_bytes} bytes, {messages} messages"
+                f"{until}",
+                "--allow-truncated",
+            )
         )
+    if episode.unverified_change:
+        _warn(f"episode '{path}': the data section's CRC does not match: {CRC_NOTE}")
+    for problem, switch in problems:
         if not allow_truncated:
             raise ToolError(
-                f"{problem}; finish it with 'replay repair {path}', or pass --allow-truncated"
+                f"{problem}; finish it with 'replay repair {path}' (a copy of what is "
+                f"readable), or pass {switch}"
             )
         _warn(problem)
     return episode
@@ -84,8 +113,16 @@ def summary(args: argparse.Namespace) -> int:
 
 
 def plot(args: argparse.Namespace) -> int:
+    if args.out.suffix.lower() != ".png":
+        raise ToolError(f"--out '{args.out}': expected a .png file (the chart is a PNG)")
     check_output_file(args.out, [args.episode])
-    write_episode_chart(open_episode(args.episode, args.allow_truncated), args.out)
+    episode = open_episode(args.episode, args.allow_truncated)
+    if not episode.counts.get(LOOP_TICK.name):
+        raise ToolError(
+            f"episode '{args.episode}' has no control ticks ({LOOP_TICK.name}): the run ended "
+            "before its first tick; nothing to plot"
+        )
+    write_episode_chart(episode, args.out)
     print(f"{PROG}: wrote {args.out}")
     return 0
 
@@ -124,8 +161,12 @@ def reestimate(args: argparse.Namespace) -> int:
         + (
             "with the run's calibration, N*m and N)"
             if calibration is not None
-            else "raw: " + ("the run applied no calibration)" if run.calibration is None
-                            else "the run's calibration is for another configuration)")
+            else "raw: "
+            + (
+                "the run applied no calibration)"
+                if run.calibration is None
+                else "the run's calibration is for another configuration)"
+            )
         )
     ]
     truth = episode_streams.truth(episode)
@@ -168,30 +209,54 @@ def _task_sentence(episode: Episode, given: str | None) -> str:
 def export(args: argparse.Namespace) -> int:
     distinct(build_parser(), "EP", [str(p.resolve()) for p in args.episodes])
     check_output_folder(args.lerobot, args.episodes, "--lerobot", must_not_exist=True)
-    aligned = []
-    for path in args.episodes:
-        episode = open_episode(path, args.allow_truncated)
-        try:
-            aligned.append(align(episode, _task_sentence(episode, args.task)))
-        except AlignmentError as exc:
-            raise ToolError(f"episode '{path}': {exc}") from None
-        first = aligned[0]
-        if (aligned[-1].fps, aligned[-1].frame_hw) != (first.fps, first.frame_hw):
-            raise ToolError(
-                f"episode '{path}': {aligned[-1].fps} fps, frames {aligned[-1].frame_hw}; the "
-                f"first episode has {first.fps} fps, frames {first.frame_hw}: one dataset "
-                "holds one rate and one frame size"
-            )
-    written = write_dataset(
-        [a.dataset for a in aligned], args.lerobot, aligned[0].fps, aligned[0].frame_hw
-    )
-    repeated = sum(a.repeated for a in aligned)
+    aligned = _aligned_episodes(args.episodes, args.allow_truncated, args.task)
+    first = next(aligned)  # the dataset's rate, frame size and window
+    fps, frame_hw, window = first.fps, first.frame_hw, first.window
+    repeated = 0
+
+    def each() -> Iterator[DatasetEpisode]:
+        nonlocal repeated
+        for item in itertools.chain([first], aligned):
+            repeated += item.repeated
+            yield item.dataset  # its frames are read while the video is written, then freed
+
+    try:
+        written = write_dataset(each(), args.lerobot, fps, frame_hw)
+    except ValueError as exc:  # an episode the dataset cannot hold (named in the message)
+        raise ToolError(f"--lerobot '{args.lerobot}': {exc}") from None
     print(
         f"{PROG}: wrote a LeRobot v3.0 dataset of {written.episodes} episodes, "
-        f"{written.frames} frames at {written.fps} fps ({aligned[0].window} control ticks "
+        f"{written.frames} frames at {written.fps} fps ({window} control ticks "
         f"per frame; {repeated} rows repeat an older frame) to {args.lerobot}"
     )
     return 0
+
+
+def _aligned_episodes(
+    paths: list[Path], allow_truncated: bool, task: str | None
+) -> Iterator[AlignedEpisode]:
+    """Each episode read and aligned only when the export asks for it (one in memory at a
+    time); ToolError naming the file for one the first one's dataset cannot hold (another
+    camera rate, frame size, or loop rate: the window of ticks per frame)."""
+    first: AlignedEpisode | None = None
+    for path in paths:
+        episode = open_episode(path, allow_truncated)
+        try:
+            item = align(episode, _task_sentence(episode, task))
+        except AlignmentError as exc:
+            raise ToolError(f"episode '{path}': {exc}") from None
+        del episode  # the aligned episode's frames keep what they need
+        if first is None:
+            first = item
+        elif (item.fps, item.frame_hw, item.window) != (first.fps, first.frame_hw, first.window):
+            raise ToolError(
+                f"episode '{path}': {item.fps} fps, frames {item.frame_hw}, "
+                f"{item.window} control ticks per frame (loop {item.loop_rate_hz:.0f} Hz); the "
+                f"first episode has {first.fps} fps, frames {first.frame_hw}, {first.window} "
+                f"ticks per frame (loop {first.loop_rate_hz:.0f} Hz): one dataset holds one "
+                "camera rate, frame size and loop rate; export them separately"
+            )
+        yield item
 
 
 def repair(args: argparse.Namespace) -> int:
@@ -201,10 +266,11 @@ def repair(args: argparse.Namespace) -> int:
         report = repair_file(args.episode, out)
     except EpisodeError as exc:
         raise ToolError(str(exc)) from None
+    lost = f", {report.lost_bytes} bytes lost to damage" if report.lost_bytes else ""
     print(
         f"{PROG}: wrote {out}: {report.messages} messages from the {report.read_bytes} of "
-        f"{report.source_bytes} bytes of '{args.episode}' that held whole records, marked "
-        "incomplete"
+        f"{report.source_bytes} bytes of '{args.episode}' that held whole records{lost}, "
+        "marked incomplete"
     )
     return 0
 
@@ -223,8 +289,10 @@ def build_parser() -> argparse.ArgumentParser:
         if truncated:
             sub.add_argument(
                 "--allow-truncated",
+                "--allow-damaged",
+                dest="allow_truncated",
                 action="store_true",
-                help="read a file cut short (no footer) up to its last whole record",
+                help="read a file cut short (no footer) or damaged: what is readable",
             )
 
     sub = command(
@@ -241,6 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument(
         "--method",
         required=True,
+        type=nonblank("an estimator configuration's name or a YAML path"),
         help="estimator configuration: a name in configs/estimators or a YAML path",
     )
     sub.add_argument("--out", type=Path, default=None, help="CSV of the new estimates")
@@ -248,13 +317,16 @@ def build_parser() -> argparse.ArgumentParser:
     sub.add_argument("episodes", type=Path, nargs="+", metavar="EP", help="episode files")
     sub.add_argument(
         "--allow-truncated",
+        "--allow-damaged",
+        dest="allow_truncated",
         action="store_true",
-        help="read files cut short (no footer) up to their last whole record",
+        help="read files cut short (no footer) or damaged: what is readable",
     )
     sub.add_argument("--lerobot", type=Path, required=True, help="new dataset folder")
     sub.add_argument(
         "--task",
         default=None,
+        type=nonblank("a task sentence, e.g. 'insert the usb_c plug'"),
         help="the task sentence of every episode (default: 'insert the TASK plug')",
     )
     sub = command("repair", "finish a file left by a killed process", repair)
@@ -267,4 +339,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    return run_tool(PROG, lambda: args.run(args))
+    return run_tool(PROG, lambda: _run(args))
+
+
+def _run(args: argparse.Namespace) -> int:
+    """The subcommand; an episode's content that cannot be read (a message that does not
+    decode, one without the fields the writer writes) is one line too."""
+    try:
+        return args.run(args)
+    except EpisodeError as exc:
+        raise ToolError(str(exc)) from None

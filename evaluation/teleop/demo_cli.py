@@ -23,8 +23,14 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
   (a window, its own process) shows it as it is written; ``--foxglove`` serves the same
   streams on ws://HOST:PORT (a port already taken: one line, exit 2).
 
+Times printed (the timeline, the sign table) are seconds from the run's start, on its
+clock. ``--duration S`` ends the demo after S s on that clock.
+
 Exit: 0 when the demo ended (hand-back, the duration, the window closed); 130 / 143 on
-SIGINT / SIGTERM after the safe stop; 2 for bad input; 1 if a device could not be reached.
+SIGINT / SIGTERM after the safe stop; 2 for bad input; 1 if a device could not be reached
+or the run ended in a fault (a watchdog trip: an unplugged pad while the operator drives,
+late ticks; after the safe stop, one line naming it; a simulated real-time run on a loaded
+machine is told to need an idle core, evaluation/common/run_outcome.py).
 """
 
 from __future__ import annotations
@@ -49,14 +55,13 @@ from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
 from drivers import registry
 from evaluation.common.cli_support import (
-    EXIT_SIGINT,
-    EXIT_SIGTERM,
     ToolError,
     integer,
     number,
     run_tool,
 )
 from evaluation.common.outputs import check_output_folder
+from evaluation.common.run_outcome import fault_exit, pace_line, signal_exit
 from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from evaluation.trials.batch_cli import add_override_argument
 
@@ -117,9 +122,16 @@ def _run(args: argparse.Namespace) -> int:
         # imported here: a script plays the simulated pad, which a real run never loads
         from evaluation.teleop.pad_script import load_pad_script
 
-        script = load_pad_script(args.script or DEFAULT_SCRIPT)
+        mapping = pad_mapping(task)
+        script = load_pad_script(args.script or DEFAULT_SCRIPT, mapping.axes, mapping.buttons)
+    created = not args.out.exists()
     args.out.mkdir(parents=True, exist_ok=True)
-    return run_demo(task, args, script)
+    try:
+        return run_demo(task, args, script)
+    except BaseException:  # nothing recorded yet (a stream that cannot listen, no devices)
+        if created and not any(args.out.iterdir()):
+            args.out.rmdir()  # no empty folder left that looks like a run's
+        raise
 
 
 def real_pad_attached() -> bool:
@@ -181,9 +193,11 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
                 args.seed,
                 backend=args.backend,
                 realtime=not args.fast,
+                paced=True,
                 controllers=table,
                 prepare=_pad_preparation(task, script),
                 episode=recording,
+                max_duration_s=args.duration,
             )
         except BaseException as error:
             recording.close({"error": f"{type(error).__name__}: {error}"})
@@ -195,9 +209,12 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     if script is not None and not args.autonomy:
         print(sign_table(read_episode(args.out / EPISODE_FILE), manoeuvres(script)))
     print(f"teleop_demo: episode {args.out / EPISODE_FILE}")
-    if outcome.loop.reason == "signal" and not quit_asked:
-        return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
-    return 0
+    if not quit_asked:
+        kept = f"the episode is complete up to then: {args.out / EPISODE_FILE}"
+        stopped = signal_exit("teleop_demo", outcome.loop, kept)
+        if stopped is not None:
+            return stopped
+    return fault_exit("teleop_demo", outcome.loop)
 
 
 def controller_table(machines: list[Any]) -> dict[str, Controller]:
@@ -245,17 +262,23 @@ def _pad_preparation(task: Task, script: Any) -> Callable[[registry.DeviceSet], 
             twin: Any = device_set.devices.gamepad  # the simulated pad (drivers/sim/twins)
             twin.play(script)
             return None
-        pad: Any = registry.load_device(task.device_files["gamepad"], "real", kind="gamepad")
+        pad: Any = registry.load_device(  # on the world's clock, as every device of the run
+            task.device_files["gamepad"], "real", kind="gamepad", clock=device_set.clock
+        )
         devices = dataclasses.replace(device_set.devices, gamepad=pad)
         return dataclasses.replace(device_set, devices=devices)
 
     return prepare
 
 
+def pad_mapping(task: Task) -> Any:
+    """The gamepad's mapping (its device file's ``axes`` and ``buttons`` by action)."""
+    return registry.load_device_config(task.device_files["gamepad"], "real", "gamepad").config
+
+
 def mapping_lines(task: Task) -> list[str]:
     """The pad's mapping as the view lists it."""
-    spec = registry.load_device_config(task.device_files["gamepad"], "real", "gamepad")
-    config = spec.config
+    config = pad_mapping(task)
     lines = [f"{action}: {b.axis}{' (inverted)' if b.invert else ''}"
              for action, b in config.axes.items()]  # fmt: skip
     lines.append(", ".join(f"{action}: {button}" for action, button in config.buttons.items()))
@@ -264,13 +287,14 @@ def mapping_lines(task: Task) -> list[str]:
 
 def sign_table(episode: Episode, script: list[Manoeuvre]) -> str:
     """Each scripted manoeuvre, the torque it drives, the expected sign and the change
-    the episode recorded (docs/TELEOP.md, "Signs")."""
-    lines = ["manoeuvre (script s)          torque  expected  measured change  ok"]
+    the episode recorded, with its unit (docs/TELEOP.md, "Signs")."""
+    lines = ["manoeuvre (script s)          torque  expected  measured change        ok"]
     for check in measured_signs(episode, script):
         m = check.manoeuvre
+        change = f"{check.change:+.2e} {check.unit}"
         lines.append(f"{m.action} {m.value:+.2f} ({m.start_s:5.1f}-{m.end_s:5.1f})"
-                     f"{'':8}{m.torque}  {m.expected_sign:+d}        {check.change:+.2e}"
-                     f"        {verdict(check)}")  # fmt: skip
+                     f"{'':8}{m.torque}  {m.expected_sign:+d}        {change:<22} "
+                     f"{verdict(check)}")  # fmt: skip
     return "\n".join(lines)
 
 
@@ -291,6 +315,9 @@ def summary(outcome: RunOutcome, view: Any) -> str:
                  f"{outcome.loop.phase.value}")  # fmt: skip
     lines.append(f"loop: {stats.ticks} ticks, {stats.overruns} overruns, period p99 "
                  f"{stats.period_p99_s * 1e3:.2f} ms")  # fmt: skip
+    pace = pace_line(outcome.devices.clock)
+    if pace is not None:
+        lines.append(pace)
     if view is not None:
         lines.append(f"view: {view.offered} frames offered, {view.dropped} dropped")
     return "\n".join(lines)

@@ -6,7 +6,8 @@ episode, drawn by the view's own code from the episode's streams.
 The view's snapshots are rebuilt from the episode in the loop's order (each
 ``/tactile/wrench`` message with the newest ``/tactile/image``, ``/tactile/field``,
 ``/loop/tick`` and ``/teleop/input`` before it), the torque history of the 10 s up to the
-frame at ``T`` (s on the episode's clock) is replayed, and that frame is drawn
+frame at ``T`` (s on the episode's clock; a time past its end is refused) is replayed,
+and that frame is drawn
 (``controller.view.view_drawing.draw``) off screen and written atomically. The README's
 picture of the sim demo is made this way (docs/TELEOP.md has the command).
 """
@@ -16,20 +17,26 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import yaml
 
-from controller.episode import decode_image, grid_arrays, read_episode
+from controller.episode import EpisodeError, decode_image, grid_arrays, read_episode
 from controller.view.snapshot import ViewSnapshot
 from core.atomic_files import atomic_file
 from core.config import CONFIG_ROOT, resolve_config_path
 from core.sensor_profile import sensor_profile
 from drivers import registry
 from evaluation.common.cli_support import ToolError, number, run_tool
-from evaluation.common.outputs import check_output_folder
+from evaluation.common.outputs import check_output_file
+
+
+def _warn(message: str) -> None:
+    print(f"teleop_screenshot: warning: {message}", file=sys.stderr)
+
 
 STREAMS = ("/tactile/image", "/tactile/field", "/tactile/wrench", "/loop/tick", "/teleop/input")
 
@@ -46,12 +53,37 @@ def main(argv: list[str] | None = None) -> int:
 def _run(path: Path, at_s: float, out: Path) -> int:
     if out.suffix.lower() != ".png":
         raise ToolError(f"--out '{out}': expected a .png file")
-    check_output_folder(out.parent, [path], option="--out")
-    if out.resolve() == path.resolve():
-        raise ToolError(f"--out '{out}': that is the input")
-    episode = read_episode(path)
-    mm_per_px = sensor_profile(_task_sensor(episode)).mm_per_px
-    snapshots = [s for s in snapshots_of(episode, mm_per_px) if s.t_s <= at_s]
+    check_output_file(out, [path], option="--out")  # beside the episode is fine
+    try:
+        episode = read_episode(path)
+    except EpisodeError as error:
+        raise ToolError(str(error)) from None
+    if episode.damaged:
+        _warn(f"episode '{path}' is damaged: {episode.lost_bytes} bytes could not be read "
+              f"({episode.lost_text()}); drawing from the rest")  # fmt: skip
+    start_s, end_s = episode.time_range_s()
+    if not math.isfinite(end_s):
+        raise ToolError(f"episode '{path}': no messages (the run ended before its first tick)")
+    if at_s > end_s:
+        raise ToolError(
+            f"--at {at_s:g}: past the episode's end; expected a time in [0, {end_s:.2f}] s "
+            f"(its messages run from {start_s:.2f} to {end_s:.2f} s)"
+        )
+    try:
+        mm_per_px = sensor_profile(_task_sensor(episode)).mm_per_px
+    except (KeyError, TypeError, yaml.YAMLError) as error:
+        raise ToolError(
+            f"episode '{path}': its task.yaml attachment names no tactile sensor ({error})"
+        ) from None
+    try:
+        snapshots = [s for s in snapshots_of(episode, mm_per_px) if s.t_s <= at_s]
+    except EpisodeError as error:
+        raise ToolError(str(error)) from None
+    except (KeyError, TypeError, ValueError) as error:  # a hand-made file's messages
+        raise ToolError(
+            f"episode '{path}': a message lacks what this package's writer writes "
+            f"({type(error).__name__}: {error})"
+        ) from None
     if not snapshots:
         raise ToolError(f"--at {at_s}: the episode has no tactile estimate by then")
     os.environ.setdefault("SDL_VIDEODRIVER", "dummy")

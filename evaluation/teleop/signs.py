@@ -53,14 +53,21 @@ class Manoeuvre:
         return int(np.sign(self.value * AXES[self.action][1]))
 
 
+UNIT_CALIBRATED = "N*m"
+UNIT_RAW = "raw mm"
+"""The estimate's tilt torques: N*m with a calibration (the demo's tasks have one), else the
+estimator's raw units (mm)."""
+
+
 @dataclass(frozen=True)
 class SignCheck:
-    """One manoeuvre, its torque's change (``change``: hold mean minus the mean before,
-    estimate units; NaN if the episode does not cover it) and whether its sign is the
-    expected one."""
+    """One manoeuvre, its torque's change (``change``: hold mean minus the mean before, in
+    ``unit``: ``UNIT_CALIBRATED`` or ``UNIT_RAW``; NaN if the episode does not cover it) and
+    whether its sign is the expected one."""
 
     manoeuvre: Manoeuvre
     change: float
+    unit: str = UNIT_CALIBRATED
 
     @property
     def ok(self) -> bool:
@@ -88,9 +95,12 @@ def measured_signs(
 ) -> list[SignCheck]:
     """Each manoeuvre of ``script`` (times from the demo's start at ``start_s`` on the
     episode's clock) checked against the episode's ``/tactile/wrench``."""
-    rows = [(m.value["t_s"], m.value["tau_x"], m.value["tau_y"])
-            for m in episode.messages("/tactile/wrench") if not m.value["zeroing"]]  # fmt: skip
+    values = [m.value for m in episode.messages("/tactile/wrench") if not m.value["zeroing"]]
+    rows = [(v["t_s"], v["tau_x"], v["tau_y"]) for v in values]
+    calibrated = bool(values) and all(v.get("calibrated", False) for v in values)
+    unit = UNIT_CALIBRATED if calibrated else UNIT_RAW
     data = np.array([[np.nan if v is None else v for v in row] for row in rows], float)
+    data = data.reshape(-1, 3)
     t = data[:, 0] - start_s
     checks = []
     for m in script:
@@ -98,8 +108,8 @@ def measured_signs(
         hold = (t >= m.start_s + SETTLE_S) & (t <= m.end_s)
         before = (t >= m.start_s - BEFORE_S) & (t < m.start_s)
         if not (np.isfinite(data[hold, column]).any() and np.isfinite(data[before, column]).any()):
-            checks.append(SignCheck(m, math.nan))  # not in the episode (it ended before)
+            checks.append(SignCheck(m, math.nan, unit))  # not in the episode (it ended before)
             continue
         change = float(np.nanmean(data[hold, column]) - np.nanmean(data[before, column]))
-        checks.append(SignCheck(m, change))
+        checks.append(SignCheck(m, change, unit))
     return checks

@@ -55,10 +55,10 @@ HEADER = [
     "the arm's flange F/T sensor). A trial fails when the plug's true insertion "
     "force (the net contact force along the hole's axis) exceeds the connector's "
     "insertion-force specification (USB-C 20 N, USB-A 35 N; "
-    "sources in docs/SIMULATION.md, \"Contact-force limits\"). Each task's section ends "
+    'sources in docs/SIMULATION.md, "Contact-force limits"). Each task\'s section ends '
     "with the product's targets judged on its trials (evaluation/trials/targets.py); the "
     "commit and machine each report ran on, and when its seeds were named, are in "
-    "docs/BENCHMARKS.md, \"Insertion trials\".",
+    'docs/BENCHMARKS.md, "Insertion trials".',
     "",
 ]
 

@@ -212,14 +212,20 @@ def result_text(success: bool, failure_reason: object) -> str:
     return "inserted" if success else f"failed: {failure_reason}"
 
 
+def insertion_force_text(max_n: object, p99_n: object) -> str:
+    """The title's ``; plug insertion force max X N, p99 Y N`` ("" if not numbers)."""
+    try:
+        return f"; plug insertion force max {float(max_n):.1f} N, p99 {float(p99_n):.1f} N"  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return ""
+
+
 def write_trial_chart(folder: Path, result: TrialResult) -> Path:
     """The chart of the trial recorded in ``folder``, titled with its ``result``, as
     ``folder/summary.png``; its path."""
     ended = result_text(result.success, result.failure_reason)
-    title = (
-        chart_title(result.task, result.seed, result.controller, ended)
-        + f"; plug insertion force max {result.max_insertion_force_n:.1f} N, "
-        f"p99 {result.p99_insertion_force_n:.1f} N"
+    title = chart_title(result.task, result.seed, result.controller, ended) + insertion_force_text(
+        result.max_insertion_force_n, result.p99_insertion_force_n
     )
     path = folder / CHART_NAME
     trial_chart(folder, path, title, result.contact_force_limit_n)

@@ -11,9 +11,11 @@ transitions.jsonl, truth.npz, trial.json) and ``summary.png`` (estimated torques
 phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
-possible. Exit codes as every tool's (evaluation/common/cli_support.py); a trial that fails
-still exits 0 (the outcome is the result), a run stopped by SIGINT/SIGTERM exits 130/143
-after its safe stop, with the record kept.
+possible. Times printed are seconds from the run's start. Exit codes as every tool's
+(evaluation/common/cli_support.py); a trial that fails still exits 0 (the outcome is the
+result), but one that ended in a fault (a watchdog trip, an exception in a tick) exits 1
+after its safe stop with one line naming it (evaluation/common/run_outcome.py); a run
+stopped by SIGINT/SIGTERM exits 130/143 after its safe stop, with the record kept.
 """
 
 from __future__ import annotations
@@ -23,8 +25,9 @@ from pathlib import Path
 
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run.task import load_task
-from evaluation.common.cli_support import EXIT_SIGINT, EXIT_SIGTERM, ToolError, integer, run_tool
+from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.common.outputs import check_output_folder
+from evaluation.common.run_outcome import fault_exit, signal_exit
 from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED
@@ -71,6 +74,7 @@ def _run(args: argparse.Namespace) -> int:
         args.seed,
         backend=args.backend,
         realtime=args.realtime,
+        paced=True,
         out_dir=args.out,
         episode=EpisodeOptions(image_format=args.episode_images),
     )
@@ -81,9 +85,12 @@ def _run(args: argparse.Namespace) -> int:
     episode = args.out / EPISODE_FILE
     print(f"run_trial: episode {episode}; summarise it with:")
     print(f"  .venv/bin/python scripts/replay.py summary {episode}")
-    if outcome.loop.reason == "signal":
-        return EXIT_SIGTERM if "SIGTERM" in outcome.loop.message else EXIT_SIGINT
-    return 0
+    stopped = signal_exit(
+        "run_trial", outcome.loop, f"the record is complete up to then: {args.out}"
+    )
+    if stopped is not None:
+        return stopped
+    return fault_exit("run_trial", outcome.loop)
 
 
 def timeline(outcome: TrialOutcome) -> str:

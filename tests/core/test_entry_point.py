@@ -1,6 +1,7 @@
 """Every script in scripts/ ends in one line on Ctrl-C or SIGTERM at any moment, while its
 tool's modules are still being imported included (core/entry_point.py)."""
 
+import os
 import re
 import signal
 import subprocess
@@ -116,3 +117,56 @@ def test_other_unraisable_exceptions_still_reach_the_previous_hook(tmp_path):
     done = _run_main_on(tmp_path, "noisy", tool + "def main():\n    Drops()\n    return 0\n")
     assert done.returncode == 0
     assert "Exception ignored" in done.stderr and "lost in __del__" in done.stderr
+
+
+# pybind11 (SciPy's _highspy) turns a KeyboardInterrupt during a module's initialisation into
+# ImportError("initialization failed") from it.
+STOPPED_IN_AN_EXTENSION = """
+try:
+    raise {stop}()
+except BaseException as stop:
+    raise ImportError("initialization failed") from stop
+
+def main():
+    return 0
+"""
+
+
+@pytest.mark.parametrize(
+    "stop, code, word",
+    [("KeyboardInterrupt", 130, "interrupted by SIGINT"), ("Terminated", 143, "ended by SIGTERM")],
+)
+def test_a_stop_inside_an_extension_modules_import_is_the_same_stop(tmp_path, stop, code, word):
+    source = "from core.entry_point import Terminated\n" + STOPPED_IN_AN_EXTENSION.format(stop=stop)
+    done = _run_main_on(tmp_path, "ext", source)
+    assert done.returncode == code, done.stderr
+    assert done.stderr.strip() == f"ext: {word}"
+
+
+def test_an_import_error_of_its_own_is_still_a_traceback(tmp_path):
+    source = "import no_such_module_here\ndef main():\n    return 0\n"
+    done = _run_main_on(tmp_path, "broken", source)
+    assert done.returncode == 1 and "ModuleNotFoundError" in done.stderr
+
+
+def test_a_reader_that_leaves_early_ends_the_tool_quietly(tmp_path):
+    (tmp_path / "chatty_tool.py").write_text(
+        "from evaluation.common.cli_support import run_tool\n"
+        "def main():\n"
+        "    return run_tool('chatty', lambda: [print('line', i) for i in range(100000)] and 0)\n"
+    )
+    runner = (
+        f"import sys; sys.path[:0] = [{str(tmp_path)!r}, {str(ROOT)!r}]; sys.argv = ['chatty']\n"
+        "from core.entry_point import run_main\nrun_main('chatty_tool')"
+    )
+    read_end, write_end = os.pipe()
+    os.close(read_end)  # the reader (``| head``) has gone before the first line
+    try:
+        done = subprocess.run(
+            [sys.executable, "-c", runner], stdout=write_end, stderr=subprocess.PIPE,
+            text=True, timeout=60,
+        )  # fmt: skip
+    finally:
+        os.close(write_end)
+    assert done.returncode == 128 + signal.SIGPIPE
+    assert done.stderr == ""

@@ -41,6 +41,7 @@ def test_a_full_queue_drops_counts_and_records_what_it_dropped(tmp_path):
 
     assert dropped == 17  # of 21: one in the thread's hands, three queued
     ep = read_episode(tmp_path / "e.mcap")
+    assert ep.data_crc_matches is True  # the writer records the data section's CRC
     assert ep.counts["/loop/tick"] + writer.dropped["/loop/tick"] == 20
     assert ep.counts.get("/machine/transition", 0) + writer.dropped["/machine/transition"] == 1
     assert ep.outcome["dropped_total"] == str(dropped)
@@ -92,7 +93,7 @@ def test_a_truncated_file_reads_to_its_last_whole_record_and_says_how_much(tmp_p
     report = repair(cut, tmp_path / "fixed.mcap")
     assert (report.read_bytes, report.source_bytes) == (ep.read_bytes, ep.size_bytes)
     assert read_episode(tmp_path / "fixed.mcap").counts == ep.counts
-    with pytest.raises(EpisodeError, match="already finished"):
+    with pytest.raises(EpisodeError, match="already finished and whole"):
         repair(path, tmp_path / "again.mcap")
     with pytest.raises(EpisodeError, match="is the episode itself"):
         repair(cut, cut)

@@ -1,8 +1,9 @@
 """The Foxglove live stream: a local WebSocket client subscribes and receives one message of
-each schema. foxglove-sdk 0.30's server accepts the subprotocol ``foxglove.sdk.v1`` (its
-handshake refuses a client offering only the older ``foxglove.websocket.v1``, the one the
-Foxglove app of before the SDK spoke); the messages are the same (JSON ``advertise`` and
-``subscribe``, binary ``MessageData``: opcode 1, subscription id u32, log time u64, payload)."""
+each schema, whichever subprotocol name it offers: foxglove-sdk 0.30's server accepts only
+``foxglove.sdk.v1``, and the stream's relay serves a client offering only the older
+``foxglove.websocket.v1`` (Lichtblick, the Foxglove app of before the SDK) too; the messages
+are the same (JSON ``advertise`` and ``subscribe``, binary ``MessageData``: opcode 1,
+subscription id u32, log time u64, payload). Failures to listen are one line saying why."""
 
 import json
 import struct
@@ -36,13 +37,17 @@ def records():
     }  # fmt: skip
 
 
-def test_a_client_subscribes_and_receives_each_schema():
+@pytest.mark.parametrize(
+    "offered", [SUBPROTOCOLS, ["foxglove.websocket.v1"], ["foxglove.sdk.v1"]], ids=str
+)
+def test_a_client_subscribes_and_receives_each_schema(offered):
     stream = FoxgloveLiveStream(port=0)
     try:
         sent = records()
         for topic, data in sent.values():  # the channels open as their topics first appear
             stream(topic, 1_000_000_000, None, data)
-        with connect(stream.url, subprotocols=SUBPROTOCOLS, open_timeout=5) as ws:
+        with connect(stream.url, subprotocols=offered, open_timeout=5) as ws:
+            assert ws.subprotocol == offered[0]
             channels = {}
             while len(channels) < len(sent):
                 message = json.loads(ws.recv(timeout=5))
@@ -84,7 +89,26 @@ def test_a_client_subscribes_and_receives_each_schema():
 def test_a_port_already_taken_is_one_clear_error():
     first = FoxgloveLiveStream(port=0)
     try:
-        with pytest.raises(LiveStreamError, match=f"127.0.0.1:{first.port}.*port taken"):
+        with pytest.raises(LiveStreamError, match=f"127.0.0.1:{first.port}: the port is taken"):
             FoxgloveLiveStream(port=first.port)
     finally:
         first.close()
+
+
+def test_a_bad_host_name_is_not_blamed_on_the_port():
+    with pytest.raises(LiveStreamError) as error:
+        FoxgloveLiveStream(host="no-such-host.invalid", port=0)
+    assert "does not resolve" in str(error.value) and "port" not in str(error.value).split(":")[-1]
+
+
+def test_an_ipv6_host_is_written_in_brackets():
+    try:
+        stream = FoxgloveLiveStream(host="::1", port=0)
+    except LiveStreamError:
+        pytest.skip("no IPv6 loopback on this machine")
+    try:
+        assert stream.url == f"ws://[::1]:{stream.port}"
+        with connect(stream.url, subprotocols=SUBPROTOCOLS, open_timeout=5) as ws:
+            assert json.loads(ws.recv(timeout=5))["op"] == "serverInfo"
+    finally:
+        stream.close()

@@ -55,3 +55,18 @@ def test_a_view_without_a_display_says_so_once_and_ends(tmp_path, monkeypatch):
     view.close()
     assert len(commands) == 1 and commands[0].startswith("error ")
     assert "no_such_driver" in commands[0]
+
+
+def test_a_view_that_sdl_puts_offscreen_says_no_window_appeared(tmp_path, monkeypatch):
+    for name in ("SDL_VIDEODRIVER", "DISPLAY", "WAYLAND_DISPLAY"):  # no display at all
+        monkeypatch.delenv(name, raising=False)
+    view = window.LiveView([], tmp_path)
+    view.start()
+    commands = []
+    view.watch(commands.append)
+    deadline = time.monotonic() + 60.0
+    while view.alive and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.5)  # the watcher's last read
+    view.close()
+    assert commands == ["error no display: SDL fell back to its 'offscreen' video driver"]

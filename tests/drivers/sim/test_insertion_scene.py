@@ -273,6 +273,7 @@ def test_fingers_opened_a_little_keep_a_pressed_plug_square_between_them(opening
     physics = InsertionPhysics(section.scene, plug, HOLE, pose(0.001), 0.0, truth)
     for k in range(1, 51):  # pressed 2 mm into the wrist
         physics.step_to(0.01 * k, 0.01 * k, pose(0.001 - 0.003 * k / 50))
+
     def out_of_plane_rad():  # the plug's turn in the fingers about x_S and y_S
         return float(np.hypot(*physics.data.qpos[physics._gel_q[3:5]]))
 

@@ -216,3 +216,20 @@ def test_export_refuses_an_existing_folder_and_leaves_no_partial(episode_path, t
     err = capsys.readouterr().err.strip()
     assert "already exists" in err and "\n" not in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["there"]
+
+
+def test_episodes_at_another_loop_rate_are_one_line_naming_the_file(episode_path, tmp_path,
+                                                                    capsys):  # fmt: skip
+    from controller.episode.session import EPISODE_FILE, EpisodeOptions
+    from controller.run import load_task
+    from evaluation.trials.trial import run
+
+    slow = tmp_path / "slow"
+    task = load_task("usb_c", ["loop.rate_hz=50", "machine.timeouts.total_s=3"])
+    run(task, "dipole", 0, out_dir=slow, episode=EpisodeOptions(image_format="jpeg"))
+    out = tmp_path / "dataset"
+    assert main(["export", str(episode_path), str(slow / EPISODE_FILE), "--lerobot", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("replay: error: episode ") and "\n" not in err and "Traceback" not in err
+    assert str(slow / EPISODE_FILE) in err and "loop 50 Hz" in err and "loop 100 Hz" in err
+    assert not out.exists() and [p.name for p in tmp_path.iterdir()] == ["slow"]

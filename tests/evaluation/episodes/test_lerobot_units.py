@@ -3,9 +3,12 @@ control ticks, and a dataset written whole or not at all."""
 
 from __future__ import annotations
 
+import tracemalloc
+
 import numpy as np
 import pytest
 
+from evaluation.episodes.image_stats import QUANTILES, ImageStats
 from evaluation.episodes.lerobot_alignment import (
     AlignmentError,
     camera_fps,
@@ -67,10 +70,35 @@ def test_a_generator_shorter_than_the_episode_is_refused(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_episodes_must_share_their_features():
+def test_episodes_must_share_their_features(tmp_path):
     with pytest.raises(ValueError, match="differ from episode 0"):
         other = DatasetEpisode("task", 3, iter(()), ())
-        write_dataset([_episode(3), other], None, 25, (8, 16))  # type: ignore[arg-type]
+        write_dataset([_episode(3), other], tmp_path / "d", 25, (8, 16))
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_image_statistics_stream_in_histograms_and_match_numpys_on_the_pixels():
+    rng = np.random.default_rng(3)
+    frames = [rng.integers(0, 256, (12, 20, 3), dtype=np.uint8) for _ in range(7)]
+    frames[2][:] = 17  # a constant frame: repeated values
+    stats = ImageStats()
+    for frame in frames[:4]:
+        stats.add(frame)
+    rest = ImageStats()
+    for frame in frames[4:]:
+        rest.add(frame)
+    stats.merge(rest)
+    got = stats.stats()
+    pixels = np.stack(frames).reshape(-1, 3) / 255.0
+    expected = {
+        "min": pixels.min(axis=0), "max": pixels.max(axis=0), "mean": pixels.mean(axis=0),
+        "std": pixels.std(axis=0),
+    }  # fmt: skip
+    for q in QUANTILES:
+        expected[f"q{round(q * 100):02d}"] = np.quantile(pixels, q, axis=0)
+    for key, value in expected.items():
+        np.testing.assert_allclose(got[key].reshape(3), value, rtol=0, atol=1e-12, err_msg=key)
+    assert got["count"].tolist() == [7] and stats.counts.nbytes == 3 * 256 * 8
 
 
 def test_a_feature_needs_a_row_per_frame_and_a_name_per_column():
@@ -78,3 +106,21 @@ def test_a_feature_needs_a_row_per_frame_and_a_name_per_column():
         VectorFeature("action", ("a", "b"), np.ones((4, 3)))
     with pytest.raises(ValueError, match="3 rows for 4 frames"):
         DatasetEpisode("task", 4, iter(()), (VectorFeature("action", ("a",), np.ones((3, 1))),))
+
+
+def test_many_episodes_are_written_in_bounded_memory(tmp_path):
+    """Episodes are taken one at a time and only their numeric rows kept: the Python-side
+    peak does not grow with the episodes (the sampled frames as float64 did: 20 episodes of
+    100 frames of 96 x 128 would have held 590 MB)."""
+
+    def episodes(count: int):
+        for _ in range(count):
+            yield _episode(100, shape=(96, 128, 3))
+
+    peaks = []
+    for count in (2, 20):
+        tracemalloc.start()
+        write_dataset(episodes(count), tmp_path / f"d{count}", 25, (96, 128))
+        peaks.append(tracemalloc.get_traced_memory()[1])
+        tracemalloc.stop()
+    assert peaks[1] < peaks[0] + 8 * 2**20, peaks  # not 18 episodes' frames more

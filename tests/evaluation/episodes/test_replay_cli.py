@@ -51,7 +51,14 @@ def test_plot_draws_the_chart_and_never_writes_over_the_episode(episode_path, tm
     before = episode_path.read_bytes()
     capsys.readouterr()
     assert main(["plot", str(episode_path), "--out", str(episode_path)]) == 2
+    assert "expected a .png file" in one_error_line(capsys)
+    link = tmp_path / "link.png"
+    link.symlink_to(episode_path)
+    assert main(["plot", str(episode_path), "--out", str(link)]) == 2
     assert "never writes over its inputs" in one_error_line(capsys)
+    assert main(["plot", str(episode_path), "--out", str(tmp_path / "chart.txt")]) == 2
+    assert "expected a .png file" in one_error_line(capsys)
+    assert not (tmp_path / "chart.txt").exists()
     assert episode_path.read_bytes() == before
 
 
@@ -227,3 +234,110 @@ def test_a_truncated_file_reestimates_exactly_up_to_its_cut(truncated, capsys):
     assert logged > 20 and frames - logged in (0, 1)  # the cut may fall between the two
     assert f"re-estimated {frames} frames" in report
     assert f"over {logged} frames, {logged} of {logged} frames identical" in report
+
+
+@pytest.fixture(scope="module")
+def damaged(episode_path, tmp_path_factory):
+    """The episode with 100 kB zeroed at 40 % of its size (its footer and later chunks
+    intact), as ``dd ... conv=notrunc`` leaves it."""
+    path = tmp_path_factory.mktemp("damaged") / "damaged.mcap"
+    data = bytearray(episode_path.read_bytes())
+    start = int(len(data) * 0.4)
+    data[start : start + 100_000] = bytes(100_000)
+    path.write_bytes(bytes(data))
+    return path
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["summary"],
+        ["plot", "--out", "x.png"],
+        ["reestimate", "--method", "default"],
+        ["export", "--lerobot", "dataset"],
+    ],
+)
+def test_a_damaged_file_names_the_lost_bytes_in_one_line(command, damaged, tmp_path, capsys,
+                                                         monkeypatch):  # fmt: skip
+    monkeypatch.chdir(tmp_path)
+    assert main([command[0], str(damaged), *command[1:]]) == 2
+    err = one_error_line(capsys)
+    start = int(damaged.stat().st_size * 0.4)
+    assert "is damaged" in err and "truncated" not in err and "--allow-damaged" in err
+    lost = err.split("(bytes ")[1].split(" ")[0]
+    first, end = (int(x) for x in lost.split(".."))
+    assert first <= start and start + 100_000 <= end
+    assert not (tmp_path / "x.png").exists() and not (tmp_path / "dataset").exists()
+
+
+def test_a_damaged_file_is_read_past_its_damage_and_repair_keeps_every_intact_chunk(
+    damaged, episode_path, tmp_path, capsys
+):
+    assert main(["summary", str(damaged), "--allow-damaged"]) == 0
+    captured = capsys.readouterr()
+    assert captured.err.startswith("replay: warning: ") and captured.err.count("\n") == 1
+    assert "file: damaged: " in captured.out and "outcome: done" in captured.out
+    whole, read = read_episode(episode_path), read_episode(damaged)
+    lost = sum(whole.counts.values()) - sum(read.counts.values())
+    assert 0 < lost < sum(whole.counts.values()) * 0.05  # the damaged chunks only
+    last = read.time_range_s()[1]
+    assert last == whole.time_range_s()[1]  # read to the end, past the damage
+    out = tmp_path / "repaired.mcap"
+    assert main(["repair", str(damaged), "--out", str(out)]) == 0
+    assert "bytes lost to damage" in capsys.readouterr().out
+    assert read_episode(out).counts == read.counts
+    assert main(["plot", str(out), "--out", str(tmp_path / "p.png")]) == 0
+
+
+def test_an_episode_without_ticks_says_so_and_plot_refuses(tmp_path, capsys):
+    from controller.episode.writer import EpisodeWriter
+
+    path = tmp_path / "e.mcap"
+    EpisodeWriter(path, {"format_version": "1", "task": "usb_c"}).close({"reason": "signal"})
+    assert main(["summary", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out and "duration: none: no messages" in out and "ticks: none" in out
+    assert main(["plot", str(path), "--out", str(tmp_path / "p.png")]) == 2
+    assert "no control ticks" in one_error_line(capsys)
+    assert not (tmp_path / "p.png").exists()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["export", "EP", "--lerobot", "d", "--task", ""],
+        ["export", "EP", "--lerobot", "d", "--task", "   "],
+        ["reestimate", "EP", "--method", ""],
+    ],
+)
+def test_an_empty_task_sentence_or_method_is_refused(argv, episode_path, tmp_path, capsys,
+                                                     monkeypatch):  # fmt: skip
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as stop:
+        main([str(episode_path) if a == "EP" else a for a in argv])
+    assert stop.value.code == 2
+    assert "empty text" in capsys.readouterr().err
+    assert not (tmp_path / "d").exists()
+
+
+@pytest.mark.parametrize(
+    "payload, said",
+    [(b"{broken", "does not decode as json"), (b'{"index": 0}', "no field 'start_s'"),
+     (b"[1, 2]", "expected a JSON object")],
+)  # fmt: skip
+def test_a_hand_made_episode_with_bad_messages_is_one_line(payload, said, tmp_path, capsys):
+    from mcap.writer import Writer
+
+    from controller.episode.topics import PROFILE
+
+    path = tmp_path / "hand.mcap"
+    with path.open("wb") as stream:
+        writer = Writer(stream)
+        writer.start(profile=PROFILE, library="hand")
+        channel = writer.register_channel("/loop/tick", "json", 0)
+        writer.add_message(channel, 10_000_000, payload, 10_000_000, 0)
+        writer.add_metadata("outcome", {"reason": "done"})
+        writer.finish()
+    assert main(["plot", str(path), "--out", str(tmp_path / "p.png")]) == 2
+    err = one_error_line(capsys)
+    assert str(path) in err and said in err

@@ -148,3 +148,12 @@ def test_a_real_run_without_hardware_names_every_device_in_one_line(tmp_path):
     for role in ("arm: xarm6: ", "gripper: hande: ", "tactile: ", "gamepad: "):
         assert f"; {role}" in errors[0] or f"not ready: {role}" in errors[0]
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_trial_that_ends_in_a_fault_says_so_in_its_exit_code(tmp_path, capsys):
+    out = tmp_path / "trial"
+    code = main(["--task", "usb_c", "--set", "loop.tactile_max_age_s=0.001", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1, err
+    assert err.startswith("run_trial: error: the run ended in a fault (safe stop done): stale")
+    assert (out / "trial.json").is_file()  # the record is kept, complete

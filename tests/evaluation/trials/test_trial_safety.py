@@ -129,6 +129,8 @@ def test_sigterm_during_a_trial_stops_safely_and_keeps_the_record(tmp_path):
     process.send_signal(signal.SIGTERM)
     stdout, stderr = process.communicate(timeout=60)
     assert process.returncode == 143, stderr
+    assert stderr.startswith("run_trial: ended by SIGTERM (safe stop done)"), stderr
+    assert stderr.count("\n") == 1 and "Traceback" not in stderr
     summary = json.loads((out / "trial.json").read_text())
     assert summary["loop"]["reason"] == "signal"
     assert not summary["result"]["success"]

@@ -5,7 +5,8 @@ and the ground truth it never sees.
 board's height and tilt and the plug's pose in the grasp (``draws.draw_scene``, seeded by
 ``seed``), builds the physics, and the
 twins on one ``SceneClock`` (``ManualClock`` base: as fast as possible; ``realtime``:
-``MonotonicClock``):
+``MonotonicClock`` from 0, or with ``paced`` a ``PacedClock``, which waits for the
+controller on a busy machine):
 
 * the SimArm, its configuration adapted to the scene through the config objects: it
   starts upright over the nominal hole, the plug's tip ``start_above_hole_m`` above the
@@ -36,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from core.clock import ManualClock, MonotonicClock
+from core.clock import Clock, ManualClock, MonotonicClock, PacedClock
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.sim.gel.model import GelModel
 from drivers.sim.gel.profile import ObjectShape, gel_profile
@@ -119,13 +120,17 @@ def build_insertion_sim(
     devices: SimDevices,
     seed: int,
     realtime: bool = False,
+    paced: bool = False,
 ) -> InsertionSim:
     """The scene for one trial (see the module docstring); ValueError if the plug does not
     fit the opening or the start pose leaves the arm's envelope."""
     check_fits(scene, plug)
     draw = draw_scene(hole_nominal, scene, seed)
     hole = draw.hole
-    clock = SceneClock(MonotonicClock() if realtime else ManualClock())
+    base: Clock = ManualClock()  # every choice starts at 0
+    if realtime:
+        base = PacedClock() if paced else MonotonicClock.from_now()
+    clock = SceneClock(base)
     # the trials start over the nominal hole; the alignment demo (start_depth_m) in the true one
     start_hole = hole_nominal if scene.start_depth_m is None else hole
     arm_config = scene_arm_config(devices.arm, scene, plug, start_hole)
@@ -167,4 +172,6 @@ def build_world(spec: Any, configs: Mapping[str, Any]) -> InsertionSim:
     (a ``registry.WorldSpec``) with the twins of ``configs`` (kind -> the device file's
     ``backend: sim`` configuration)."""
     devices = SimDevices(**configs)
-    return build_insertion_sim(spec.scene, spec.plug, spec.hole, devices, spec.seed, spec.realtime)
+    return build_insertion_sim(
+        spec.scene, spec.plug, spec.hole, devices, spec.seed, spec.realtime, spec.paced
+    )

@@ -26,6 +26,11 @@ class SceneClock:
         """Call ``sync(now)`` at every sleep."""
         self._sync = sync
 
+    @property
+    def base(self) -> Clock:
+        """The clock the scene's time comes from."""
+        return self._base
+
     def now(self) -> float:
         return self._base.now()
 
