@@ -38,7 +38,6 @@ from collections.abc import Iterable
 from typing import Generic, NamedTuple, TypeVar
 
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from core import quaternion
 from core.config import Config, config_dataclass, number
@@ -47,12 +46,11 @@ from core.quaternion import Quat
 from core.spatial import (
     clamp_norm,
     quat_from_rpy,
-    rotation_from_rpy,
     rpy_from_quat,
     tilt_of_quat,
-    tilt_of_rotation,
     tilts_of_tool_axes,
-    tool_z_in_base,
+    tool_z_from_rpy,
+    turned,
     vec3,
 )
 
@@ -244,8 +242,7 @@ def _tilts_beyond(pose: Pose, angular: np.ndarray, duration_s: float, max_tilt_r
     ``max_tilt_rad`` (or beyond its present tilt, if larger) within ``duration_s``."""
     if angular[0] == 0.0 and angular[1] == 0.0:
         return False  # about the vertical only: the tilt stays (ROUNDING_RAD covers round-off)
-    rotation = rotation_from_rpy(pose.rpy_rad)
-    allowed = max(max_tilt_rad, tilt_of_rotation(rotation)) + ROUNDING_RAD
+    z_T_in_B = tool_z_from_rpy(pose.rpy_rad)
+    allowed = max(max_tilt_rad, float(tilts_of_tool_axes(z_T_in_B[None])[0])) + ROUNDING_RAD
     times = np.linspace(duration_s / _TWIST_TILT_SAMPLES, duration_s, _TWIST_TILT_SAMPLES)
-    z_path = Rotation.from_rotvec(np.outer(times, angular)).apply(tool_z_in_base(rotation))
-    return bool(np.any(tilts_of_tool_axes(z_path) > allowed))
+    return bool(np.any(tilts_of_tool_axes(turned(z_T_in_B, angular, times)) > allowed))

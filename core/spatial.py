@@ -121,6 +121,31 @@ def tilts_of_tool_axes(z_T_in_B: np.ndarray) -> np.ndarray:
     return np.arctan2(horizontal, -z_T_in_B[:, 2])  # z_T . -z_B
 
 
+def tool_z_from_rpy(rpy_rad: tuple[float, float, float]) -> np.ndarray:
+    """z_T in B (a unit 3-vector) of ``Pose.rpy_rad``: the third column of
+    Rz(yaw) Ry(pitch) Rx(roll), in closed form (``rotation_from_rpy`` costs ~0.25 ms a call,
+    too much for every command's tilt check; the same vector to round-off)."""
+    roll, pitch, yaw = (float(a) for a in rpy_rad)
+    cr, sr = math.cos(roll), math.sin(roll)
+    cp, sp = math.cos(pitch), math.sin(pitch)
+    cy, sy = math.cos(yaw), math.sin(yaw)
+    return np.array([cy * sp * cr + sy * sr, sy * sp * cr - cy * sr, cp * cr])
+
+
+def turned(vector: np.ndarray, angular_rad_s: np.ndarray, times_s: np.ndarray) -> np.ndarray:
+    """``vector`` (3,) turned at the constant angular velocity ``angular_rad_s`` (rad/s, in
+    the vector's frame) for each of ``times_s`` (N,): the (N, 3) rows, by Rodrigues' formula
+    (``Rotation.from_rotvec(...).apply`` costs ~0.2 ms a call; the same rows to round-off)."""
+    speed = math.sqrt(float(np.dot(angular_rad_s, angular_rad_s)))
+    if speed == 0.0:
+        return np.tile(vector, (len(times_s), 1))
+    axis = angular_rad_s / speed
+    angles = speed * np.asarray(times_s, dtype=float)
+    cos, sin = np.cos(angles)[:, None], np.sin(angles)[:, None]
+    along = axis * float(np.dot(axis, vector))
+    return vector * cos + cross(axis, vector) * sin + along * (1.0 - cos)
+
+
 def tilt_of_rotation(T2B: Rotation) -> float:
     """The tilt (rad, in [0, pi]) of the tool oriented by R_T2B."""
     return tilt_of_tool_axis(tool_z_in_base(T2B))[0]

@@ -20,7 +20,9 @@ from core.spatial import (
     tilt_of_rotation,
     tilt_of_tool_axis,
     tilts_of_tool_axes,
+    tool_z_from_rpy,
     tool_z_in_base,
+    turned,
 )
 
 angles = st.floats(-math.pi, math.pi)
@@ -115,3 +117,19 @@ def test_the_tilts_of_many_tool_axes_are_each_axis_tilt():
     expected = [tilt_of_tool_axis(axis)[0] for axis in axes]
     np.testing.assert_allclose(tilts_of_tool_axes(axes), expected, rtol=0, atol=1e-15)
     assert tilts_of_tool_axes(axes)[0] == 0.0 and tilts_of_tool_axes(axes)[1] == math.pi
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.tuples(angles, angles, angles))
+def test_the_tool_axis_in_closed_form_is_scipys(rpy):
+    expected = tool_z_in_base(rotation_from_rpy(rpy))
+    np.testing.assert_allclose(tool_z_from_rpy(rpy), expected, rtol=0, atol=1e-15)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.tuples(*(st.floats(-3.0, 3.0),) * 3), st.tuples(angles, angles, angles))
+def test_turning_by_rodrigues_is_scipys_rotation(angular, rpy):
+    vector, angular = tool_z_from_rpy(rpy), np.array(angular)
+    times = np.linspace(0.01, 0.05, 5)
+    expected = Rotation.from_rotvec(np.outer(times, angular)).apply(vector)
+    np.testing.assert_allclose(turned(vector, angular, times), expected, rtol=0, atol=1e-14)
