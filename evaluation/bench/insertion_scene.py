@@ -15,7 +15,16 @@ captures). Reported: simulated seconds per wall second and per CPU second (the m
 runs), the frames, the final insertion depth and the largest contact force.
 
     python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
-        [--fingerprint] [--profile]
+        [--set KEY=VALUE ...] [--against CHECKOUT] [--fingerprint] [--profile]
+
+The task's ``estimator:`` (null: the sensor's own, the default) is the estimator, as in a
+trial; ``--set`` overrides any task key by its dotted path, checked as the task file is
+(e.g. ``--set estimator=PATH.yaml`` to time another estimator).
+
+``--against CHECKOUT``: instead of the timed runs in this process, each seed once here and
+once in another checkout of the project (e.g. a git worktree at the base commit), each run
+in a fresh process, the two sides alternating, with the ratio per seed and its median
+(evaluation/bench/scene_pairs.py): a speed-up measured in one time window, under one load.
 
 ``--fingerprint``: after the timed runs, each seed again, untimed, with digests of its
 frames, estimates and truth (evaluation/bench/run_fingerprint.py): two versions of the code
@@ -35,8 +44,9 @@ import argparse
 import math
 import pstats
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from pathlib import Path
 
 import cv2
 import mujoco
@@ -51,9 +61,11 @@ from drivers.registry import WorldSpec, build_device_set
 from drivers.sim.scenes.insertion import InsertionSim
 from drivers.sim.scenes.insertion.frames import S_IN_T
 from evaluation.bench.run_fingerprint import RunFingerprint
+from evaluation.bench.scene_pairs import check_checkout, print_pairs
 from evaluation.bench.scene_profile import part_clock, part_times, profile_call, top_functions
 from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
+from evaluation.trials.batch_cli import add_override_argument
 
 RATE_HZ = 100.0
 TILT_RAD = 0.15  # the tilted approach's tilt, about the hole's y
@@ -135,14 +147,18 @@ def scripted_run(
     estimate: bool,
     runner: Callable[[Callable[[], None]], object] = lambda drive: drive(),
     fingerprint: RunFingerprint | None = None,
+    overrides: Sequence[str] = (),
 ) -> RunResult:
     """One scripted insertion (see the module docstring), timed from the first command;
     ``runner(drive)`` runs its timed part (e.g. under a profiler); ``fingerprint`` is fed
-    every frame and estimate (its hashing is timed too)."""
-    loaded = load_task(task)
+    every frame and estimate (its hashing is timed too); ``overrides``: ``KEY=VALUE`` on
+    the task."""
+    loaded = load_task(task, overrides)
     world = WorldSpec(loaded.scene, loaded.config.plug, loaded.config.hole, seed)
     sim = build_device_set(loaded.device_files, "sim", world).world
-    estimator = estimator_for_sensor(loaded.tactile_model) if estimate else None
+    estimator = (
+        estimator_for_sensor(loaded.tactile_model, loaded.config.estimator) if estimate else None
+    )
     for device in (sim.arm, sim.gripper, sim.tactile):
         device.connect()
     begin_wall, begin_cpu, begin_sim = time.perf_counter(), time.process_time(), sim.clock.now()
@@ -239,6 +255,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--no-estimate", action="store_true", help="leave the tactile estimator out of the loop"
     )
+    add_override_argument(parser, "override a task key by dotted path, e.g. estimator=PATH.yaml")
+    parser.add_argument(
+        "--against",
+        type=Path,
+        metavar="CHECKOUT",
+        help="run each seed here and in this other checkout, alternating (scene_pairs.py)",
+    )
     parser.add_argument(
         "--fingerprint",
         action="store_true",
@@ -255,20 +278,51 @@ def main(argv: list[str] | None = None) -> int:
 
 def bench(args: argparse.Namespace) -> int:
     estimate = not args.no_estimate
+    other = None if args.against is None else check_checkout(args.against)
+    load_task(args.task, args.overrides)  # a wrong key: one line, before any run
     cv2.setNumThreads(1)
     one_thread = "1 thread (cv2.setNumThreads(1), OMP/OpenBLAS/MKL 1)"
     print(f"Machine: {describe_machine(one_thread)}; MuJoCo {mujoco.__version__}.")
     what = "physics, gel, rendering" + (", estimation" if estimate else "")
-    print(f"Task {args.task}, {what}; {args.runs} runs (seeds {args.seed}..).\n")
+    changed = "".join(f", {override}" for override in args.overrides)
+    print(f"Task {args.task}{changed}, {what}; {args.runs} runs (seeds {args.seed}..).\n")
+    seeds = range(args.seed, args.seed + args.runs)
+    if other is not None:
+        options = [
+            "--task",
+            args.task,
+            *(["--no-estimate"] if args.no_estimate else []),
+            *(part for override in args.overrides for part in ("--set", override)),
+        ]
+        print_pairs(other, seeds, options)
+    else:
+        timed_runs(args.task, seeds, estimate, args.overrides)
+    if args.fingerprint:
+        print("\n| seed | frames | estimates | truth |")
+        print("|---|---|---|---|")
+        for seed in seeds:
+            digests = scripted_run(
+                args.task, seed, estimate, fingerprint=RunFingerprint(), overrides=args.overrides
+            ).digests
+            assert digests is not None
+            print(f"| {seed} | {digests['frames']} | {digests['estimates']} | {digests['truth']} |")
+    if args.profile:
+        print_profile(args.task, args.seed, estimate, args.overrides)
+    return 0
+
+
+def timed_runs(task: str, seeds: range, estimate: bool, overrides: Sequence[str]) -> None:
+    """The timed runs in this process: a row each, then the medians."""
     print("| seed | sim s | wall s | x real time | CPU s | x per CPU s | frames | depth mm |")
     print("|---|---|---|---|---|---|---|---|")
     results = []
-    for seed in range(args.seed, args.seed + args.runs):
-        r = scripted_run(args.task, seed, estimate)
+    for seed in seeds:
+        r = scripted_run(task, seed, estimate, overrides=overrides)
         results.append(r)
         print(
             f"| {seed} | {r.sim_s:.2f} | {r.wall_s:.2f} | {r.speed_x:.1f} | {r.cpu_s:.2f} | "
-            f"{r.cpu_speed_x:.1f} | {r.frames} | {r.depth_m * 1e3:.2f} |"
+            f"{r.cpu_speed_x:.1f} | {r.frames} | {r.depth_m * 1e3:.2f} |",
+            flush=True,
         )
     median = float(np.median([r.speed_x for r in results]))
     median_cpu = float(np.median([r.cpu_speed_x for r in results]))
@@ -277,23 +331,13 @@ def bench(args: argparse.Namespace) -> int:
         "CPU second of the process (the same on an idle core; lower wall figures mean a busy "
         "machine)."
     )
-    if args.fingerprint:
-        print("\n| seed | frames | estimates | truth |")
-        print("|---|---|---|---|")
-        for seed in range(args.seed, args.seed + args.runs):
-            digests = scripted_run(args.task, seed, estimate, fingerprint=RunFingerprint()).digests
-            assert digests is not None
-            print(f"| {seed} | {digests['frames']} | {digests['estimates']} | {digests['truth']} |")
-    if args.profile:
-        print_profile(args.task, args.seed, estimate)
-    return 0
 
 
-def print_profile(task: str, seed: int, estimate: bool) -> None:
+def print_profile(task: str, seed: int, estimate: bool, overrides: Sequence[str] = ()) -> None:
     """Two more runs of ``seed``: one with the parts' timers (the split), one under the
     profiler (its top functions)."""
     with part_clock() as seconds:
-        run = scripted_run(task, seed, estimate)
+        run = scripted_run(task, seed, estimate, overrides=overrides)
     print(
         f"\nSeed {seed}'s timed part by part of the scene (timers around each part's entry "
         f"points, exclusive of the parts it calls): {run.cpu_s:.3f} CPU s for "
@@ -307,7 +351,13 @@ def print_profile(task: str, seed: int, estimate: bool) -> None:
     ):
         print(f"| {part} | {part_s:.3f} | {100 * part_s / run.cpu_s:.0f} % |")
     profiles: list[pstats.Stats] = []
-    run = scripted_run(task, seed, estimate, lambda drive: profiles.append(profile_call(drive)))
+    run = scripted_run(
+        task,
+        seed,
+        estimate,
+        lambda drive: profiles.append(profile_call(drive)),
+        overrides=overrides,
+    )
     print(
         f"\nThe same under cProfile on the CPU clock ({run.cpu_s:.2f} CPU s: the profiler slows "
         "Python-heavy parts most), by part and by function:\n"
