@@ -1,0 +1,211 @@
+"""What whole simulated trials decided, one digest per seed, to show that a change (a
+speed-up, a refactor) leaves every trial's outcome as it was.
+
+    python scripts/trial_fingerprints.py --task usb_c|usb_a|PATH.yaml --seeds A:B
+        [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
+        [--set KEY=VALUE ...] [--out FILE.csv] [--against OTHER.csv]
+
+Each seed runs the trial tools' own path (``evaluation.trials.trial.run``, as
+``scripts/run_trial.py`` and the batch tools run it), as fast as possible, in this process,
+one after the other, writing nothing but this tool's table. A seed's row holds:
+
+* ``outcome``: a digest of everything the trial decided, the ``TrialResult``'s fields
+  except ``wall_time_s``, and the machine's transitions (time, source, target, reason,
+  rule), floats exactly (``repr``): two runs of the same code on one seed give the same;
+* ``truth``: a digest of the simulated world's truth table (every row, bit for bit): equal
+  truths mean the same physics, the same controller commands, the same run;
+* the fields behind ``outcome``, readable (status, failure, durations, forces) and the
+  transitions as ``t_s source>target reason[rule]`` joined by ``; ``, so that a changed
+  digest can be explained from the two tables.
+
+The table goes to stdout as each seed finishes and, with ``--out``, to a CSV file (written
+atomically at the end). ``--against OTHER.csv`` compares the rows with an earlier table of
+the same task and controller (e.g. from another commit): it prints the seeds whose
+``outcome`` or ``truth`` differ, field by field, and the count of identical ones. Exit codes
+as every tool's (evaluation/common/cli_support.py): bad input is one line and exit 2; a
+difference against ``OTHER.csv`` is reported, not an error (exit 0).
+
+Like the scene's benchmark it limits OpenMP, OpenBLAS and MKL to one thread before NumPy
+loads (``scripts/trial_fingerprints.py``) and OpenCV to one thread, so that the digests do
+not depend on the machine's cores.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import hashlib
+import json
+import sys
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from controller.insertion.interface import Transition
+from controller.run.task import load_task
+from evaluation.common.cli_support import ToolError, run_tool
+from evaluation.common.outputs import atomic_text, check_output_file
+from evaluation.trials.batch_cli import add_override_argument, seeds_type
+from evaluation.trials.oracle import TRIAL_CONTROLLERS
+from evaluation.trials.result import TrialResult
+from evaluation.trials.trial import TrialOutcome, raise_if_interrupted, run
+
+PROG = "trial_fingerprints"
+IGNORED = ("wall_time_s",)  # what a trial measures but does not decide
+RESULT_FIELDS = tuple(f.name for f in dataclasses.fields(TrialResult) if f.name not in IGNORED)
+COLUMNS = ("task", "controller", "seed", "outcome", "truth", "transitions") + tuple(
+    name for name in RESULT_FIELDS if name not in ("task", "controller", "seed")
+)
+KEY = ("task", "controller", "seed")
+
+
+def _exact(value: Any) -> Any:
+    """A JSON-ready value with floats as their ``repr`` (exact, NaN included)."""
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, bool | int | str) or value is None:
+        return value
+    return str(value)
+
+
+def format_transition(transition: Transition) -> str:
+    """``t_s source>target reason[rule]`` with ``t_s`` exact (``repr``)."""
+    rule = f"[{transition.rule}]" if transition.rule else ""
+    return (
+        f"{transition.t_s!r} {transition.source.value}>{transition.target.value} "
+        f"{transition.reason}{rule}"
+    )
+
+
+def outcome_digest(result: TrialResult, transitions: Iterable[Transition]) -> str:
+    """SHA-256 (16 hex digits) of ``result`` without ``wall_time_s`` and the transitions."""
+    content = {
+        "result": {name: _exact(getattr(result, name)) for name in RESULT_FIELDS},
+        "transitions": [format_transition(t) for t in transitions],
+    }
+    text = json.dumps(content, sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def truth_digest(truth: dict[str, np.ndarray] | None) -> str:
+    """SHA-256 (16 hex digits) of the truth arrays (names, shapes, dtypes and values), or
+    ``""`` without truth (on hardware)."""
+    if truth is None:
+        return ""
+    digest = hashlib.sha256()
+    for name in sorted(truth):
+        values = np.ascontiguousarray(truth[name])
+        digest.update(f"{name}:{values.dtype.str}:{values.shape};".encode())
+        digest.update(values.tobytes())
+    return digest.hexdigest()[:16]
+
+
+def fingerprint_row(outcome: TrialOutcome) -> dict[str, str]:
+    """The table's row for one finished trial (``COLUMNS``, as text)."""
+    result = outcome.result
+    row = {
+        "outcome": outcome_digest(result, outcome.transitions),
+        "truth": truth_digest(outcome.truth),
+        "transitions": "; ".join(format_transition(t) for t in outcome.transitions),
+    }
+    for name in RESULT_FIELDS:
+        value = _exact(getattr(result, name))
+        row[name] = "" if value is None else str(value)
+    return {column: row[column] for column in COLUMNS}
+
+
+def read_table(path: Path) -> dict[tuple[str, ...], dict[str, str]]:
+    """An earlier table (``--out``) by (task, controller, seed); ToolError if it is not one."""
+    try:
+        with path.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            missing = [c for c in COLUMNS if c not in (reader.fieldnames or ())]
+            if missing:
+                raise ToolError(
+                    f"--against '{path}': not a trial fingerprint table (no column "
+                    f"{', '.join(missing)}); expected a CSV written by --out"
+                )
+            return {tuple(row[k] for k in KEY): row for row in reader}
+    except csv.Error as exc:
+        raise ToolError(f"--against '{path}': not a CSV file ({exc})") from None
+
+
+def differences(before: dict[str, str], after: dict[str, str]) -> list[str]:
+    """The columns whose text differs between two rows of one seed, as ``name: a -> b``."""
+    return [
+        f"{name}: {before[name]} -> {after[name]}"
+        for name in COLUMNS
+        if name not in KEY and before[name] != after[name]
+    ]
+
+
+def compare(
+    rows: Sequence[dict[str, str]], earlier: dict[tuple[str, ...], dict[str, str]], path: Path
+) -> list[str]:
+    """The comparison's report lines: each seed that differs (or is not in ``earlier``),
+    then the count of identical seeds."""
+    lines, same = [], 0
+    for row in rows:
+        before = earlier.get(tuple(row[k] for k in KEY))
+        if before is None:
+            lines.append(f"seed {row['seed']}: not in '{path}'")
+        elif before["outcome"] == row["outcome"] and before["truth"] == row["truth"]:
+            same += 1
+        else:
+            lines.append(f"seed {row['seed']}: " + "; ".join(differences(before, row)))
+    lines.append(f"{same} of {len(rows)} seeds identical to '{path}' (outcome and truth)")
+    return lines
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
+    parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
+    parser.add_argument(
+        "--seeds", type=seeds_type, required=True, help="A:B, the seeds A up to B (B excluded)"
+    )
+    add_override_argument(parser, "override a task key by dotted path (repeatable)")
+    parser.add_argument("--out", type=Path, default=None, help="write the table to this CSV")
+    parser.add_argument(
+        "--against", type=Path, default=None, help="compare with this earlier table (--out's)"
+    )
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return run_tool(PROG, lambda: _run(args))
+
+
+def _run(args: argparse.Namespace) -> int:
+    task = load_task(args.task, args.overrides)
+    earlier = None
+    if args.against is not None:
+        if not args.against.is_file():
+            raise ToolError(f"--against '{args.against}': no such file; expected a CSV of --out")
+        earlier = read_table(args.against)
+    if args.out is not None:
+        check_output_file(args.out, [task.path, args.against])
+    cv2.setNumThreads(1)
+    writer = csv.DictWriter(sys.stdout, COLUMNS, lineterminator="\n")
+    writer.writeheader()
+    rows = []
+    for seed in args.seeds:
+        outcome = run(task, args.controller, seed)
+        raise_if_interrupted(outcome)
+        rows.append(fingerprint_row(outcome))
+        writer.writerow(rows[-1])
+        sys.stdout.flush()
+    if args.out is not None:
+        with atomic_text(args.out, newline="") as handle:
+            table = csv.DictWriter(handle, COLUMNS, lineterminator="\n")
+            table.writeheader()
+            table.writerows(rows)
+        print(f"{PROG}: wrote {args.out}", file=sys.stderr)
+    if earlier is not None:
+        print("\n".join(compare(rows, earlier, args.against)))
+    return 0

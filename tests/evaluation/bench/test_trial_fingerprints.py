@@ -1,0 +1,118 @@
+"""The trial fingerprint tool: one digest of what a trial decided, wall time excluded; the
+table written and compared; bad input is one line and exit 2."""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+
+import pytest
+
+from controller.insertion import Phase
+from controller.insertion.interface import Transition
+from evaluation.bench.trial_fingerprints import COLUMNS, compare, main, outcome_digest, read_table
+from evaluation.trials.result import TrialResult
+
+SHORT = ["--set", "machine.timeouts.total_s=6.0"]  # grasp and the start of the approach only
+
+RESULT = TrialResult(
+    task="usb_c",
+    controller="dipole",
+    seed=3,
+    success=True,
+    status="inserted",
+    failure_reason=None,
+    time_to_insert_s=8.5,
+    duration_s=9.0,
+    max_wrist_force_n=4.0,
+    force_limit_n=20.0,
+    wall_time_s=2.0,
+)
+TRANSITIONS = (
+    Transition(2.25, Phase.GRASP, Phase.APPROACH, "grasped_and_zeroed"),
+    Transition(6.1, Phase.APPROACH, Phase.SEARCH, "surface_contact"),
+)
+
+
+def test_the_outcome_digest_ignores_wall_time_only():
+    digest = outcome_digest(RESULT, TRANSITIONS)
+    assert outcome_digest(dataclasses.replace(RESULT, wall_time_s=99.0), TRANSITIONS) == digest
+    assert outcome_digest(dataclasses.replace(RESULT, duration_s=9.0 + 1e-12), TRANSITIONS) != (
+        digest
+    )
+    later = (TRANSITIONS[0], dataclasses.replace(TRANSITIONS[1], t_s=6.11))
+    assert outcome_digest(RESULT, later) != digest
+    ruled = (TRANSITIONS[0], dataclasses.replace(TRANSITIONS[1], rule="probe"))
+    assert outcome_digest(RESULT, ruled) != digest
+
+
+@pytest.fixture(scope="module")
+def table(tmp_path_factory):
+    """A table of one short trial (seed 2), written by the tool."""
+    path = tmp_path_factory.mktemp("fingerprints") / "before.csv"
+    assert main(["--task", "usb_c", "--seeds", "2:3", *SHORT, "--out", str(path)]) == 0
+    return path
+
+
+def test_a_table_is_written_and_a_rerun_matches_it(table, capsys):
+    with table.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["seed"] for row in rows] == ["2"] and list(rows[0]) == list(COLUMNS)
+    assert rows[0]["transitions"].split(" ")[1] == "grasp>approach"
+    assert len(rows[0]["outcome"]) == 16 and len(rows[0]["truth"]) == 16
+    capsys.readouterr()
+    assert main(["--task", "usb_c", "--seeds", "2:3", *SHORT, "--against", str(table)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith(",".join(COLUMNS)) and "1 of 1 seeds identical" in out
+
+
+def test_a_changed_row_is_named_field_by_field(table):
+    earlier = read_table(table)
+    row = dict(next(iter(earlier.values())))
+    changed = {**row, "outcome": "0" * 16, "duration_s": "1.0"}
+    lines = compare([changed], earlier, table)
+    assert lines[0].startswith(f"seed 2: outcome: {row['outcome']} -> 0000000000000000")
+    assert f"duration_s: {row['duration_s']} -> 1.0" in lines[0]
+    assert lines[-1].startswith("0 of 1 seeds identical")
+    absent = {**row, "seed": "7"}
+    assert compare([absent], earlier, table)[0] == f"seed 7: not in '{table}'"
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--task", "usb_c", "--seeds", "3"], "argument --seeds: '3': expected A:B"),
+        (["--task", "usb_c", "--seeds", "0:1", "--controller", "x"], "argument --controller"),
+    ],
+)
+def test_a_bad_argument_is_a_usage_error_exit_2(args, message, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(args)
+    assert exit_info.value.code == 2
+    assert message in capsys.readouterr().err.strip().splitlines()[-1]
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--task", "nope", "--seeds", "0:1"], "unknown task configuration 'nope'"),
+        (["--task", "usb_c", "--seeds", "0:1", "--against", "missing.csv"], "no such file"),
+        (["--task", "usb_c", "--seeds", "0:1", "--out", "/dev/full"], "not a regular file"),
+        (["--task", "usb_c", "--seeds", "0:1", "--out", "."], "is a folder"),
+    ],
+)
+def test_a_bad_input_is_one_line_and_exit_2(args, message, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("trial_fingerprints: error:") and message in err
+    assert err.count("\n") == 1
+
+
+def test_a_table_that_is_not_one_is_refused(tmp_path, capsys):
+    other = tmp_path / "other.csv"
+    other.write_text("seed,x\n1,2\n")
+    assert main(["--task", "usb_c", "--seeds", "0:1", "--against", str(other)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("trial_fingerprints: error: --against") and "not a trial" in err
+    assert "\n" not in err
