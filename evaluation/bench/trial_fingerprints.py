@@ -4,6 +4,7 @@ speed-up, a refactor) leaves every trial's outcome as it was.
     python scripts/trial_fingerprints.py --task usb_c|usb_a|PATH.yaml --seeds A:B
         [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
         [--set KEY=VALUE ...] [--out FILE.csv] [--against OTHER.csv]
+    python scripts/trial_fingerprints.py --compare BEFORE.csv AFTER.csv
 
 Each seed runs the trial tools' own path (``evaluation.trials.trial.run``, as
 ``scripts/run_trial.py`` and the batch tools run it), as fast as possible, in this process,
@@ -21,7 +22,9 @@ one after the other, writing nothing but this tool's table. A seed's row holds:
 The table goes to stdout as each seed finishes and, with ``--out``, to a CSV file (written
 atomically at the end). ``--against OTHER.csv`` compares the rows with an earlier table of
 the same task and controller (e.g. from another commit): it prints the seeds whose
-``outcome`` or ``truth`` differ, field by field, and the count of identical ones. Exit codes
+``outcome`` or ``truth`` differ, field by field, and the count of identical ones;
+``--compare BEFORE.csv AFTER.csv`` does the same for two tables already written (AFTER's
+rows against BEFORE's), running no trial. Exit codes
 as every tool's (evaluation/common/cli_support.py): bad input is one line and exit 2; a
 difference against ``OTHER.csv`` is reported, not an error (exit 0).
 
@@ -118,20 +121,23 @@ def fingerprint_row(outcome: TrialOutcome) -> dict[str, str]:
     return {column: row[column] for column in COLUMNS}
 
 
-def read_table(path: Path) -> dict[tuple[str, ...], dict[str, str]]:
-    """An earlier table (``--out``) by (task, controller, seed); ToolError if it is not one."""
+def read_table(path: Path, option: str = "--against") -> dict[tuple[str, ...], dict[str, str]]:
+    """A table written by ``--out``, by (task, controller, seed); ToolError naming ``option``
+    if it is missing or not one."""
+    if not path.is_file():
+        raise ToolError(f"{option} '{path}': no such file; expected a CSV written by --out")
     try:
         with path.open(newline="") as handle:
             reader = csv.DictReader(handle)
             missing = [c for c in COLUMNS if c not in (reader.fieldnames or ())]
             if missing:
                 raise ToolError(
-                    f"--against '{path}': not a trial fingerprint table (no column "
+                    f"{option} '{path}': not a trial fingerprint table (no column "
                     f"{', '.join(missing)}); expected a CSV written by --out"
                 )
             return {tuple(row[k] for k in KEY): row for row in reader}
     except csv.Error as exc:
-        raise ToolError(f"--against '{path}': not a CSV file ({exc})") from None
+        raise ToolError(f"{option} '{path}': not a CSV file ({exc})") from None
 
 
 def differences(before: dict[str, str], after: dict[str, str]) -> list[str]:
@@ -163,31 +169,51 @@ def compare(
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
-    parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
+    parser.add_argument("--task", help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
-    parser.add_argument(
-        "--seeds", type=seeds_type, required=True, help="A:B, the seeds A up to B (B excluded)"
-    )
+    parser.add_argument("--seeds", type=seeds_type, help="A:B, the seeds A up to B (B excluded)")
     add_override_argument(parser, "override a task key by dotted path (repeatable)")
     parser.add_argument("--out", type=Path, default=None, help="write the table to this CSV")
     parser.add_argument(
         "--against", type=Path, default=None, help="compare with this earlier table (--out's)"
     )
+    parser.add_argument(
+        "--compare",
+        type=Path,
+        nargs=2,
+        metavar=("BEFORE", "AFTER"),
+        help="compare two tables written by --out, running no trial",
+    )
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.compare is not None:
+        given = [name for name in ("task", "seeds", "out", "against") if getattr(args, name)]
+        if given or args.overrides:
+            parser.error(f"argument --compare: runs no trial; drop --{(given or ['set'])[0]}")
+        return run_tool(PROG, lambda: _compare_tables(*args.compare))
+    missing = [f"--{name}" for name in ("task", "seeds") if getattr(args, name) is None]
+    if missing:
+        parser.error(f"the following arguments are required: {', '.join(missing)}")
     return run_tool(PROG, lambda: _run(args))
+
+
+def _compare_tables(before: Path, after: Path) -> int:
+    earlier = read_table(before, "--compare")
+    later = read_table(after, "--compare")
+    print("\n".join(compare(list(later.values()), earlier, before)))
+    absent = [key[2] for key in earlier if key not in later]
+    if absent:
+        print(f"{len(absent)} seeds of '{before}' are not in '{after}': {', '.join(absent)}")
+    return 0
 
 
 def _run(args: argparse.Namespace) -> int:
     task = load_task(args.task, args.overrides)
-    earlier = None
-    if args.against is not None:
-        if not args.against.is_file():
-            raise ToolError(f"--against '{args.against}': no such file; expected a CSV of --out")
-        earlier = read_table(args.against)
+    earlier = None if args.against is None else read_table(args.against)
     if args.out is not None:
         check_output_file(args.out, [task.path, args.against])
     cv2.setNumThreads(1)

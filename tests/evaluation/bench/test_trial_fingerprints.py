@@ -78,9 +78,28 @@ def test_a_changed_row_is_named_field_by_field(table):
     assert compare([absent], earlier, table)[0] == f"seed 7: not in '{table}'"
 
 
+def test_two_written_tables_are_compared_without_a_trial(table, tmp_path, capsys):
+    text = table.read_text()
+    changed = tmp_path / "after.csv"
+    row = text.splitlines()[1].split(",")
+    row[COLUMNS.index("outcome")] = "f" * 16
+    changed.write_text("\n".join([text.splitlines()[0], ",".join(row)]) + "\n")
+    assert main(["--compare", str(table), str(table)]) == 0
+    assert capsys.readouterr().out == f"1 of 1 seeds identical to '{table}' (outcome and truth)\n"
+    assert main(["--compare", str(table), str(changed)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("seed 2: outcome: ") and "-> ffffffffffffffff" in out
+    empty = tmp_path / "empty.csv"
+    empty.write_text(text.splitlines()[0] + "\n")
+    assert main(["--compare", str(table), str(empty)]) == 0
+    assert "1 seeds of" in capsys.readouterr().out.splitlines()[-1]
+
+
 @pytest.mark.parametrize(
     ("args", "message"),
     [
+        (["--task", "usb_c"], "the following arguments are required: --seeds"),
+        (["--compare", "a.csv", "b.csv", "--task", "usb_c"], "runs no trial; drop --task"),
         (["--task", "usb_c", "--seeds", "3"], "argument --seeds: '3': expected A:B"),
         (["--task", "usb_c", "--seeds", "0:1", "--controller", "x"], "argument --controller"),
     ],
@@ -99,6 +118,7 @@ def test_a_bad_argument_is_a_usage_error_exit_2(args, message, capsys):
         (["--task", "usb_c", "--seeds", "0:1", "--against", "missing.csv"], "no such file"),
         (["--task", "usb_c", "--seeds", "0:1", "--out", "/dev/full"], "not a regular file"),
         (["--task", "usb_c", "--seeds", "0:1", "--out", "."], "is a folder"),
+        (["--compare", "missing.csv", "missing.csv"], "--compare 'missing.csv': no such file"),
     ],
 )
 def test_a_bad_input_is_one_line_and_exit_2(args, message, tmp_path, capsys, monkeypatch):
