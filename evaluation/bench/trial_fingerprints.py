@@ -19,6 +19,9 @@ one after the other, writing nothing but this tool's table. A seed's row holds:
   transitions as ``t_s source>target reason[rule]`` joined by ``; ``, so that a changed
   digest can be explained from the two tables.
 
+A trial that raises is a row of status ``error`` (its exception in ``failure_reason``, no
+transitions, no truth), as the batch tools record it; the next seed runs.
+
 The table goes to stdout as each seed finishes and, with ``--out``, to a CSV file (written
 atomically at the end). ``--against OTHER.csv`` compares the rows with an earlier table of
 the same task and controller (e.g. from another commit): it prints the seeds whose
@@ -49,13 +52,15 @@ import cv2
 import numpy as np
 
 from controller.insertion.interface import Transition
-from controller.run.task import load_task
+from controller.run.task import Task, load_task
 from evaluation.common.cli_support import ToolError, run_tool
 from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.trials.batch_cli import add_override_argument, seeds_type
+from evaluation.trials.guard import error_result
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
-from evaluation.trials.trial import TrialOutcome, raise_if_interrupted, run
+from evaluation.trials.spec import TrialSpec
+from evaluation.trials.trial import raise_if_interrupted, run
 
 PROG = "trial_fingerprints"
 IGNORED = ("wall_time_s",)  # what a trial measures but does not decide
@@ -107,18 +112,35 @@ def truth_digest(truth: dict[str, np.ndarray] | None) -> str:
     return digest.hexdigest()[:16]
 
 
-def fingerprint_row(outcome: TrialOutcome) -> dict[str, str]:
-    """The table's row for one finished trial (``COLUMNS``, as text)."""
-    result = outcome.result
+def fingerprint_row(
+    result: TrialResult,
+    transitions: Sequence[Transition] = (),
+    truth: dict[str, np.ndarray] | None = None,
+) -> dict[str, str]:
+    """The table's row for one trial (``COLUMNS``, as text): its result, the machine's
+    transitions and the truth arrays (none for a trial that raised)."""
     row = {
-        "outcome": outcome_digest(result, outcome.transitions),
-        "truth": truth_digest(outcome.truth),
-        "transitions": "; ".join(format_transition(t) for t in outcome.transitions),
+        "outcome": outcome_digest(result, transitions),
+        "truth": truth_digest(truth),
+        "transitions": "; ".join(format_transition(t) for t in transitions),
     }
     for name in RESULT_FIELDS:
         value = _exact(getattr(result, name))
         row[name] = "" if value is None else str(value)
     return {column: row[column] for column in COLUMNS}
+
+
+def trial_row(task: Task, task_name: str, controller: str, seed: int) -> dict[str, str]:
+    """The row of one trial of ``task`` run now; a trial that raises is a row too, of status
+    ``error`` (as the batch tools record it: ``evaluation.trials.guard``); a signal that
+    stopped the trial stops the tool."""
+    try:
+        outcome = run(task, controller, seed)
+    except Exception as exc:  # noqa: BLE001 -- a trial that raises is an outcome to compare
+        spec = TrialSpec(task_name, controller, seed)
+        return fingerprint_row(error_result(spec, f"{type(exc).__name__}: {exc}", 0.0))
+    raise_if_interrupted(outcome)
+    return fingerprint_row(outcome.result, outcome.transitions, outcome.truth)
 
 
 def read_table(path: Path, option: str = "--against") -> dict[tuple[str, ...], dict[str, str]]:
@@ -221,9 +243,7 @@ def _run(args: argparse.Namespace) -> int:
     writer.writeheader()
     rows = []
     for seed in args.seeds:
-        outcome = run(task, args.controller, seed)
-        raise_if_interrupted(outcome)
-        rows.append(fingerprint_row(outcome))
+        rows.append(trial_row(task, args.task, args.controller, seed))
         writer.writerow(rows[-1])
         sys.stdout.flush()
     if args.out is not None:

@@ -10,6 +10,7 @@ import pytest
 
 from controller.insertion import Phase
 from controller.insertion.interface import Transition
+from evaluation.bench import trial_fingerprints
 from evaluation.bench.trial_fingerprints import COLUMNS, compare, main, outcome_digest, read_table
 from evaluation.trials.result import TrialResult
 
@@ -136,3 +137,18 @@ def test_a_table_that_is_not_one_is_refused(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith("trial_fingerprints: error: --against") and "not a trial" in err
     assert "\n" not in err
+
+
+def test_a_trial_that_raises_is_an_error_row(monkeypatch, tmp_path, capsys):
+    def broken(task, controller, seed):
+        raise RuntimeError(f"seed {seed} broke\non two lines")
+
+    monkeypatch.setattr(trial_fingerprints, "run", broken)
+    out = tmp_path / "errors.csv"
+    assert main(["--task", "usb_a", "--seeds", "4:6", "--out", str(out)]) == 0
+    with out.open(newline="") as handle:
+        rows = list(csv.DictReader(handle))
+    assert [row["seed"] for row in rows] == ["4", "5"]
+    assert rows[0]["status"] == "error" and rows[0]["truth"] == rows[0]["transitions"] == ""
+    assert rows[1]["failure_reason"] == "error: RuntimeError: seed 5 broke on two lines"
+    assert rows[0]["outcome"] != rows[1]["outcome"]
