@@ -424,8 +424,12 @@ def test_losing_contact_in_search_probes_down_and_finds_the_opening_below():
     for _ in range(60):
         world.step(machine)
     world.floor_drop_m = 0.002  # the tip fell into a deep opening: support 2 mm lower
+    first = len(world.commands)
     assert world.run_until(machine, Phase.ALIGN) is Phase.ALIGN
     assert path(machine)[-1] == ("SEARCH", "ALIGN", "hole_found")
+    decided = [(c.stage, c.rule) for c in world.commands[first:]]
+    assert ("search.drag", "search.lost_contact") in decided  # the tick that began the probe
+    assert decided[-1] == ("search.probe", "search.hole_found:probe")
     assert world.tip[2] < world.hole.z_m - cfg.search.in_hole_depth_m
 
 

@@ -70,7 +70,7 @@ def test_every_tick_records_its_phase_sub_stage_and_rule():
     commands.append(world.step(machine))
     listed = {f"{p.value}.{s.value}" for p, stages in INSERTION.stages.items() for s in stages}
     assert all(c.stage in listed for c in commands), {c.stage for c in commands} - listed
-    assert all(c.rule.split(".")[0] == c.stage.split(".")[0] for c in commands if c.rule)
+    assert all(c.rule and c.rule.split(".")[0] == c.stage.split(".")[0] for c in commands)
     seen = {c.stage for c in commands}
     assert {"grasp.capture", "approach.descend", "search.drag", "align.seek"} <= seen
     assert commands[-1].stage == "done.hold" and commands[-1].rule == "done.hold"

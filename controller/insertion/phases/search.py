@@ -67,6 +67,7 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
         lost = machine.signals.magnitude < settings.contact_lost_sigma
         state.count = state.count + 1 if lost else 0
         if state.count >= settings.contact_lost_frames:
+            machine.fire("lost_contact")
             state.next(SearchStage.PROBE, obs.t_s)
             return hold()
         elapsed = obs.t_s - state.entered_t_s
