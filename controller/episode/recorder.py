@@ -47,6 +47,7 @@ def command_json(tick: TickRecord) -> bytes:
             "rezero_tactile": bool(command and command.rezero_tactile),
             "limited": list(tick.limited),
             "rule": command.rule if command is not None else "",
+            "stage": command.stage if command is not None else "",
             "sent": command is not None,
             "fault": tick.fault,
         }

@@ -137,8 +137,9 @@ COMMAND = Topic(
     "target) or null, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
     "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``rule`` (the machine's rule that "
     "decided it, 'phase.rule', e.g. 'search.drag', 'align.torque_servo'; '' when the machine "
-    "names none), ``sent`` (false on a fault tick: nothing was sent) and ``fault`` (the "
-    "watchdog's trip message or null).",
+    "names none), ``stage`` (the sub-stage in which the rule was decided, 'phase.stage', e.g. "
+    "'align.seek'; '' when the machine has none), ``sent`` (false on a fault tick: nothing "
+    "was sent) and ``fault`` (the watchdog's trip message or null).",
 )
 ARM_STATUS = Topic(
     "/arm/status",
@@ -289,6 +290,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "rezero_tactile": _BOOL,
             "limited": _STRS,
             "rule": _STR,
+            "stage": _STR,
             "sent": _BOOL,
             "fault": _STR_OR_NULL,
         },

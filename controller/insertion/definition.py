@@ -1,18 +1,30 @@
-"""The insertion machine's transition table, as data, and its check.
+"""The insertion machine's transition table and sub-stages, as data, and their check.
 
 Each ``Edge`` says that ``source`` may go to ``target`` when the guard ``guard`` holds; the
 guard's name is the reason the machine records (for FAILED, a ``FailureReason`` value). The
 machine refuses a transition that is not in its table, and the table is checked when the
 machine is built: every phase reachable from the initial one, none a trap (each non-terminal
-phase can reach a terminal one), terminal phases without outgoing edges.
+phase can reach a terminal one), terminal phases without outgoing edges. Each phase lists
+its sub-stages (``stages``): every member of the Enum its module (``phases/``) names them
+by, and the machine refuses to be in a sub-stage that is not listed.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterable
-from dataclasses import dataclass
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from enum import Enum
 
 from controller.insertion.interface import FailureReason, Phase
+from controller.insertion.phases.align import AlignStage
+from controller.insertion.phases.approach import ApproachStage
+from controller.insertion.phases.backoff import BackoffStage
+from controller.insertion.phases.grasp import GraspStage
+from controller.insertion.phases.insert import InsertStage
+from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
+from controller.insertion.phases.release import ReleaseStage
+from controller.insertion.phases.retract import RetractStage
+from controller.insertion.phases.search import SearchStage
 
 AUTONOMOUS = (
     Phase.GRASP,
@@ -34,7 +46,8 @@ F = FailureReason
 
 
 class DefinitionError(ValueError):
-    """The transition table is malformed: an unreachable phase, a trap, a terminal exit."""
+    """The definition is malformed: an unreachable phase, a trap, a terminal exit, a phase
+    whose sub-stages are not listed, or not all of them."""
 
 
 @dataclass(frozen=True)
@@ -48,12 +61,15 @@ class Edge:
 
 @dataclass(frozen=True)
 class Definition:
-    """A machine's phases, where it starts, where it ends, and its edges."""
+    """A machine's phases, where it starts, where it ends, its edges, and each phase's
+    sub-stages (none listed: a machine without named sub-stages, such as the blind
+    baseline)."""
 
     phases: tuple[Phase, ...]
     initial: Phase
     terminal: tuple[Phase, ...]
     edges: tuple[Edge, ...]
+    stages: Mapping[Phase, tuple[Enum, ...]] = field(default_factory=dict)
 
     def allows(self, source: Phase, target: Phase, guard: str) -> bool:
         """True if the table has the edge ``source -> target`` under ``guard``."""
@@ -99,18 +115,41 @@ def _insertion_edges() -> tuple[Edge, ...]:
     return tuple(edges)
 
 
+_STAGES: dict[Phase, tuple[Enum, ...]] = {
+    Phase.GRASP: (
+        GraspStage.START, GraspStage.LIFT, GraspStage.OPEN, GraspStage.CAPTURE,
+        GraspStage.CLOSE, GraspStage.SETTLE, GraspStage.ZERO,
+    ),
+    Phase.APPROACH: (ApproachStage.POSE, ApproachStage.DESCEND),
+    Phase.SEARCH: (SearchStage.DRAG, SearchStage.PROBE),
+    Phase.ALIGN: (
+        AlignStage.START, AlignStage.SEEK, AlignStage.TURN, AlignStage.WIDTH, AlignStage.YAW,
+        AlignStage.SERVO,
+    ),
+    Phase.INSERT: (InsertStage.START, InsertStage.PRESS, InsertStage.PUSH),
+    Phase.BACKOFF: (BackoffStage.LIFT,),
+    Phase.RELEASE: (ReleaseStage.OPEN, ReleaseStage.OPENING),
+    Phase.RETRACT: (RetractStage.LIFT,),
+    Phase.DONE: (TerminalStage.HOLD,),
+    Phase.FAILED: (TerminalStage.HOLD,),
+    Phase.TELEOP: (TeleopStage.OPERATOR,),
+    Phase.ESTOP: (EstopStage.HOLD,),
+}  # fmt: skip
+
 INSERTION = Definition(
     phases=tuple(Phase),
     initial=Phase.GRASP,
     terminal=TERMINAL,
     edges=_insertion_edges(),
+    stages=_STAGES,
 )
 
 
 def check_definition(definition: Definition) -> None:
     """Raise DefinitionError unless every edge joins known phases, terminal phases have no
-    outgoing edge, every phase is reachable from the initial one, and every non-terminal
-    phase can reach a terminal one."""
+    outgoing edge, every phase is reachable from the initial one, every non-terminal
+    phase can reach a terminal one, and, if the definition lists sub-stages, every phase
+    lists its own: each member of one Enum, once."""
     known = set(definition.phases)
     if definition.initial not in known or not set(definition.terminal) <= known:
         raise DefinitionError("the initial and terminal phases must be among the phases")
@@ -127,6 +166,30 @@ def check_definition(definition: Definition) -> None:
     traps = [p.name for p in definition.phases if p not in backward]
     if traps:
         raise DefinitionError(f"trap phases (cannot reach a terminal phase): {', '.join(traps)}")
+    _check_stages(definition)
+
+
+def _check_stages(definition: Definition) -> None:
+    """Every phase of ``definition`` lists its sub-stages, if any does: each member of one
+    Enum, once; none listed for a phase outside the machine."""
+    if not definition.stages:
+        return
+    outside = [p.name for p in definition.stages if p not in definition.phases]
+    if outside:
+        raise DefinitionError(f"sub-stages of phases not in the machine: {', '.join(outside)}")
+    for phase in definition.phases:
+        stages = definition.stages.get(phase, ())
+        if not stages:
+            raise DefinitionError(f"phase {phase.name} lists no sub-stages")
+        kinds = {type(stage) for stage in stages}
+        if len(kinds) > 1:
+            raise DefinitionError(f"phase {phase.name}: sub-stages of several enums")
+        missing = [s.name for s in type(stages[0]) if s not in stages]
+        if missing or len(set(stages)) != len(stages):
+            raise DefinitionError(
+                f"phase {phase.name}: expected each sub-stage of {type(stages[0]).__name__} "
+                f"once, missing {', '.join(missing) or 'none'}"
+            )
 
 
 def _closure(start: set[Phase], edges: tuple[Edge, ...], reverse: bool) -> set[Phase]:

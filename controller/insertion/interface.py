@@ -102,7 +102,9 @@ class Command:
     (after a grasp or a re-grasp). ``rule``: the machine's rule that decided this command,
     ``phase.rule`` (e.g. ``search.drag``, ``search.torque_catch``, ``align.torque_servo``;
     docs/ARCHITECTURE.md lists them), recorded with every tick; empty when the machine names
-    none.
+    none. ``stage``: the sub-stage in which that rule was decided, ``phase.stage`` (e.g.
+    ``align.seek``; the phase modules' enums, listed in definition.py), recorded with every
+    tick; empty when the machine has no sub-stages.
     """
 
     twist: Twist | None = None
@@ -111,6 +113,7 @@ class Command:
     capture_open_tactile: bool = False
     rezero_tactile: bool = False
     rule: str = ""
+    stage: str = ""
 
     def __post_init__(self) -> None:
         if self.twist is not None and self.pose is not None:

@@ -169,7 +169,14 @@ class SearchSettings(Config):
     length, out or back) turns the plug about B's z by the next of +``retry_yaw_rad``,
     -``retry_yaw_rad`` and 0 from the approach's yaw: a tilted plug's long leading edge
     drops into the opening only when it lies within the opening's width, so a search that
-    never caught at the nominal yaw is not repeated at it."""
+    never caught at the nominal yaw is not repeated at it.
+    The drag: the tip follows the pattern at ``speed_m_s`` plus the servo toward it, at most
+    ``max_speed_ratio`` x ``speed_m_s``; a gap between ticks longer than ``max_tick_s``
+    advances the path by that time only. The drag resistance is judged only while dragging
+    steadily (the filtered drag direction's speed at least ``steady_speed_ratio`` x
+    ``speed_m_s`` and its cosine to the latest command at least ``steady_cosine``), and
+    divided by a load of at least ``min_load_sigma`` (noise units; SEARCH's load handed to
+    ALIGN and INSERT is at least that too)."""
 
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-4, 0.01, default=0.0008)
@@ -188,6 +195,11 @@ class SearchSettings(Config):
     contact_lost_frames: int = number(1, 1000, default=15)
     in_hole_depth_m: float = number(0.0, 0.01, default=0.0005)
     retry_yaw_rad: float = number(0.0, 0.5, default=0.035)
+    max_speed_ratio: float = number(1.0, 10.0, default=2.0)
+    max_tick_s: float = number(0.001, 10.0, default=0.1)
+    steady_speed_ratio: float = number(0.0, 1.0, default=0.5)
+    steady_cosine: float = number(0.0, 1.0, default=0.95)
+    min_load_sigma: float = number(0.01, 1e4, default=1.0)
 
 
 @config_dataclass
@@ -228,8 +240,8 @@ class AlignSettings(Config):
 
     *Yaw*: sweep the yaw as INSERT's press does (``insert.yaw_sweep_rad``,
     ``yaw_rate_rad_s``, ``sweeps``) until the plug enters; back where the sweep began, a
-    plug at least half of ``enter_m`` in goes on to the servo, any other backs off to
-    SEARCH again. The opening's long walls holding the plug's yaw also end the sweep (the
+    plug at least ``entering_ratio`` x ``enter_m`` in goes on to the servo, any other backs
+    off to SEARCH again. The opening's long walls holding the plug's yaw also end the sweep (the
     servo stage): the torque about the plug's axis at least ``twist_sigma`` noise units
     for ``frames`` estimates (the plug is in the slot even where the depth by touch says
     otherwise: the in-grasp pose is unknown); 0 turns this off.
@@ -238,8 +250,8 @@ class AlignSettings(Config):
     yields to the contact's torque, w_T = -R_S2T (k * n_S) (n_S the normalised filtered
     torques tau_x, tau_y, tau_z, zero within their tolerance; gains ``gain_tau_*`` in rad/s
     per noise unit). Aligned: every torque within its tolerance (``tol_tau_*_sigma``, noise
-    units) with the axial load at least half of SEARCH's, for ``frames`` successive
-    estimates, or the plug down to ``insert.depth_m`` (it slid in while turning). The
+    units) with the axial load at least ``aligned_load_ratio`` x SEARCH's, for ``frames``
+    successive estimates, or the plug down to ``insert.depth_m`` (it slid in while turning). The
     servo (and INSERT's share of it) never tilts the TCP beyond ``servo_tilt_max_rad`` from
     straight down (the in-grasp tilt, the board's and a margin): past it, only its
     uprighting part is kept."""
@@ -264,6 +276,8 @@ class AlignSettings(Config):
     width_sigma: float = number(0.0, 1e4, default=1.0)
     servo_tilt_max_rad: float = number(0.0, 1.0, default=10 * _DEG)
     twist_sigma: float = number(0.0, 1e4, default=6.0)
+    entering_ratio: float = number(0.0, 1.0, default=0.5)
+    aligned_load_ratio: float = number(0.0, 10.0, default=0.5)
 
 
 @config_dataclass
@@ -276,8 +290,10 @@ class InsertSettings(Config):
     that load is reached (the *stall height*: the TCP's height then), the TCP sweeps the
     plug's yaw about its tip axis, a triangle wave between +-``yaw_sweep_rad`` about the
     opening's nominal yaw at ``yaw_rate_rad_s`` (the opening's yaw is uncertain and the
-    USB-C clearances leave about 1 deg). The TCP ``engage_m`` below the stall height (the
-    load gave way: the plug entered the opening) begins the push; ``sweeps`` whole sweeps
+    USB-C clearances leave about 1 deg); the stall height is taken once the load is at
+    least ``stall_load_ratio`` x the press load. The TCP ``engage_m`` below the stall height,
+    or the load below ``give_way_ratio`` x the press load after the stall (the load gave
+    way: the plug entered the opening) begins the push; ``sweeps`` whole sweeps
     without engaging: the plug is not over the opening (BACKOFF, then APPROACH and SEARCH
     again where the pattern left off).
 
@@ -285,7 +301,7 @@ class InsertSettings(Config):
     ``compliance_scale`` of its gains. The axial force (the estimated force along T z,
     estimate units) above ``force_budget``, or the tilt torque (norm of the normalised
     torques about T x and T y) risen by ``jam_rise_sigma`` above its lowest value in this
-    INSERT, for ``jam_frames`` successive estimates, or the TCP not 0.1 mm lower for
+    INSERT, for ``jam_frames`` successive estimates, or the TCP not ``progress_m`` lower for
     ``stall_s``: a jam (BACKOFF, then ALIGN).
     ``force_budget`` in N.
 
@@ -305,6 +321,9 @@ class InsertSettings(Config):
     yaw_rate_rad_s: float = number(1e-3, 1.0, default=0.25)
     sweeps: int = number(1, 20, default=1)
     stall_s: float = number(0.1, 60.0, default=1.5)
+    progress_m: float = number(1e-6, 0.01, default=1e-4)
+    stall_load_ratio: float = number(0.0, 1.0, default=0.8)
+    give_way_ratio: float = number(0.0, 1.0, default=0.5)
 
 
 @config_dataclass

@@ -1,4 +1,5 @@
-"""Kinematics the machine needs: the plug's tip, twists about the tip, bounded twists.
+"""Kinematics the machine needs: the plug's tip and its lowest edge, the yaw, twists about
+the tip, bounded twists.
 Vectors are NumPy arrays in B (m, m/s, rad/s); rotations and tilts are core.spatial's.
 """
 
@@ -11,12 +12,31 @@ from scipy.spatial.transform import Rotation
 
 from core.devices import Pose, Twist
 from core.spatial import clamp_norm, cross, rotation_from_rpy, vec3
+from core.task_geometry import PlugGeometry
 
 
 def tip_position(pose: Pose, length_m: float) -> np.ndarray:
     """Position in B of the plug's tip, ``length_m`` along T z from the TCP."""
     tip_offset_B = rotation_from_rpy(pose.rpy_rad).apply([0.0, 0.0, length_m])
     return np.asarray(pose.xyz_m, dtype=float) + tip_offset_B
+
+
+def lowest_edge(pose: Pose, plug: PlugGeometry, rotation: Rotation) -> np.ndarray:
+    """The lowest of the four edge midpoints of the plug's tip face, in B (m), for the TCP
+    at ``pose`` turned by ``rotation`` (T2B): the edge a tilted plug leads with, and the one
+    caught in the opening (ALIGN turns about it)."""
+    tip = tip_position(pose, plug.length_m)
+    half_w, half_t = 0.5 * plug.width_m, 0.5 * plug.thickness_m
+    offsets = rotation.apply(
+        [[half_w, 0.0, 0.0], [-half_w, 0.0, 0.0], [0.0, half_t, 0.0], [0.0, -half_t, 0.0]]
+    )
+    return tip + offsets[int(np.argmin(offsets[:, 2]))]
+
+
+def yaw_of(rotation: Rotation) -> float:
+    """The heading (rad) of T x in B's x-y plane, for the T2B ``rotation``."""
+    x_t = rotation.apply([1.0, 0.0, 0.0])
+    return math.atan2(float(x_t[1]), float(x_t[0]))
 
 
 def pivot_twist(

@@ -16,8 +16,6 @@ from controller.insertion.machine_config import SearchSettings
 from controller.insertion.signals import TactileSignals
 from core.spatial import cross
 
-STEADY_COSINE = 0.95  # the resistance is judged only on a steady drag direction
-
 
 def lateral_resistance(
     signals: TactileSignals, rotation: Rotation, direction_b: np.ndarray
@@ -94,13 +92,14 @@ class HoleDetector:
 
     The drag direction d is the tip's commanded horizontal velocity in B, filtered like the
     signals (so its lag matches theirs); the rule is judged only while dragging steadily (d
-    at least half the search speed and within acos(0.95) of the latest command). The
-    friction torque's axis e = z_T x d lies in T's x-y plane; the tool axis a with the larger
-    |e_a| measures the resistance r = n_a / e_a (n the normalised torque in T), so r is the
-    same for any drag direction served by that axis even though the two axes are measured by
-    different estimators (T x: a dipole tilt torque, T y: the NHHD in-plane torque, by
-    default). Friction grows with the load, so each axis keeps as its reference the ratio of
-    r to the load L (the normalised axial force, at least 1): learned (weight ``ema_alpha``)
+    at least ``steady_speed_ratio`` of the search speed and within
+    acos(``steady_cosine``) of the latest command). The friction torque's axis e = z_T x d
+    lies in T's x-y plane; the tool axis a with the larger |e_a| measures the resistance
+    r = n_a / e_a (n the normalised torque in T), so r is the same for any drag direction
+    served by that axis even though the two axes are measured by different estimators (T x:
+    a dipole tilt torque, T y: the NHHD in-plane torque, by default). Friction grows with
+    the load, so each axis keeps as its reference the ratio of r to the load L (the
+    normalised axial force, at least ``min_load_sigma``): learned (weight ``ema_alpha``)
     over its first ``hole_frames`` judged samples and the first ``settle_s`` of SEARCH, then
     followed slowly (``reference_alpha``) while r is not rising. Hole found: r - ratio x L
     >= max(``hole_rise_sigma``, ``hole_rise_ratio`` x |ratio x L|) for ``hole_frames``
@@ -130,7 +129,7 @@ class HoleDetector:
         none; ``commanded``: the tip velocity in B last commanded, ``elapsed_s``: time since
         SEARCH began."""
         caught = self._judge(signals, rotation, commanded, elapsed_s)
-        dropped = self._dropped(signals.axial_force_n, elapsed_s)
+        dropped = self._dropped(signals.axial_force_sigma, elapsed_s)
         horizontal = np.array([commanded[0], commanded[1], 0.0])
         self._drag = self._alpha * horizontal + (1.0 - self._alpha) * self._drag
         return "+".join(
@@ -174,13 +173,13 @@ class HoleDetector:
         settings, drag = self._settings, self._drag
         speed = float(np.linalg.norm(drag))
         horizontal = np.array([commanded[0], commanded[1], 0.0])
-        if speed < 0.5 * settings.speed_m_s or np.dot(drag, horizontal) < STEADY_COSINE * (
-            speed * np.linalg.norm(horizontal)
-        ):
+        if speed < settings.steady_speed_ratio * settings.speed_m_s or np.dot(
+            drag, horizontal
+        ) < settings.steady_cosine * (speed * np.linalg.norm(horizontal)):
             self._count = 0
             return False
         a, resistance = lateral_resistance(signals, rotation, drag)
-        load = max(signals.axial_force_n, 1.0)
+        load = max(signals.axial_force_sigma, settings.min_load_sigma)
         ratio = self._ratios[a]
         self._learned[a] += 1
         if (

@@ -102,8 +102,10 @@ class TactileSignals:
         return self._filtered * self._sigma
 
     @property
-    def axial_force_n(self) -> float:
-        """The filtered force along T z in noise units (see ``axial_force``)."""
+    def axial_force_sigma(self) -> float:
+        """The filtered force along T z in noise units: the normalised force channels
+        (shear_x, shear_y, normal of S) rotated into T (see ``axial_force`` for the same in
+        the estimate's units). The load SEARCH, ALIGN and INSERT hold and judge."""
         return float((self.s2t @ self._filtered[3:])[2])
 
     @property

@@ -24,7 +24,14 @@ from __future__ import annotations
 
 import dataclasses
 
-from controller.insertion.definition import TERMINAL, Definition, Edge, check_definition
+from controller.insertion.commands import operator_command
+from controller.insertion.definition import (
+    INSERTION,
+    TERMINAL,
+    Definition,
+    Edge,
+    check_definition,
+)
 from controller.insertion.interface import (
     Command,
     FailureReason,
@@ -33,14 +40,15 @@ from controller.insertion.interface import (
     TeleopInput,
     Transition,
 )
-from controller.insertion.machine import InsertionMachine, has_fault, operator_command
+from controller.insertion.machine import InsertionMachine, has_fault
 from controller.insertion.machine_config import MachineConfig
 from core.devices import Twist
 from core.task_geometry import HolePose, PlugGeometry
 
 _F = FailureReason
+_PHASES = (Phase.GRASP, Phase.TELEOP, Phase.ESTOP, Phase.DONE, Phase.FAILED)
 TELEOP_ONLY = Definition(
-    phases=(Phase.GRASP, Phase.TELEOP, Phase.ESTOP, Phase.DONE, Phase.FAILED),
+    phases=_PHASES,
     initial=Phase.GRASP,
     terminal=TERMINAL,
     edges=(
@@ -54,6 +62,7 @@ TELEOP_ONLY = Definition(
             for p in (Phase.GRASP, Phase.TELEOP, Phase.ESTOP)
         ),
     ),  # fmt: skip
+    stages={phase: INSERTION.stages[phase] for phase in _PHASES},
 )
 
 

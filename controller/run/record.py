@@ -2,10 +2,11 @@
 written as the run goes, so a crash loses at most the last second.
 
 ``DIR/ticks.jsonl``: one JSON object per control tick (time, phase, the estimate the machine
-saw, the command as sent and the machine's rule that decided it, the TCP pose, the gripper
-width, the limits that acted, a fault), flushed every ``FLUSH_TICKS`` ticks and at the end
-(a write that fails, e.g. on a full disk, cuts the file at its last flushed tick and raises
-an OSError naming it, which the loop turns into a fault: a safe stop);
+saw, the command as sent and the machine's rule and sub-stage that decided it, the TCP
+pose, the gripper width, the limits that acted, a fault), flushed every ``FLUSH_TICKS``
+ticks and at the end (a write that fails, e.g. on a full disk, cuts the file at its last
+flushed tick and raises an OSError naming it, which the loop turns into a fault: a safe
+stop);
 ``DIR/transitions.jsonl``: every phase change with its reason and rule, flushed at once. At
 the end ``DIR/trial.json`` (task, resolved configuration, seed, controller, outcome) is
 written atomically; in simulation the trial tools add ``DIR/truth.npz`` (the simulator's
@@ -107,6 +108,7 @@ class RunRecorder:
             row["slip"] = obs.wrench.slip_suspected
         if command is not None:
             row["rule"] = command.rule
+            row["stage"] = command.stage
         if command is not None and command.twist is not None:
             row["twist"] = [*command.twist.linear_m_s, *command.twist.angular_rad_s]
         if command is not None and command.gripper is not None:

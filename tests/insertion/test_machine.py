@@ -15,6 +15,9 @@ from controller.insertion.machine_config import (
     SlipSettings,
     Timeouts,
 )
+from controller.insertion.motion import lowest_edge
+from controller.insertion.phases.align import AlignStage
+from controller.insertion.phases.search import SearchStage
 from controller.insertion.search import SearchPattern
 from core.spatial import tilt_of_rotation
 from tests.insertion.world import ToyWorld, make_machine, path, toy_config
@@ -169,7 +172,7 @@ def test_a_plug_on_the_rim_sweeps_its_yaw_then_searches_again_and_succeeds():
     yaws = []
     while machine.phase is not Phase.DONE and world.t_s < 60.0:
         world.step(machine)
-        if machine.phase is Phase.ALIGN and machine._stage.name == "yaw":
+        if machine.phase is Phase.ALIGN and machine.stage is AlignStage.YAW:
             x_t = world.rotation.apply([1.0, 0.0, 0.0])
             yaws.append(np.arctan2(x_t[1], x_t[0]) - world.hole.yaw_rad)
     assert machine.phase is Phase.DONE
@@ -194,18 +197,14 @@ def test_jams_at_one_height_mean_the_rim_whatever_the_depth_by_touch_says():
     world.run_until(machine, Phase.DONE, max_s=90.0)
     reasons = [r for _, _, r in path(machine)]
     first_jam = reasons.index("jam")
-    assert reasons[first_jam : first_jam + 3] == ["jam", "backed_off", "aligned"]
+    assert reasons[first_jam:first_jam + 3] == ["jam", "backed_off", "aligned"]
     second_jam = reasons.index("jam", first_jam + 1)
     assert "hole_found" not in reasons[first_jam:second_jam]  # both at the one catch
     # after the second jam at that height the plug no longer counts as entered there: no
     # third push; ALIGN's yaw stage finds it not over the opening, and it searches again
     next_catch = reasons.index("hole_found", second_jam)
     assert reasons[second_jam:next_catch] == [
-        "jam",
-        "backed_off",
-        "not_entered",
-        "search_again",
-        "surface_contact",
+        "jam", "backed_off", "not_entered", "search_again", "surface_contact"
     ]
     assert machine.phase is Phase.DONE
 
@@ -217,13 +216,13 @@ def test_the_walls_holding_the_yaw_end_the_sweep_early_in_the_servo():
     yaws = []
     while not any(t.source is Phase.ALIGN for t in machine.transitions) and world.t_s < 60.0:
         world.step(machine)
-        if machine.phase is Phase.ALIGN and machine._stage.name == "yaw":
+        if machine.phase is Phase.ALIGN and machine.stage is AlignStage.YAW:
             x_t = world.rotation.apply([1.0, 0.0, 0.0])
             yaws.append(np.arctan2(x_t[1], x_t[0]) - world.hole.yaw_rad)
     rules = [c.rule for c in world.commands]
     assert "align.yaw_sweep" in rules and "align.twist_held" in rules
     assert rules.index("align.twist_held") > rules.index("align.yaw_sweep")
-    assert "align.torque_servo" in rules[rules.index("align.twist_held") :]
+    assert "align.torque_servo" in rules[rules.index("align.twist_held"):]
     assert max(yaws) - min(yaws) < 0.5 * cfg.insert.yaw_sweep_rad  # the sweep cut short
     # with the rule off the same world sweeps the whole range (as on a bare rim)
     off = replace(cfg, align=replace(cfg.align, twist_sigma=0.0))
@@ -239,18 +238,18 @@ def test_align_seeks_the_wall_against_the_lean_then_turns_upright_about_the_heel
     machine = make_machine(world, cfg)
     world.run_until(machine, Phase.ALIGN)
     lean = world.rotation.apply([0.0, 0.0, 1.0])[:2]
-    start = machine._lowest_edge(world.observe(), world.rotation)
-    while machine._stage.name in ("", "seek"):
+    start = lowest_edge(world.observe().arm.tcp, machine.plug, world.rotation)
+    while machine.stage in (AlignStage.START, AlignStage.SEEK):
         world.step(machine)
-    held = machine._lowest_edge(world.observe(), world.rotation)
+    held = lowest_edge(world.observe().arm.tcp, machine.plug, world.rotation)
     moved = held - start
     assert np.dot(moved[:2], lean) < 0.0  # backward, against the lean
     assert np.linalg.norm(moved[:2]) <= cfg.align.seek_max_m
-    assert machine._stage.name == "turn"
-    while machine._stage.name == "turn":
+    assert machine.stage is AlignStage.TURN
+    while machine.stage is AlignStage.TURN:
         world.step(machine)
     assert tilt_of_rotation(world.rotation) <= cfg.align.tilt_tol_rad
-    now = machine._lowest_edge(world.observe(), world.rotation)
+    now = lowest_edge(world.observe().arm.tcp, machine.plug, world.rotation)
     assert np.linalg.norm((now - held)[:2]) < 5e-4  # turned about the heel, held at the wall
 
 
@@ -302,15 +301,11 @@ def test_a_search_out_of_time_searches_again_with_each_pass_at_another_yaw():
     yaws = []  # (SEARCH's path length since its first timeout, m; yaw, rad) while dragging
     while machine.phase is not Phase.FAILED and world.t_s < 60.0:
         world.step(machine)
-        if machine.phase is Phase.SEARCH and machine._yaw_passes_from_m is None:
+        if machine.phase is Phase.SEARCH and machine.memory.yaw_passes_from_m is None:
             assert abs(_yaw_from_approach(machine, world)) < 1e-3  # the nominal yaw
         elif machine.phase is Phase.SEARCH:
-            yaws.append(
-                (
-                    machine._search_s_m - machine._yaw_passes_from_m,
-                    _yaw_from_approach(machine, world),
-                )
-            )
+            yaws.append((machine.memory.search_s_m - machine.memory.yaw_passes_from_m,
+                         _yaw_from_approach(machine, world)))
     reasons = [r for _, _, r in path(machine)]
     assert reasons.count("search_timeout") == 2  # each a retry, not a failure
     assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")
@@ -350,15 +345,16 @@ def test_an_align_timeout_lifts_clear_of_the_surface_then_searches_again():
     world.run_until(machine, Phase.BACKOFF)
     assert path(machine)[-1] == ("ALIGN", "BACKOFF", "align_timeout")
     caught = world.observe()
-    assert machine._depth(caught, world.rotation) > 0.0  # the tip's edge in the opening
+    caught_depth = machine.touch.depth(caught.arm.tcp, world.rotation)
+    assert caught_depth > 0.0  # the tip's edge in the opening
     world.run_until(machine, Phase.APPROACH)
     assert path(machine)[-1] == ("BACKOFF", "APPROACH", "search_again")
     lifted = world.observe()
     # lifted clear: the lowest edge the back-off distance above the surface found, which
     # is more than the back-off distance for a tip that was below the surface
-    assert -machine._depth(lifted, world.rotation) >= cfg.backoff.distance_m
+    assert -machine.touch.depth(lifted.arm.tcp, world.rotation) >= cfg.backoff.distance_m
     lift_m = lifted.arm.tcp.xyz_m[2] - caught.arm.tcp.xyz_m[2]
-    assert lift_m > cfg.backoff.distance_m + 0.5 * machine._depth(caught, world.rotation)
+    assert lift_m > cfg.backoff.distance_m + 0.5 * caught_depth
     assert world.run_until(machine, Phase.FAILED) is Phase.FAILED  # the next one: no retry left
     assert path(machine)[-1] == ("ALIGN", "FAILED", "too_many_retries")
 
@@ -428,8 +424,12 @@ def test_losing_contact_in_search_probes_down_and_finds_the_opening_below():
     for _ in range(60):
         world.step(machine)
     world.floor_drop_m = 0.002  # the tip fell into a deep opening: support 2 mm lower
+    first = len(world.commands)
     assert world.run_until(machine, Phase.ALIGN) is Phase.ALIGN
     assert path(machine)[-1] == ("SEARCH", "ALIGN", "hole_found")
+    decided = [(c.stage, c.rule) for c in world.commands[first:]]
+    assert ("search.drag", "search.lost_contact") in decided  # the tick that began the probe
+    assert decided[-1] == ("search.probe", "search.hole_found:probe")
     assert world.tip[2] < world.hole.z_m - cfg.search.in_hole_depth_m
 
 
@@ -442,12 +442,12 @@ def test_losing_contact_then_touching_the_surface_again_drags_on():
     machine = make_machine(world, cfg)
     world.run_until(machine, Phase.SEARCH)
     world.board = False  # contact lost ...
-    while machine.phase is Phase.SEARCH and machine._stage.name != "probe":
+    while machine.phase is Phase.SEARCH and machine.stage is not SearchStage.PROBE:
         world.step(machine)
     world.board = True  # ... and found again on the surface while probing down
-    while machine.phase is Phase.SEARCH and machine._stage.name == "probe":
+    while machine.phase is Phase.SEARCH and machine.stage is SearchStage.PROBE:
         world.step(machine)
-    assert machine.phase is Phase.SEARCH and machine._stage.name == ""
+    assert machine.phase is Phase.SEARCH and machine.stage is SearchStage.DRAG
     world.run_until(machine, Phase.BACKOFF)
     assert path(machine)[-1] == ("SEARCH", "BACKOFF", "search_timeout")  # it searched on
 

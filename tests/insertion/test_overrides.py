@@ -8,6 +8,7 @@ import pytest
 
 from controller.insertion.interface import Phase, TeleopInput
 from controller.insertion.machine_config import MachineConfig, Timeouts
+from controller.insertion.phases.grasp import GraspStage
 from core.devices import Twist
 from tests.insertion.world import ToyWorld, make_machine, path
 
@@ -90,7 +91,7 @@ def test_hand_back_while_holding_before_the_baseline_keeps_the_grasp_and_rezeroe
     world = ToyWorld()
     machine = make_machine(world)
     world.step(machine)
-    while machine._stage.name != "zero":  # settled on the plug, zeroing, no baseline yet
+    while machine.stage is not GraspStage.ZERO:  # settled on the plug, zeroing, no baseline yet
         world.step(machine)
     take_over(world, machine)
     assert hand_back(world, machine).target is Phase.GRASP

@@ -17,7 +17,7 @@ STILL = np.zeros(3)  # no drag: only the load-drop rule can fire
 def feed(detector: HoleDetector, loads: list[float], t0_s: float = 0.0) -> list[str]:
     found = []
     for i, load in enumerate(loads):
-        signals = SimpleNamespace(axial_force_n=load, torque_t=np.zeros(3))
+        signals = SimpleNamespace(axial_force_sigma=load, torque_t=np.zeros(3))
         found.append(detector.update(signals, UPRIGHT, STILL, t0_s + 0.04 * i))
     return found
 

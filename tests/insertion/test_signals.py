@@ -72,7 +72,7 @@ def test_torques_and_axial_force_in_the_tool_frame():
     signals.update(estimate(1.0, tau_x=0.0002, tau_y=0.0004, tau_z=0.005, shear_y=0.3))
     np.testing.assert_allclose(signals.torque_t, [1.0, -1.0, 2.0])
     assert signals.axial_force == pytest.approx(0.3)  # shear along S y = along T z
-    assert signals.axial_force_n == pytest.approx(150.0)
+    assert signals.axial_force_sigma == pytest.approx(150.0)
 
 
 def test_reset_forgets_the_baseline():
