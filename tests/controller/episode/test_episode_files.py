@@ -18,7 +18,7 @@ from core.devices import ArmMode, ArmState, ArmStatus, Pose
 
 
 def _writer(path, **options):
-    return EpisodeWriter(path, {"format_version": "1", "seed": "0"}, **options)
+    return EpisodeWriter(path, {"format_version": "2", "seed": "0"}, **options)
 
 
 def test_a_full_queue_drops_counts_and_records_what_it_dropped(tmp_path):
@@ -119,9 +119,27 @@ def test_a_record_its_encoder_refuses_is_dropped_and_counted_and_writing_goes_on
     assert ep.complete and ep.outcome["dropped_total"] == "1"
 
 
-def test_json_writes_a_non_finite_number_as_null_and_numpy_values_as_numbers():
-    payload = {"a": float("nan"), "b": np.array([1.5, np.inf]), "c": np.float32(0.25)}
-    assert json.loads(json_bytes(payload)) == {"a": None, "b": [1.5, None], "c": 0.25}
+def test_json_leaves_out_what_has_no_value_and_writes_numpy_values_as_numbers():
+    payload = {
+        "a": float("nan"),
+        "b": np.array([1.5, np.inf]),
+        "c": np.float32(0.25),
+        "d": None,
+        "e": "null",
+        "f": [1, 2],
+    }
+    assert json.loads(json_bytes(payload)) == {"c": 0.25, "e": "null", "f": [1, 2]}
+    assert json_bytes({"g": 1.0}) == b'{"g":1.0}'
+
+
+def test_the_reader_gives_the_fields_a_message_lacks_as_none(tmp_path):
+    writer = _writer(tmp_path / "e.mcap")
+    writer.log(LOOP_TICK, 0.0, json_bytes, {"index": 0, "start_s": 0.0, "phase": "x",
+                                           "fault": None})  # fmt: skip
+    writer.close({"reason": "done"})
+    (message,) = read_episode(tmp_path / "e.mcap").messages("/loop/tick")
+    assert message.value["fault"] is None and message.value["overran"] is None
+    assert message.value["phase"] == "x"
 
 
 @pytest.mark.parametrize("force", [(0.5, -1.0, 4.25), None])
@@ -135,5 +153,5 @@ def test_the_arm_status_carries_the_external_force_or_null(force):
         external_force_n=force,
     )
     message = json.loads(arm_json(status))
-    assert message["external_force_n"] == (None if force is None else list(force))
+    assert message.get("external_force_n") == (None if force is None else list(force))
     assert set(message) <= set(JSON_SCHEMAS[ARM_STATUS.schema]["properties"])
