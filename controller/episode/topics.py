@@ -15,7 +15,7 @@ sensor (placed in T by ``/tf_static``), ``H`` the hole. SI units unless a field'
 otherwise; the raw tactile estimate's units are the estimator's (mm, mm^2) unless
 ``calibrated``.
 
-Two encodings:
+Two encodings (an absent field reads as None: ``controller.episode.reader``):
 
 * ``protobuf``: Foxglove's well-known schemas (``foxglove.CompressedImage``,
   ``foxglove.Grid``, ``foxglove.FrameTransforms``), encoded by ``foxglove-sdk``'s message
@@ -123,7 +123,7 @@ TACTILE_WRENCH = Topic(
     "The estimate the controller saw (``controller.tactile.WrenchEstimate``, after any "
     "``TransformedSource``): ``t_s`` (the frame's capture time), tau_x, tau_y, tau_z, "
     "shear_x, shear_y, normal and the FingerVision baseline's fv_tau_x/y/z (raw: mm, tau_z "
-    "and fv mm^2; N*m / N when ``calibrated``; a non-finite value is null), the flags "
+    "and fv mm^2; N*m / N when ``calibrated``; a non-finite value is absent), the flags "
     "(contact, degenerate, slip_suspected, slip_gross, rezero_recommended, zeroing, "
     "calibrated) and ``push_index``: the frame's index among the pushes (0-based; the image "
     "of the same push has the same index in ``/tactile/push``).",
@@ -136,7 +136,7 @@ TACTILE_PUSH = Topic(
     "each call into the wrench source, in the order made",
     "The calls the loop made into the wrench source, so a re-estimation repeats them in the "
     "same order: ``call`` 'push' (``push_index``, ``frame_t_s``: capture time, s), "
-    "'capture_open' or 'rezero' (``n_frames``: the frames asked for, null for the "
+    "'capture_open' or 'rezero' (``n_frames``: the frames asked for, absent for the "
     "source's default; ``push_index``: the index of the next push, which is the first frame "
     "the call affects). Messages of one file are ordered by (log_time, sequence).",
 )
@@ -147,13 +147,13 @@ COMMAND = Topic(
     "B",
     "every tick",
     "The command as sent, after the limits: ``twist_linear_m_s`` and ``twist_angular_rad_s`` "
-    "(TCP twist in B) or null, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) or "
-    "null, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
-    "target) or null, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
+    "(TCP twist in B) or absent, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) "
+    "or absent, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
+    "target) or absent, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
     "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``rule`` (the machine's rule that "
     "decided it, 'phase.rule', e.g. 'search.drag', 'align.torque_servo'; '' when the machine "
     "names none), ``sent`` (false on a fault tick: nothing was sent) and ``fault`` (the "
-    "watchdog's trip message or null).",
+    "watchdog's trip message; absent without one).",
 )
 ARM_STATUS = Topic(
     "/arm/status",
@@ -162,9 +162,9 @@ ARM_STATUS = Topic(
     "B",
     "every tick (the status the machine saw)",
     "``t_s`` (read time), ``tcp_xyz_m``, ``tcp_rpy_rad`` (T2B, xArm rpy), ``joints_rad`` (6; "
-    "null where unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
-    "``warning_code``, ``external_force_n`` (N, B: the F/T sensor's force on the tool; null "
-    "without one).",
+    "absent when any is unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
+    "``warning_code``, ``external_force_n`` (N, B: the F/T sensor's force on the tool; "
+    "absent without one).",
 )
 GRIPPER_STATUS = Topic(
     "/gripper/status",
@@ -208,7 +208,7 @@ LOOP_TICK = Topic(
     "",
     "every tick",
     "``index``, ``deadline_s``, ``start_s``, ``end_s`` (s on the loop's clock), ``overran``, "
-    "``phase`` (the machine's phase after its step) and ``fault`` (null or the trip).",
+    "``phase`` (the machine's phase after its step) and ``fault`` (the trip; absent without one).",
 )
 TCP_TF = Topic(
     "/tf",
