@@ -6,8 +6,10 @@
 // The parsers are packages/mcap-support/src/{parseJsonSchema,protobufDefinitionsToDatatypes,
 // parseChannel}.ts of the open-source Foxglove Studio (MPL-2.0), as published, compiled, in
 // the npm package @foxglove/studio-base 1.48.0 (pinned with its integrity in
-// package-lock.json; Lichtblick forked Studio from this code and keeps the same
-// parseJsonSchema). The package is a webpack build, so this script takes the three modules'
+// package-lock.json). Lichtblick, the maintained fork of this code, publishes no npm package
+// holding its mcap-support (no @lichtblick/mcap-support; @lichtblick/suite is the extension
+// API only), so the published Studio build is the pinned copy of that parser here.
+// The package is a webpack build, so this script takes the three modules'
 // text out of the bundle, as webpack concatenated them, and runs it with the libraries they
 // import (protobufjs and its descriptor extension, @protobufjs/base64) from npm.
 //
