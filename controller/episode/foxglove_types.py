@@ -4,7 +4,6 @@ function runs on the episode writer's thread."""
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -41,10 +40,19 @@ def schema(name: str) -> Any:
     return _MESSAGES[name].get_schema()
 
 
-def timestamp(t_s: float) -> Timestamp:
-    """``t_s`` (s, >= 0) as a protobuf timestamp."""
-    sec = math.floor(t_s)
-    return Timestamp(sec=int(sec), nsec=min(int(round((t_s - sec) * 1e9)), 999_999_999))
+def timestamp(t_s: float, offset_ns: int = 0) -> Timestamp:
+    """``t_s`` (s on the loop's clock) plus ``offset_ns`` (the episode's offset to the wall
+    clock, ``EpisodeWriter.offset_ns``; the result >= 0) as a protobuf timestamp: on the
+    clock of the log times, so a viewer lines the message up with them."""
+    ns = round(t_s * 1e9) + offset_ns
+    sec, nsec = divmod(ns, 1_000_000_000)
+    return Timestamp(sec=int(sec), nsec=int(nsec))
+
+
+def loop_time_s(stamp: Any, offset_ns: int = 0) -> float:
+    """A protobuf timestamp written by ``timestamp`` back on the loop's clock, s
+    (``offset_ns``: the episode's, ``Episode.offset_ns``)."""
+    return (stamp.seconds * 1_000_000_000 + stamp.nanos - offset_ns) / 1e9
 
 
 def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> bytes:
@@ -62,16 +70,21 @@ def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> byt
 
 
 def image_bytes(
-    capture_t_s: float, image: np.ndarray, image_format: str, jpeg_quality: int
+    capture_t_s: float,
+    image: np.ndarray,
+    image_format: str,
+    jpeg_quality: int,
+    offset_ns: int = 0,
 ) -> bytes:
-    """A ``foxglove.CompressedImage`` of ``image`` captured at ``capture_t_s`` in frame S."""
+    """A ``foxglove.CompressedImage`` of ``image`` captured at ``capture_t_s`` (loop's clock;
+    stamped plus ``offset_ns``) in frame S."""
     data = encode_image(image, image_format, jpeg_quality)
     return CompressedImage(
-        timestamp=timestamp(capture_t_s), frame_id="S", data=data, format=image_format
+        timestamp=timestamp(capture_t_s, offset_ns), frame_id="S", data=data, format=image_format
     ).encode()
 
 
-def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
+def grid_bytes(capture_t_s: float, field: VectorField, offset_ns: int = 0) -> bytes:
     """A ``foxglove.Grid`` of ``field`` (u, v in mm and the divergence) in frame S: cells of
     the field's spacing (m), the corner at the first cell's outer corner."""
     dx_mm, dy_mm = field.spacing_mm
@@ -84,7 +97,7 @@ def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
     )
     float32 = PackedElementFieldNumericType.Float32
     return Grid(
-        timestamp=timestamp(capture_t_s),
+        timestamp=timestamp(capture_t_s, offset_ns),
         frame_id="S",
         pose=Pose(position=corner, orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)),
         column_count=cols,
@@ -102,10 +115,12 @@ def grid_bytes(capture_t_s: float, field: VectorField) -> bytes:
 Vector = Sequence[float] | np.ndarray
 
 
-def transforms_bytes(t_s: float, frames: list[tuple[str, str, Vector, Vector]]) -> bytes:
-    """A ``foxglove.FrameTransforms`` at ``t_s``: each (parent, child, translation m (3),
-    quaternion (x, y, z, w))."""
-    stamp = timestamp(t_s)
+def transforms_bytes(
+    t_s: float, frames: list[tuple[str, str, Vector, Vector]], offset_ns: int = 0
+) -> bytes:
+    """A ``foxglove.FrameTransforms`` at ``t_s`` (loop's clock; stamped plus ``offset_ns``):
+    each (parent, child, translation m (3), quaternion (x, y, z, w))."""
+    stamp = timestamp(t_s, offset_ns)
     return FrameTransforms(
         transforms=[
             FrameTransform(

@@ -10,7 +10,11 @@ ranges were lost (``lost``), whether the file was finished (``finished``: its fo
 read) and complete (``complete``: finished by the writer, not by ``repair``, nothing
 lost). Messages are kept as bytes and decoded when iterated: ``json`` topics to dicts,
 Foxglove's ``protobuf`` topics to the protobuf messages of the schemas the file carries
-(``mcap-protobuf-support``). Times are on the loop's clock, in s.
+(``mcap-protobuf-support``). Times are on the loop's clock, in s: a file's log times are
+the wall clock (format 2), the loop's time plus the offset in its ``episode`` metadata
+(``log_time_offset_ns``), which the reader subtracts (format 1: log times on the loop's
+clock, offset 0). A JSON message of format 2 leaves out a field that has no value; the
+reader gives every field of its schema that it lacks as None (format 1 wrote null).
 
 Errors are ``EpisodeError`` (a ValueError), one line naming the file: a missing or
 unreadable file, a file that is not MCAP, an MCAP file that is not an episode, a message
@@ -39,6 +43,7 @@ from controller.episode.topics import (
     METADATA_OUTCOME,
     METADATA_REPAIR,
     PROFILE,
+    READABLE_VERSIONS,
 )
 
 NS_PER_S = 1_000_000_000
@@ -50,7 +55,8 @@ class EpisodeError(ValueError):
 
 @dataclass(frozen=True)
 class EpisodeMessage:
-    """One decoded message: ``topic``, ``t_s`` (its log time on the loop's clock, s),
+    """One decoded message: ``topic``, ``t_s`` (its log time on the loop's clock, s: the
+    log time minus the episode's ``offset_ns``),
     ``sequence`` (the writer's order among messages of equal time) and ``value`` (a dict for
     a ``json`` topic; a protobuf message of the Foxglove schema for a ``protobuf`` one)."""
 
@@ -123,6 +129,17 @@ class Episode:
         )
 
     @property
+    def offset_ns(self) -> int:
+        """The offset from the loop's clock to the log times (the wall clock), integer ns
+        (metadata ``log_time_offset_ns``; 0 in files of format 1, logged on the loop's
+        clock): a log time minus it is the loop's time."""
+        return int(self.info.get("log_time_offset_ns", "0"))
+
+    def loop_s(self, log_time_ns: int) -> float:
+        """A log time (ns) on the loop's clock, s."""
+        return (log_time_ns - self.offset_ns) / NS_PER_S
+
+    @property
     def info(self) -> dict[str, str]:
         """The ``episode`` metadata (task, seed, controller, versions, machine, ...)."""
         return self.metadata.get(METADATA_EPISODE, {})
@@ -142,7 +159,7 @@ class Episode:
         if not self._messages:
             return (math.nan, math.nan)
         times = [m.log_time for m in self._messages]
-        return (min(times) / NS_PER_S, max(times) / NS_PER_S)
+        return (self.loop_s(min(times)), self.loop_s(max(times)))
 
     def messages(self, *topics: str) -> Iterator[EpisodeMessage]:
         """The messages of ``topics`` (every topic if none), decoded, in (log time,
@@ -151,6 +168,7 @@ class Episode:
         ids = {cid for cid, ch in self._channels.items() if not wanted or ch.topic in wanted}
         chosen = [m for m in self._messages if m.channel_id in ids]
         chosen.sort(key=lambda m: (m.log_time, m.sequence))
+        offset_ns = self.offset_ns
         for record in chosen:
             channel = self._channels[record.channel_id]
             try:
@@ -160,16 +178,17 @@ class Episode:
             except Exception as error:  # noqa: BLE001 -- a decoder's own errors, any type
                 raise EpisodeError(
                     f"episode '{self.path}': topic {channel.topic}, message at "
-                    f"{record.log_time / NS_PER_S:.6f} s: does not decode as "
+                    f"{(record.log_time - offset_ns) / NS_PER_S:.6f} s: does not decode as "
                     f"{channel.message_encoding} ({' '.join(str(error).split())[:160]})"
                 ) from None
             if channel.message_encoding == "json" and not isinstance(value, dict):
                 raise EpisodeError(
                     f"episode '{self.path}': topic {channel.topic}, message at "
-                    f"{record.log_time / NS_PER_S:.6f} s: expected a JSON object, got "
-                    f"{type(value).__name__}"
+                    f"{(record.log_time - offset_ns) / NS_PER_S:.6f} s: expected a JSON "
+                    f"object, got {type(value).__name__}"
                 )
-            yield EpisodeMessage(channel.topic, record.log_time / NS_PER_S, record.sequence, value)
+            t_s = (record.log_time - offset_ns) / NS_PER_S
+            yield EpisodeMessage(channel.topic, t_s, record.sequence, value)
 
     def records(self) -> tuple[dict[int, Schema], dict[int, Channel], list[Message]]:
         """The raw MCAP schemas and channels by id and the messages in file order (what
@@ -180,7 +199,7 @@ class Episode:
         decoder = self._decoders.get(channel.id)
         if decoder is None:
             if channel.message_encoding == "json":
-                decoder = json.loads
+                decoder = self._json_decoder(channel)
             else:
                 found = DecoderFactory().decoder_for(
                     channel.message_encoding, self._schemas.get(channel.schema_id)
@@ -193,6 +212,25 @@ class Episode:
                 decoder = found
             self._decoders[channel.id] = decoder
         return decoder
+
+    def _json_decoder(self, channel: Channel) -> Callable[[bytes], Any]:
+        """``json.loads``; in format 2, the schema's fields a message lacks set to None."""
+        if self.info.get("format_version", "1").split(".")[0] == "1":
+            return json.loads
+        schema = self._schemas.get(channel.schema_id)
+        try:
+            fields = tuple(json.loads(schema.data)["properties"]) if schema else ()
+        except (ValueError, TypeError, KeyError):
+            fields = ()
+
+        def decode(data: bytes) -> Any:
+            value = json.loads(data)
+            if isinstance(value, dict):
+                for name in fields:
+                    value.setdefault(name, None)
+            return value
+
+        return decode
 
 
 def read_episode(path: str | Path) -> Episode:
@@ -254,10 +292,10 @@ class _Scan:
 
     def episode(self, read_bytes: int, finished: bool, lost: tuple[LostRange, ...]) -> Episode:
         version = self.metadata.get(METADATA_EPISODE, {}).get("format_version")
-        if version is not None and version.split(".")[0] != FORMAT_VERSION.split(".")[0]:
+        if version is not None and version.split(".")[0] not in READABLE_VERSIONS:
             raise EpisodeError(
                 f"episode '{self.path}': format version {version}, this reader reads "
-                f"{FORMAT_VERSION}"
+                f"{' and '.join(READABLE_VERSIONS)} (the newest: {FORMAT_VERSION})"
             )
         known = [m for m in self.messages if m.channel_id in self.channels]
         counts = Counter(self.channels[m.channel_id].topic for m in known)

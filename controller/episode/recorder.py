@@ -9,14 +9,17 @@ Both only enqueue (``EpisodeWriter.log``): the payloads are the loop's own immut
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from controller.episode import foxglove_types, topics
 from controller.episode.writer import EpisodeWriter, json_bytes
 from controller.insertion.interface import TeleopInput
+from controller.insertion.machine_config import s2t_matrix
 from controller.loop import TickRecord
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField
@@ -118,9 +121,30 @@ def tick_json(tick: TickRecord) -> bytes:
     )
 
 
-def tcp_tf(arm: ArmStatus) -> bytes:
+def tcp_tf(arm: ArmStatus, offset_ns: int = 0) -> bytes:
     quaternion = quat_from_rpy(arm.tcp.rpy_rad)
-    return foxglove_types.transforms_bytes(arm.t_s, [("B", "T", arm.tcp.xyz_m, quaternion)])
+    return foxglove_types.transforms_bytes(
+        arm.t_s, [("B", "T", arm.tcp.xyz_m, quaternion)], offset_ns
+    )
+
+
+Mount = tuple[tuple[float, float, float], tuple[float, float, float, float]]
+"""Where the sensor sits on the tool: S's origin in T (m) and the S2T rotation as a
+quaternion (x, y, z, w)."""
+
+
+def sensor_mount(torque_axes: tuple[str, str, str], plug_thickness_m: float) -> Mount:
+    """S in T (``/tf_static``): the rotation of the machine's ``signals.torque_axes`` (S's axes
+    as signed axes of T) and the origin at the gel's centre, on the plug's face half its
+    thickness along +y_T from the TCP (drivers/sim/scenes/insertion/frames.py)."""
+    quat = Rotation.from_matrix(s2t_matrix(torque_axes)).as_quat()  # (x, y, z, w)
+    x, y, z, w = (float(v) for v in quat)
+    return (0.0, 0.5 * float(plug_thickness_m), 0.0), (x, y, z, w)
+
+
+def static_tf(item: tuple[float, Mount], offset_ns: int = 0) -> bytes:
+    t_s, (origin, quaternion) = item
+    return foxglove_types.transforms_bytes(t_s, [("T", "S", origin, quaternion)], offset_ns)
 
 
 def transition_json(transition: Any) -> bytes:
@@ -166,12 +190,17 @@ def gripper_key(gripper: GripperStatus) -> tuple:
 
 class TickLogger:
     """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
-    only when due, see ``Latch``), and asks for a flush at each phase change."""
+    only when due, see ``Latch``; ``/tf_static`` with ``mount``, where the sensor sits on
+    the tool, when given), and asks for a flush at each phase change."""
 
-    def __init__(self, writer: EpisodeWriter) -> None:
+    def __init__(self, writer: EpisodeWriter, mount: Mount | None = None) -> None:
         self.writer = writer
+        self.mount = mount
         self._gripper = Latch()
         self._teleop = Latch()
+        self._static = Latch()
+        self._tcp_tf = functools.partial(tcp_tf, offset_ns=writer.offset_ns)
+        self._static_tf = functools.partial(static_tf, offset_ns=writer.offset_ns)
 
     def __call__(self, tick: TickRecord) -> None:
         log, t = self.writer.log, tick.timing.start_s
@@ -183,7 +212,9 @@ class TickLogger:
         if self._teleop.due(obs.teleop, t):
             log(topics.TELEOP, t, teleop_json, obs.teleop)
         log(topics.LOOP_TICK, t, tick_json, tick)
-        log(topics.TCP_TF, t, tcp_tf, obs.arm)
+        log(topics.TCP_TF, t, self._tcp_tf, obs.arm)
+        if self.mount is not None and self._static.due(self.mount, t):
+            log(topics.TF_STATIC, t, self._static_tf, (t, self.mount))
         for transition in tick.transitions:
             log(topics.TRANSITION, transition.t_s, transition_json, transition)
         if tick.transitions:
@@ -270,7 +301,7 @@ class RecordingSource:
         log(topics.TACTILE_IMAGE, now, self._image_bytes, (float(t_s), frame.copy()))
         field = field_of(self._estimator)
         if field is not None and not estimate.zeroing:
-            log(topics.TACTILE_FIELD, now, _grid_bytes, (float(t_s), field))
+            log(topics.TACTILE_FIELD, now, self._grid_bytes, (float(t_s), field))
         log(topics.TACTILE_WRENCH, now, wrench_json, (index, estimate))
         return estimate
 
@@ -288,8 +319,9 @@ class RecordingSource:
 
     def _image_bytes(self, item: tuple[float, np.ndarray]) -> bytes:
         t_s, image = item
-        return foxglove_types.image_bytes(t_s, image, self.image_format, self.jpeg_quality)
+        return foxglove_types.image_bytes(
+            t_s, image, self.image_format, self.jpeg_quality, self.writer.offset_ns
+        )
 
-
-def _grid_bytes(item: tuple[float, VectorField]) -> bytes:
-    return foxglove_types.grid_bytes(*item)
+    def _grid_bytes(self, item: tuple[float, VectorField]) -> bytes:
+        return foxglove_types.grid_bytes(*item, offset_ns=self.writer.offset_ns)

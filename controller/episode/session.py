@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-from controller.episode.recorder import RecordingSource, TickLogger
+from controller.episode.recorder import Mount, RecordingSource, TickLogger
 from controller.episode.topics import (
     ATTACHMENT_CALIBRATION,
     ATTACHMENT_MEDIA_TYPE,
@@ -132,10 +132,12 @@ class EpisodeRecording:
                 calibration.to_yaml().encode(),
             )
 
-    def start(self) -> EpisodeWriter:
+    def start(self, clock: Clock | None = None) -> EpisodeWriter:
         """Create the episode file (FileExistsError if it exists) with the ``episode``
         metadata (its ``started_utc`` now), the resolved task and the run's calibration (if
-        any) attached as YAML."""
+        any) attached as YAML. ``clock``: the loop's clock, whose time now fixes the offset
+        from the loop's times to the log times (the wall clock; a loop time of 0 now if
+        None)."""
         if self.writer is not None:
             raise RuntimeError(f"episode {self.path}: started already")
         started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
@@ -146,6 +148,7 @@ class EpisodeRecording:
             queue_size=self.options.queue_size,
             flush_interval_s=self.options.flush_interval_s,
             listeners=self.listeners,
+            loop_now_s=0.0 if clock is None else clock.now(),
         )
         return self.writer
 
@@ -164,9 +167,10 @@ class EpisodeRecording:
             jpeg_quality=self.options.jpeg_quality,
         )
 
-    def observer(self) -> TickLogger:
-        """The loop's observer that records each tick."""
-        return TickLogger(self._started())
+    def observer(self, mount: Mount | None = None) -> TickLogger:
+        """The loop's observer that records each tick (and ``/tf_static``: ``mount``, where
+        the sensor sits on the tool, ``recorder.sensor_mount``, when given)."""
+        return TickLogger(self._started(), mount)
 
     def close(self, outcome: Mapping[str, str] | None = None) -> None:
         """Write the outcome metadata and finish the file (idempotent; nothing if the

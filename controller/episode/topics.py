@@ -3,22 +3,31 @@
 This table is the episode format's contract (docs/EPISODES.md): the writer
 (``controller.episode.writer``) writes these ``Topic`` objects, with these schemas, and the
 reader (``controller.episode.reader``) decodes by the schemas the file carries. Times: every
-message's MCAP ``log_time`` is the time on the **loop's clock** in integer nanoseconds
-(``t_s * 1e9``; in simulation the world's clock, on the robot ``time.monotonic``); a
-message's own ``t_s``/``timestamp`` field, where it has one, is when the value was measured
-(e.g. a frame's capture). Frames (docs/ARCHITECTURE.md): ``B`` the arm base, ``T`` the tool
-(TCP), ``S`` the tactile sensor, ``H`` the hole. SI units unless a field's name says
+message's MCAP ``log_time`` is the **wall clock** of the recording in integer nanoseconds
+since the Unix epoch: the loop's time (``t_s``; in simulation the world's clock, on the
+robot ``time.monotonic``) plus the offset fixed when the file is created (wall clock minus
+loop clock then; metadata ``log_time_offset_ns``), so a viewer shows when the run happened.
+A JSON message's own ``t_s``/``start_s`` fields stay on the loop's clock; the Foxglove
+messages' ``timestamp`` (a frame's capture, a transform's time) is on the log-time clock, so
+a viewer lines them up with the log times; the reader gives both back on the loop's clock.
+Frames (docs/ARCHITECTURE.md): ``B`` the arm base, ``T`` the tool (TCP), ``S`` the tactile
+sensor (placed in T by ``/tf_static``), ``H`` the hole. SI units unless a field's name says
 otherwise; the raw tactile estimate's units are the estimator's (mm, mm^2) unless
 ``calibrated``.
 
-Two encodings:
+Two encodings (an absent field reads as None: ``controller.episode.reader``):
 
 * ``protobuf``: Foxglove's well-known schemas (``foxglove.CompressedImage``,
   ``foxglove.Grid``, ``foxglove.FrameTransforms``), encoded by ``foxglove-sdk``'s message
   classes, so Foxglove's image, plot and 3D panels show them without a converter;
 * ``json``: our messages, one JSON object each, with a JSON Schema (``jsonschema``)
-  registered in the file, named ``tactile_insertion.NAME``. A non-finite number (NaN,
-  inf) in any JSON field is written as null.
+  registered in the file, named ``tactile_insertion.NAME``. Every field has one JSON type
+  (no ``anyOf``, no ``null``, a ``type`` beside every ``enum``): the rules of Foxglove's
+  JSON-schema parser (Foxglove Studio's and Lichtblick's ``parseJsonSchema``), which drops a
+  channel whose schema has a field of any other form. A value that is absent (a number that
+  is not finite, a vector or a fault the tick has none of) is an absent key, never null;
+  the reader gives every field of the schema that a message lacks back as None (as files
+  of format 1 wrote null).
 
 Rates (each ``Topic.rate``): most topics have a message per tick or per frame. The
 **latched** topics (``/gripper/status``, ``/teleop/input``: values that change seldom) have
@@ -36,9 +45,13 @@ from typing import Any, Literal
 
 from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS
 
-FORMAT_VERSION = "1"
-"""The episode format's version (metadata ``episode.format_version``); a reader refuses
-another major version."""
+FORMAT_VERSION = "2"
+"""The episode format's version (metadata ``episode.format_version``). 2: log times on the
+wall clock (``log_time_offset_ns``), JSON schemas of one type per field (an absent value an
+absent key), ``/tf_static``. The reader reads 1 and 2 and refuses any other."""
+
+READABLE_VERSIONS = ("1", "2")
+"""The major versions the reader reads."""
 
 PROFILE = "tactile-insertion"
 """The MCAP header's profile string."""
@@ -65,15 +78,17 @@ def _json_schema(properties: Mapping[str, Any], required: tuple[str, ...] = ()) 
 
 
 _NUM = {"type": "number"}
-_NUM_OR_NULL = {"type": ["number", "null"]}
 _BOOL = {"type": "boolean"}
 _STR = {"type": "string"}
-_STR_OR_NULL = {"type": ["string", "null"]}
 _INT = {"type": "integer"}
 _VEC3 = {"type": "array", "items": _NUM, "minItems": 3, "maxItems": 3}
-_VEC3_OR_NULL = {"anyOf": [_VEC3, {"type": "null"}]}
-_NUMS = {"type": "array", "items": _NUM_OR_NULL}
+_NUMS = {"type": "array", "items": _NUM}
 _STRS = {"type": "array", "items": _STR}
+
+
+def _enum(*values: str) -> dict:
+    return {"type": "string", "enum": list(values)}
+
 
 TACTILE_IMAGE = Topic(
     "/tactile/image",
@@ -108,7 +123,7 @@ TACTILE_WRENCH = Topic(
     "The estimate the controller saw (``controller.tactile.WrenchEstimate``, after any "
     "``TransformedSource``): ``t_s`` (the frame's capture time), tau_x, tau_y, tau_z, "
     "shear_x, shear_y, normal and the FingerVision baseline's fv_tau_x/y/z (raw: mm, tau_z "
-    "and fv mm^2; N*m / N when ``calibrated``; a non-finite value is null), the flags "
+    "and fv mm^2; N*m / N when ``calibrated``; a non-finite value is absent), the flags "
     "(contact, degenerate, slip_suspected, slip_gross, rezero_recommended, zeroing, "
     "calibrated) and ``push_index``: the frame's index among the pushes (0-based; the image "
     "of the same push has the same index in ``/tactile/push``).",
@@ -121,7 +136,7 @@ TACTILE_PUSH = Topic(
     "each call into the wrench source, in the order made",
     "The calls the loop made into the wrench source, so a re-estimation repeats them in the "
     "same order: ``call`` 'push' (``push_index``, ``frame_t_s``: capture time, s), "
-    "'capture_open' or 'rezero' (``n_frames``: the frames asked for, null for the "
+    "'capture_open' or 'rezero' (``n_frames``: the frames asked for, absent for the "
     "source's default; ``push_index``: the index of the next push, which is the first frame "
     "the call affects). Messages of one file are ordered by (log_time, sequence).",
 )
@@ -132,14 +147,14 @@ COMMAND = Topic(
     "B",
     "every tick",
     "The command as sent, after the limits: ``twist_linear_m_s`` and ``twist_angular_rad_s`` "
-    "(TCP twist in B) or null, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) or "
-    "null, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
-    "target) or null, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
+    "(TCP twist in B) or absent, ``pose_xyz_m`` and ``pose_rpy_rad`` (servo target, T2B) "
+    "or absent, ``gripper_width_m``, ``gripper_speed_m_s``, ``gripper_force_n`` (a new gripper "
+    "target) or absent, ``capture_open_tactile``, ``rezero_tactile``, ``limited`` (the limits "
     "that changed it, e.g. 'speed', 'workspace', 'tilt'), ``rule`` (the machine's rule that "
     "decided it, 'phase.rule', e.g. 'search.drag', 'align.torque_servo'; '' when the machine "
     "names none), ``stage`` (the sub-stage in which the rule was decided, 'phase.stage', e.g. "
     "'align.seek'; '' when the machine has none), ``sent`` (false on a fault tick: nothing "
-    "was sent) and ``fault`` (the watchdog's trip message or null).",
+    "was sent) and ``fault`` (the watchdog's trip message; absent without one).",
 )
 ARM_STATUS = Topic(
     "/arm/status",
@@ -148,9 +163,9 @@ ARM_STATUS = Topic(
     "B",
     "every tick (the status the machine saw)",
     "``t_s`` (read time), ``tcp_xyz_m``, ``tcp_rpy_rad`` (T2B, xArm rpy), ``joints_rad`` (6; "
-    "null where unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
-    "``warning_code``, ``external_force_n`` (N, B: the F/T sensor's force on the tool; null "
-    "without one).",
+    "absent when any is unknown, e.g. the simulated arm), ``mode``, ``state``, ``error_code``, "
+    "``warning_code``, ``external_force_n`` (N, B: the F/T sensor's force on the tool; "
+    "absent without one).",
 )
 GRIPPER_STATUS = Topic(
     "/gripper/status",
@@ -194,7 +209,7 @@ LOOP_TICK = Topic(
     "",
     "every tick",
     "``index``, ``deadline_s``, ``start_s``, ``end_s`` (s on the loop's clock), ``overran``, "
-    "``phase`` (the machine's phase after its step) and ``fault`` (null or the trip).",
+    "``phase`` (the machine's phase after its step) and ``fault`` (the trip; absent without one).",
 )
 TCP_TF = Topic(
     "/tf",
@@ -203,8 +218,20 @@ TCP_TF = Topic(
     "B",
     "every tick",
     "The TCP pose: parent 'B', child 'T', translation in m, rotation a unit quaternion "
-    "(from the xArm rpy, core.spatial's 'xyz' convention). In simulation the truth adds, on "
-    "``/sim/tf``, the plug ('plug', S2B) and the hole ('H').",
+    "(from the xArm rpy, core.spatial's 'xyz' convention). ``/tf_static`` places S in T; in "
+    "simulation the truth adds, on ``/sim/tf``, the plug ('plug', S2B) and the hole ('H').",
+)
+TF_STATIC = Topic(
+    "/tf_static",
+    "foxglove.FrameTransforms",
+    "protobuf",
+    "T",
+    "latched: the first tick, then again at the first tick 1 s or more after the last one "
+    "written (it never changes; repeated so a viewer that seeks or joins late has it)",
+    "Where the sensor sits on the tool: parent 'T', child 'S' (S2T: the rotation of the "
+    "machine's ``signals.torque_axes``, the origin at the gel's centre, half the plug's "
+    "thickness along +y_T), so the 3D panel places the tactile field's grid (frame S) on "
+    "the tool.",
 )
 DROPS = Topic(
     "/episode/drops",
@@ -251,6 +278,7 @@ TOPICS: Mapping[str, Topic] = {
         TRANSITION,
         LOOP_TICK,
         TCP_TF,
+        TF_STATIC,
         DROPS,
         SIM_TRUTH,
         SIM_TF,
@@ -263,36 +291,36 @@ JSON_SCHEMAS: Mapping[str, dict] = {
         {
             "t_s": _NUM,
             "push_index": _INT,
-            **{k: _NUM_OR_NULL for k in VALUE_FIELDS},
+            **{k: _NUM for k in VALUE_FIELDS},
             **{k: _BOOL for k in FLAG_FIELDS},
         },
-        ("t_s", "push_index", "tau_x", "tau_y", "tau_z"),
+        ("t_s", "push_index"),
     ),  # fmt: skip
     TACTILE_PUSH.schema: _json_schema(
         {
-            "call": {"enum": ["push", "capture_open", "rezero"]},
+            "call": _enum("push", "capture_open", "rezero"),
             "push_index": _INT,
             "frame_t_s": _NUM,
-            "n_frames": {"type": ["integer", "null"]},
+            "n_frames": _INT,
         },
         ("call", "push_index"),
     ),
     COMMAND.schema: _json_schema(
         {
-            "twist_linear_m_s": _VEC3_OR_NULL,
-            "twist_angular_rad_s": _VEC3_OR_NULL,
-            "pose_xyz_m": _VEC3_OR_NULL,
-            "pose_rpy_rad": _VEC3_OR_NULL,
-            "gripper_width_m": _NUM_OR_NULL,
-            "gripper_speed_m_s": _NUM_OR_NULL,
-            "gripper_force_n": _NUM_OR_NULL,
+            "twist_linear_m_s": _VEC3,
+            "twist_angular_rad_s": _VEC3,
+            "pose_xyz_m": _VEC3,
+            "pose_rpy_rad": _VEC3,
+            "gripper_width_m": _NUM,
+            "gripper_speed_m_s": _NUM,
+            "gripper_force_n": _NUM,
             "capture_open_tactile": _BOOL,
             "rezero_tactile": _BOOL,
             "limited": _STRS,
             "rule": _STR,
             "stage": _STR,
             "sent": _BOOL,
-            "fault": _STR_OR_NULL,
+            "fault": _STR,
         },
         ("sent", "limited"),
     ),
@@ -306,7 +334,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "state": _STR,
             "error_code": _INT,
             "warning_code": _INT,
-            "external_force_n": _VEC3_OR_NULL,
+            "external_force_n": _VEC3,
         },
         ("t_s", "tcp_xyz_m", "tcp_rpy_rad"),
     ),
@@ -326,7 +354,7 @@ JSON_SCHEMAS: Mapping[str, dict] = {
         {
             "connected": _BOOL,
             "in_control": _BOOL,
-            "in_control_by": {"enum": ["operator", "machine"]},
+            "in_control_by": _enum("operator", "machine"),
             "twist_linear_m_s": _VEC3,
             "twist_angular_rad_s": _VEC3,
             **{
@@ -355,12 +383,15 @@ JSON_SCHEMAS: Mapping[str, dict] = {
             "end_s": _NUM,
             "overran": _BOOL,
             "phase": _STR,
-            "fault": _STR_OR_NULL,
+            "fault": _STR,
         },
         ("index", "start_s", "phase"),
     ),
     DROPS.schema: _json_schema(
-        {"dropped_total": _INT, "by_topic": {"type": "object", "additionalProperties": _INT}},
+        {
+            "dropped_total": _INT,
+            "by_topic": {"type": "object", "properties": {name: _INT for name in TOPICS}},
+        },
         ("dropped_total", "by_topic"),
     ),
     SIM_TRUTH.schema: _json_schema(
@@ -380,7 +411,9 @@ JSON_SCHEMAS: Mapping[str, dict] = {
 """The JSON Schema of each ``json`` topic's schema name."""
 
 METADATA_EPISODE = "episode"
-"""The metadata record written at the start: ``format_version``, ``task``, ``task_file``,
+"""The metadata record written at the start: ``format_version``, ``log_time_offset_ns``
+(integer ns since the Unix epoch: a message's log time minus it is the loop's time; written
+by the writer), ``task``, ``task_file``,
 ``overrides`` (JSON list), ``seed``, ``controller``, ``backend``, ``package_version``,
 ``git_revision`` (or "unknown"), ``machine`` (host, CPU, OS, Python), ``started_utc`` (ISO
 8601 wall clock), ``tactile_image_format`` ('jpeg' or 'png'), ``jpeg_quality``,

@@ -67,9 +67,25 @@ loop's payload and the encoded message (the live view and the Foxglove live stre
 
 def json_bytes(payload: Mapping[str, Any]) -> bytes:
     """A JSON topic's message: ``payload`` as compact JSON (``orjson``: numpy arrays and
-    scalars as numbers, a non-finite number as null). TypeError for a value JSON cannot
-    hold."""
-    return orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
+    scalars as numbers), without the fields that have no value: a key whose value is None or
+    a non-finite number, or a list holding one, is left out (controller/episode/topics.py:
+    one JSON type per field, an absent value an absent key). TypeError for a value JSON
+    cannot hold."""
+    data = orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
+    if b"null" not in data:  # orjson writes None and NaN as null: nothing absent
+        return data
+    kept = {
+        k: v
+        for k, v in orjson.loads(data).items()
+        if v is not None and not (isinstance(v, list) and None in v)
+    }
+    return orjson.dumps(kept)
+
+
+def wall_offset_ns(loop_now_s: float) -> int:
+    """The offset from the loop's clock (now ``loop_now_s``, s) to the wall clock, integer ns:
+    a log time is ``round(t_s * 1e9)`` plus it."""
+    return time.time_ns() - round(loop_now_s * NS_PER_S)
 
 
 def schema_of(topic: Topic) -> tuple[str, str, bytes]:
@@ -86,7 +102,9 @@ def schema_of(topic: Topic) -> tuple[str, str, bytes]:
 class EpisodeWriter:
     """Writes one episode to ``path`` (a new file; FileExistsError if it exists).
 
-    ``info``: the ``episode`` metadata (controller/episode/topics.py, METADATA_EPISODE);
+    ``info``: the ``episode`` metadata (controller/episode/topics.py, METADATA_EPISODE), to
+    which the writer adds ``log_time_offset_ns``; ``loop_now_s``: the loop's clock now (s),
+    which fixes the offset from the loop's times to the log times (the wall clock);
     ``attachments``: name -> (media type, bytes), e.g. the task file. ``queue_size``,
     ``flush_interval_s``: see the module doc. ``listeners``: each gets every record written,
     on the logger thread (one that raises is logged and dropped). Use it as a context
@@ -102,8 +120,11 @@ class EpisodeWriter:
         queue_size: int = QUEUE_SIZE,
         flush_interval_s: float = FLUSH_INTERVAL_S,
         listeners: Sequence[Listener] = (),
+        loop_now_s: float = 0.0,
     ) -> None:
         self.path = Path(path)
+        self.offset_ns = wall_offset_ns(loop_now_s)
+        """A log time (ns, the wall clock) minus this is the loop's time (ns)."""
         self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
         self._stream: IO[bytes] = self.path.open("xb")
@@ -114,7 +135,9 @@ class EpisodeWriter:
             enable_data_crcs=True,
         )
         self._mcap.start(profile=PROFILE, library=LIBRARY)
-        self._mcap.add_metadata(METADATA_EPISODE, dict(info))
+        self._mcap.add_metadata(
+            METADATA_EPISODE, {**dict(info), "log_time_offset_ns": str(self.offset_ns)}
+        )
         for name, (media_type, data) in attachments.items():
             self._mcap.add_attachment(0, 0, name, media_type, data)
         self._mcap.flush()
@@ -124,7 +147,7 @@ class EpisodeWriter:
         self._sequence = itertools.count()
         self.dropped: Counter[str] = Counter()
         self._dropped_written = 0
-        self._last_ns = 0  # the newest log time written, ns
+        self._last_ns = self.offset_ns  # the newest log time written, ns
         self._wake = threading.Event()  # a flush or the stop is wanted now
         self._stopping = False
         self._error: OSError | None = None
@@ -137,12 +160,14 @@ class EpisodeWriter:
     # -- the loop's side (never blocks) ----------------------------------------------------
 
     def log(self, topic: Topic, t_s: float, encode: Encoder, payload: Any) -> None:
-        """Queue one record of ``topic`` logged at ``t_s`` (s on the loop's clock), encoded
+        """Queue one record of ``topic`` logged at ``t_s`` (s on the loop's clock; its log
+        time is that plus ``offset_ns``), encoded
         on the logger thread by ``encode(payload)``; dropped and counted if the queue is
         full or the writer has failed. ``payload`` must not change afterwards."""
         sequence = next(self._sequence)
         if self._error is None and not self._closed and len(self._queue) < self._queue_size:
-            self._queue.append((topic, round(t_s * NS_PER_S), sequence, encode, payload))
+            t_ns = round(t_s * NS_PER_S) + self.offset_ns
+            self._queue.append((topic, t_ns, sequence, encode, payload))
             return
         if not self.dropped[topic.name]:
             why = "queue full" if self._error is None and not self._closed else "writer stopped"

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from controller.episode.recorder import sensor_mount
 from controller.episode.session import EpisodeRecording
 from controller.insertion import Machine, Transition
 from controller.loop import ControlLoop, LoopResult, Observer, TickRecord
@@ -126,9 +127,10 @@ def run_task(
         if recorder is not None:
             stack.callback(recorder.close)
         if episode is not None:  # once connected too; the caller closes it
-            episode.start()
+            episode.start(device_set.clock)
             source = episode.tap(source, device_set.clock)
-            observers = [episode.observer(), *observers]
+            mount = sensor_mount(config.machine.signals.torque_axes, config.plug.thickness_m)
+            observers = [episode.observer(mount), *observers]
         ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])
         device_set.devices.gripper.activate()
         began = time.perf_counter()

@@ -130,7 +130,7 @@ def _run(
     source: WrenchSource = estimator_for_sensor("gelsight_mini")
     observer: Callable[[TickRecord], None] = records.append
     if recording is not None:
-        recording.start()
+        recording.start(clock)
         source = recording.tap(source, clock)
         logger = recording.observer()
 

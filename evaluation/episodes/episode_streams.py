@@ -20,6 +20,7 @@ from typing import Any, TypeVar
 import numpy as np
 
 from controller.episode import Episode, EpisodeError, decode_image
+from controller.episode.foxglove_types import loop_time_s
 from controller.episode.topics import (
     ARM_STATUS,
     COMMAND,
@@ -215,8 +216,8 @@ class LoggedFrame:
 def frames(episode: Episode) -> Iterator[LoggedFrame]:
     """The ``/tactile/image`` frames in the order pushed, decoded only when asked."""
     for message in episode.messages(TACTILE_IMAGE.name):
-        stamp = message.value.timestamp
-        capture = stamp.seconds + stamp.nanos * 1e-9  # a protobuf message: always there
+        stamp = message.value.timestamp  # a protobuf message: always there
+        capture = loop_time_s(stamp, episode.offset_ns)  # stamped on the log times' clock
         yield LoggedFrame(message.t_s, capture, message.value.format, message.value)
 
 

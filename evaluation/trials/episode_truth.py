@@ -34,8 +34,8 @@ def truth_json(row: np.ndarray) -> bytes:
     return json_bytes(out)
 
 
-def _truth_tf(item: tuple[np.ndarray, Any]) -> bytes:
-    row, hole = item
+def _truth_tf(item: tuple[np.ndarray, Any, int]) -> bytes:
+    row, hole, offset_ns = item
     values = row.tolist()
     w, x, y, z = values[_SLICES["plug_quat_b"]]
     half = hole.yaw_rad / 2.0
@@ -45,6 +45,7 @@ def _truth_tf(item: tuple[np.ndarray, Any]) -> bytes:
             ("B", "plug", values[_SLICES["tip_xyz_b"]], (x, y, z, w)),
             ("B", "H", (hole.x_m, hole.y_m, hole.z_m), (0.0, 0.0, math.sin(half), math.cos(half))),
         ],
+        offset_ns,
     )
 
 
@@ -75,4 +76,4 @@ class SimTruthLogger:
         for row in rows:
             t_s = float(row[0])
             writer.log(topics.SIM_TRUTH, t_s, truth_json, row)
-            writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole))
+            writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole, writer.offset_ns))

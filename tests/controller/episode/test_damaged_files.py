@@ -26,7 +26,7 @@ def _episode(path, compression=CompressionType.ZSTD):
             stream, chunk_size=CHUNK_BYTES, compression=compression, enable_data_crcs=True
         )
         writer.start(profile=PROFILE, library="test")
-        writer.add_metadata(METADATA_EPISODE, {"format_version": "1", "task": "usb_c"})
+        writer.add_metadata(METADATA_EPISODE, {"format_version": "2", "task": "usb_c"})
         writer.add_attachment(0, 0, "task.yaml", "application/yaml", b"task: usb_c\n")
         schema = writer.register_schema("loop.Tick", "jsonschema", b"{}")
         channel = writer.register_channel("/loop/tick", "json", schema)

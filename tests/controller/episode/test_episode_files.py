@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -18,7 +19,7 @@ from core.devices import ArmMode, ArmState, ArmStatus, Pose
 
 
 def _writer(path, **options):
-    return EpisodeWriter(path, {"format_version": "1", "seed": "0"}, **options)
+    return EpisodeWriter(path, {"format_version": "2", "seed": "0"}, **options)
 
 
 def test_a_full_queue_drops_counts_and_records_what_it_dropped(tmp_path):
@@ -119,9 +120,27 @@ def test_a_record_its_encoder_refuses_is_dropped_and_counted_and_writing_goes_on
     assert ep.complete and ep.outcome["dropped_total"] == "1"
 
 
-def test_json_writes_a_non_finite_number_as_null_and_numpy_values_as_numbers():
-    payload = {"a": float("nan"), "b": np.array([1.5, np.inf]), "c": np.float32(0.25)}
-    assert json.loads(json_bytes(payload)) == {"a": None, "b": [1.5, None], "c": 0.25}
+def test_json_leaves_out_what_has_no_value_and_writes_numpy_values_as_numbers():
+    payload = {
+        "a": float("nan"),
+        "b": np.array([1.5, np.inf]),
+        "c": np.float32(0.25),
+        "d": None,
+        "e": "null",
+        "f": [1, 2],
+    }
+    assert json.loads(json_bytes(payload)) == {"c": 0.25, "e": "null", "f": [1, 2]}
+    assert json_bytes({"g": 1.0}) == b'{"g":1.0}'
+
+
+def test_the_reader_gives_the_fields_a_message_lacks_as_none(tmp_path):
+    writer = _writer(tmp_path / "e.mcap")
+    writer.log(LOOP_TICK, 0.0, json_bytes, {"index": 0, "start_s": 0.0, "phase": "x",
+                                           "fault": None})  # fmt: skip
+    writer.close({"reason": "done"})
+    (message,) = read_episode(tmp_path / "e.mcap").messages("/loop/tick")
+    assert message.value["fault"] is None and message.value["overran"] is None
+    assert message.value["phase"] == "x"
 
 
 @pytest.mark.parametrize("force", [(0.5, -1.0, 4.25), None])
@@ -135,5 +154,47 @@ def test_the_arm_status_carries_the_external_force_or_null(force):
         external_force_n=force,
     )
     message = json.loads(arm_json(status))
-    assert message["external_force_n"] == (None if force is None else list(force))
+    assert message.get("external_force_n") == (None if force is None else list(force))
     assert set(message) <= set(JSON_SCHEMAS[ARM_STATUS.schema]["properties"])
+
+
+def _hand_made(path, version, log_time_ns, payload):
+    """An episode written with ``mcap``'s writer alone, as a reader of another version finds it."""
+    with path.open("wb") as stream:
+        mcap = Writer(stream)
+        mcap.start(profile="tactile-insertion", library="test")
+        mcap.add_metadata("episode", {"format_version": version})
+        schema = mcap.register_schema("tactile_insertion.LoopTick", "jsonschema", b"{}")
+        channel = mcap.register_channel("/loop/tick", "json", schema)
+        mcap.add_message(channel, log_time_ns, json.dumps(payload).encode(), log_time_ns)
+        mcap.finish()
+
+
+def test_a_format_1_episode_reads_on_the_loops_clock_with_its_nulls(tmp_path):
+    path = tmp_path / "old.mcap"
+    _hand_made(path, "1", 1_500_000_000, {"index": 0, "start_s": 1.5, "fault": None})
+    episode = read_episode(path)
+    assert episode.offset_ns == 0
+    (message,) = episode.messages("/loop/tick")
+    assert message.t_s == 1.5 and message.value == {"index": 0, "start_s": 1.5, "fault": None}
+
+
+def test_another_format_version_is_refused_in_one_line(tmp_path):
+    path = tmp_path / "new.mcap"
+    _hand_made(path, "3", 0, {"index": 0})
+    with pytest.raises(EpisodeError, match=r"format version 3, this reader reads 1 and 2") as e:
+        read_episode(path)
+    assert "\n" not in str(e.value)
+
+
+def test_log_times_are_the_wall_clock_and_messages_give_the_loops_time(tmp_path):
+    before = time.time_ns()
+    writer = EpisodeWriter(tmp_path / "e.mcap", {"format_version": "2"}, loop_now_s=100.0)
+    writer.log(LOOP_TICK, 100.25, json_bytes, {"index": 0, "start_s": 100.25, "phase": "x"})
+    writer.close({"reason": "done"})
+    episode = read_episode(tmp_path / "e.mcap")
+    (message,) = episode.messages("/loop/tick")
+    assert message.t_s == 100.25 and episode.time_range_s() == (100.25, 100.25)
+    (record,) = episode.records()[2]
+    assert before + 0.25e9 <= record.log_time <= time.time_ns() + 0.25e9
+    assert int(episode.info["log_time_offset_ns"]) == episode.offset_ns == writer.offset_ns

@@ -21,7 +21,7 @@ def test_a_listener_gets_every_record_with_the_files_bytes_on_the_writers_thread
     def listener(topic, t_ns, payload, data):
         got.append((topic.name, t_ns, payload, data, threading.current_thread().name))
 
-    writer = EpisodeWriter(tmp_path / "e.mcap", {"format_version": "1"}, listeners=[listener])
+    writer = EpisodeWriter(tmp_path / "e.mcap", {"format_version": "2"}, listeners=[listener])
     for i in range(5):
         writer.log(LOOP_TICK, i * 0.01, json_bytes, tick(i))
     writer.close({"reason": "done"})
@@ -30,7 +30,7 @@ def test_a_listener_gets_every_record_with_the_files_bytes_on_the_writers_thread
     assert {g[4] for g in got} == {"episode-writer"}
     messages = list(read_episode(tmp_path / "e.mcap").messages("/loop/tick"))
     assert [json_bytes(m.value) for m in messages] == [g[3] for g in got]
-    assert [round(m.t_s * 1e9) for m in messages] == [g[1] for g in got]
+    assert [round(m.t_s * 1e9) + writer.offset_ns for m in messages] == [g[1] for g in got]
 
 
 def test_a_listener_that_raises_is_dropped_and_the_recording_goes_on(tmp_path, caplog):
@@ -43,7 +43,7 @@ def test_a_listener_that_raises_is_dropped_and_the_recording_goes_on(tmp_path, c
     good = []
     writer = EpisodeWriter(
         tmp_path / "e.mcap",
-        {"format_version": "1"},
+        {"format_version": "2"},
         listeners=[broken, lambda *record: good.append(record[0].name)],
     )
     for i in range(3):

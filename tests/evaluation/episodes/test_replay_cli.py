@@ -293,7 +293,7 @@ def test_an_episode_without_ticks_says_so_and_plot_refuses(tmp_path, capsys):
     from controller.episode.writer import EpisodeWriter
 
     path = tmp_path / "e.mcap"
-    EpisodeWriter(path, {"format_version": "1", "task": "usb_c"}).close({"reason": "signal"})
+    EpisodeWriter(path, {"format_version": "2", "task": "usb_c"}).close({"reason": "signal"})
     assert main(["summary", str(path)]) == 0
     out = capsys.readouterr().out
     assert "nan" not in out and "duration: none: no messages" in out and "ticks: none" in out
