@@ -56,7 +56,7 @@ from controller.insertion.interface import (
 )
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.motion import bounded_twist, rotation_error
-from controller.insertion.search import SearchPattern
+from controller.insertion.search_path import SearchPattern
 from core.config import Config, config_dataclass, number
 from core.devices import Twist
 from core.spatial import clamp_norm, rotation_from_rpy

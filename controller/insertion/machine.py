@@ -47,7 +47,7 @@ from controller.insertion.phases import (
     search,
 )
 from controller.insertion.phases.stage import PhaseState
-from controller.insertion.search import SearchPattern
+from controller.insertion.search_path import SearchPattern
 from controller.insertion.signals import TactileSignals
 from controller.insertion.touch import TouchMemory
 from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation

@@ -18,7 +18,7 @@ from controller.insertion.machine_config import (
 from controller.insertion.motion import lowest_edge
 from controller.insertion.phases.align import AlignStage
 from controller.insertion.phases.search import SearchStage
-from controller.insertion.search import SearchPattern
+from controller.insertion.search_path import SearchPattern
 from core.spatial import tilt_of_rotation
 from tests.insertion.world import ToyWorld, make_machine, path, toy_config
 

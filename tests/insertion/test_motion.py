@@ -12,7 +12,7 @@ from controller.insertion.motion import (
     pivot_twist,
     tip_position,
 )
-from controller.insertion.search import SearchPattern
+from controller.insertion.search_path import SearchPattern
 from core.devices import Pose
 from core.spatial import rpy_from_rotation, tilt_of_tool_axis, tool_z_in_base
 

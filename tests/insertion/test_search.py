@@ -8,7 +8,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from controller.insertion.machine_config import SearchSettings
-from controller.insertion.search import HoleDetector
+from controller.insertion.search_path import HoleDetector
 
 UPRIGHT = Rotation.from_euler("x", np.pi)
 STILL = np.zeros(3)  # no drag: only the load-drop rule can fire

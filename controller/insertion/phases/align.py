@@ -20,7 +20,7 @@ from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import lowest_edge, pivot_twist, tip_position, yaw_of
 from controller.insertion.phases import backoff
 from controller.insertion.phases.stage import Staged
-from controller.insertion.search import lateral_resistance
+from controller.insertion.search_path import lateral_resistance
 from controller.insertion.servo import (
     YawSweep,
     align_rate,

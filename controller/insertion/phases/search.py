@@ -15,7 +15,7 @@ from controller.insertion.interface import Command, FailureReason, Observation, 
 from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import tip_position
 from controller.insertion.phases.stage import Staged
-from controller.insertion.search import HoleDetector
+from controller.insertion.search_path import HoleDetector
 from core.spatial import clamp_norm, rotation_from_rpy
 
 if TYPE_CHECKING:
