@@ -61,9 +61,13 @@ def test_a_signal_while_the_tool_loads_is_one_line_and_its_exit_code(tmp_path, n
         stderr=subprocess.PIPE,
         text=True,
     )
-    assert process.stdout.readline() == "loading\n"  # the tool is importing NumPy now
-    process.send_signal(signum)
-    _, err = process.communicate(timeout=30)
+    try:
+        assert process.stdout.readline() == "loading\n"  # the tool is importing NumPy now
+        process.send_signal(signum)
+        _, err = process.communicate(timeout=30)
+    finally:  # a failure leaves no process running into the next test
+        process.kill()
+        process.communicate()
     assert process.returncode == 128 + signum, err
     assert "Traceback" not in err and len(err.strip().splitlines()) == 1, err
     word = "interrupted by SIGINT" if signum == signal.SIGINT else "ended by SIGTERM"
