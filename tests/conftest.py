@@ -1,6 +1,5 @@
 """What the whole suite shares: one recorded trial, made once per test run and shared by
-the pytest-xdist workers through a file lock in the run's common temporary folder; and how
-the tests are spread over the workers (``pytest_collection_modifyitems``)."""
+the pytest-xdist workers through a file lock in the run's common temporary folder."""
 
 from __future__ import annotations
 
@@ -15,25 +14,6 @@ from evaluation.trials.trial import run
 
 RECORDED_TASK, RECORDED_CONTROLLER, RECORDED_SEED = "usb_c", "dipole", 0
 _DONE = "recorded.done"
-_SHARED_BY_WORKERS = {"run_root", "recorded_trial", "episode_path"}  # made once per run
-_CHEAP = {"tmp_path_factory", "worker_id", "testrun_uid"}  # pytest's and xdist's own
-
-
-def pytest_collection_modifyitems(config, items) -> None:
-    """With ``--dist loadgroup`` (pyproject.toml) the tests are spread over the workers one
-    by one, except those of a module whose test uses a fixture made once per module or
-    session (other than the run-wide shared ones, which the file lock shares): a module's
-    such tests run on one worker, so each of those fixtures is made once."""
-    for item in items:
-        fixtures = getattr(item, "_fixtureinfo", None)  # pytest's record of a test's fixtures
-        if fixtures is None:
-            continue
-        for name, definitions in fixtures.name2fixturedefs.items():
-            if name in _SHARED_BY_WORKERS or name in _CHEAP:
-                continue
-            if definitions[-1].scope != "function":
-                item.add_marker(pytest.mark.xdist_group(item.module.__name__))
-                break
 
 
 @pytest.fixture(scope="session")
