@@ -19,6 +19,7 @@ from controller.insertion.interface import FailureReason, Phase
 from controller.insertion.phases.align import AlignStage
 from controller.insertion.phases.approach import ApproachStage
 from controller.insertion.phases.backoff import BackoffStage
+from controller.insertion.phases.feel import FeelStage
 from controller.insertion.phases.grasp import GraspStage
 from controller.insertion.phases.insert import InsertStage
 from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
@@ -29,6 +30,7 @@ from controller.insertion.phases.search import SearchStage
 AUTONOMOUS = (
     Phase.GRASP,
     Phase.APPROACH,
+    Phase.FEEL,
     Phase.SEARCH,
     Phase.ALIGN,
     Phase.INSERT,
@@ -40,7 +42,7 @@ TERMINAL = (Phase.DONE, Phase.FAILED)
 # Where autonomy resumes after TELEOP or an acknowledged ESTOP (machine.py decides which).
 RESUMABLE = (Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.ALIGN, Phase.RETRACT)
 # Phases in which the plug touches the board or the opening.
-IN_CONTACT = (Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
+IN_CONTACT = (Phase.FEEL, Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
 
 F = FailureReason
 
@@ -84,6 +86,8 @@ def _edges(sources: Iterable[Phase], target: Phase, guards: Iterable[str]) -> li
 def _insertion_edges() -> tuple[Edge, ...]:
     edges = [
         Edge(Phase.GRASP, Phase.APPROACH, "grasped_and_zeroed"),
+        Edge(Phase.APPROACH, Phase.FEEL, "first_contact"),
+        Edge(Phase.FEEL, Phase.APPROACH, "grasp_felt"),
         Edge(Phase.APPROACH, Phase.SEARCH, "surface_contact"),
         Edge(Phase.SEARCH, Phase.ALIGN, "hole_found"),
         Edge(Phase.SEARCH, Phase.BACKOFF, "search_timeout"),
@@ -99,7 +103,7 @@ def _insertion_edges() -> tuple[Edge, ...]:
         Edge(Phase.RELEASE, Phase.RETRACT, "released"),
         Edge(Phase.RETRACT, Phase.DONE, "retracted"),
     ]
-    holding = (Phase.APPROACH, Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
+    holding = (Phase.APPROACH, Phase.FEEL, Phase.SEARCH, Phase.ALIGN, Phase.INSERT, Phase.BACKOFF)
     edges += _edges(holding, Phase.GRASP, ["slip_regrasp"])
     edges += _edges(AUTONOMOUS, Phase.FAILED, [F.TIMEOUT.value, F.DEVICE_FAULT.value])
     edges += _edges(holding, Phase.FAILED, [F.SLIP.value, F.LIMIT_EXCEEDED.value])
@@ -121,6 +125,7 @@ _STAGES: dict[Phase, tuple[Enum, ...]] = {
         GraspStage.CLOSE, GraspStage.SETTLE, GraspStage.ZERO,
     ),
     Phase.APPROACH: (ApproachStage.POSE, ApproachStage.DESCEND),
+    Phase.FEEL: (FeelStage.PRESS, FeelStage.ROCK, FeelStage.ROCK_BACK, FeelStage.LIFT),
     Phase.SEARCH: (SearchStage.DRAG, SearchStage.PROBE),
     Phase.ALIGN: (
         AlignStage.START, AlignStage.SEEK, AlignStage.TURN, AlignStage.WIDTH, AlignStage.YAW,

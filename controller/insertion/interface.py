@@ -21,6 +21,7 @@ class Phase(Enum):
 
     GRASP = "grasp"
     APPROACH = "approach"
+    FEEL = "feel"  # the first touch: the plug's pose in the hand, by rocking on the board
     SEARCH = "search"
     ALIGN = "align"
     INSERT = "insert"

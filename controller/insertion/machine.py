@@ -32,6 +32,7 @@ from controller.insertion.definition import (
     Definition,
     check_definition,
 )
+from controller.insertion.grasp_estimate import GraspEstimate
 from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
 from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import approach_rotation, rotation_error, tip_position
@@ -39,6 +40,7 @@ from controller.insertion.phases import (
     align,
     approach,
     backoff,
+    feel,
     grasp,
     insert,
     overrides,
@@ -50,13 +52,14 @@ from controller.insertion.phases.stage import PhaseState
 from controller.insertion.search_path import SearchPattern
 from controller.insertion.signals import TactileSignals
 from controller.insertion.touch import TouchMemory
-from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation
+from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation, tool_z_in_base
 from core.task_geometry import HolePose, PlugGeometry
 
 _HOLDING = (Phase.APPROACH, *IN_CONTACT)
 _TIMEOUT_KEYS = {
     Phase.GRASP: "grasp_s",
     Phase.APPROACH: "approach_s",
+    Phase.FEEL: "feel_s",
     Phase.SEARCH: "search_s",
     Phase.ALIGN: "align_s",
     Phase.INSERT: "insert_s",
@@ -69,6 +72,7 @@ Step = Callable[["InsertionMachine", Observation, bool], Command]
 _ENTER: dict[Phase, Enter] = {
     Phase.GRASP: grasp.enter,
     Phase.APPROACH: approach.enter,
+    Phase.FEEL: feel.enter,
     Phase.SEARCH: search.enter,
     Phase.ALIGN: align.enter,
     Phase.INSERT: insert.enter,
@@ -83,6 +87,7 @@ _ENTER: dict[Phase, Enter] = {
 _STEP: dict[Phase, Step] = {
     Phase.GRASP: grasp.step,
     Phase.APPROACH: approach.step,
+    Phase.FEEL: feel.step,
     Phase.SEARCH: search.step,
     Phase.ALIGN: align.step,
     Phase.INSERT: insert.step,
@@ -99,6 +104,7 @@ class RunMemory:
     SEARCH's axial load (noise units), which ALIGN and INSERT press with; ``retries``:
     back-offs and re-grasps so far; ``regrasp``: GRASP after a slip (lift and open first);
     ``keep_grasp``: GRASP on a resume with the plug held (settle and re-zero only);
+    ``felt``: FEEL has run (once per run);
     ``released``: RELEASE was entered; ``search_s_m``: SEARCH's path length so far (m,
     kept when searching again); ``yaw_passes_from_m``: that length at SEARCH's first
     timeout (then each pass of the pattern is yawed); ``search_again``: the present
@@ -108,6 +114,7 @@ class RunMemory:
     retries: int = 0
     regrasp: bool = False
     keep_grasp: bool = False
+    felt: bool = False
     released: bool = False
     search_s_m: float = 0.0
     yaw_passes_from_m: float | None = None
@@ -122,8 +129,9 @@ class InsertionMachine:
     (the insertion table by default; checked here, DefinitionError if malformed).
 
     The phase modules (``phases/``) read ``config``, ``plug``, ``hole``, ``hole_xyz``,
-    ``signals``, ``memory``, ``touch`` and ``tick_s``, their own state (``state``), and act
-    through ``fire``, ``go`` and ``fail``.
+    ``signals``, ``memory``, ``touch``, ``tick_s`` and ``grasp`` (FEEL's estimate of the
+    plug in the hand, None before it), their own state (``state``), and act through
+    ``fire``, ``go`` and ``fail``.
     """
 
     def __init__(
@@ -143,6 +151,7 @@ class InsertionMachine:
         self.touch = TouchMemory(plug, hole.z_m)
         self.hole_xyz = np.array([hole.x_m, hole.y_m, hole.z_m])  # the nominal opening, B (m)
         self.tick_s = 0.0  # time since the previous tick (s)
+        self.grasp: GraspEstimate | None = None  # the plug in the hand, found by FEEL
         self._pattern = SearchPattern(
             config.search.pattern, config.search.pitch_m, config.search.uncertainty_xy_m
         )
@@ -150,6 +159,7 @@ class InsertionMachine:
         self._approach_rot = approach_rotation(
             hole.yaw_rad, config.approach.tilt_rad, config.approach.tilt_axis
         )
+        self._feel_rot = approach_rotation(hole.yaw_rad, 0.0, config.approach.tilt_axis)
         self._phase = definition.initial
         self._transitions: list[Transition] = []
         self._state_or_none: PhaseState | None = None  # None until the first step
@@ -260,6 +270,8 @@ class InsertionMachine:
         self.fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target
         self._enter(obs)
+        if target is Phase.FEEL:
+            self.memory.felt = True
         if guard == "hole_found":  # a new catch: no jam there yet
             self.touch.new_catch()
         if target is Phase.RELEASE:
@@ -325,6 +337,7 @@ class InsertionMachine:
             return self.fail(obs, FailureReason.TOO_MANY_RETRIES)
         self.memory.retries += 1
         self.memory.regrasp = True
+        self.memory.felt, self.grasp = False, None  # a new grasp: feel it again
         self.go(obs, Phase.GRASP, "slip_regrasp")
         return hold()
 
@@ -336,15 +349,38 @@ class InsertionMachine:
         offset_uv = self._pattern.offset(s_m)
         return self._hole_yaw.apply([offset_uv[0], offset_uv[1], 0.0])
 
+    def tip_shift_b(self, rotation: Rotation) -> np.ndarray:
+        """Where the plug's tip is, less where the nominal grasp puts it, in B (m), for the
+        TCP turned by ``rotation`` (T2B): FEEL's estimate (``grasp``), zero before it."""
+        if self.grasp is None:
+            return np.zeros(3)
+        return self.grasp.tip_shift_b(rotation)
+
+    def plug_axis_b(self, rotation: Rotation) -> np.ndarray:
+        """The plug's axis (unit, toward its tip) in B for the TCP turned by ``rotation``
+        (T2B): T z turned by FEEL's estimate, T z before it."""
+        if self.grasp is None:
+            return tool_z_in_base(rotation)
+        return rotation.apply(self.grasp.tip_t / self.grasp.length_m)
+
     def search_rotation(self) -> Rotation:
-        """The approach rotation (T2B), turned about B's z by the present pass's yaw once
-        SEARCH has run out of time (config.SearchSettings, ``retry_yaw_rad``)."""
+        """Before FEEL: the approach rotation without its tilt (T z straight down, so the
+        tip's face can lie flat on the board). Then the approach rotation (T2B), turned
+        about T y against FEEL's estimate of the
+        plug's tilt in the hand (so the plug, not the arm, is as the approach has it), and
+        about B's z by the present pass's yaw once SEARCH has run out of time
+        (config.SearchSettings, ``retry_yaw_rad``)."""
+        if not self.memory.felt:
+            return self._feel_rot
+        approach = self._approach_rot
+        if self.grasp is not None:  # the plug upright, not the arm
+            approach = approach * Rotation.from_euler("y", -self.grasp.tilt_rad)
         start, length = self.memory.yaw_passes_from_m, self._pattern.length_m
         if start is None or length <= 0.0:
-            return self._approach_rot
+            return approach
         passes = int((self.memory.search_s_m - start) // length)
         yaw = self.config.search.retry_yaw_rad * (1.0, -1.0, 0.0)[passes % 3]
-        return Rotation.from_euler("z", yaw) * self._approach_rot
+        return Rotation.from_euler("z", yaw) * approach
 
     def hold_rotation(self, rotation: Rotation) -> np.ndarray:
         """Angular velocity in B (rad/s) servoing the TCP from ``rotation`` (T2B) to the

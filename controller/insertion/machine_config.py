@@ -109,7 +109,8 @@ class SignalSettings(Config):
 
 @config_dataclass
 class ApproachSettings(Config):
-    """APPROACH: move the tip to ``height_m`` above the nominal opening with the plug tilted by
+    """APPROACH: move the tip to ``height_m`` above the nominal opening (``touched_height_m``
+    above the board surface once touch has found it) with the plug tilted by
     ``tilt_rad`` about T's ``tilt_axis`` (the paper's tilted approach), moving at up to
     ``move_speed_m_s`` / ``rotate_speed_rad_s`` until within ``pose_tol_m`` / ``angle_tol_rad``;
     the position and orientation servo of every phase has the gain ``pose_gain_1_s`` (speed
@@ -119,6 +120,7 @@ class ApproachSettings(Config):
     ``overtravel_m`` below the board surface without contact: limit exceeded."""
 
     height_m: float = number(0.0, 0.1, default=0.003)
+    touched_height_m: float = number(0.0, 0.1, default=0.001)
     tilt_rad: float = number(-45 * _DEG, 45 * _DEG, default=15 * _DEG)
     tilt_axis: Literal["x", "y"] = "x"
     move_speed_m_s: float = number(1e-4, 0.25, default=0.045)
@@ -130,6 +132,26 @@ class ApproachSettings(Config):
     overtravel_m: float = number(0.0, 0.05, default=0.004)
     contact_sigma: float = number(0.5, 1e4, default=8.0)
     contact_frames: int = number(1, 100, default=3)
+
+
+@config_dataclass
+class FeelSettings(Config):
+    """FEEL, at the run's first touch (phases/feel.py): APPROACH brings the tip down
+    ``offset_m`` from the nominal opening along its narrow axis (beyond the opening's
+    uncertainty, so the tip's face lands on the board); the tip is held ``press_depth_m``
+    below its height at contact for ``settle_s``; then the TCP turns about the horizontal
+    axis across the opening's width at ``rock_speed_rad_s``, toward the side that makes the
+    in-plane torque (about T y) smaller, until that torque changes sign with at least
+    ``flip_sigma`` (noise units) on the new side; then back until it changes sign again.
+    No change within ``rock_max_rad`` of the starting rotation: the turn is reversed once,
+    then FEEL ends without an estimate (the nominal grasp is kept)."""
+
+    offset_m: float = number(0.0, 0.05, default=0.0065)
+    press_depth_m: float = number(0.0, 0.005, default=0.0005)
+    settle_s: float = number(0.0, 5.0, default=0.3)
+    rock_speed_rad_s: float = number(0.005, 1.0, default=0.2)
+    rock_max_rad: float = number(0.01, 0.5, default=0.14)
+    flip_sigma: float = number(0.0, 100.0, default=1.0)
 
 
 @config_dataclass
@@ -387,6 +409,7 @@ class Timeouts(Config):
 
     grasp_s: float = number(0.1, 600.0, default=5.0)
     approach_s: float = number(0.1, 600.0, default=10.0)
+    feel_s: float = number(0.1, 600.0, default=8.0)
     search_s: float = number(0.1, 600.0, default=30.0)
     align_s: float = number(0.1, 600.0, default=10.0)
     insert_s: float = number(0.1, 600.0, default=8.0)
@@ -403,6 +426,7 @@ class MachineConfig(Config):
     gripper: GripperSettings = field(default_factory=GripperSettings)
     signals: SignalSettings = field(default_factory=SignalSettings)
     approach: ApproachSettings = field(default_factory=ApproachSettings)
+    feel: FeelSettings = field(default_factory=FeelSettings)
     search: SearchSettings = field(default_factory=SearchSettings)
     align: AlignSettings = field(default_factory=AlignSettings)
     insert: InsertSettings = field(default_factory=InsertSettings)

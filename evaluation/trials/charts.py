@@ -4,7 +4,8 @@
   controller, the 95% Wilson interval as error bars (the insertion speed/success chart); with
   a single speed, one point per controller side by side;
 * ``success_time_chart``: the share of trials inserted within a time, against that time,
-  one step curve per controller (success against time to insert).
+  one step curve per controller (success against time to insert);
+* ``grasp_error_chart``: histograms of FEEL's errors on the plug in the hand (tilt, tip).
 """
 
 from __future__ import annotations
@@ -125,4 +126,21 @@ def success_time_chart(
     ax.grid(True, alpha=0.3)
     ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)  # beside: hides no curve
     ax.set_title(textwrap.fill(title, TITLE_WIDTH), fontsize=10)
+    _save(fig, path)
+
+
+def grasp_error_chart(
+    tilt_errors_deg: Sequence[float], tip_errors_mm: Sequence[float], path: Path, title: str
+) -> None:
+    """Histograms of FEEL's absolute errors (evaluation/trials/grasp_scores.py): the
+    width-plane tilt (deg) and the tip's offset along T x (mm), one trial each."""
+    fig = Figure(figsize=(9.0, 3.6), layout="constrained")
+    left, right = fig.subplots(1, 2)
+    left.hist(tilt_errors_deg, bins=20, color="#4477aa")
+    left.set_xlabel("|tilt error| in the width plane, deg")
+    left.set_ylabel("trials")
+    right.hist(tip_errors_mm, bins=20, color="#aa7744")
+    right.set_xlabel("|tip offset error| along T x, mm")
+    fig.suptitle(textwrap.fill(f"{title} ({len(tilt_errors_deg)} estimates)", TITLE_WIDTH),
+                 fontsize=10)
     _save(fig, path)

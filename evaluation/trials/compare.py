@@ -14,6 +14,8 @@ overrides) on the same seeds; all the trials share one executor. OUT gets:
   controller -- the insertion speed/success chart (with one speed: per controller);
 * ``time_to_insert_<speed>.png``: success against time to insert (the share of trials
   inserted within t, against t) per controller, one chart per speed setting;
+* ``grasp_errors_<controller>_<speed>.png``: the histograms of the in-hand estimate's
+  errors (FEEL, evaluation/trials/grasp_scores.py), for each cell whose controller has one;
 * ``comparison.md``: the table, the product's targets judged at each speed
   (evaluation/trials/targets.py) and the charts, as a section for docs/EVALUATION.md;
   ``comparison.json``: every cell's summary.
@@ -51,7 +53,13 @@ from evaluation.trials.batch_cli import (
     load_trial_function,
     make_executor,
 )
-from evaluation.trials.charts import controller_label, speed_success_chart, success_time_chart
+from evaluation.trials.charts import (
+    controller_label,
+    grasp_error_chart,
+    speed_success_chart,
+    success_time_chart,
+)
+from evaluation.trials.grasp_scores import tilt_errors_deg, tip_errors_mm
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import SeedSpecs, format_seeds
 from evaluation.trials.targets import targets_markdown
@@ -78,6 +86,45 @@ class Cell:
 
 def histogram_name(speed: float) -> str:
     return f"time_to_insert_{speed:g}.png"
+
+
+def grasp_chart_name(cell: Cell) -> str:
+    return f"grasp_errors_{cell.controller}_{cell.speed:g}.png"
+
+
+def _grasp_markdown(cells: Mapping[Cell, Batch]) -> list[str]:
+    """The in-hand estimate's errors per cell that has one (evaluation/trials/grasp_scores),
+    as a table and its histograms; nothing when no cell has one."""
+    rows, charts = [], []
+    for cell, batch in cells.items():
+        g = batch.summary.get("grasp_estimate")
+        if g is None:
+            continue
+        tilt, tip = g["tilt_error_deg"], g["tip_x_error_mm"]
+        thick, tip_y = g["thickness_tilt_deg_not_estimated"], g["tip_y_mm_not_estimated"]
+        rows.append(
+            f"| {controller_label(cell.controller)} | {cell.speed:g} | {g['estimated']}/{g['of']} "
+            f"| {tilt['median']:.2f} | {tilt['p95']:.2f} | {tip['median']:.2f} | "
+            f"{tip['p95']:.2f} | {thick['median']:.2f} | {tip_y['median']:.2f} |"
+        )
+        charts += [f"![in-hand estimate errors, {cell.controller}]({grasp_chart_name(cell)})", ""]
+    if not rows:
+        return []
+    return [
+        "",
+        "The plug in the hand, found by touch (FEEL) against the scene's truth: absolute "
+        "errors of the width-plane tilt (deg) and of the tip's offset along T x (mm); the "
+        "thickness-plane tilt and the tip's offset along T y are not estimated (their true "
+        "size, for scale).",
+        "",
+        "| controller | speed | estimated | tilt median ° | tilt p95 ° | tip x median mm "
+        "| tip x p95 mm | thickness tilt median ° (not estimated) "
+        "| tip y median mm (not estimated) |",
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        *rows,
+        "",
+        *charts,
+    ]
 
 
 def grid(
@@ -169,6 +216,7 @@ def comparison_markdown(
             f"![success against time to insert at {speed_key}={speed:g}]({histogram_name(speed)})",
             "",
         ]
+    lines += _grasp_markdown(cells)
     return "\n".join(lines)
 
 
@@ -200,6 +248,15 @@ def write_comparison(
             out / histogram_name(speed),
             f"{task}: success against time to insert at {speed_key}={speed:g}, seeds {seeds}",
         )
+    for cell, batch in cells.items():
+        tilt = tilt_errors_deg(batch.results)
+        if tilt:
+            grasp_error_chart(
+                tilt,
+                tip_errors_mm(batch.results),
+                out / grasp_chart_name(cell),
+                f"{task}: the plug in the hand by touch, {cell.controller}, seeds {seeds}",
+            )
     write_text(out / TABLE, comparison_markdown(task, seeds, speed_key, cells, command) + "\n")
     every = [
         {"controller": c.controller, "speed": c.speed, "summary": b.summary}

@@ -36,6 +36,13 @@ class TrialResult:
     ``contact_force_limit_n``: the task's limit on the insertion force (the connector's
     specified insertion force); ``insertion_force_violations``: how many times the insertion
     force rose above that limit (a violation fails the trial: ``insertion_force_exceeded``).
+
+    The plug's pose in the hand (controller/insertion/grasp_estimate.py; NaN where unknown):
+    ``grasp_tilt_est_rad`` the machine's estimate of its tilt in the width plane (about T y)
+    and ``grasp_tilt_true_rad`` the scene's; ``grasp_tilt_thickness_true_rad`` the true tilt
+    in the thickness plane (about T x; not estimated); ``tip_x_est_m`` the estimated tip's
+    offset along T x from the nominal, and ``tip_x_true_m``, ``tip_y_true_m`` the true tip's
+    along T x and T y (m).
     """
 
     task: str
@@ -55,6 +62,12 @@ class TrialResult:
     p99_insertion_force_n: float = 0.0
     contact_force_limit_n: float = float("nan")
     insertion_force_violations: int = 0
+    grasp_tilt_est_rad: float = float("nan")
+    grasp_tilt_true_rad: float = float("nan")
+    grasp_tilt_thickness_true_rad: float = float("nan")
+    tip_x_est_m: float = float("nan")
+    tip_x_true_m: float = float("nan")
+    tip_y_true_m: float = float("nan")
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -71,7 +84,10 @@ class TrialResult:
         """The result of one ``trials.csv`` row (``as_row`` written by the batch: an empty
         cell is None, floats as ``repr``); ValueError (or KeyError) on a malformed row."""
         values: dict[str, Any] = {}
-        for name in (f.name for f in fields(cls)):
+        for f in fields(cls):
+            name = f.name
+            if name not in row and name in _POSE_FIELDS:  # a table from before they existed
+                continue
             text = row[name]
             if name == "failure_reason":
                 values[name] = text or None
@@ -90,3 +106,11 @@ class TrialResult:
 
 _TEXT_FIELDS = ("task", "controller", "status")
 _INT_FIELDS = ("seed", "insertion_force_violations")
+_POSE_FIELDS = (
+    "grasp_tilt_est_rad",
+    "grasp_tilt_true_rad",
+    "grasp_tilt_thickness_true_rad",
+    "tip_x_est_m",
+    "tip_x_true_m",
+    "tip_y_true_m",
+)

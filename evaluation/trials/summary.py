@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from scipy.stats import binomtest
 
+from evaluation.trials.grasp_scores import grasp_estimate_summary
 from evaluation.trials.result import TrialResult
 
 CONFIDENCE = 0.95
@@ -45,7 +46,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     ``contact_force_limit_n``, ``insertion_force_violations`` (summed) and
     ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
     is the simulated time over the wall time of the trials that ran to an outcome (error
-    trials have no simulated time).
+    trials have no simulated time); ``grasp_estimate`` (only when some trial has one): FEEL's
+    errors on the plug in the hand (evaluation/trials/grasp_scores.py).
     """
     ordered = sorted(results, key=lambda r: (r.controller, r.seed))
     n = len(ordered)
@@ -87,4 +89,7 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         if wall_s > 0
         else None,
     )
+    grasp = grasp_estimate_summary(ordered)
+    if grasp is not None:
+        summary["grasp_estimate"] = grasp
     return summary

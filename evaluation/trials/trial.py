@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -237,7 +238,29 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         p99_insertion_force_n=float(np.percentile(insertion, 99)) if len(insertion) else 0.0,
         contact_force_limit_n=config.contact_force_limit_n,
         insertion_force_violations=violations,
+        **_grasp_fields(task, seed, ran),
     )
+
+
+def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
+    """The plug's pose in the hand: the machine's estimate (FEEL's, where its machine has
+    one) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
+    # imported here: the scene's draws belong to the simulator, which a real run never loads
+    from drivers.sim.scenes.insertion.draws import draw_scene
+    from evaluation.trials.grasp_truth import grasp_truth
+
+    length = task.config.plug.length_m
+    truth = grasp_truth(draw_scene(task.config.hole, task.scene, seed).grasp, length)
+    estimate = getattr(ran.machine, "grasp", None)
+    tilt = estimate.tilt_rad if estimate is not None else math.nan
+    return {
+        "grasp_tilt_est_rad": tilt,
+        "grasp_tilt_true_rad": truth.tilt_width_rad,
+        "grasp_tilt_thickness_true_rad": truth.tilt_thickness_rad,
+        "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
+        "tip_x_true_m": float(truth.tip_t_m[0]),
+        "tip_y_true_m": float(truth.tip_t_m[1]),
+    }
 
 
 def _result_on_hardware(task, controller, seed, ran: RunOutcome) -> TrialResult:

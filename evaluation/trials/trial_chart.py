@@ -26,7 +26,8 @@ from evaluation.trials.result import TrialResult
 CHART_NAME = "summary.png"
 
 PHASE_COLOURS = {
-    "grasp": "#dddddd", "approach": "#cfe2f3", "search": "#fff2cc", "align": "#d9ead3",
+    "grasp": "#dddddd", "approach": "#cfe2f3", "feel": "#d0e0e3", "search": "#fff2cc",
+    "align": "#d9ead3",
     "insert": "#b6d7a8", "backoff": "#f4cccc", "release": "#e6e0f8", "retract": "#eeeeee",
     "teleop": "#ffe599", "estop": "#ea9999",
 }  # fmt: skip

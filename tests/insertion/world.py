@@ -80,6 +80,11 @@ class ToyWorld:
     # how far below the surface the plug standing on the rim sinks (one end of its leading
     # edge in the opening): the depth by touch then reads it entered
     rim_sink_m: float = 0.0
+    # the plug turned in the hand by this about T y (its tip toward +T x); on the board, the
+    # in-plane torque (about T y) of the tip face's width edge pressed at one end, its sign
+    # that of the edge's slope, zero where the face lies flat
+    grasp_tilt_rad: float = 0.0
+    edge_torque: float = 0.02
     noise: float = 0.0003
     # the arm's F/T reading (ArmStatus.external_force_n, N in B), for the blind baseline: the
     # board (or the opening's floor under the tip) pushing up k_arm_n_m per m of the tip's
@@ -122,7 +127,13 @@ class ToyWorld:
 
     @property
     def tip(self) -> np.ndarray:
-        return self.p + self.rotation.apply([0.0, 0.0, self.plug.length_m])
+        a, length = self.grasp_tilt_rad, self.plug.length_m
+        return self.p + self.rotation.apply([length * math.sin(a), 0.0, length * math.cos(a)])
+
+    def _edge_slope(self) -> float:
+        """How much the tip face's width edge rises toward its +x end (B z per unit)."""
+        a = self.grasp_tilt_rad
+        return float(self.rotation.apply([math.cos(a), 0.0, -math.sin(a)])[2])
 
     @property
     def hole_xy(self) -> np.ndarray:
@@ -220,6 +231,8 @@ class ToyWorld:
                 axial = self.k_board * max(0.0, support - tip[2])
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
+                flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
+                torque_b += self.edge_torque * flat * self.rotation.apply([0.0, 1.0, 0.0])
         if self.on_rim:
             torque_b += self.held_yaw_twist * z_t
         if self.jammed_in_this_insert and not (

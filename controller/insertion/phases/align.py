@@ -31,9 +31,7 @@ from controller.insertion.servo import (
 from core.spatial import (
     clamp_norm,
     rotation_from_rpy,
-    tilt_of_rotation,
     tilt_of_tool_axis,
-    tool_z_in_base,
 )
 
 if TYPE_CHECKING:
@@ -77,7 +75,8 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
     """ALIGN's command for ``obs`` (see the module doc)."""
     state, settings = machine.state(AlignState), machine.config.align
     rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
-    if state.stage is AlignStage.START and tilt_of_rotation(rotation) <= settings.tilt_tol_rad:
+    plug_tilt = tilt_of_tool_axis(machine.plug_axis_b(rotation))[0]
+    if state.stage is AlignStage.START and plug_tilt <= settings.tilt_tol_rad:
         # upright already (after a jam's back-off): no heel to seek or turn about
         _after_upright(machine, state, obs, rotation)
     if state.stage is AlignStage.START:
@@ -150,7 +149,7 @@ def _turn(
 ) -> Command:
     """TURN: upright about the heel, the heel held against the wall."""
     settings = machine.config.align
-    angle, axis = tilt_of_tool_axis(tool_z_in_base(rotation))
+    angle, axis = tilt_of_tool_axis(machine.plug_axis_b(rotation))
     if angle <= settings.tilt_tol_rad:
         machine.fire("upright")
         _after_upright(machine, state, obs, rotation)

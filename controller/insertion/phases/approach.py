@@ -1,6 +1,8 @@
 """APPROACH: servo to the tilted pose above the opening (the tip rising first if it is below
 its height there, so the plug never sweeps over the board), then descend until contact
-(config.ApproachSettings). The pose is over where SEARCH's pattern left off.
+(config.ApproachSettings). The pose is over where SEARCH's pattern left off, with the tip
+where FEEL found it; before FEEL has run, beside the opening (``feel.offset_m``), and the
+contact there begins FEEL.
 """
 
 from __future__ import annotations
@@ -44,10 +46,13 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
     state, settings = machine.state(ApproachState), machine.config.approach
     rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
     if state.stage is ApproachStage.POSE:
-        resume = machine.pattern_offset_b(machine.memory.search_s_m)
-        target_tip = machine.hole_xyz + resume + np.array([0.0, 0.0, settings.height_m])
+        target_tip = _target_tip(machine)
         target_rot = machine.search_rotation()
-        target_tcp = target_tip - target_rot.apply([0.0, 0.0, machine.plug.length_m])
+        target_tcp = (
+            target_tip
+            - target_rot.apply([0.0, 0.0, machine.plug.length_m])
+            - machine.tip_shift_b(target_rot)
+        )
         error = target_tcp - np.asarray(obs.arm.tcp.xyz_m)
         turn = rotation_error(rotation, target_rot)
         tip_z = tip_position(obs.arm.tcp, machine.plug.length_m)[2]
@@ -70,8 +75,28 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
         state.count = state.count + 1 if contact else 0
     if state.count >= settings.contact_frames:
         machine.touch.touch_surface(obs.arm.tcp, rotation)
-        machine.go(obs, Phase.SEARCH, "surface_contact")
+        if machine.memory.felt:
+            machine.go(obs, Phase.SEARCH, "surface_contact")
+        else:
+            machine.go(obs, Phase.FEEL, "first_contact")
         return hold()
     machine.fire("descend")
     v_tip = np.array([0.0, 0.0, -settings.descend_speed_m_s])
     return tip_command(machine.config, machine.plug, obs, v_tip, machine.hold_rotation(rotation))
+
+
+def _target_tip(machine: InsertionMachine) -> np.ndarray:
+    """Where APPROACH brings the tip, in B (m): above the feel point before FEEL has run,
+    else above where SEARCH's pattern left off; ``approach.height_m`` above the nominal
+    opening, or ``approach.touched_height_m`` above the surface once touch has found it."""
+    if machine.memory.felt:
+        offset = machine.pattern_offset_b(machine.memory.search_s_m)
+    else:
+        yaw = machine.hole.yaw_rad
+        offset = machine.config.feel.offset_m * np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+    settings, surface_z = machine.config.approach, machine.touch.surface_z_m
+    if surface_z is None:
+        return machine.hole_xyz + offset + np.array([0.0, 0.0, settings.height_m])
+    above = machine.hole_xyz + offset
+    above[2] = surface_z + settings.touched_height_m
+    return above

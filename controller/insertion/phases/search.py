@@ -81,7 +81,7 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
     offset = machine.pattern_offset_b(memory.search_s_m)
     ahead = machine.pattern_offset_b(memory.search_s_m + _AHEAD_M) - offset
     tangent = ahead / np.linalg.norm(ahead) if np.linalg.norm(ahead) > 0 else ahead
-    tip = tip_position(obs.arm.tcp, machine.plug.length_m)
+    tip = tip_position(obs.arm.tcp, machine.plug.length_m) + machine.tip_shift_b(rotation)
     gain = machine.config.approach.pose_gain_1_s
     v_tip = np.zeros(3)
     v_tip[:2] = settings.speed_m_s * tangent[:2] + gain * (

@@ -33,7 +33,8 @@ FORCE_LIMIT_N = 20.0
 
 
 def fake_trial(spec: TrialSpec) -> TrialResult:
-    """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed."""
+    """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed;
+    ``dipole`` estimates the plug in the hand 0.001 rad and 0.1 mm off per seed."""
     if spec.seed == 5:
         raise RuntimeError("boom\nsecond line")
     success = spec.seed % 4 != 3
@@ -55,7 +56,19 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
         max_wrist_force_n=10.0 + spec.seed,
         force_limit_n=FORCE_LIMIT_N,
         wall_time_s=0.25,
+        **(_fake_pose(spec.seed) if spec.controller == "dipole" else {}),
     )
+
+
+def _fake_pose(seed: int) -> dict[str, float]:
+    return {
+        "grasp_tilt_est_rad": 0.02 + 0.001 * seed,
+        "grasp_tilt_true_rad": 0.02,
+        "tip_x_est_m": 1e-4 * seed,
+        "tip_x_true_m": 0.0,
+        "grasp_tilt_thickness_true_rad": 0.01,
+        "tip_y_true_m": 0.0,
+    }
 
 
 def slow_trial(spec: TrialSpec) -> TrialResult:
@@ -601,6 +614,11 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     assert "machine.insert.speed_m_s=0.01\n" in targets and "=0.02\n" in targets
     assert "| `zero_torque` falls short of `dipole` | – | not run |" in targets
     assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
+    # the in-hand estimate: a table row and a histogram per dipole cell, none for the others
+    assert sorted(p.name for p in out.glob("grasp_errors_*.png")) == [
+        "grasp_errors_dipole_0.01.png", "grasp_errors_dipole_0.02.png"
+    ]
+    assert table.count("| dipole | 0.01 | 5/6 |") == 1  # the raising seed 5 has none
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6
