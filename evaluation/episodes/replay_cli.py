@@ -212,12 +212,12 @@ def export(args: argparse.Namespace) -> int:
     aligned = _aligned_episodes(args.episodes, args.allow_truncated, args.task)
     first = next(aligned)  # the dataset's rate, frame size and window
     fps, frame_hw, window = first.fps, first.frame_hw, first.window
-    repeated = 0
+    drift_s = 0.0
 
     def each() -> Iterator[DatasetEpisode]:
-        nonlocal repeated
+        nonlocal drift_s
         for item in itertools.chain([first], aligned):
-            repeated += item.repeated
+            drift_s = max(drift_s, item.drift_s)
             yield item.dataset  # its frames are read while the video is written, then freed
 
     try:
@@ -226,8 +226,9 @@ def export(args: argparse.Namespace) -> int:
         raise ToolError(f"--lerobot '{args.lerobot}': {exc}") from None
     print(
         f"{PROG}: wrote a LeRobot v3.0 dataset of {written.episodes} episodes, "
-        f"{written.frames} frames at {written.fps} fps ({window} control ticks "
-        f"per frame; {repeated} rows repeat an older frame) to {args.lerobot}"
+        f"{written.frames} frames at {written.fps} fps (one row per tactile frame; {window} "
+        f"control ticks per frame; capture times at most {drift_s:.3f} s from the nominal "
+        f"timestamps) to {args.lerobot}"
     )
     return 0
 
