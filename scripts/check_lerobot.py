@@ -88,9 +88,9 @@ def check(root: Path, expected: list[tuple[str, int]]) -> list[str]:
             pixels = np.round(image.transpose(1, 2, 0) * 255).astype(int)
             worst = max(worst, int(np.abs(pixels - decoded[first + row]).max()))
         index += length
-        print(f"episode {episode}: {length} rows for {frames} tactile frames; task {sorted(tasks)}; "
-              f"{length - bad_times} of {length} frame_index/timestamp = k / fps; images vs "
-              f"PyAV's frames {first}..{first + length - 1}: largest difference {worst} "
+        print(f"episode {episode}: {length} rows for {frames} tactile frames; task "
+              f"{sorted(tasks)}; {length - bad_times} of {length} frame_index/timestamp = k / fps; "
+              f"images vs PyAV's frames {first}..{first + length - 1}: largest difference {worst} "
               "grey levels")  # fmt: skip
         if length != frames:
             failures.append(f"episode {episode}: {length} rows, expected {frames}")
@@ -102,16 +102,18 @@ def check(root: Path, expected: list[tuple[str, int]]) -> list[str]:
             failures.append(f"episode {episode}: an image differs from PyAV's by {worst}")
     if len(decoded) != dataset.num_frames:
         failures.append(f"the video has {len(decoded)} frames for {dataset.num_frames} rows")
-    print(f"checked {index} frames in {time.monotonic() - began:.1f} s: "
-          + ("all checks passed" if not failures else f"{len(failures)} checks FAILED"))  # fmt: skip
+    verdict = "all checks passed" if not failures else f"{len(failures)} checks FAILED"
+    print(f"checked {index} frames in {time.monotonic() - began:.1f} s: {verdict}")
     return failures
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="check_lerobot", description=__doc__.splitlines()[0])
     parser.add_argument("root", type=Path, metavar="DIR", help="the exported dataset")
-    parser.add_argument("--episode", type=episode_argument, action="append", required=True,
-                        metavar="TASK=FRAMES", help="each episode's task and frame count")  # fmt: skip
+    parser.add_argument(
+        "--episode", type=episode_argument, action="append", required=True,
+        metavar="TASK=FRAMES", help="each episode's task and frame count",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     if not (args.root / "meta" / "info.json").is_file():
         print(f"check_lerobot: error: '{args.root}': expected a LeRobot dataset folder "

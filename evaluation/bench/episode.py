@@ -5,9 +5,9 @@
    machine's hiccups do not end it) is killed with SIGKILL at a uniformly random time 2..10 s
    after its episode file appears. The loss of records is the newest tick the loop had made
    (its start, which the child keeps in shared memory) minus the newest ``/loop/tick`` record
-   the reader finds in the killed file, both on the loop's clock; the kill's own time (the real-time
-   trial's clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus that record
-   adds how far the loop itself lagged;
+   the reader finds in the killed file, both on the loop's clock; the time from that record's
+   tick to the kill adds how far the loop itself lagged (the child also keeps the
+   ``time.monotonic`` of its newest tick: CLOCK_MONOTONIC, shared by both processes);
 2. **cost at the default rates**: ``--runs`` real-time usb_c trials (default options, seeds
    ``--seed``, ``--seed`` + 1, ...) with their episode, and one without: the writer thread's
    CPU time (``time.thread_time``) per second of loop time in each, and its median over the
@@ -108,7 +108,7 @@ def kill_losses(work: Path, kills: int, seed: int) -> list[float]:
     for i in range(kills):
         out = work / f"kill{i}"
         mark = work / f"mark{i}"
-        mark.write_bytes(bytes(8))
+        mark.write_bytes(bytes(16))
         command = [sys.executable, "-m", "evaluation.bench.episode_child", str(out), str(mark),
                    str(seed * 1000 + i), *RELAXED_OVERRUNS]  # fmt: skip
         process = subprocess.Popen(
@@ -126,11 +126,11 @@ def kill_losses(work: Path, kills: int, seed: int) -> list[float]:
         process.wait()
         ep = read_episode(episode)
         last = max(m.t_s for m in ep.messages(LOOP_TICK.name))  # the newest tick on disk
-        (made,) = struct.unpack("<d", mark.read_bytes())
+        made, made_at = struct.unpack("<dd", mark.read_bytes())
         losses.append(made - last)
-        since_kill.append(killed_at - last)
+        since_kill.append(killed_at - made_at + made - last)
         print(f"kill {i}: at {killed_at:.3f} s, newest tick made {made:.3f} s, newest record "
-              f"{last:.3f} s: lost {made - last:.3f} s of records ({killed_at - last:.3f} s "
+              f"{last:.3f} s: lost {made - last:.3f} s of records ({since_kill[-1]:.3f} s "
               f"before the kill); read {ep.read_bytes} of {ep.size_bytes} B, "
               f"finished {ep.finished}")  # fmt: skip
     print(
