@@ -153,8 +153,8 @@ def _location(template: str, **keys: Any) -> str:
 
 @dataclass
 class _Written:
-    """What is kept of each episode written: its task, length, numeric rows and image
-    statistics (never its frames)."""
+    """What is kept of each episode written: its task, length, numeric rows and statistics
+    (never its frames)."""
 
     layout: list[tuple[str, tuple[str, ...]]]
     features: tuple[VectorFeature, ...]
