@@ -13,7 +13,7 @@ WORKERS     ?= $(shell nproc 2>/dev/null || echo 2)
 
 # make check-lerobot (not part of `make test`): the real lerobot, pinned, in its own Python 3.12
 # environment, loads an export of two episodes of different tasks and checks every frame
-# (scripts/check_lerobot.py; docs/EPISODES.md "Checked with LeRobot itself")
+# (evaluation/episodes/lerobot_check.py; docs/EPISODES.md "Checked with LeRobot itself")
 LEROBOT_VERSION := 0.6.1
 PYTHON312 := $(shell command -v python3.12 >/dev/null && python3.12 -c '' 2>/dev/null \
                && command -v python3.12 || ls -d $$(pyenv root 2>/dev/null)/versions/3.12*/bin/python3.12 2>/dev/null | tail -1)
@@ -81,7 +81,7 @@ check-lerobot: $(STAMP) $(LEROBOT_STAMP)
 	  --lerobot $(CHECK_OUT)/dataset
 	@frames() { $(BIN)/python scripts/replay.py summary $(CHECK_OUT)/$$1/episode.mcap \
 	            | awk '$$1 == "/tactile/image" {print $$2}'; }; \
-	set -x; $(LEROBOT_VENV)/bin/python scripts/check_lerobot.py $(CHECK_OUT)/dataset \
+	set -x; PYTHONPATH=$(CURDIR) $(LEROBOT_VENV)/bin/python scripts/check_lerobot.py $(CHECK_OUT)/dataset \
 	  --episode "insert the usb_c plug=$$(frames usb_c)" --episode "insert the usb_a plug=$$(frames usb_a)"
 
 clean:
