@@ -11,7 +11,17 @@ SPEEDS      ?= 0.004
 CONTROLLERS ?= dipole,oracle,blind
 WORKERS     ?= $(shell nproc 2>/dev/null || echo 2)
 
-.PHONY: install demo estimator-demo test typecheck bench evaluate trials calibrations lint clean
+# make check-lerobot (not part of `make test`): the real lerobot, pinned, in its own Python 3.12
+# environment, loads an export of two episodes of different tasks and checks every frame
+# (evaluation/episodes/lerobot_check.py; docs/EPISODES.md "Checked with LeRobot itself")
+LEROBOT_VERSION := 0.6.1
+PYTHON312 := $(shell command -v python3.12 >/dev/null && python3.12 -c '' 2>/dev/null \
+               && command -v python3.12 || ls -d $$(pyenv root 2>/dev/null)/versions/3.12*/bin/python3.12 2>/dev/null | tail -1)
+LEROBOT_VENV  := .venv-lerobot
+LEROBOT_STAMP := $(LEROBOT_VENV)/.installed-$(LEROBOT_VERSION)
+CHECK_OUT     := out/check-lerobot
+
+.PHONY: install demo estimator-demo test typecheck bench evaluate trials calibrations lint clean check-lerobot
 
 install: $(STAMP)
 
@@ -56,5 +66,23 @@ trials: $(STAMP)
 lint: $(STAMP)
 	$(BIN)/ruff check .
 
+$(LEROBOT_STAMP):
+	@test -n "$(PYTHON312)" || { echo "check-lerobot: Python 3.12 not found; set PYTHON312=/path/to/python3.12" >&2; exit 2; }
+	$(PYTHON312) -m venv $(LEROBOT_VENV)
+	$(LEROBOT_VENV)/bin/python -m pip install --quiet "lerobot[dataset]==$(LEROBOT_VERSION)"
+	touch $(LEROBOT_STAMP)
+
+check-lerobot: $(STAMP) $(LEROBOT_STAMP)
+	rm -rf $(CHECK_OUT)
+	@for task in usb_c usb_a; do \
+	  MPLBACKEND=Agg $(BIN)/python scripts/run_trial.py --task $$task --seed 0 --out $(CHECK_OUT)/$$task > /dev/null || exit $$?; \
+	done
+	$(BIN)/python scripts/replay.py export $(CHECK_OUT)/usb_c/episode.mcap $(CHECK_OUT)/usb_a/episode.mcap \
+	  --lerobot $(CHECK_OUT)/dataset
+	@frames() { $(BIN)/python scripts/replay.py summary $(CHECK_OUT)/$$1/episode.mcap \
+	            | awk '$$1 == "/tactile/image" {print $$2}'; }; \
+	set -x; PYTHONPATH=$(CURDIR) $(LEROBOT_VENV)/bin/python scripts/check_lerobot.py $(CHECK_OUT)/dataset \
+	  --episode "insert the usb_c plug=$$(frames usb_c)" --episode "insert the usb_a plug=$$(frames usb_a)"
+
 clean:
-	rm -rf $(VENV) out .pytest_cache
+	rm -rf $(VENV) $(LEROBOT_VENV) out .pytest_cache

@@ -70,9 +70,14 @@ def json_bytes(payload: Mapping[str, Any]) -> bytes:
     scalars as numbers), without the fields that have no value: a key whose value is None or
     a non-finite number, or a list holding one, is left out (controller/episode/topics.py:
     one JSON type per field, an absent value an absent key). TypeError for a value JSON
-    cannot hold."""
-    data = orjson.dumps(payload, option=orjson.OPT_SERIALIZE_NUMPY)
-    if b"null" not in data:  # orjson writes None and NaN as null: nothing absent
+    cannot hold.
+
+    The keys whose value is None go before the encoding (most messages have one: a command
+    without a pose, a simulated arm without joint angles); only a message still holding a
+    null after that (a NaN, or a None in a list) is parsed back and written again."""
+    present = {k: v for k, v in payload.items() if v is not None}
+    data = orjson.dumps(present, option=orjson.OPT_SERIALIZE_NUMPY)
+    if b"null" not in data:  # orjson writes None and NaN as null: nothing else absent
         return data
     kept = {
         k: v
@@ -263,6 +268,8 @@ class EpisodeWriter:
             channel = self._register(topic)
         self._mcap.add_message(channel, t_ns, data, t_ns, sequence % 2**32)
         self._last_ns = max(self._last_ns, t_ns)
+        if not self._listeners:
+            return
         for listener in tuple(self._listeners):
             try:
                 listener(topic, t_ns, payload, data)

@@ -5,22 +5,29 @@
    machine's hiccups do not end it) is killed with SIGKILL at a uniformly random time 2..10 s
    after its episode file appears. The loss of records is the newest tick the loop had made
    (its start, which the child keeps in shared memory) minus the newest ``/loop/tick`` record
-   the reader finds in the killed file, both on the loop's clock; the kill's own time (the real-time
-   trial's clock is CLOCK_MONOTONIC, this process's ``time.monotonic``) minus that record
-   adds how far the loop itself lagged;
-2. **cost**: one long simulated trial in this process (as fast as possible, the search made
+   the reader finds in the killed file, both on the loop's clock; the time from that record's
+   tick to the kill adds how far the loop itself lagged (the child also keeps the
+   ``time.monotonic`` of its newest tick: CLOCK_MONOTONIC, shared by both processes);
+2. **cost at the default rates**: ``--runs`` real-time usb_c trials (default options, seeds
+   ``--seed``, ``--seed`` + 1, ...) with their episode, and one without: the writer thread's
+   CPU time (``time.thread_time``) per second of loop time in each, and its median over the
+   runs: the fraction of a core the writer takes at real-time rates;
+3. **cost as fast as possible**: one long simulated trial in this process (the search made
    to fail so it runs about 60 s of loop time): every ``EpisodeWriter.log`` call is timed
    (median, p99), and the writer thread's CPU time is divided by the trial's loop time (the
    fraction of a core it takes at real-time rates);
-3. **size**: that trial's file size, and its size per topic;
-4. **decoding**: the file opened with ``mcap``'s own seeking reader, and every message
+4. **size**: that trial's file size, and its size per topic;
+5. **decoding**: the file opened with ``mcap``'s own seeking reader, and every message
    decoded with Foxglove's schemas (``mcap-protobuf-support``) or as JSON;
-5. **libraries**: the same messages written again through ``mcap``'s writer and through
+6. **libraries**: the same messages written again through ``mcap``'s writer and through
    ``foxglove-sdk``'s (``open_mcap``, raw channels with the same schemas), both flushed every
    0.1 s of loop time: CPU time, size, and the messages a reader recovers from the file as
    it stands after the last flush before ``close`` (what a SIGKILL would leave).
 
-    python scripts/bench_episode.py [--kills 20] [--seed 0]
+The last lines sum up the two targets: the writer's median CPU at the default rates and the
+worst SIGKILL loss.
+
+    python scripts/bench_episode.py [--kills 20] [--runs 5] [--seed 0]
 """
 
 from __future__ import annotations
@@ -69,28 +76,39 @@ LONG_TRIAL = (
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="bench_episode", description=__doc__.splitlines()[0])
     parser.add_argument("--kills", type=int, default=20)
+    parser.add_argument("--runs", type=int, default=5, help="real-time trials for the CPU")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
+    if args.kills < 1 or args.runs < 1:
+        parser.error(f"--kills and --runs: expected at least 1, got {args.kills}, {args.runs}")
     work = Path(tempfile.mkdtemp(prefix="bench_episode_"))
     try:
-        print(f"Machine: {describe_machine('the trial in one process, its writer thread')}\n")
-        realtime_cost(work, args.seed)
+        print(f"Machine: {describe_machine('the trial in one process, its writer thread')}")
+        print(f"Load average before: {' '.join(f'{v:.1f}' for v in os.getloadavg())}\n")
+        cpu = realtime_cost(work, args.seed, args.runs)
         episode = cost_and_size(work, args.seed)
         decode_all(episode)
         compare_libraries(episode, work)
-        kill_losses(work, args.kills, args.seed)
+        losses = kill_losses(work, args.kills, args.seed)
+        print(f"Load average after: {' '.join(f'{v:.1f}' for v in os.getloadavg())}")
+        print(f"TARGET writer CPU at the default rates: median {statistics.median(cpu):.2f} % of a "
+              f"core over {len(cpu)} real-time trials ({', '.join(f'{c:.2f}' for c in cpu)}); "
+              f"target under 1 %")  # fmt: skip
+        print(f"TARGET SIGKILL loss: worst {max(losses):.3f} s over {len(losses)} kills, "
+              f"{sum(loss > 0.1 for loss in losses)} over 0.1 s; target at most 0.1 s")  # fmt: skip
     finally:
         shutil.rmtree(work, ignore_errors=True)
     return 0
 
 
-def kill_losses(work: Path, kills: int, seed: int) -> None:
+def kill_losses(work: Path, kills: int, seed: int) -> list[float]:
+    """Kill ``kills`` real-time trials (see the module doc); each one's loss of records, s."""
     rng = random.Random(seed)
     losses, since_kill = [], []
     for i in range(kills):
         out = work / f"kill{i}"
         mark = work / f"mark{i}"
-        mark.write_bytes(bytes(8))
+        mark.write_bytes(bytes(16))
         command = [sys.executable, "-m", "evaluation.bench.episode_child", str(out), str(mark),
                    str(seed * 1000 + i), *RELAXED_OVERRUNS]  # fmt: skip
         process = subprocess.Popen(
@@ -108,11 +126,11 @@ def kill_losses(work: Path, kills: int, seed: int) -> None:
         process.wait()
         ep = read_episode(episode)
         last = max(m.t_s for m in ep.messages(LOOP_TICK.name))  # the newest tick on disk
-        (made,) = struct.unpack("<d", mark.read_bytes())
+        made, made_at = struct.unpack("<dd", mark.read_bytes())
         losses.append(made - last)
-        since_kill.append(killed_at - last)
+        since_kill.append(killed_at - made_at + made - last)
         print(f"kill {i}: at {killed_at:.3f} s, newest tick made {made:.3f} s, newest record "
-              f"{last:.3f} s: lost {made - last:.3f} s of records ({killed_at - last:.3f} s "
+              f"{last:.3f} s: lost {made - last:.3f} s of records ({since_kill[-1]:.3f} s "
               f"before the kill); read {ep.read_bytes} of {ep.size_bytes} B, "
               f"finished {ep.finished}")  # fmt: skip
     print(
@@ -121,6 +139,7 @@ def kill_losses(work: Path, kills: int, seed: int) -> None:
         f"newest record: median {statistics.median(since_kill):.3f} s, worst "
         f"{max(since_kill):.3f} s\n"
     )
+    return losses
 
 
 @contextmanager
@@ -147,20 +166,23 @@ def timed_writer() -> Iterator[tuple[list[float], list[float]]]:
         EpisodeWriter.log, EpisodeWriter.close = original, close  # type: ignore[method-assign]
 
 
-def realtime_cost(work: Path, seed: int) -> None:
-    """A real-time trial with and without its episode: the enqueue times and the loop's
-    tick work and lateness."""
+def realtime_cost(work: Path, seed: int, runs: int) -> list[float]:
+    """Real-time trials without their episode (once) and with it (``runs`` times, seeds
+    ``seed``, ``seed`` + 1, ...): the enqueue times, the loop's tick work and lateness, and
+    the writer thread's CPU per s of loop time (%, returned for each run with the episode)."""
     task = load_task("usb_c", RELAXED_OVERRUNS)
-    print(f"Real-time usb_c trial (seed {seed}), with and without the episode:")
+    print(f"Real-time usb_c trials (seeds {seed}..{seed + runs - 1}), without and with the "
+          "episode (default options):")  # fmt: skip
     print(
-        "| episode | ticks | tick work p50 / p99 / max, ms | tick lateness p99 / max, ms "
+        "| episode | seed | ticks | tick work p50 / p99 / max, ms | tick lateness p99 / max, ms "
         "| enqueue per record median / p99 / max, us | writer thread CPU per s of loop time |"
     )
-    print("|---|---|---|---|---|---|")  # fmt: skip
-    for with_episode in (False, True):
-        out = work / f"realtime_{with_episode}"
+    print("|---|---|---|---|---|---|---|")  # fmt: skip
+    cpu: list[float] = []
+    for with_episode, run_seed in [(False, seed)] + [(True, seed + i) for i in range(runs)]:
+        out = work / f"realtime_{with_episode}_{run_seed}"
         with timed_writer() as (times, busy):
-            outcome = run(task, "dipole", seed, out_dir=out, realtime=True,
+            outcome = run(task, "dipole", run_seed, out_dir=out, realtime=True,
                           episode=EpisodeOptions() if with_episode else None)  # fmt: skip
         s = outcome.loop.stats
         duration = s.ticks / task.config.loop.rate_hz
@@ -170,12 +192,16 @@ def realtime_cost(work: Path, seed: int) -> None:
             if times
             else "-"
         )
-        cpu = f"{busy[0] / duration * 100:.2f} %" if busy else "-"
-        print(f"| {'yes' if with_episode else 'no'} | {s.ticks} | {s.work_p50_s * 1e3:.2f} / "
-              f"{s.work_p99_s * 1e3:.2f} / {s.work_max_s * 1e3:.2f} | "
+        if busy:
+            cpu.append(busy[0] / duration * 100)
+        text = f"{cpu[-1]:.2f} %" if busy else "-"
+        print(f"| {'yes' if with_episode else 'no'} | {run_seed} | {s.ticks} | "
+              f"{s.work_p50_s * 1e3:.2f} / {s.work_p99_s * 1e3:.2f} / {s.work_max_s * 1e3:.2f} | "
               f"{s.lateness_p99_s * 1e3:.2f} / {s.lateness_max_s * 1e3:.2f} | {enqueue_text} "
-              f"| {cpu} |")  # fmt: skip
-    print()
+              f"| {text} |")  # fmt: skip
+    print(f"\nwriter thread CPU at the default rates: median {statistics.median(cpu):.2f} % of a "
+          f"core over {runs} real-time trials\n")  # fmt: skip
+    return cpu
 
 
 def cost_and_size(work: Path, seed: int) -> Path:

@@ -1,7 +1,7 @@
 """The trial a SIGKILL benchmark kills (evaluation/bench/episode.py): a real-time simulated
 usb_c trial writing its episode into OUT, with an observer that stores each tick's start
-(s on the loop's clock) in the 8-byte file MARK, so the parent knows, after the kill, the
-newest tick the loop had made.
+(s on the loop's clock) and the ``time.monotonic`` it was noted at in the 16-byte file MARK,
+so the parent knows, after the kill, the newest tick the loop had made and when.
 
     python -m evaluation.bench.episode_child OUT MARK SEED OVERRIDE...
 """
@@ -11,6 +11,7 @@ from __future__ import annotations
 import mmap
 import struct
 import sys
+import time
 from pathlib import Path
 
 from controller.episode.session import EpisodeOptions
@@ -21,10 +22,10 @@ from evaluation.trials.trial import run
 
 def main(argv: list[str]) -> int:
     out, mark, seed, overrides = Path(argv[0]), Path(argv[1]), int(argv[2]), argv[3:]
-    with mark.open("r+b") as handle, mmap.mmap(handle.fileno(), 8) as shared:
+    with mark.open("r+b") as handle, mmap.mmap(handle.fileno(), 16) as shared:
 
         def note(tick: TickRecord) -> None:
-            shared[:8] = struct.pack("<d", tick.timing.start_s)
+            shared[:16] = struct.pack("<dd", tick.timing.start_s, time.monotonic())
 
         task = load_task("usb_c", overrides)
         run(task, "dipole", seed, out_dir=out, episode=EpisodeOptions(), realtime=True,

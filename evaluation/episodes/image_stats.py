@@ -1,20 +1,22 @@
 """Streaming statistics of RGB uint8 frames, in bounded memory: ``ImageStats``.
 
-LeRobot's image statistics are per channel over the pixels of the sampled frames, scaled to
-[0, 1]: min, max, mean, std and the quantiles q01, q10, q50, q90, q99, each of shape
-(3, 1, 1), and ``count`` (the frames). A uint8 channel has 256 values, so a histogram of
-256 counts per channel holds everything these need: they come out as NumPy gives them on
-the stacked pixels (``np.quantile``'s linear interpolation included; equal to float
-rounding), whatever the number of frames, in 3 x 256 integers instead of every sampled
-pixel as float64 (the export held 0.45 GB of them per episode).
+LeRobot's image statistics of an episode are per channel over the pixels of its sampled
+frames (evaluation/episodes/lerobot_stats.py says which), scaled to [0, 1]: min, max, mean,
+std and the quantiles q01, q10, q50, q90, q99, each of shape (3, 1, 1), and ``count`` (the
+frames). A uint8 channel has 256 values, so a histogram of 256 counts per channel holds
+everything these need: they come out as NumPy gives them on the stacked pixels
+(``np.quantile``'s linear interpolation included; equal to float rounding), whatever the
+number of frames, in 3 x 256 integers instead of every sampled pixel as float64 (the export
+held 0.45 GB of them per episode).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from evaluation.episodes.lerobot_stats import QUANTILE_KEYS, QUANTILES
+
 LEVELS = 256
-QUANTILES = (0.01, 0.10, 0.50, 0.90, 0.99)
 
 
 class ImageStats:
@@ -44,7 +46,7 @@ class ImageStats:
             raise ValueError("no frames to take statistics of")
         values = np.arange(LEVELS, dtype=np.float64) / (LEVELS - 1)
         out: dict[str, list[float]] = {k: [] for k in ("min", "max", "mean", "std")}
-        out |= {_quantile_key(q): [] for q in QUANTILES}
+        out |= {key: [] for key in QUANTILE_KEYS}
         for counts in self.counts:
             present = np.flatnonzero(counts)
             total = int(counts.sum())
@@ -53,14 +55,10 @@ class ImageStats:
             out["max"].append(float(values[present[-1]]))
             out["mean"].append(mean)
             out["std"].append(float(np.sqrt(np.dot(counts, (values - mean) ** 2) / total)))
-            for q in QUANTILES:
-                out[_quantile_key(q)].append(_quantile(counts, values, total, q))
+            for key, q in zip(QUANTILE_KEYS, QUANTILES, strict=True):
+                out[key].append(_quantile(counts, values, total, q))
         stats = {k: np.array(v).reshape(3, 1, 1) for k, v in out.items()}
         return stats | {"count": np.array([self.frames])}
-
-
-def _quantile_key(q: float) -> str:
-    return f"q{round(q * 100):02d}"
 
 
 def _quantile(counts: np.ndarray, values: np.ndarray, total: int, q: float) -> float:

@@ -3,17 +3,18 @@ LeRobot: alignment").
 
 LeRobot v3.0 has one ``fps`` per dataset: every row is one instant, and a video frame is
 looked up at its row's timestamp. Our tactile camera runs at its own rate (25 Hz for the
-GelSight Mini) and the control loop at 100 Hz. The export's rows are the **tactile frames**:
+GelSight Mini) and the control loop at 100 Hz. The export's rows are the **tactile frames**,
+one row per frame captured and pushed, none repeated and none left out:
 
-* ``fps`` is the camera's rate (the median interval between frames pushed, rounded to a
+* ``fps`` is the camera's rate (the median interval between frames captured, rounded to a
   whole number of frames per second, as LeRobot wants an integer);
-* row ``k`` stands for time ``T_k = t_0 + k / fps`` on the loop's clock (``t_0``: when the
-  first frame was pushed) and its ``timestamp`` is ``k / fps``. Its image is the newest frame
-  pushed at or before ``T_k`` (``HOLD_TOLERANCE_S``): on a camera that drops a frame the
-  previous one is shown again, and ``observation.tactile.frame_age_s`` says how old it is;
+* row ``k`` is frame ``k``; its ``timestamp`` is the nominal ``k / fps`` (the frame's
+  presentation time in the video, where LeRobot looks it up within its ``tolerance_s``), and
+  ``observation.tactile.capture_time_s`` its real capture time, s after the episode's first
+  frame's (on the loop's clock; a camera's jitter and drops show there);
 * ``observation.state`` is the robot as the control loop saw it at the tick at or before
-  ``T_k`` (the tick that pushed the frame): TCP pose T2B (m, rad, xArm rpy) and gripper
-  opening (m);
+  the frame's push (``TICK_TOLERANCE_S``; the tick that pushed the frame): TCP pose T2B (m,
+  rad, xArm rpy) and gripper opening (m);
 * ``observation.state.window`` keeps the higher rate: the same state at the last ``W``
   ticks up to that tick, oldest first, flattened row-major (``W = round(loop rate / fps)``,
   4 at 100 Hz / 25 Hz; the first rows repeat the first tick);
@@ -21,8 +22,8 @@ GelSight Mini) and the control loop at 100 Hz. The export's rows are the **tacti
   ``valid`` 0 and the values 0 while the estimator was zeroing or had no reference);
 * ``action`` is the command sent at that tick (TCP twist in B, m/s and rad/s, zero when none
   was sent; the gripper opening last commanded, m), and ``action.window`` the commands of
-  the ``W`` ticks from that tick on, i.e. until the next frame: the action chunk that
-  followed the frame.
+  the ``W`` ticks from that tick on, i.e. about until the next frame: the action chunk
+  that followed the frame.
 """
 
 from __future__ import annotations
@@ -39,12 +40,14 @@ from evaluation.episodes import episode_streams
 from evaluation.episodes.episode_streams import LoggedFrame, Ticks
 from evaluation.episodes.lerobot_dataset import DatasetEpisode, VectorFeature
 
-HOLD_TOLERANCE_S = 1e-6
+TICK_TOLERANCE_S = 1e-6
+"""A tick this much after a frame's push time (s) still counts as at it (float rounding)."""
 STATE_NAMES = ("tcp_x_m", "tcp_y_m", "tcp_z_m", "tcp_roll_rad", "tcp_pitch_rad",
                "tcp_yaw_rad", "gripper_width_m")  # fmt: skip
 ACTION_NAMES = ("v_x_m_s", "v_y_m_s", "v_z_m_s", "w_x_rad_s", "w_y_rad_s", "w_z_rad_s",
                 "gripper_target_m")  # fmt: skip
 WRENCH_NAMES = (*VALUE_FIELDS, "contact", "valid")
+CAPTURE_KEY = "observation.tactile.capture_time_s"
 
 
 class AlignmentError(ValueError):
@@ -54,32 +57,31 @@ class AlignmentError(ValueError):
 @dataclass(frozen=True)
 class AlignedEpisode:
     """An episode as dataset rows: the ``dataset`` episode, its ``fps``, the frames' size
-    (``frame_hw``: height, width px), the ticks per row ``window``, how many rows
-    ``repeated`` an older frame, and the control loop's rate (``loop_rate_hz``, Hz)."""
+    (``frame_hw``: height, width px), the ticks per row ``window``, the largest distance
+    between a frame's capture time and its nominal timestamp (``drift_s``, s), and the
+    control loop's rate (``loop_rate_hz``, Hz)."""
 
     dataset: DatasetEpisode
     fps: int
     frame_hw: tuple[int, int]
     window: int
-    repeated: int
+    drift_s: float
     loop_rate_hz: float = math.nan
 
 
-def camera_fps(push_t_s: np.ndarray) -> int:
-    """The camera's rate from the times frames were pushed (s): 1 / the median interval,
+def camera_fps(capture_t_s: np.ndarray) -> int:
+    """The camera's rate from the frames' capture times (s): 1 / the median interval,
     rounded; AlignmentError with fewer than two frames."""
-    if len(push_t_s) < 2:
-        raise AlignmentError(f"{len(push_t_s)} tactile frame(s): need at least 2 to export")
-    return max(1, round(1.0 / float(np.median(np.diff(push_t_s)))))
+    if len(capture_t_s) < 2:
+        raise AlignmentError(f"{len(capture_t_s)} tactile frame(s): need at least 2 to export")
+    return max(1, round(1.0 / float(np.median(np.diff(capture_t_s)))))
 
 
-def frame_rows(push_t_s: np.ndarray, fps: int) -> tuple[np.ndarray, np.ndarray]:
-    """The rows' times ``T_k = t_0 + k / fps`` (s, from the first push to the last) and,
-    for each, the index of the newest frame pushed at or before it."""
-    rows = math.floor((push_t_s[-1] - push_t_s[0]) * fps + 0.5) + 1
-    row_t = push_t_s[0] + np.arange(rows) / fps
-    source = np.searchsorted(push_t_s, row_t + HOLD_TOLERANCE_S, side="right") - 1
-    return row_t, source
+def frame_times(capture_t_s: np.ndarray, fps: int) -> tuple[np.ndarray, np.ndarray]:
+    """Each frame's row times: the nominal ``timestamp`` ``k / fps`` and the capture time
+    after the first frame's (both s)."""
+    nominal = np.arange(len(capture_t_s)) / fps
+    return nominal, capture_t_s - capture_t_s[0]
 
 
 def _state(ticks: Ticks) -> np.ndarray:
@@ -113,11 +115,11 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
     ticks = episode_streams.ticks(episode)
     if len(ticks) == 0:
         raise AlignmentError("no control ticks (/loop/tick) to take the robot's state from")
+    capture = np.array([frame.capture_t_s for frame in logged])
     push_t = np.array([frame.t_s for frame in logged])
-    fps = camera_fps(push_t)
-    row_t, source = frame_rows(push_t, fps)
-    rows = len(row_t)
-    tick = np.clip(np.searchsorted(ticks.t_s, row_t + HOLD_TOLERANCE_S, side="right") - 1, 0, None)
+    fps = camera_fps(capture)
+    nominal, captured = frame_times(capture, fps)
+    tick = np.clip(np.searchsorted(ticks.t_s, push_t + TICK_TOLERANCE_S, side="right") - 1, 0, None)
     loop_rate = 1.0 / float(np.median(np.diff(ticks.t_s))) if len(ticks) > 1 else fps
     window = max(1, round(loop_rate / fps))
     state, action = _state(ticks), _action(ticks)
@@ -128,10 +130,8 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
             _window_names(STATE_NAMES, window, forward=False),
             windows(state, tick, window, forward=False),
         ),
-        VectorFeature("observation.wrench", WRENCH_NAMES, _wrench(episode, logged, source)),
-        VectorFeature(
-            "observation.tactile.frame_age_s", ("age_s",), (row_t - push_t[source])[:, None]
-        ),
+        VectorFeature("observation.wrench", WRENCH_NAMES, _wrench(episode, len(logged))),
+        VectorFeature(CAPTURE_KEY, ("capture_time_s",), captured[:, None]),
         VectorFeature("action", ACTION_NAMES, action[tick]),
         VectorFeature(
             "action.window",
@@ -141,36 +141,31 @@ def align(episode: Episode, task: str) -> AlignedEpisode:
     )
     first = logged[0].image()
     frame_hw = (int(first.shape[0]), int(first.shape[1]))
-    repeated = int(rows - len(np.unique(source)))
-    dataset = DatasetEpisode(task, rows, _rgb_frames(logged, source), features)
-    return AlignedEpisode(dataset, fps, frame_hw, window, repeated, loop_rate)
+    drift = float(np.max(np.abs(captured - nominal)))
+    dataset = DatasetEpisode(task, len(logged), _rgb_frames(logged), features)
+    return AlignedEpisode(dataset, fps, frame_hw, window, drift, loop_rate)
 
 
-def _wrench(episode: Episode, logged: list[LoggedFrame], source: np.ndarray) -> np.ndarray:
-    """The estimate of each row's frame (matched by push order), its flags last; zeros and
+def _wrench(episode: Episode, frames: int) -> np.ndarray:
+    """The estimate of each frame (matched by push order), its flags last; zeros and
     ``valid`` 0 while the estimator zeroed or where nothing finite was logged."""
     found = episode_streams.estimates(episode)
     by_push = {int(p): i for i, p in enumerate(found.push_index)}
-    table = np.zeros((len(logged), len(WRENCH_NAMES)))
-    for push in range(len(logged)):
+    table = np.zeros((frames, len(WRENCH_NAMES)))
+    for push in range(frames):
         i = by_push.get(push)
         if i is None or found.zeroing[i] or not np.isfinite(found.values[i]).all():
             continue
         table[push, : len(VALUE_FIELDS)] = found.values[i]
         table[push, -2:] = (float(found.contact[i]), 1.0)
-    return table[source]
+    return table
 
 
-def _rgb_frames(logged: list[LoggedFrame], source: np.ndarray) -> Iterator[np.ndarray]:
-    """Each row's image as RGB uint8 (H x W x 3), decoded once per frame."""
-    last, image = -1, None
-    for index in source:
-        if index != last:
-            decoded = logged[index].image()
-            image = (
-                np.repeat(decoded[:, :, None], 3, axis=2)
-                if decoded.ndim == 2
-                else decoded[:, :, ::-1]
-            )
-            last = index
+def _rgb_frames(logged: list[LoggedFrame]) -> Iterator[np.ndarray]:
+    """Each frame's image as RGB uint8 (H x W x 3), decoded when asked."""
+    for frame in logged:
+        decoded = frame.image()
+        image = (
+            np.repeat(decoded[:, :, None], 3, axis=2) if decoded.ndim == 2 else decoded[:, :, ::-1]
+        )
         yield np.ascontiguousarray(image)

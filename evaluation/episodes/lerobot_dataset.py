@@ -18,9 +18,9 @@ LeRobot")::
                                              one after the other
 
 Every episode goes into chunk 0, file 0 (one export is far below LeRobot's 100 MB data and
-200 MB video file sizes). Statistics are exact over the numeric features; over the video
-they are taken, as LeRobot does, on up to ``IMAGE_STAT_FRAMES`` evenly spaced frames per
-episode, per RGB channel, scaled to [0, 1], shape (3, 1, 1).
+200 MB video file sizes). Statistics are taken per episode and aggregated over the dataset
+as LeRobot does (evaluation/episodes/lerobot_stats.py): the numeric features over every row,
+the video over the frames LeRobot samples, per RGB channel, scaled to [0, 1], shape (3, 1, 1).
 
 Memory: the episodes are taken one at a time from any iterable (a generator that reads
 each episode file when asked): each one's frames go to the video encoder as they come and
@@ -45,7 +45,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
-from evaluation.episodes.image_stats import QUANTILES, ImageStats
+from evaluation.episodes.image_stats import ImageStats
+from evaluation.episodes.lerobot_stats import (
+    Stats,
+    aggregate_features,
+    downsampled,
+    numeric_stats,
+    sample_indices,
+)
 from evaluation.episodes.lerobot_video import open_video, video_info
 
 CODEBASE_VERSION = "v3.0"
@@ -66,7 +73,6 @@ INDEX_FEATURES = {
     "task_index": "int64",
 }
 """The columns every LeRobot v3.0 data file has, with their dtypes."""
-IMAGE_STAT_FRAMES = 100
 
 
 @dataclass(frozen=True)
@@ -147,15 +153,15 @@ def _location(template: str, **keys: Any) -> str:
 
 @dataclass
 class _Written:
-    """What is kept of each episode written: its task, length, numeric rows and image
-    statistics (never its frames)."""
+    """What is kept of each episode written: its task, length, numeric rows and statistics
+    (never its frames)."""
 
     layout: list[tuple[str, tuple[str, ...]]]
     features: tuple[VectorFeature, ...]
     tasks: list[str]
     lengths: list[int]
     tables: list[pa.Table]
-    images: list[ImageStats]
+    stats: list[dict[str, Stats]]
 
     @property
     def episodes(self) -> int:
@@ -186,8 +192,10 @@ def _write(
             elif layout != written.layout:
                 raise ValueError(f"episode {number}: its features differ from episode 0's")
             task_index = task_order.setdefault(episode.task, len(task_order))
-            written.images.append(_encode_frames(episode, number, video))
-            written.tables.append(_data_table(episode, number, written.frames, task_index, fps))
+            images = _encode_frames(episode, number, video)
+            table = _data_table(episode, number, written.frames, task_index, fps)
+            written.tables.append(table)
+            written.stats.append(_episode_stats(table, written.features, images))
             written.tasks.append(episode.task)
             written.lengths.append(episode.length)
             del episode  # its frames (and the episode file behind them) may go now
@@ -201,10 +209,7 @@ def _write(
     _write_episodes(root, written, fps)
     tasks = list(task_order)
     pd.DataFrame({"task_index": range(len(tasks))}, index=tasks).to_parquet(root / TASKS_PATH)
-    images = ImageStats()
-    for sample in written.images:
-        images.merge(sample)
-    _write_json(root / "meta" / "stats.json", _stats(table, written.features, images))
+    _write_json(root / "meta" / "stats.json", _plain(aggregate_features(written.stats)))
     info = {
         "codebase_version": CODEBASE_VERSION,
         "robot_type": robot_type,
@@ -225,8 +230,8 @@ def _write(
 
 
 def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> ImageStats:
-    """Encode the episode's frames; the statistics of the evenly spaced ones."""
-    keep = set(np.linspace(0, episode.length - 1, IMAGE_STAT_FRAMES).round().astype(int))
+    """Encode the episode's frames; the statistics of those LeRobot samples."""
+    keep = set(sample_indices(episode.length).tolist())
     sampled = ImageStats()
     count = 0
     for frame in episode.frames:
@@ -237,7 +242,7 @@ def _encode_frames(episode: DatasetEpisode, number: int, video: Any) -> ImageSta
         except ValueError as exc:
             raise ValueError(f"episode {number}, frame {count}: {exc}") from None
         if count in keep:
-            sampled.add(np.asarray(frame, dtype=np.uint8))
+            sampled.add(downsampled(np.asarray(frame, dtype=np.uint8)))
         count += 1
     if count != episode.length:
         raise ValueError(f"episode {number}: {count} frames for a length of {episode.length}")
@@ -290,20 +295,6 @@ def _features_info(
     return features
 
 
-def _numeric_stats(values: np.ndarray) -> dict[str, np.ndarray]:
-    """min, max, mean, std, count and the quantiles over the rows of ``values`` (n, k)."""
-    stats = {
-        "min": values.min(axis=0),
-        "max": values.max(axis=0),
-        "mean": values.mean(axis=0, dtype=np.float64),
-        "std": values.std(axis=0, dtype=np.float64),
-        "count": np.array([len(values)]),
-    }
-    for q, value in zip(QUANTILES, np.quantile(values, QUANTILES, axis=0), strict=True):
-        stats[f"q{round(q * 100):02d}"] = value
-    return stats
-
-
 def _table_values(table: pa.Table, key: str) -> np.ndarray:
     """The column ``key`` as an (n, k) array."""
     column = table.column(key).combine_chunks()
@@ -312,20 +303,25 @@ def _table_values(table: pa.Table, key: str) -> np.ndarray:
     return column.to_numpy().reshape(-1, 1)
 
 
-def _stats(
+def _episode_stats(
     table: pa.Table, vectors: tuple[VectorFeature, ...], images: ImageStats
-) -> dict[str, dict[str, Any]]:
+) -> dict[str, Stats]:
+    """One episode's statistics (its rows in ``table``), feature by feature."""
     keys = [f.key for f in vectors] + list(INDEX_FEATURES)
-    stats = {key: _numeric_stats(_table_values(table, key)) for key in keys}
+    stats = {key: numeric_stats(_table_values(table, key)) for key in keys}
     stats[IMAGE_KEY] = images.stats()
+    return stats
+
+
+def _plain(stats: dict[str, Stats]) -> dict[str, dict[str, Any]]:
     return {key: {k: v.tolist() for k, v in values.items()} for key, values in stats.items()}
 
 
 def _write_episodes(root: Path, written: _Written, fps: int) -> None:
     rows: list[dict[str, Any]] = []
     first = 0
-    for number, (task, length, table, images) in enumerate(
-        zip(written.tasks, written.lengths, written.tables, written.images, strict=True)
+    for number, (task, length, stats) in enumerate(
+        zip(written.tasks, written.lengths, written.stats, strict=True)
     ):
         video = f"videos/{IMAGE_KEY}/"
         row: dict[str, Any] = {
@@ -343,7 +339,7 @@ def _write_episodes(root: Path, written: _Written, fps: int) -> None:
             "meta/episodes/chunk_index": 0,
             "meta/episodes/file_index": 0,
         }
-        for key, values in _stats(table, written.features, images).items():
+        for key, values in _plain(stats).items():
             for name, value in values.items():
                 row[f"stats/{key}/{name}"] = value
         rows.append(row)

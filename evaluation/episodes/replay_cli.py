@@ -10,6 +10,8 @@
                                            (simulation) and against the logged estimates
     replay export EP [EP ...] --lerobot DIR [--task TEXT]
                                            a LeRobot v3.0 dataset of the episodes
+    replay export EP --rerun OUT.rrd       a Rerun recording of the episode (the ``rerun``
+                                           extra): scalars, texts, images, fields, frames
     replay repair EP [--out OUT]           finish a file left by a killed process
 
 EP is an episode file (MCAP, ``episode.mcap`` in a run's folder). A file cut short by a
@@ -49,12 +51,18 @@ from evaluation.common.cli_support import (
     resolved_config_path,
     run_tool,
 )
-from evaluation.common.outputs import atomic_text, check_output_file, check_output_folder
+from evaluation.common.outputs import (
+    atomic_file,
+    atomic_text,
+    check_output_file,
+    check_output_folder,
+)
 from evaluation.episodes import episode_streams, reestimation
 from evaluation.episodes.episode_chart import write_episode_chart
 from evaluation.episodes.episode_summary import CRC_NOTE, summary_lines
 from evaluation.episodes.lerobot_alignment import AlignedEpisode, AlignmentError, align
 from evaluation.episodes.lerobot_dataset import DatasetEpisode, write_dataset
+from evaluation.episodes.rerun_export import LOOP_TIMELINE, RerunMissing, rerun_sdk, write_recording
 from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
 
 PROG = "replay"
@@ -208,16 +216,18 @@ def _task_sentence(episode: Episode, given: str | None) -> str:
 
 def export(args: argparse.Namespace) -> int:
     distinct(build_parser(), "EP", [str(p.resolve()) for p in args.episodes])
+    if args.rerun is not None:
+        return export_rerun(args)
     check_output_folder(args.lerobot, args.episodes, "--lerobot", must_not_exist=True)
     aligned = _aligned_episodes(args.episodes, args.allow_truncated, args.task)
     first = next(aligned)  # the dataset's rate, frame size and window
     fps, frame_hw, window = first.fps, first.frame_hw, first.window
-    repeated = 0
+    drift_s = 0.0
 
     def each() -> Iterator[DatasetEpisode]:
-        nonlocal repeated
+        nonlocal drift_s
         for item in itertools.chain([first], aligned):
-            repeated += item.repeated
+            drift_s = max(drift_s, item.drift_s)
             yield item.dataset  # its frames are read while the video is written, then freed
 
     try:
@@ -226,9 +236,34 @@ def export(args: argparse.Namespace) -> int:
         raise ToolError(f"--lerobot '{args.lerobot}': {exc}") from None
     print(
         f"{PROG}: wrote a LeRobot v3.0 dataset of {written.episodes} episodes, "
-        f"{written.frames} frames at {written.fps} fps ({window} control ticks "
-        f"per frame; {repeated} rows repeat an older frame) to {args.lerobot}"
+        f"{written.frames} frames at {written.fps} fps (one row per tactile frame; {window} "
+        f"control ticks per frame; capture times at most {drift_s:.3f} s from the nominal "
+        f"timestamps) to {args.lerobot}"
     )
+    return 0
+
+
+def export_rerun(args: argparse.Namespace) -> int:
+    """``export EP --rerun OUT.rrd``: one episode, written to a temporary file beside OUT
+    and renamed when complete."""
+    if len(args.episodes) != 1:
+        raise ToolError(f"--rerun: expected one episode, got {len(args.episodes)}")
+    if args.task is not None:
+        raise ToolError("--task: only with --lerobot (a Rerun recording has no task sentence)")
+    if args.rerun.suffix.lower() != ".rrd":
+        raise ToolError(f"--rerun '{args.rerun}': expected a .rrd file (a Rerun recording)")
+    try:
+        rerun_sdk()
+    except RerunMissing:
+        raise ToolError(
+            "--rerun needs rerun-sdk, not installed: pip install -e '.[rerun]' (the 'rerun' extra)"
+        ) from None
+    check_output_file(args.rerun, args.episodes, "--rerun")
+    episode = open_episode(args.episodes[0], args.allow_truncated)
+    with atomic_file(args.rerun) as temporary:
+        counts = write_recording(episode, temporary)
+    rows = ", ".join(f"{n} {kind}" for kind, n in counts.items())
+    print(f"{PROG}: wrote a Rerun recording ({rows}; timeline '{LOOP_TIMELINE}') to {args.rerun}")
     return 0
 
 
@@ -313,7 +348,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="estimator configuration: a name in configs/estimators or a YAML path",
     )
     sub.add_argument("--out", type=Path, default=None, help="CSV of the new estimates")
-    sub = command("export", "export episodes as a LeRobot v3.0 dataset", export)
+    sub = command(
+        "export", "export episodes as a LeRobot v3.0 dataset or one as a Rerun recording", export
+    )
     sub.add_argument("episodes", type=Path, nargs="+", metavar="EP", help="episode files")
     sub.add_argument(
         "--allow-truncated",
@@ -322,7 +359,10 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="read files cut short (no footer) or damaged: what is readable",
     )
-    sub.add_argument("--lerobot", type=Path, required=True, help="new dataset folder")
+    target = sub.add_mutually_exclusive_group(required=True)
+    target.add_argument("--lerobot", type=Path, help="new dataset folder")
+    target.add_argument("--rerun", type=Path, metavar="OUT.rrd",
+                        help="a Rerun recording of one episode (the 'rerun' extra)")  # fmt: skip
     sub.add_argument(
         "--task",
         default=None,

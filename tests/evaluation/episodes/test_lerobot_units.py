@@ -8,28 +8,30 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from evaluation.episodes.image_stats import QUANTILES, ImageStats
+from evaluation.episodes.image_stats import ImageStats
 from evaluation.episodes.lerobot_alignment import (
     AlignmentError,
     camera_fps,
-    frame_rows,
+    frame_times,
     windows,
 )
 from evaluation.episodes.lerobot_dataset import DatasetEpisode, VectorFeature, write_dataset
+from evaluation.episodes.lerobot_stats import (
+    QUANTILES,
+    aggregate,
+    downsampled,
+    numeric_stats,
+    sample_count,
+)
 
 
-def test_rows_follow_the_camera_and_hold_the_last_frame_over_a_drop():
-    pushed = 1.0 + np.array([0.0, 0.04, 0.12, 0.16])  # the frame at 1.08 s was lost
-    fps = camera_fps(pushed)
-    row_t, source = frame_rows(pushed, fps)
+def test_every_frame_is_one_row_at_its_nominal_time_and_keeps_its_capture_time():
+    captured = 1.0 + np.array([0.0, 0.04, 0.12, 0.15, 0.20, 0.24])  # 1.08 s lost, 1.15 early
+    fps = camera_fps(captured)
+    nominal, capture = frame_times(captured, fps)
     assert fps == 25
-    np.testing.assert_allclose(row_t, 1.0 + np.arange(5) * 0.04)
-    assert list(source) == [0, 1, 1, 2, 3]
-
-
-def test_a_slightly_late_frame_stays_on_its_row():
-    pushed = np.array([0.0, 0.0400004, 0.08, 0.1199996])
-    assert list(frame_rows(pushed, 25)[1]) == [0, 1, 2, 3]
+    np.testing.assert_allclose(nominal, [0.0, 0.04, 0.08, 0.12, 0.16, 0.20])  # none repeated
+    np.testing.assert_allclose(capture, [0.0, 0.04, 0.12, 0.15, 0.20, 0.24])  # none dropped
 
 
 def test_one_frame_is_too_few_to_tell_the_rate():
@@ -99,6 +101,30 @@ def test_image_statistics_stream_in_histograms_and_match_numpys_on_the_pixels():
     for key, value in expected.items():
         np.testing.assert_allclose(got[key].reshape(3), value, rtol=0, atol=1e-12, err_msg=key)
     assert got["count"].tolist() == [7] and stats.counts.nbytes == 3 * 256 * 8
+
+
+def test_episode_statistics_aggregate_as_lerobots_by_hand():
+    """Episodes [0, 2] and [3, 5, 3, 5]: means 1 and 4, std 1 each, counts 2 and 4."""
+    first = numeric_stats(np.array([[0.0], [2.0]]))
+    second = numeric_stats(np.array([[3.0], [5.0], [3.0], [5.0]]))
+    got = aggregate([first, second])
+    assert got["count"].tolist() == [6]
+    assert got["min"].tolist() == [0.0] and got["max"].tolist() == [5.0]
+    np.testing.assert_allclose(got["mean"], [(2 * 1 + 4 * 4) / 6])  # 3
+    # pooled: (2 * (1 + (1 - 3)^2) + 4 * (1 + (4 - 3)^2)) / 6 = 3, the rows' own variance
+    np.testing.assert_allclose(got["std"], [np.sqrt(3.0)])
+    np.testing.assert_allclose(np.var([0, 2, 3, 5, 3, 5]), 3.0)
+    # quantiles: the count-weighted mean of the episodes', not the pooled rows' quantile
+    np.testing.assert_allclose(got["q50"], [(2 * 1.0 + 4 * 4.0) / 6])  # 3
+    np.testing.assert_allclose(got["q01"], [(2 * 0.02 + 4 * 3.0) / 6])  # 2.0067, pooled 0.05
+
+
+def test_image_statistics_sample_frames_as_lerobot_does():
+    # lerobot's estimate_num_samples docstring: 1000 -> 177, 2000 -> 299, 5000 -> 594
+    assert [sample_count(n) for n in (1000, 2000, 5000, 20000)] == [177, 299, 594, 1681]
+    assert sample_count(50) == 50 and sample_count(300) == 100 and sample_count(10**6) == 10_000
+    assert downsampled(np.zeros((240, 320, 3))).shape == (120, 160, 3)  # 320 // 150 = 2
+    assert downsampled(np.zeros((240, 299, 3))).shape == (240, 299, 3)
 
 
 def test_a_feature_needs_a_row_per_frame_and_a_name_per_column():
