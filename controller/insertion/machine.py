@@ -356,6 +356,10 @@ class InsertionMachine:
             return np.zeros(3)
         return self.grasp.tip_shift_b(rotation)
 
+    def feel_first(self) -> bool:
+        """FEEL is on (``feel.enabled``) and has not run on the present grasp."""
+        return self.config.feel.enabled and not self.memory.felt
+
     def plug_axis_b(self, rotation: Rotation) -> np.ndarray:
         """The plug's axis (unit, toward its tip) in B for the TCP turned by ``rotation``
         (T2B): T z turned by FEEL's estimate, T z before it."""
@@ -364,13 +368,13 @@ class InsertionMachine:
         return rotation.apply(self.grasp.tip_t / self.grasp.length_m)
 
     def search_rotation(self) -> Rotation:
-        """Before FEEL: the approach rotation without its tilt (T z straight down, so the
-        tip's face can lie flat on the board). Then the approach rotation (T2B), turned
+        """Before FEEL (``feel_first``): the approach rotation without its tilt (T z straight
+        down, so the tip's face can lie flat on the board). Then the approach rotation (T2B), turned
         about T y against FEEL's estimate of the
         plug's tilt in the hand (so the plug, not the arm, is as the approach has it), and
         about B's z by the present pass's yaw once SEARCH has run out of time
         (config.SearchSettings, ``retry_yaw_rad``)."""
-        if not self.memory.felt:
+        if self.feel_first():
             return self._feel_rot
         approach = self._approach_rot
         if self.grasp is not None:  # the plug upright, not the arm

@@ -136,7 +136,9 @@ class ApproachSettings(Config):
 
 @config_dataclass
 class FeelSettings(Config):
-    """FEEL, at the run's first touch (phases/feel.py): APPROACH brings the tip down
+    """FEEL, at the run's first touch (phases/feel.py), when ``enabled`` (off by default:
+    on the tuning seeds it has not yet paid for its time, docs/BENCHMARKS.md, "The plug in
+    the hand by touch"): APPROACH brings the tip down
     ``offset_m`` from the nominal opening along its narrow axis (beyond the opening's
     uncertainty, so the tip's face lands on the board); the tip is held ``press_depth_m``
     below its height at contact for ``settle_s``; then the TCP turns about the horizontal
@@ -146,6 +148,7 @@ class FeelSettings(Config):
     No change within ``rock_max_rad`` of the starting rotation: the turn is reversed once,
     then FEEL ends without an estimate (the nominal grasp is kept)."""
 
+    enabled: bool = False
     offset_m: float = number(0.0, 0.05, default=0.0065)
     press_depth_m: float = number(0.0, 0.005, default=0.0005)
     settle_s: float = number(0.0, 5.0, default=0.3)

@@ -1,12 +1,21 @@
 """FEEL on the toy world (tests/insertion/world.py, whose plug may be turned in the hand):
 the tilt found by rocking, the search aimed with it, and a face that never lies flat."""
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from controller.insertion.interface import Phase
+from controller.insertion.machine_config import MachineConfig
 from controller.insertion.phases.feel import FeelStage
-from tests.insertion.world import ToyWorld, make_machine, path
+from tests.insertion.world import ToyWorld, make_machine, path, toy_config
+
+
+def feeling() -> MachineConfig:
+    """The toy world's configuration with FEEL on."""
+    config = toy_config()
+    return replace(config, feel=replace(config.feel, enabled=True))
 
 
 def _tip_error_in_search_m(world: ToyWorld, machine) -> float:
@@ -22,7 +31,7 @@ def _tip_error_in_search_m(world: ToyWorld, machine) -> float:
 @pytest.mark.parametrize("tilt", [-0.06, 0.05])
 def test_feel_finds_the_tilt_in_the_hand_and_the_search_follows_the_true_tip(tilt):
     world = ToyWorld(grasp_tilt_rad=tilt)
-    machine = make_machine(world)
+    machine = make_machine(world, feeling())
     error_m = _tip_error_in_search_m(world, machine)
     assert machine.grasp is not None
     assert machine.grasp.tilt_rad == pytest.approx(tilt, abs=0.005)
@@ -37,7 +46,7 @@ def test_feel_finds_the_tilt_in_the_hand_and_the_search_follows_the_true_tip(til
 
 def test_without_the_torque_the_tilt_is_not_found_and_the_search_misses_the_true_tip():
     world = ToyWorld(grasp_tilt_rad=0.05, edge_torque=0.0)
-    machine = make_machine(world)
+    machine = make_machine(world, feeling())
     rules = []
     while machine.phase is not Phase.SEARCH and world.t_s < 30.0:
         rules.append(world.step(machine).rule)
@@ -50,7 +59,7 @@ def test_without_the_torque_the_tilt_is_not_found_and_the_search_misses_the_true
 
 def test_feel_rocks_toward_the_flat_face_first():
     world = ToyWorld(grasp_tilt_rad=0.05)
-    machine = make_machine(world)
+    machine = make_machine(world, feeling())
     world.run_until(machine, Phase.FEEL)
     while machine.stage is not FeelStage.ROCK:
         world.step(machine)
@@ -60,3 +69,24 @@ def test_feel_rocks_toward_the_flat_face_first():
     turned = (world.rotation * start.inv()).as_rotvec()
     # the tilt is reached turning about B y (the axis across the opening's width at yaw 0)
     assert np.sign(turned[1]) == np.sign(0.05) and abs(turned[1]) > 0.01
+
+
+def test_feel_is_off_by_default_and_the_run_goes_straight_to_search():
+    world = ToyWorld(grasp_tilt_rad=0.05)
+    machine = make_machine(world)
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+    assert ("APPROACH", "SEARCH", "surface_contact") == path(machine)[1]
+    assert machine.grasp is None
+
+
+def test_a_regrasp_feels_again():
+    world = ToyWorld(grasp_tilt_rad=0.05)
+    machine = make_machine(world, feeling())
+    world.run_until(machine, Phase.SEARCH)
+    world.slip_gross = True
+    world.run_until(machine, Phase.GRASP, max_s=world.t_s + 0.1)
+    world.slip_gross = False
+    assert machine.grasp is None  # the new grasp is not the one felt
+    assert world.run_until(machine, Phase.DONE) is Phase.DONE
+    feels = [t for t in path(machine) if t[1] == "FEEL"]
+    assert len(feels) == 2 and machine.grasp is not None

@@ -10,7 +10,7 @@ from controller.insertion.interface import Phase, TeleopInput
 from controller.insertion.machine_config import MachineConfig, Timeouts
 from controller.insertion.phases.grasp import GraspStage
 from core.devices import Twist
-from tests.insertion.world import ToyWorld, make_machine, path, toy_config
+from tests.insertion.world import ToyWorld, make_machine, path
 
 OPERATOR = TeleopInput(connected=True, in_control=True, twist=Twist((0.0, 0.0, 0.01)))
 STILL = Twist()
@@ -125,7 +125,7 @@ def test_hand_back_after_release_resumes_retract():
 
 def test_time_under_teleop_does_not_count_toward_the_timeouts():
     world = ToyWorld()
-    cfg = replace(toy_config(), timeouts=replace(Timeouts(), total_s=22.0))  # run: 15.2 s
+    cfg = replace(MachineConfig(), timeouts=replace(Timeouts(), total_s=20.0))  # run: 12.8 s
     machine = make_machine(world, cfg)
     world.run_until(machine, Phase.APPROACH)
     for _ in range(1500):  # 15 s under teleop

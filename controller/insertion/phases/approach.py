@@ -1,8 +1,8 @@
 """APPROACH: servo to the tilted pose above the opening (the tip rising first if it is below
 its height there, so the plug never sweeps over the board), then descend until contact
 (config.ApproachSettings). The pose is over where SEARCH's pattern left off, with the tip
-where FEEL found it; before FEEL has run, beside the opening (``feel.offset_m``), and the
-contact there begins FEEL.
+where FEEL found it; when FEEL is to run first, beside the opening (``feel.offset_m``), and
+the contact there begins FEEL.
 """
 
 from __future__ import annotations
@@ -75,10 +75,10 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
         state.count = state.count + 1 if contact else 0
     if state.count >= settings.contact_frames:
         machine.touch.touch_surface(obs.arm.tcp, rotation)
-        if machine.memory.felt:
-            machine.go(obs, Phase.SEARCH, "surface_contact")
-        else:
+        if machine.feel_first():
             machine.go(obs, Phase.FEEL, "first_contact")
+        else:
+            machine.go(obs, Phase.SEARCH, "surface_contact")
         return hold()
     machine.fire("descend")
     v_tip = np.array([0.0, 0.0, -settings.descend_speed_m_s])
@@ -86,16 +86,17 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
 
 
 def _target_tip(machine: InsertionMachine) -> np.ndarray:
-    """Where APPROACH brings the tip, in B (m): above the feel point before FEEL has run,
-    else above where SEARCH's pattern left off; ``approach.height_m`` above the nominal
-    opening, or ``approach.touched_height_m`` above the surface once touch has found it."""
-    if machine.memory.felt:
-        offset = machine.pattern_offset_b(machine.memory.search_s_m)
-    else:
+    """Where APPROACH brings the tip, in B (m): above the feel point before FEEL has run
+    (``InsertionMachine.feel_first``), else above where SEARCH's pattern left off;
+    ``approach.height_m`` above the nominal opening, or ``approach.touched_height_m`` above
+    the surface FEEL touched once it has run."""
+    if machine.feel_first():
         yaw = machine.hole.yaw_rad
         offset = machine.config.feel.offset_m * np.array([-np.sin(yaw), np.cos(yaw), 0.0])
+    else:
+        offset = machine.pattern_offset_b(machine.memory.search_s_m)
     settings, surface_z = machine.config.approach, machine.touch.surface_z_m
-    if surface_z is None:
+    if surface_z is None or not machine.memory.felt:
         return machine.hole_xyz + offset + np.array([0.0, 0.0, settings.height_m])
     above = machine.hole_xyz + offset
     above[2] = surface_z + settings.touched_height_m
