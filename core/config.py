@@ -341,7 +341,7 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
             f"{path}: not a UTF-8 text file (byte 0x{raw[exc.start]:02x} at offset {exc.start})"
         ) from None
     try:
-        data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader
+        data = copy.deepcopy(_parsed(text))  # the caller's own copy: it may change it
     except yaml.MarkedYAMLError as exc:
         raise ConfigError(_yaml_message(path, exc)) from None
     except yaml.reader.ReaderError as exc:
@@ -359,6 +359,14 @@ def load_yaml(path: Path | str) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise ConfigError(f"{path}: expected a mapping of keys at the top level, got {show(data)}")
     return data
+
+
+@functools.lru_cache(maxsize=64)
+def _parsed(text: str) -> Any:
+    """The YAML ``text`` read by the strict SafeLoader, kept for the next read of the same
+    text (a process loads the same configuration files again and again; the parse is pure
+    Python). An error is raised each time, never kept."""
+    return yaml.load(text, Loader=_StrictLoader)
 
 
 BASE_KEY = "extends"

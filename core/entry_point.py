@@ -77,7 +77,12 @@ def _redeliver_lost_stops(previous_hook):
         if signum is None:
             previous_hook(unraisable)
             return
-        threading.Timer(REDELIVERY_DELAY_S, os.kill, (os.getpid(), signum)).start()
+        while True:
+            try:
+                threading.Timer(REDELIVERY_DELAY_S, os.kill, (os.getpid(), signum)).start()
+                return
+            except (KeyboardInterrupt, Terminated):  # on a loaded machine, the stop sent
+                continue  # again landed before the hook returned: lost again, send it again
 
     return hook
 

@@ -1,8 +1,11 @@
-"""What the whole suite shares: one recorded trial, made once per test run and shared by
-the pytest-xdist workers through a file lock in the run's common temporary folder."""
+"""What the whole suite shares: artifacts made once per test run and shared by the
+pytest-xdist workers through a file lock in the run's common temporary folder (``made_once``):
+one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs."""
 
 from __future__ import annotations
 
+import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -10,10 +13,11 @@ from filelock import FileLock
 
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import load_task
+from controller.run.task import Task
 from evaluation.trials.trial import run
+from tests.easy_scene import easy_scene_task, write_easy_calibration
 
 RECORDED_TASK, RECORDED_CONTROLLER, RECORDED_SEED = "usb_c", "dipole", 0
-_DONE = "recorded.done"
 
 
 @pytest.fixture(scope="session")
@@ -24,20 +28,44 @@ def run_root(tmp_path_factory, worker_id) -> Path:
     return base if worker_id == "master" else base.parent
 
 
+def made_once(run_root: Path, name: str, make: Callable[[Path], None]) -> Path:
+    """``run_root/name``, made by ``make(folder)`` by the first worker of the run to ask (the
+    others wait on the lock and read it). A ``make`` that failed leaves no ``.done`` mark: the
+    next one to ask starts again from an empty folder. The tests only read the folder."""
+    folder = run_root / name
+    with FileLock(str(run_root / f"{name}.lock")):
+        if not (run_root / f"{name}.done").exists():
+            shutil.rmtree(folder, ignore_errors=True)
+            make(folder)
+            (run_root / f"{name}.done").touch()
+    return folder
+
+
+def _record_trial(folder: Path) -> None:
+    episode = EpisodeOptions(image_format="png")
+    task = load_task(RECORDED_TASK)
+    outcome = run(task, RECORDED_CONTROLLER, RECORDED_SEED, out_dir=folder, episode=episode)
+    assert outcome.result.success
+    (folder / EPISODE_FILE).chmod(0o444)
+
+
 @pytest.fixture(scope="session")
 def recorded_trial(run_root) -> Path:
     """The record folder of a simulated USB-C trial (seed 0, the dipole controller) that
     inserted, with its episode recorded with lossless (PNG) frames and made read-only (the
     tools never write over their input): ``trial.json``, ``ticks.jsonl``,
     ``transitions.jsonl``, ``truth.npz``, ``episode.mcap``. Only the tests read it."""
-    folder = run_root / "recorded_trial"
-    with FileLock(str(run_root / "recorded_trial.lock")):
-        if not (run_root / _DONE).exists():
-            episode = EpisodeOptions(image_format="png")
-            task = load_task(RECORDED_TASK)
-            outcome = run(task, RECORDED_CONTROLLER, RECORDED_SEED, out_dir=folder,
-                          episode=episode)  # fmt: skip
-            assert outcome.result.success
-            (folder / EPISODE_FILE).chmod(0o444)
-            (run_root / _DONE).touch()
-    return folder
+    return made_once(run_root, "recorded_trial", _record_trial)
+
+
+@pytest.fixture(scope="session")
+def easy_task(run_root) -> Callable[[str], Task]:
+    """``easy_task(name)``: task ``name`` on the easy scene (tests/easy_scene.py) with the
+    easy scene's own calibration, fitted once per test run."""
+
+    def task(name: str) -> Task:
+        folder = made_once(run_root, f"easy_calibration_{name}",
+                           lambda out: write_easy_calibration(name, out))  # fmt: skip
+        return easy_scene_task(name, folder)
+
+    return task

@@ -8,14 +8,11 @@ For tests of the trial machinery (records, faults, signals, take-over) that need
 machine to reach INSERT or DONE, not of the machine's success on the drawn scene, which is
 the insertion trials' to measure (docs/TRIALS.md).
 
-``easy_task(name)`` loads a task on the easy scene with a calibration fitted in it (once per
-test process, into a temporary folder): the task's own calibration was fitted for the full
-scene's drawn grasp and is refused on another grasp (controller/run/task_calibration.py)."""
+The suite's ``easy_task(name)`` fixture (tests/conftest.py) loads a task on the easy scene
+with a calibration fitted in it, once per test run: the task's own calibration was fitted for
+the full scene's drawn grasp and is refused on another grasp
+(controller/run/task_calibration.py)."""
 
-import atexit
-import functools
-import shutil
-import tempfile
 from pathlib import Path
 
 from controller.run.task import Task, load_task
@@ -30,16 +27,14 @@ EASY_SCENE = (
 )
 
 
-@functools.cache
-def _easy_calibration(name: str) -> Path:
-    folder = Path(tempfile.mkdtemp(prefix="easy-scene-calibration-"))
-    atexit.register(shutil.rmtree, folder, True)
+def write_easy_calibration(name: str, folder: Path) -> None:
+    """Fits task ``name``'s calibration on the easy scene into ``folder/<name>.yaml``."""
     task = load_task(name, EASY_SCENE, with_calibration=False)
-    path = folder / f"{name}.yaml"
-    path.write_text(fit_scene_calibration(record_in_scene(task, 0), task).to_yaml())
-    return path
+    folder.mkdir(parents=True)
+    calibration = fit_scene_calibration(record_in_scene(task, 0), task)
+    (folder / f"{name}.yaml").write_text(calibration.to_yaml())
 
 
-def easy_task(name: str) -> Task:
-    """Task ``name`` on the easy scene, with the easy scene's own calibration."""
-    return load_task(name, (*EASY_SCENE, f"calibration={_easy_calibration(name)}"))
+def easy_scene_task(name: str, calibrations: Path) -> Task:
+    """Task ``name`` on the easy scene, with the calibration in ``calibrations``."""
+    return load_task(name, (*EASY_SCENE, f"calibration={calibrations / f'{name}.yaml'}"))

@@ -4,19 +4,23 @@ tests/node/foxglove_parser/ is a small npm package, pinned by its package-lock.j
 takes Foxglove Studio's ``parseChannel`` and ``parseJsonSchema`` (packages/mcap-support of the
 open-source Studio, which Lichtblick forked) out of the published ``@foxglove/studio-base``
 1.48.0 and runs them on the episode: every channel must parse and every message decode, every
-path the layout plots must be a number (see check_episode.mjs). ``npm ci`` installs it into
-the test's temporary folder with its own npm cache (the npm registry is the only network use).
+path the layout plots must be a number (see check_episode.mjs). ``npm ci`` installs it once
+per version of the package's files into the user's cache folder (the npm registry is the only
+network use).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import shutil
 import subprocess
+import tempfile
 from pathlib import Path
 
 import pytest
+from filelock import FileLock
 
 from controller.episode import read_episode
 from controller.episode.session import EPISODE_FILE
@@ -26,13 +30,13 @@ PACKAGE = Path(__file__).resolve().parents[2] / "node" / "foxglove_parser"
 LAYOUT = Path(__file__).resolve().parents[3] / "docs" / "foxglove" / "episode_layout.json"
 
 
-@pytest.fixture(scope="module")
-def checker(tmp_path_factory) -> Path:
-    """The package installed (``npm ci``) in a temporary folder: its check script's path."""
-    npm, node = shutil.which("npm"), shutil.which("node")
-    assert npm and node, "this test needs Node.js and npm on PATH (Node 20)"
-    folder = tmp_path_factory.mktemp("foxglove_parser")
-    for name in ("package.json", "package-lock.json", "check_episode.mjs"):
+FILES = ("package.json", "package-lock.json", "check_episode.mjs")
+
+
+def _install(folder: Path, npm: str) -> None:
+    """``npm ci`` of the package into ``folder`` (new), with its own npm cache."""
+    folder.mkdir(parents=True)
+    for name in FILES:
         shutil.copy(PACKAGE / name, folder / name)
     cache = folder / "npm-cache"
     env = {**os.environ, "npm_config_cache": str(cache), "npm_config_update_notifier": "false"}
@@ -41,6 +45,28 @@ def checker(tmp_path_factory) -> Path:
         cwd=folder, env=env, capture_output=True, text=True, timeout=900,
     )  # fmt: skip
     assert done.returncode == 0, f"npm ci failed:\n{done.stdout}\n{done.stderr}"
+    shutil.rmtree(cache)
+
+
+@pytest.fixture(scope="module")
+def checker() -> Path:
+    """The package installed (``npm ci``) once per version of its files, in the user's cache
+    folder (``$XDG_CACHE_HOME``, else ~/.cache), keyed by their SHA-256: its check script's
+    path. A clean machine installs it from scratch; an install cut short is done again."""
+    npm, node = shutil.which("npm"), shutil.which("node")
+    assert npm and node, "this test needs Node.js and npm on PATH (Node 20)"
+    key = hashlib.sha256(b"".join((PACKAGE / name).read_bytes() for name in FILES))
+    root = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "tactile-insertion"
+    root.mkdir(parents=True, exist_ok=True)
+    folder = root / f"foxglove_parser-{key.hexdigest()[:16]}"
+    with FileLock(str(folder) + ".lock"):
+        if not folder.is_dir():
+            partial = Path(tempfile.mkdtemp(prefix="foxglove_parser-", dir=root))
+            try:
+                _install(partial / "package", npm)
+                (partial / "package").rename(folder)
+            finally:
+                shutil.rmtree(partial)
     return folder / "check_episode.mjs"
 
 

@@ -19,6 +19,7 @@ import pytest
 from controller.episode import read_episode
 from evaluation.episodes import episode_streams
 from evaluation.episodes.replay_cli import main
+from tests.conftest import made_once
 
 INFO_KEYS = {
     "codebase_version", "robot_type", "total_episodes", "total_frames", "total_tasks",
@@ -63,14 +64,18 @@ def sample_count(frames: int) -> int:
 
 
 @pytest.fixture(scope="module")
-def dataset(episode_path, tmp_path_factory):
-    """Two episodes (the recorded one and a copy) exported into one dataset."""
-    folder = tmp_path_factory.mktemp("export")
-    second = folder / "second.mcap"
-    shutil.copyfile(episode_path, second)
-    root = folder / "lerobot"
-    assert main(["export", str(episode_path), str(second), "--lerobot", str(root)]) == 0
-    return root
+def dataset(episode_path, run_root):
+    """Two episodes (the recorded one and a copy) exported into one dataset, once per test
+    run (tests/conftest.py)."""
+
+    def export(folder):
+        folder.mkdir()
+        second = folder / "second.mcap"
+        shutil.copyfile(episode_path, second)
+        root = folder / "lerobot"
+        assert main(["export", str(episode_path), str(second), "--lerobot", str(root)]) == 0
+
+    return made_once(run_root, "lerobot_export", export) / "lerobot"
 
 
 def test_info_has_every_required_key_and_describes_each_feature(dataset, episode_path):

@@ -23,6 +23,7 @@ from evaluation.offline.calibrate_cli import main as calibrate_main
 from evaluation.offline.dataset import META, Dataset, DatasetMeta, DatasetWriter
 from evaluation.offline.jig_dataset import write_jig_dataset
 from evaluation.offline.make_dataset_cli import main as make_dataset_main
+from tests.conftest import made_once
 from tests.video_faults import corrupt_frame, truncate_inside_frame
 
 
@@ -37,20 +38,22 @@ class _ExactRenderer:
         return self._renderer.render(full)
 
 
-@pytest.fixture(scope="module")
-def dataset_folder(tmp_path_factory) -> Path:
-    folder = tmp_path_factory.mktemp("jig") / "plate"
-    config = jig_config()
+def _write_plate_dataset(folder: Path) -> None:
     write_jig_dataset(
         folder,
         "gelsight_mini",
         gel_model("gelsight_mini", "plate"),
         _ExactRenderer(),
         [Experiment("x", 0.04, 4)],
-        config,
+        jig_config(),
         seed=5,
     )
-    return folder
+
+
+@pytest.fixture(scope="module")
+def dataset_folder(run_root) -> Path:
+    """A simulated jig dataset, written once per test run (tests/conftest.py); read only."""
+    return made_once(run_root, "jig_plate_dataset", _write_plate_dataset)
 
 
 def test_dataset_round_trip(dataset_folder):

@@ -11,13 +11,17 @@ from controller.view.live_stream import FoxgloveLiveStream
 from evaluation.teleop import demo_cli
 from evaluation.teleop.pad_script import load_pad_script
 from evaluation.teleop.signs import manoeuvres, measured_signs
+from tests.conftest import made_once
+
+
+def _run_demo(out):
+    assert demo_cli.main(["--no-view", "--fast", "--out", str(out)]) == 0
 
 
 @pytest.fixture(scope="module")
-def demo(tmp_path_factory):
-    out = tmp_path_factory.mktemp("demo") / "out"
-    assert demo_cli.main(["--no-view", "--fast", "--out", str(out)]) == 0
-    return read_episode(out / "episode.mcap")
+def demo(run_root):
+    """The scripted demo's episode, run once per test run (tests/conftest.py)."""
+    return read_episode(made_once(run_root, "teleop_demo", _run_demo) / "episode.mcap")
 
 
 def test_each_manoeuvre_gives_the_documented_tilt_torque_sign(demo):

@@ -20,14 +20,13 @@ from controller.run import CONTROLLERS, Controller, run_task
 from controller.run.task import load_task
 from drivers.sim.twins.gamepad import PadEvent
 from evaluation.trials import trial
-from tests.easy_scene import easy_task
 
 ROOT = Path(__file__).resolve().parents[3]
 PERIOD_S = 0.01  # the tasks' loop.rate_hz is 100
 
 
 @pytest.mark.parametrize(("task", "seed"), [("usb_c", 3), ("usb_a", 0)])
-def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
+def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed, easy_task):
     # the easy scene (tests/easy_scene.py): this checks the trial's path and scoring; the
     # machine's success on the drawn scene is the insertion trials' to measure
     outcome = trial.run(easy_task(task), "dipole", seed)
@@ -42,7 +41,7 @@ def test_a_short_trial_per_task_succeeds_on_a_fixed_seed(task, seed):
     assert outcome.transitions[-1].target is Phase.DONE
 
 
-def test_a_driver_fault_mid_insertion_stops_safely_within_one_period():
+def test_a_driver_fault_mid_insertion_stops_safely_within_one_period(easy_task):
     built, stops, injected = [], [], []
 
     def spy_on_stops(device_set):
@@ -90,7 +89,7 @@ def test_a_driver_fault_mid_insertion_stops_safely_within_one_period():
     assert outcome.transitions[-1].reason == "device_fault"
 
 
-def test_an_operator_takes_over_and_hands_back_through_the_gamepad():
+def test_an_operator_takes_over_and_hands_back_through_the_gamepad(easy_task):
     task = easy_task("usb_c")  # the hand-back must still lead to an insertion
     script = [
         PadEvent(1.5, axes={"vz": 0.5}, buttons={"deadman": True}),  # during GRASP (settling)
