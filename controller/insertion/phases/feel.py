@@ -34,6 +34,9 @@ if TYPE_CHECKING:
     from controller.insertion.machine import InsertionMachine
 
 
+_HISTORY_TICKS = 100  # the ticks' rock angles kept: 1 s at 100 Hz, past any frame's latency
+
+
 class FeelStage(Enum):
     """FEEL's sub-stages, in order."""
 
@@ -49,7 +52,7 @@ class FeelState(Staged[FeelStage]):
     TCP rotation (T2B) at entry, from which the rock angle is measured; ``axis`` the rock
     axis (unit, B); ``direction`` the sign of the present turn about it; ``sign`` the
     in-plane torque's sign before the present turn's change; ``angles`` (t_s, rad) the
-    TCP's rock angle at each tick; ``last`` the previous estimate's (angle, torque);
+    TCP's rock angle at each recent tick; ``last`` the previous estimate's (angle, torque);
     ``flips`` the angles where the sign changed; ``reversed``: the first turn found no
     change within ``rock_max_rad`` and was reversed."""
 
@@ -85,7 +88,7 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
         state.axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
         state.tip_z0_m = float(tip_position(obs.arm.tcp, machine.plug.length_m)[2])
     angle = rock_angle(rotation, state.reference, state.axis)
-    state.angles.append((obs.t_s, angle))
+    state.angles = [*state.angles[-(_HISTORY_TICKS - 1):], (obs.t_s, angle)]
     if state.stage is FeelStage.LIFT:
         return _lift(machine, state, obs, rotation)
     torque = float(machine.signals.torque_t[1])
