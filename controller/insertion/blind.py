@@ -46,6 +46,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from controller.insertion.definition import Definition, Edge, check_definition
+from controller.insertion.force_reading import ArmForce, ForceReading
 from controller.insertion.interface import (
     Command,
     FailureReason,
@@ -86,7 +87,9 @@ class BlindConfig(Config):
     ``hover_m``: tip height above the board between passes; ``move_speed_m_s``,
     ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain x error),
     ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
-    ``timeout_s``: the whole run."""
+    ``timeout_s``: the whole run; ``rewind``: a probe first takes the pattern back to where
+    it was at the time the force's reading describes (the force's delay, swept past the
+    opening), once per stretch of the pattern."""
 
     gripper: GripperSettings
     pattern: Literal["spiral", "raster"] = "spiral"
@@ -118,6 +121,7 @@ class BlindConfig(Config):
     pose_tol_m: float = number(1e-6, 0.01, default=0.0002)
     retract_m: float = number(0.0, 0.2, default=0.03)
     timeout_s: float = number(1.0, 3600.0, default=120.0)
+    rewind: bool = False
 
     def __post_init__(self) -> None:
         if not self.touch_force_n < self.press_force_n < self.stop_force_n:
@@ -137,9 +141,21 @@ class BlindConfig(Config):
         return tuple(offsets)
 
 
+@config_dataclass
+class TouchSpiralConfig(BlindConfig):
+    """The task file's ``touch_spiral:`` section: the blind baseline's search with the force
+    read by touch (``force_reading.TactileAxialForce``), every key as ``blind:``'s, forces
+    on the whole plug; ``finger_share``: the sensing finger's share of the plug's axial
+    load (two alike fingers: 0.5), by which its calibrated force is divided."""
+
+    finger_share: float = number(0.05, 1.0, default=0.5)
+
+
 LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s
 TURN_TOL_RAD = 0.002  # a pass's yaw is reached within this, rad
 STALL_M = 1e-4  # the push is moving while the TCP goes this much lower within stall_s, m
+HISTORY_TICKS = 100  # the sweep's (time, length) kept for a rewind: 1 s at 100 Hz
+OPEN_FRAMES = 6  # new frames seen while the estimator takes the open gel (more than it takes)
 NO_FORCE = "no_force"  # the FAILED transition's rule when the arm reports no force
 
 F = FailureReason
@@ -184,9 +200,20 @@ BLIND = Definition(
 class BlindMachine:
     """The blind baseline (see the module doc); a ``Machine`` for the control loop."""
 
-    def __init__(self, config: BlindConfig, plug: PlugGeometry, hole: HolePose) -> None:
+    def __init__(
+        self,
+        config: BlindConfig,
+        plug: PlugGeometry,
+        hole: HolePose,
+        reading: ForceReading | None = None,
+    ) -> None:
         check_definition(BLIND)
         self.config, self.plug, self.hole = config, plug, hole
+        self._reading = reading if reading is not None else ArmForce(config.force_window)
+        self._force_n = 0.0  # the reading's last force (N) and the time it describes (s)
+        self._force_t_s = 0.0
+        self._frames = 0  # new tactile estimates counted while capturing the open gel
+        self._frame_t_s = math.nan
         self._phase = Phase.GRASP
         self._transitions: list[Transition] = []
         self._pattern = SearchPattern(config.pattern, config.pitch_m, config.half_width_m)
@@ -197,8 +224,9 @@ class BlindMachine:
         self._stage = ""
         self._pass = 0
         self._s_m = 0.0  # the pattern's path length swept in this pass
+        self._s_history: deque[tuple[float, float]] = deque(maxlen=HISTORY_TICKS)
+        self._rewound_to_m = -math.inf  # the pattern's length at the last rewound probe
         self._tare: list[float] = []
-        self._forces: deque[float] = deque(maxlen=config.force_window)
         self._bias_n = 0.0
         self._press_z_m: float | None = None  # the TCP's height at the settled press
         self._hold_xy: np.ndarray | None = None  # INSERT's x, y (the TCP's at the catch)
@@ -222,7 +250,7 @@ class BlindMachine:
         dt_s, self._last_t_s = obs.t_s - self._last_t_s, obs.t_s
         if obs.fault or obs.arm.error_code or obs.gripper.fault_code:
             return self._go(obs, Phase.FAILED, F.DEVICE_FAULT.value)
-        if obs.arm.external_force_n is None:
+        if not self._reading.available(obs):
             return self._go(obs, Phase.FAILED, F.DEVICE_FAULT.value, NO_FORCE)
         if obs.t_s - self._start_t_s > self.config.timeout_s:
             return self._go(obs, Phase.FAILED, F.TIMEOUT.value)
@@ -234,13 +262,19 @@ class BlindMachine:
 
     def _grasp(self, obs: Observation) -> Command:
         g = self.config.gripper
+        zeroes = self._reading.zeroes_tactile
         if self._stage == "":  # fast to just above the plug, then close slowly
             self._stage = "preclose"
             target = g.preclose_target(self.plug.thickness_m, obs.gripper.width_m)
-            if target is not None:
-                return Command(twist=Twist(), gripper=target, rule="grasp.preclose")
+            if target is not None or zeroes:
+                return Command(
+                    twist=Twist(), gripper=target, capture_open_tactile=zeroes,
+                    rule="grasp.preclose",
+                )  # fmt: skip
         if self._stage == "preclose":
-            if obs.gripper.moving:
+            if obs.wrench is not None and obs.wrench.t_s != self._frame_t_s:
+                self._frame_t_s, self._frames = obs.wrench.t_s, self._frames + 1
+            if obs.gripper.moving or (zeroes and self._frames <= OPEN_FRAMES):
                 return Command(twist=Twist(), rule="grasp.preclose")
             self._stage, self._since_t_s = "settle", obs.t_s
             return Command(
@@ -250,7 +284,14 @@ class BlindMachine:
             )
         if not (obs.gripper.holding and not obs.gripper.moving):
             self._since_t_s = obs.t_s
+        elif self._stage == "zero":  # the estimator's new reference, then its first estimate
+            if self._reading.read(obs) is not None:
+                return self._go(obs, Phase.APPROACH, "grasped")
+            return Command(twist=Twist(), rule="grasp.zero")
         elif obs.t_s - self._since_t_s >= g.settle_s:
+            if zeroes:
+                self._stage = "zero"
+                return Command(twist=Twist(), rezero_tactile=True, rule="grasp.zero")
             return self._go(obs, Phase.APPROACH, "grasped")
         return Command(twist=Twist(), rule="grasp.close")
 
@@ -309,8 +350,12 @@ class BlindMachine:
             return self._pressed(obs, force, rule="blind.probe")
         if self._press_z_m is not None and force < cfg.catch_ratio * cfg.press_force_n:
             self._stage, self._since_t_s = "probe", obs.t_s
+            if cfg.rewind and self._s_m > self._rewound_to_m:
+                self._rewound_to_m = self._s_m
+                self._s_m = self._s_at(self._force_t_s)
             return self._pressed(obs, force, rule="blind.probe")
         self._s_m += cfg.sweep_speed_m_s * dt_s
+        self._s_history.append((obs.t_s, self._s_m))
         if self._s_m >= self._pattern.length_m:
             self._stage = "rise"
         return self._pressed(obs, force, moving=True, rule="blind.sweep")
@@ -365,12 +410,19 @@ class BlindMachine:
         return Command(twist=Twist())
 
     def _raw_force(self, obs: Observation) -> float:
-        """The sensor's upward force on the tool (z in B), N, untared: the mean of the last
-        ``force_window`` readings."""
-        force = obs.arm.external_force_n
-        assert force is not None  # step() fails the run without one
-        self._forces.append(float(force[2]))
-        return float(np.mean(self._forces))
+        """The upward force on the tool (z in B), N, untared: the reading's newest (its last
+        while it has none)."""
+        reading = self._reading.read(obs)
+        if reading is not None:
+            self._force_n, self._force_t_s = reading
+        return self._force_n
+
+    def _s_at(self, t_s: float) -> float:
+        """The pattern's swept length at time ``t_s`` (the earliest kept, if older)."""
+        for t, s_m in reversed(self._s_history):
+            if t <= t_s:
+                return s_m
+        return self._s_history[0][1] if self._s_history else self._s_m
 
     def _tip_drop_m(self, obs: Observation, force: float) -> float:
         """How far the tip has gone below its height at the settled press, m: the TCP's drop

@@ -25,6 +25,8 @@ from typing import Any
 
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.blind import BlindMachine
+from controller.insertion.force_reading import TactileAxialForce
+from controller.insertion.machine_config import s2t_matrix
 from controller.run.task import TaskConfig
 from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
@@ -70,6 +72,13 @@ def _blind_machine(config: TaskConfig) -> Machine:
     return BlindMachine(config.blind, config.plug, config.hole)
 
 
+def _touch_spiral_machine(config: TaskConfig) -> Machine:
+    axes = s2t_matrix(config.machine.signals.torque_axes)
+    spiral = config.touch_spiral
+    reading = TactileAxialForce(axes, spiral.finger_share, spiral.force_window)
+    return BlindMachine(spiral, config.plug, config.hole, reading)
+
+
 def _the_estimator(estimator: TactileEstimator, world: Any, seed: int) -> TactileEstimator:
     return estimator
 
@@ -91,4 +100,5 @@ CONTROLLERS: Mapping[str, Controller] = {
     "zero_torque": Controller(_insertion_machine, _transformed(zero_torques)),
     "torque_only": Controller(_insertion_machine, _transformed(torques_only)),
     "blind": Controller(_blind_machine, _the_estimator, arm_force=True),
+    "touch_spiral": Controller(_touch_spiral_machine, _the_estimator),
 }

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from controller.insertion import MachineConfig
-from controller.insertion.blind import BlindConfig
+from controller.insertion.blind import BlindConfig, TouchSpiralConfig
 from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
 from controller.run.task_calibration import grasp_scene_sha256, load_task_calibration
@@ -93,6 +93,7 @@ class TaskConfig(Config):
     hole: HolePose
     machine: MachineConfig
     blind: BlindConfig
+    touch_spiral: TouchSpiralConfig
     loop: LoopConfig
     limits: LimitsConfig
     teleop: TeleopConfig
