@@ -64,7 +64,9 @@ def test_the_blocker_would_catch_a_simulator_import(tmp_path):
 
 
 def test_the_controller_table_names_every_controller_once():
-    assert list(CONTROLLERS) == ["dipole", "fingervision", "zero_torque", "torque_only", "blind"]
+    assert list(CONTROLLERS) == [
+        "dipole", "fingervision", "zero_torque", "torque_only", "blind", "touch_spiral",
+    ]  # fmt: skip
     with pytest.raises(ConfigError, match="controller 'oracle': expected one of dipole, "):
         controller_entry("oracle", "sim", CONTROLLERS)
     truth_reader = Controller(CONTROLLERS["dipole"].machine, lambda est, world: est, True)

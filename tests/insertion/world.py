@@ -92,6 +92,12 @@ class ToyWorld:
     arm_force: bool = True
     k_arm_n_m: float = 1000.0
     force_bias_n: float = 0.0
+    # the tactile axial force (S's shear_y, T z) as the sensing finger's share of the arm's
+    # push instead of the geometric one above (None): the touch spiral's force
+    axial_share: float | None = None
+    # a capture of the open gel leaves the estimates zeroing until the re-zero (the real
+    # estimator's way; the insertion machine's tests keep the older toy without it)
+    open_gel_zeroes: bool = False
     frame_every: int = 2  # ticks per new tactile estimate
     zeroing_frames: int = 3
     seed: int = 0
@@ -115,6 +121,7 @@ class ToyWorld:
         self.gripper_busy_until = -1.0
         self.gripper_target: float | None = None
         self.zeroing_left = 0
+        self.open_captured = False
         self.caught = False
         self.jammed_in_this_insert = False
         self.on_rim = False
@@ -176,17 +183,20 @@ class ToyWorld:
             fault=self.fault,
         )
 
-    def _arm_force(self) -> tuple[float, float, float] | None:
-        if not self.arm_force:
-            return None
+    def _push_n(self) -> float:
+        """The board (or the opening's floor under the tip) pushing up, N."""
         tip, surface = self.tip, self.hole.z_m - self.floor_drop_m
         over_opening = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
         support = surface - self.depth_limit_m if over_opening else surface
-        push = self.k_arm_n_m * max(0.0, support - tip[2]) if self.board else 0.0
-        return (0.0, 0.0, push + self.force_bias_n)
+        return self.k_arm_n_m * max(0.0, support - tip[2]) if self.board else 0.0
+
+    def _arm_force(self) -> tuple[float, float, float] | None:
+        if not self.arm_force:
+            return None
+        return (0.0, 0.0, self._push_n() + self.force_bias_n)
 
     def _estimate(self) -> WrenchEstimate:
-        if self.zeroing_left > 0:
+        if self.open_captured or self.zeroing_left > 0:
             self.zeroing_left -= 1
             return WrenchEstimate.zero(self.t_s, zeroing=True, calibrated=False)
         force_t = np.zeros(3)
@@ -233,6 +243,8 @@ class ToyWorld:
                 torque_b += self.friction * axial * drag_axis
                 flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
                 torque_b += self.edge_torque * flat * self.rotation.apply([0.0, 1.0, 0.0])
+        if self.axial_share is not None:
+            force_t[2] = self.axial_share * self._push_n()
         if self.on_rim:
             torque_b += self.held_yaw_twist * z_t
         if self.jammed_in_this_insert and not (
@@ -260,9 +272,12 @@ class ToyWorld:
 
     def apply(self, command: Command) -> None:
         self.commands.append(command)
+        if command.capture_open_tactile and self.open_gel_zeroes:
+            self.open_captured = True
         if command.rezero_tactile:
             self.rezero_count += 1
             self.zeroing_left = self.zeroing_frames
+            self.open_captured = False
         if command.gripper is not None:
             closing = command.gripper.width_m < self.gripper_width
             self.gripper_busy_until = self.t_s + 0.15
