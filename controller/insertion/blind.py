@@ -1,10 +1,14 @@
-"""The blind baseline: the strongest search an integrator would build without touch.
+"""The blind baseline: the strongest search an integrator would build without touch; and
+the same search by touch (``touch_spiral``).
 
 A force-threshold spiral with yaw steps on the arm's own status: the TCP pose and the force
 of the F/T sensor at the flange (``ArmStatus.external_force_n``, in B; the arm file's
-``ft_sensor``). No tactile signal. It grasps (close and settle), moves the plug upright above
-the nominal opening and, for each yaw in ``yaw_offsets`` (0, +step, -step, +2 step, ...
-within ``yaw_range_rad``; the connectors' clearances leave about a degree):
+``ft_sensor``). No tactile signal. The touch spiral (``TouchSpiralConfig``, the task's
+``touch_spiral:`` section) runs the same machine on the tactile estimate instead of the
+F/T sensor (controller/insertion/force_reading.py: the plug's axial force); its grasp captures the open gel before
+closing and re-zeroes the estimator after. It grasps (close and settle), moves the plug
+upright above the nominal opening and, for each yaw in ``yaw_offsets`` (0, +step, -step,
++2 step, ... within ``yaw_range_rad``; the connectors' clearances leave about a degree):
 
 * **tare**: holds still at ``hover_m`` above the board for ``tare_s`` and takes the mean force
   as the sensor's zero (the F/T sensor drifts; the integrator tares before each contact);
@@ -89,10 +93,7 @@ class BlindConfig(Config):
     ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
     ``timeout_s``: the whole run; ``rewind``: a probe first takes the pattern back to where
     it was at the time the force's reading describes (the force's delay, swept past the
-    opening), once per stretch of the pattern; ``catch_torque_nm``: a tilt torque this far
-    (N*m, the norm of its change since the tare) from the tare's with the force under
-    ``torque_catch_ratio`` x the press also pauses the pattern (the tip's edge caught on the
-    opening's wall; 0: off, and always off for a reading without torques)."""
+    opening), once per stretch of the pattern."""
 
     gripper: GripperSettings
     pattern: Literal["spiral", "raster"] = "spiral"
@@ -125,8 +126,6 @@ class BlindConfig(Config):
     retract_m: float = number(0.0, 0.2, default=0.03)
     timeout_s: float = number(1.0, 3600.0, default=120.0)
     rewind: bool = False
-    catch_torque_nm: float = number(0.0, 1.0, default=0.0)
-    torque_catch_ratio: float = number(0.0, 1.0, default=0.9)
 
     def __post_init__(self) -> None:
         if not self.touch_force_n < self.press_force_n < self.stop_force_n:
@@ -233,8 +232,6 @@ class BlindMachine:
         self._rewound_to_m = -math.inf  # the pattern's length at the last rewound probe
         self._tare: list[float] = []
         self._bias_n = 0.0
-        self._tare_tilt: list[np.ndarray] = []
-        self._tilt_bias = np.zeros(2)  # the tilt torques at the tare, N*m
         self._press_z_m: float | None = None  # the TCP's height at the settled press
         self._hold_xy: np.ndarray | None = None  # INSERT's x, y (the TCP's at the catch)
         self._stall_z_m = math.inf  # the push's lowest TCP height so far, and when
@@ -316,14 +313,9 @@ class BlindMachine:
         self._stage = stage
         if stage == "tare":
             self._tare.append(self._raw_force(obs))
-            tilt = self._reading.tilt(obs)
-            if tilt is not None:
-                self._tare_tilt.append(tilt)
             if obs.t_s - self._since_t_s >= cfg.tare_s:
                 self._bias_n = float(np.mean(self._tare))
-                if self._tare_tilt:
-                    self._tilt_bias = np.mean(self._tare_tilt, axis=0)
-                self._tare, self._tare_tilt, self._stage, self._press_z_m = [], [], "touch", None
+                self._tare, self._stage, self._press_z_m = [], "touch", None
             return self._servo(obs, self._tip_target(self._s_m, cfg.hover_m), rule="blind.tare")
         force = self._raw_force(obs) - self._bias_n
         if stage == "touch":
@@ -360,9 +352,7 @@ class BlindMachine:
             if force >= cfg.press_force_n or obs.t_s - self._since_t_s >= cfg.probe_s:
                 self._stage = "sweep"
             return self._pressed(obs, force, rule="blind.probe")
-        if self._press_z_m is not None and (
-            force < cfg.catch_ratio * cfg.press_force_n or self._tilt_caught(obs, force)
-        ):
+        if self._press_z_m is not None and force < cfg.catch_ratio * cfg.press_force_n:
             self._stage, self._since_t_s = "probe", obs.t_s
             if cfg.rewind and self._s_m > self._rewound_to_m:
                 self._rewound_to_m = self._s_m
@@ -430,16 +420,6 @@ class BlindMachine:
         if reading is not None:
             self._force_n, self._force_t_s = reading
         return self._force_n
-
-    def _tilt_caught(self, obs: Observation, force: float) -> bool:
-        """The tilt torques ``catch_torque_nm`` or more from the tare's with the force under
-        ``torque_catch_ratio`` x the press (off at 0)."""
-        cfg = self.config
-        tilt = self._reading.tilt(obs)
-        if not cfg.catch_torque_nm or tilt is None:
-            return False
-        turned = np.linalg.norm(tilt - self._tilt_bias) >= cfg.catch_torque_nm
-        return bool(turned and force < cfg.torque_catch_ratio * cfg.press_force_n)
 
     def _s_at(self, t_s: float) -> float:
         """The pattern's swept length at time ``t_s`` (the earliest kept, if older)."""

@@ -31,11 +31,6 @@ class ForceReading(Protocol):
         """The force (N) and the time it describes (s), or None while there is none yet."""
         ...
 
-    def tilt(self, obs: Observation) -> np.ndarray | None:
-        """The tilt torques on the plug (tau_x, tau_y of S, N*m) of the newest frame, or None
-        (none yet, or a reading without them)."""
-        ...
-
 
 class ArmForce:
     """The F/T sensor's force at the flange (``ArmStatus.external_force_n``, z in B): the mean
@@ -56,9 +51,6 @@ class ArmForce:
         self._forces.append((float(force[2]), obs.t_s))
         mean = np.mean(self._forces, axis=0)
         return float(mean[0]), float(mean[1])
-
-    def tilt(self, obs: Observation) -> np.ndarray | None:
-        return None
 
 
 class TactileAxialForce:
@@ -86,9 +78,3 @@ class TactileAxialForce:
             self._frames.append((float(self._axial @ (w.shear_x, w.shear_y, w.normal)), w.t_s))
         median = np.median(self._frames, axis=0)
         return float(median[0]), float(median[1])
-
-    def tilt(self, obs: Observation) -> np.ndarray | None:
-        w = obs.wrench
-        if w is None or w.zeroing:
-            return None
-        return np.array([w.tau_x, w.tau_y])

@@ -7,7 +7,6 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-import numpy as np
 import pytest
 
 from controller.insertion.blind import BlindMachine, TouchSpiralConfig
@@ -141,4 +140,5 @@ def observation(t_s: float, shear_y: float) -> Observation:
     world = ToyWorld()
     obs = world.observe()
     return replace(obs, t_s=t_s, wrench=estimate(t_s, shear_y=shear_y))
+
 
