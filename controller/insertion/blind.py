@@ -6,9 +6,11 @@ of the F/T sensor at the flange (``ArmStatus.external_force_n``, in B; the arm f
 ``ft_sensor``). No tactile signal. The touch spiral (``TouchSpiralConfig``, the task's
 ``touch_spiral:`` section) runs the same machine on the tactile estimate instead of the
 F/T sensor (controller/insertion/force_reading.py: the plug's axial force); its grasp
-captures the open gel before closing and re-zeroes the estimator after. It grasps (close
-and settle), moves the plug upright above the nominal opening and, for each yaw in ``yaw_offsets`` (0, +step, -step,
-+2 step, ... within ``yaw_range_rad``; the connectors' clearances leave about a degree):
+captures the open gel before closing and re-zeroes the estimator after.
+
+It grasps (close and settle), moves the plug upright above the nominal opening and, for
+each yaw in ``yaw_offsets`` (0, +step, -step, +2 step, ... within ``yaw_range_rad``; the
+connectors' clearances leave about a degree):
 
 * **tare**: holds still at ``hover_m`` above the board for ``tare_s`` and takes the mean force
   as the sensor's zero (the F/T sensor drifts; the integrator tares before each contact);
