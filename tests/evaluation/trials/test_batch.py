@@ -108,7 +108,10 @@ def test_bad_seeds_are_one_line_errors(text):
 def test_spec_refuses_an_unknown_controller():
     with pytest.raises(
         SpecError,
-        match="expected one of dipole, fingervision, zero_torque, torque_only, blind, oracle",
+        match=(
+            "expected one of dipole, fingervision, zero_torque, torque_only, blind, "
+            "touch_spiral, oracle"
+        ),
     ):
         TrialSpec("usb_c", "magic", 0)
 
