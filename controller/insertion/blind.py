@@ -147,14 +147,19 @@ class BlindConfig(Config):
         return tuple(offsets)
 
 
+AxialWeights = tuple[float, float, float, float, float, float, float, float, float]
+
+
 @config_dataclass
 class TouchSpiralConfig(BlindConfig):
     """The task file's ``touch_spiral:`` section: the blind baseline's search with the force
     read by touch (``force_reading.TactileAxialForce``), every key as ``blind:``'s, forces
-    on the whole plug; ``finger_share``: the sensing finger's share of the plug's axial
-    load (two alike fingers: 0.5), by which its calibrated force is divided."""
+    on the whole plug; ``axial_weights``: N on the plug per unit of each of the estimate's
+    ``force_reading.AXIAL_TERMS`` (nine: tau_x, tau_y, tau_z in N*m, shear_x, shear_y,
+    normal in N, the three torques' magnitudes). The default reads the force channel along
+    T z (S's shear_y) over the sensing finger's share of the load (two alike fingers)."""
 
-    finger_share: float = number(0.05, 1.0, default=0.5)
+    axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
 
 
 LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s

@@ -9,11 +9,13 @@ reading describes (its capture time, s), from which a catch rewinds the pattern.
 from __future__ import annotations
 
 from collections import deque
+from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
 
 from controller.insertion.interface import Observation
+from controller.tactile.wrench import WrenchEstimate
 
 
 class ForceReading(Protocol):
@@ -53,17 +55,34 @@ class ArmForce:
         return float(mean[0]), float(mean[1])
 
 
+#: the estimate's channels an axial-force map weighs, in order: the six of S, then the
+#: magnitudes of the three torques (the cross-talk of a plug pressed sideways does not
+#: change sign with the side)
+AXIAL_TERMS = (
+    "tau_x", "tau_y", "tau_z", "shear_x", "shear_y", "normal", "|tau_x|", "|tau_y|", "|tau_z|",
+)  # fmt: skip
+
+
+def axial_terms(estimate: WrenchEstimate) -> np.ndarray:
+    """The estimate's ``AXIAL_TERMS`` (N*m and N when calibrated)."""
+    torques = np.array([estimate.tau_x, estimate.tau_y, estimate.tau_z])
+    forces = np.array([estimate.shear_x, estimate.shear_y, estimate.normal])
+    return np.concatenate([torques, forces, np.abs(torques)])
+
+
 class TactileAxialForce:
-    """The tactile estimate's force along the plug's axis (T z, toward the tip): the force
-    vector (shear_x, shear_y, normal) of S rotated into T by ``s2t`` (R_S2T), in the
-    calibration's N, over ``finger_share`` (the sensing finger's share of the plug's load):
-    the median of the last ``window`` frames (a single frame's outlier never reads as the
-    load's drop), described at their median capture time. Zeroing frames give nothing."""
+    """The plug's axial force (along T z, toward the tip; N) read by touch: ``weights`` (N
+    per unit of each of ``AXIAL_TERMS``) times the estimate's terms, the median of the last
+    ``window`` frames (a single frame's outlier never reads as the load's drop), described
+    at their median capture time. Zeroing frames give nothing. The weights are the task's
+    ``touch_spiral.axial_weights``: fitted against the plug's true axial force by
+    ``scripts/fit_axial_map.py``, or the force channel along T z over the sensing finger's
+    share of the load."""
 
     zeroes_tactile = True
 
-    def __init__(self, s2t: np.ndarray, finger_share: float, window: int) -> None:
-        self._axial = np.asarray(s2t)[2] / finger_share
+    def __init__(self, weights: Sequence[float], window: int) -> None:
+        self._weights = np.asarray(weights, dtype=float)
         self._frames: deque[tuple[float, float]] = deque(maxlen=window)
 
     def available(self, obs: Observation) -> bool:
@@ -75,6 +94,6 @@ class TactileAxialForce:
             self._frames.clear()
             return None
         if not self._frames or w.t_s != self._frames[-1][1]:
-            self._frames.append((float(self._axial @ (w.shear_x, w.shear_y, w.normal)), w.t_s))
+            self._frames.append((float(self._weights @ axial_terms(w)), w.t_s))
         median = np.median(self._frames, axis=0)
         return float(median[0]), float(median[1])

@@ -26,7 +26,6 @@ from typing import Any
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.blind import BlindMachine
 from controller.insertion.force_reading import TactileAxialForce
-from controller.insertion.machine_config import s2t_matrix
 from controller.run.task import TaskConfig
 from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
@@ -73,9 +72,8 @@ def _blind_machine(config: TaskConfig) -> Machine:
 
 
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
-    axes = s2t_matrix(config.machine.signals.torque_axes)
     spiral = config.touch_spiral
-    reading = TactileAxialForce(axes, spiral.finger_share, spiral.force_window)
+    reading = TactileAxialForce(spiral.axial_weights, spiral.force_window)
     return BlindMachine(spiral, config.plug, config.hole, reading)
 
 

@@ -12,9 +12,10 @@ import pytest
 from controller.insertion.blind import BlindMachine, TouchSpiralConfig
 from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
-from controller.insertion.machine_config import GripperSettings, s2t_matrix
+from controller.insertion.machine_config import GripperSettings
 from controller.run.controllers import CONTROLLERS
 from controller.run.task import load_task
+from core.config import ConfigError
 from tests.insertion.test_blind import reasons
 from tests.insertion.world import ToyWorld, estimate
 
@@ -23,8 +24,8 @@ SPIRAL = TouchSpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002
                            touch_force_n=1.0, press_force_n=2.0, stop_force_n=6.0,
                            sweep_speed_m_s=0.01, descend_speed_m_s=0.005, yaw_step_rad=0.02,
                            yaw_range_rad=0.02, timeout_s=60.0, force_window=3,
-                           finger_share=SHARE, rewind=True)  # fmt: skip
-AXES = s2t_matrix(("+x", "+z", "-y"))
+                           axial_weights=(0.0, 0.0, 0.0, 0.0, 1 / SHARE, 0.0, 0.0, 0.0, 0.0),
+                           rewind=True)  # fmt: skip
 
 
 def run(world: ToyWorld, machine: BlindMachine, max_s: float = 80.0) -> None:
@@ -40,7 +41,7 @@ def touch_world(**kwargs) -> ToyWorld:
 
 
 def spiral(world: ToyWorld, config: TouchSpiralConfig = SPIRAL) -> BlindMachine:
-    reading = TactileAxialForce(AXES, config.finger_share, config.force_window)
+    reading = TactileAxialForce(config.axial_weights, config.force_window)
     return BlindMachine(config, world.plug, world.hole, reading)
 
 
@@ -71,7 +72,7 @@ def test_without_the_tactile_force_it_never_touches_and_inserts_nothing():
 
 
 def test_a_single_frames_outlier_is_no_catch():
-    reading = TactileAxialForce(AXES, SHARE, window=3)
+    reading = TactileAxialForce(SPIRAL.axial_weights, window=3)
     forces = [2.0, 2.0, 0.0, 2.0, 2.0]  # N on the plug; the third frame drops out
     read = []
     for k, force in enumerate(forces):
@@ -83,7 +84,7 @@ def test_a_single_frames_outlier_is_no_catch():
 
 
 def test_zeroing_frames_give_no_force_and_start_the_window_again():
-    reading = TactileAxialForce(AXES, SHARE, window=3)
+    reading = TactileAxialForce(SPIRAL.axial_weights, window=3)
     assert reading.read(observation(0.0, shear_y=1.0)) == (pytest.approx(2.0), 0.0)
     zeroing = replace(observation(0.04, shear_y=0.0), wrench=estimate(0.04, zeroing=True))
     assert reading.read(zeroing) is None
@@ -129,7 +130,7 @@ def test_without_rewind_a_probe_holds_the_swept_length():
 
 
 def test_the_controller_reads_the_tasks_touch_spiral_section():
-    config = load_task("usb_c", ["touch_spiral.finger_share=0.25"]).config
+    config = load_task("usb_c", ["touch_spiral.force_window=4"]).config
     machine = CONTROLLERS["touch_spiral"].machine(config)
     assert isinstance(machine, BlindMachine)
     assert machine.config is config.touch_spiral
@@ -142,3 +143,25 @@ def observation(t_s: float, shear_y: float) -> Observation:
     return replace(obs, t_s=t_s, wrench=estimate(t_s, shear_y=shear_y))
 
 
+
+
+def test_the_weights_read_every_term_and_the_torques_magnitudes():
+    weights = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+    reading = TactileAxialForce(weights, window=1)
+    obs = observation(0.0, shear_y=0.5)
+    wrench = estimate(0.0, tau_x=-0.1, tau_y=0.2, tau_z=-0.3, shear_x=0.4, shear_y=0.5, normal=0.6)
+    force, _ = reading.read(replace(obs, wrench=wrench))
+    terms = (-0.1, 0.2, -0.3, 0.4, 0.5, 0.6, 0.1, 0.2, 0.3)
+    assert force == pytest.approx(sum(w * t for w, t in zip(weights, terms, strict=True)))
+
+
+@pytest.mark.parametrize(
+    ("weights", "message"),
+    [
+        ("[1.0, 2.0]", r"key 'touch_spiral.axial_weights': expected 9 items"),
+        ("[1, 2, 3, 4, 5, 6, 7, 8, .nan]", r"key 'touch_spiral.axial_weights\[8\]': expected"),
+    ],
+)
+def test_axial_weights_other_than_nine_finite_numbers_are_refused(weights, message):
+    with pytest.raises(ConfigError, match=message):
+        load_task("usb_c", [f"touch_spiral.axial_weights={weights}"])

@@ -1,0 +1,80 @@
+"""The touch spiral's axial-force map (``touch_spiral.axial_weights``), fitted on recorded
+trials against the simulator's truth (``scripts/fit_axial_map.py``).
+
+Each trial record (``run_trials.py --records``: ticks.jsonl and truth.npz) gives one
+sample per new tactile frame while the machine searches or pushes (SEARCH, INSERT): the
+estimate's ``AXIAL_TERMS`` and the true axial force on the plug at the frame's capture
+time (``wrist_wrench_t`` z: the wrist's force along T z, N). The map is their least-squares
+line with an intercept, which the machine's tare takes up (the weights are kept, the
+intercept dropped). Records are split by trial: the fit on some, the error reported on the
+others, beside the error of the reading it replaces.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from controller.insertion.force_reading import AXIAL_TERMS
+from evaluation.common.cli_support import ToolError
+
+PHASES = ("search", "insert")  # the phases whose frames are samples
+
+
+@dataclass(frozen=True)
+class AxialSamples:
+    """``terms`` (n x 9, ``AXIAL_TERMS``) and ``force_n`` (n, the true axial force, N)."""
+
+    terms: np.ndarray
+    force_n: np.ndarray
+
+
+def record_samples(folder: Path) -> AxialSamples:
+    """The samples of the trial recorded in ``folder``; ToolError naming it if it holds no
+    ticks.jsonl and truth.npz, or no estimate in SEARCH or INSERT."""
+    ticks_path, truth_path = folder / "ticks.jsonl", folder / "truth.npz"
+    if not (ticks_path.is_file() and truth_path.is_file()):
+        raise ToolError(f"{folder}: expected a trial record (ticks.jsonl and truth.npz)")
+    truth = np.load(truth_path)
+    t_s, wrist = truth["t_s"], truth["wrist_wrench_t"][:, 2]
+    rows, forces, seen = [], [], set()
+    for line in ticks_path.read_text().splitlines():
+        tick = json.loads(line)
+        frame_t_s = tick.get("estimate_t_s")
+        if tick["phase"] not in PHASES or frame_t_s is None or frame_t_s in seen:
+            continue
+        seen.add(frame_t_s)
+        e = tick["estimate"]
+        torques = np.array([e["tau_x"], e["tau_y"], e["tau_z"]])
+        rows.append(
+            np.concatenate([torques, [e["shear_x"], e["shear_y"], e["normal"]], np.abs(torques)])
+        )
+        forces.append(float(np.interp(frame_t_s, t_s, wrist)))
+    if not rows:
+        raise ToolError(f"{folder}: no tactile frame while searching or pushing")
+    return AxialSamples(np.array(rows), np.array(forces))
+
+
+def joined(samples: list[AxialSamples]) -> AxialSamples:
+    return AxialSamples(
+        np.concatenate([s.terms for s in samples]), np.concatenate([s.force_n for s in samples])
+    )
+
+
+def fit_weights(samples: AxialSamples) -> np.ndarray:
+    """The least-squares weights (9, N per unit of each term) of the force on the terms
+    and an intercept (dropped)."""
+    design = np.column_stack([samples.terms, np.ones(len(samples.force_n))])
+    solution, *_ = np.linalg.lstsq(design, samples.force_n, rcond=None)
+    return solution[: len(AXIAL_TERMS)]
+
+
+def rms_error_n(weights: np.ndarray, samples: AxialSamples) -> float:
+    """The RMS error (N) of ``weights`` on ``samples``, each read relative to its mean (as
+    the machine's tare reads it relative to its zero)."""
+    read = samples.terms @ weights
+    error = (read - read.mean()) - (samples.force_n - samples.force_n.mean())
+    return float(np.sqrt(np.mean(error**2)))
