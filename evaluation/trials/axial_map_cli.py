@@ -7,8 +7,8 @@ trials (evaluation/trials/axial_map.py).
 Each RECORD is a trial's record folder (``run_trials.py --records``: OUT/records/*/).
 Fits on the ``--fit`` records and prints the weights as the task file's
 ``touch_spiral.axial_weights`` line, then the RMS error (N) on the ``--check`` records
-(trials the fit did not see), beside that of the ``--against`` weights (default: the
-task's default reading). Writes nothing.
+(trials the fit did not see), beside that of the ``--against`` weights (default:
+``TouchSpiralConfig``'s, shear_y over a finger's share of 0.5). Writes nothing.
 Bad arguments, a folder that is not a trial record: one line and exit code 2.
 """
 
