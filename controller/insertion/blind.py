@@ -295,13 +295,9 @@ class BlindMachine:
             )
         if not (obs.gripper.holding and not obs.gripper.moving):
             self._since_t_s = obs.t_s
-        elif self._stage == "zero":  # the estimator's new reference, then its first estimate
-            if self._reading.read(obs) is not None:
-                return self._go(obs, Phase.APPROACH, "grasped")
-            return Command(twist=Twist(), rule="grasp.zero")
         elif obs.t_s - self._since_t_s >= g.settle_s:
-            if zeroes:
-                self._stage = "zero"
+            if zeroes:  # the new reference is taken in the air on the way (the tare waits)
+                self._go(obs, Phase.APPROACH, "grasped")
                 return Command(twist=Twist(), rezero_tactile=True, rule="grasp.zero")
             return self._go(obs, Phase.APPROACH, "grasped")
         return Command(twist=Twist(), rule="grasp.close")
@@ -318,9 +314,12 @@ class BlindMachine:
         cfg = self.config
         stage = self._stage or "tare"
         self._stage = stage
-        if stage == "tare":
-            self._tare.append(self._raw_force(obs))
-            if obs.t_s - self._since_t_s >= cfg.tare_s:
+        if stage == "tare":  # over readings only (the tactile one is none while zeroing)
+            reading = self._reading.read(obs)
+            if reading is not None:
+                self._force_n, self._force_t_s = reading
+                self._tare.append(self._force_n)
+            if obs.t_s - self._since_t_s >= cfg.tare_s and self._tare:
                 self._bias_n = float(np.mean(self._tare))
                 self._tare, self._stage, self._press_z_m = [], "touch", None
             return self._servo(obs, self._tip_target(self._s_m, cfg.hover_m), rule="blind.tare")
