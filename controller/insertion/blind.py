@@ -157,7 +157,8 @@ class TouchSpiralConfig(BlindConfig):
     on the whole plug; ``axial_weights``: N on the plug per unit of each of the estimate's
     ``force_reading.AXIAL_TERMS`` (nine: tau_x, tau_y, tau_z in N*m, shear_x, shear_y,
     normal in N, the three torques' magnitudes). The default reads the force channel along
-    T z (S's shear_y) over the sensing finger's share of the load (two alike fingers)."""
+    T z (S's shear_y) over the sensing finger's share of the load (two alike fingers).
+    ``force_window`` counts tactile frames here, and the force is their median."""
 
     axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
 
@@ -315,9 +316,7 @@ class BlindMachine:
         stage = self._stage or "tare"
         self._stage = stage
         if stage == "tare":  # over readings only (the tactile one is none while zeroing)
-            reading = self._reading.read(obs)
-            if reading is not None:
-                self._force_n, self._force_t_s = reading
+            if self._read_force(obs):
                 self._tare.append(self._force_n)
             if obs.t_s - self._since_t_s >= cfg.tare_s and self._tare:
                 self._bias_n = float(np.mean(self._tare))
@@ -419,12 +418,17 @@ class BlindMachine:
         self._phase, self._stage, self._since_t_s = target, "", obs.t_s
         return Command(twist=Twist())
 
-    def _raw_force(self, obs: Observation) -> float:
-        """The upward force on the tool (z in B), N, untared: the reading's newest (its last
-        while it has none)."""
+    def _read_force(self, obs: Observation) -> bool:
+        """Take the reading's newest force and its time, if it has one (True)."""
         reading = self._reading.read(obs)
         if reading is not None:
             self._force_n, self._force_t_s = reading
+        return reading is not None
+
+    def _raw_force(self, obs: Observation) -> float:
+        """The upward force on the tool (z in B), N, untared: the reading's newest (its last
+        while it has none)."""
+        self._read_force(obs)
         return self._force_n
 
     def _s_at(self, t_s: float) -> float:

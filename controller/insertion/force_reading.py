@@ -63,11 +63,16 @@ AXIAL_TERMS = (
 )  # fmt: skip
 
 
-def axial_terms(estimate: WrenchEstimate) -> np.ndarray:
-    """The estimate's ``AXIAL_TERMS`` (N*m and N when calibrated)."""
-    torques = np.array([estimate.tau_x, estimate.tau_y, estimate.tau_z])
-    forces = np.array([estimate.shear_x, estimate.shear_y, estimate.normal])
-    return np.concatenate([torques, forces, np.abs(torques)])
+def axial_terms(channels: Sequence[float]) -> np.ndarray:
+    """The ``AXIAL_TERMS`` of an estimate's six channels (``AXIAL_TERMS[:6]``, in that order;
+    N*m and N when calibrated)."""
+    values = np.asarray(channels, dtype=float)
+    return np.concatenate([values, np.abs(values[:3])])
+
+
+def estimate_channels(estimate: WrenchEstimate) -> tuple[float, ...]:
+    """The estimate's six channels in ``AXIAL_TERMS`` order."""
+    return tuple(getattr(estimate, name) for name in AXIAL_TERMS[:6])
 
 
 class TactileAxialForce:
@@ -94,6 +99,7 @@ class TactileAxialForce:
             self._frames.clear()
             return None
         if not self._frames or w.t_s != self._frames[-1][1]:
-            self._frames.append((float(self._weights @ axial_terms(w)), w.t_s))
+            force = float(self._weights @ axial_terms(estimate_channels(w)))
+            self._frames.append((force, w.t_s))
         median = np.median(self._frames, axis=0)
         return float(median[0]), float(median[1])

@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from controller.insertion.force_reading import AXIAL_TERMS
+from controller.insertion.force_reading import AXIAL_TERMS, axial_terms
 from evaluation.common.cli_support import ToolError
 
 PHASES = ("search", "insert")  # the phases whose frames are samples
@@ -33,25 +33,29 @@ class AxialSamples:
 
 
 def record_samples(folder: Path) -> AxialSamples:
-    """The samples of the trial recorded in ``folder``; ToolError naming it if it holds no
-    ticks.jsonl and truth.npz, or no estimate in SEARCH or INSERT."""
+    """The samples of the trial recorded in ``folder``; ToolError naming the folder or file if
+    it holds no ticks.jsonl and truth.npz, either is damaged (naming the tick log's line), or
+    it has no estimate in SEARCH or INSERT."""
     ticks_path, truth_path = folder / "ticks.jsonl", folder / "truth.npz"
     if not (ticks_path.is_file() and truth_path.is_file()):
         raise ToolError(f"{folder}: expected a trial record (ticks.jsonl and truth.npz)")
-    truth = np.load(truth_path)
-    t_s, wrist = truth["t_s"], truth["wrist_wrench_t"][:, 2]
+    try:
+        with np.load(truth_path) as truth:
+            t_s, wrist = truth["t_s"], truth["wrist_wrench_t"][:, 2]
+    except (OSError, ValueError, KeyError, IndexError) as exc:
+        raise ToolError(f"{truth_path}: expected a trial's truth (t_s, wrist_wrench_t): {exc}") from None
     rows, forces, seen = [], [], set()
-    for line in ticks_path.read_text().splitlines():
-        tick = json.loads(line)
-        frame_t_s = tick.get("estimate_t_s")
-        if tick["phase"] not in PHASES or frame_t_s is None or frame_t_s in seen:
-            continue
+    for number, line in enumerate(ticks_path.read_text().splitlines(), start=1):
+        try:
+            tick = json.loads(line)
+            frame_t_s = tick.get("estimate_t_s")
+            if tick["phase"] not in PHASES or frame_t_s is None or frame_t_s in seen:
+                continue
+            terms = axial_terms([tick["estimate"][name] for name in AXIAL_TERMS[:6]])
+        except (ValueError, KeyError, TypeError, AttributeError) as exc:
+            raise ToolError(f"{ticks_path}, line {number}: expected a tick record ({exc})") from None
         seen.add(frame_t_s)
-        e = tick["estimate"]
-        torques = np.array([e["tau_x"], e["tau_y"], e["tau_z"]])
-        rows.append(
-            np.concatenate([torques, [e["shear_x"], e["shear_y"], e["normal"]], np.abs(torques)])
-        )
+        rows.append(terms)
         forces.append(float(np.interp(frame_t_s, t_s, wrist)))
     if not rows:
         raise ToolError(f"{folder}: no tactile frame while searching or pushing")

@@ -88,3 +88,23 @@ def test_against_weights_must_be_nine_numbers(tmp_path, capsys):
         main(["--fit", str(record), "--check", str(record), "--against", "1,2"])
     assert exit_info.value.code == 2
     assert "expected 9 numbers" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("damage", "message"),
+    [
+        ("ticks", "ticks.jsonl, line 2: expected a tick record"),
+        ("truth", "truth.npz: expected a trial's truth"),
+    ],
+)
+def test_a_damaged_record_names_its_file_in_one_line_and_exit_2(tmp_path, capsys, damage, message):
+    good = write_record(tmp_path / "good", 1)
+    bad = write_record(tmp_path / "bad", 2)
+    if damage == "ticks":
+        lines = (bad / "ticks.jsonl").read_text().splitlines()
+        (bad / "ticks.jsonl").write_text("\n".join([lines[0], "{not json", *lines[2:]]) + "\n")
+    else:
+        (bad / "truth.npz").write_bytes(b"not a zip")
+    assert main(["--fit", str(bad), "--check", str(good)]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err and "Traceback" not in err
