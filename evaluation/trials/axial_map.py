@@ -43,7 +43,8 @@ def record_samples(folder: Path) -> AxialSamples:
         with np.load(truth_path) as truth:
             t_s, wrist = truth["t_s"], truth["wrist_wrench_t"][:, 2]
     except (OSError, ValueError, KeyError, IndexError) as exc:
-        raise ToolError(f"{truth_path}: expected a trial's truth (t_s, wrist_wrench_t): {exc}") from None
+        message = f"{truth_path}: expected a trial's truth (t_s, wrist_wrench_t): {exc}"
+        raise ToolError(message) from None
     rows, forces, seen = [], [], set()
     for number, line in enumerate(ticks_path.read_text().splitlines(), start=1):
         try:
@@ -53,7 +54,8 @@ def record_samples(folder: Path) -> AxialSamples:
                 continue
             terms = axial_terms([tick["estimate"][name] for name in AXIAL_TERMS[:6]])
         except (ValueError, KeyError, TypeError, AttributeError) as exc:
-            raise ToolError(f"{ticks_path}, line {number}: expected a tick record ({exc})") from None
+            message = f"{ticks_path}, line {number}: expected a tick record ({exc})"
+            raise ToolError(message) from None
         seen.add(frame_t_s)
         rows.append(terms)
         forces.append(float(np.interp(frame_t_s, t_s, wrist)))
