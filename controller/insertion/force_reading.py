@@ -1,4 +1,4 @@
-"""Where a press-spiral machine (controller/insertion/blind.py) reads the upward force on the
+"""Where a press-spiral machine (controller/insertion/spiral/) reads the upward force on the
 tool: the arm's F/T sensor at the flange, or the tactile estimate's axial force.
 
 Both give the force in N, positive when the board pushes the plug up into the hand (z in B

@@ -11,7 +11,7 @@ keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
   the forces kept (``zero_torques``): what the machine does without the torques;
 * ``torque_only`` (ablation): the same machine with the shear and the normal force forced
   to zero, the torques kept (``torques_only``);
-* ``blind``: the strongest search without touch (``BlindMachine``: a force-threshold
+* ``blind``: the strongest search without touch (``SpiralMachine``: a force-threshold
   spiral with yaw steps on the arm's own status, its F/T sensor's force and its pose); the
   estimator still runs, and its estimates are recorded, never used.
 """
@@ -24,8 +24,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from controller.insertion import InsertionMachine, Machine
-from controller.insertion.blind import BlindMachine
 from controller.insertion.force_reading import TactileAxialForce
+from controller.insertion.spiral import SpiralMachine
 from controller.run.task import TaskConfig
 from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
@@ -68,13 +68,13 @@ def _insertion_machine(config: TaskConfig) -> Machine:
 
 
 def _blind_machine(config: TaskConfig) -> Machine:
-    return BlindMachine(config.blind, config.plug, config.hole)
+    return SpiralMachine(config.blind, config.plug, config.hole)
 
 
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
     spiral = config.touch_spiral
     reading = TactileAxialForce(spiral.axial_weights, spiral.force_window)
-    return BlindMachine(spiral, config.plug, config.hole, reading)
+    return SpiralMachine(spiral, config.plug, config.hole, reading)
 
 
 def _the_estimator(estimator: TactileEstimator, world: Any, seed: int) -> TactileEstimator:

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from controller.insertion import MachineConfig
-from controller.insertion.blind import BlindConfig, TouchSpiralConfig
+from controller.insertion.spiral import SpiralConfig, TouchSpiralConfig
 from controller.limit_checks import check_task_limits
 from controller.loop import LoopConfig
 from controller.run.task_calibration import grasp_scene_sha256, load_task_calibration
@@ -92,7 +92,7 @@ class TaskConfig(Config):
     plug: PlugGeometry
     hole: HolePose
     machine: MachineConfig
-    blind: BlindConfig
+    blind: SpiralConfig
     touch_spiral: TouchSpiralConfig
     loop: LoopConfig
     limits: LimitsConfig

@@ -9,39 +9,41 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from controller.insertion.blind import BLIND, NO_FORCE, BlindConfig, BlindMachine
 from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
 from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral import NO_FORCE, SPIRAL, SpiralConfig, SpiralMachine
+from controller.insertion.spiral.search import SearchStage
 from controller.run.task import load_task
 from core.config import ConfigError
 from tests.insertion.world import ToyWorld
 
-SMALL = BlindConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002, touch_force_n=1.0,
+SMALL = SpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002, touch_force_n=1.0,
                     press_force_n=2.0, stop_force_n=6.0, sweep_speed_m_s=0.01,
                     descend_speed_m_s=0.005, yaw_step_rad=0.02, yaw_range_rad=0.02,
                     timeout_s=60.0)  # fmt: skip
 NO_OPENING = dict(hole_offset_m=(0.01, 0.01))  # outside the pattern: the board everywhere
 
 
-def run(world: ToyWorld, machine: BlindMachine, max_s: float = 80.0) -> list[tuple]:
+def run(world: ToyWorld, machine: SpiralMachine, max_s: float = 80.0) -> list[tuple]:
     """Step to a terminal phase; (tip, yaw offset, force) of every tick of a sweep."""
     swept = []
     while world.t_s < max_s and machine.phase not in (Phase.DONE, Phase.FAILED):
         world.step(machine)
-        if machine.phase is Phase.SEARCH and machine._stage == "sweep":
+        if machine.phase is Phase.SEARCH and machine.stage is SearchStage.SWEEP:
             force = world.observe().arm.external_force_n[2]
-            swept.append((world.tip.copy(), machine.config.yaw_offsets[machine._pass], force))
+            yaw = machine.config.yaw_offsets[machine.memory.pass_index]
+            swept.append((world.tip.copy(), yaw, force))
     return swept
 
 
-def reasons(machine: BlindMachine) -> list[str]:
+def reasons(machine: SpiralMachine) -> list[str]:
     return [t.reason for t in machine.transitions]
 
 
 def test_the_definition_is_checked_and_sound():
-    check_definition(BLIND)
-    assert {Phase.GRASP, Phase.INSERT, Phase.DONE, Phase.FAILED} <= set(BLIND.phases)
+    check_definition(SPIRAL)
+    assert {Phase.GRASP, Phase.INSERT, Phase.DONE, Phase.FAILED} <= set(SPIRAL.phases)
 
 
 def test_the_yaw_offsets_alternate_within_the_range():
@@ -52,7 +54,7 @@ def test_the_yaw_offsets_alternate_within_the_range():
 
 def test_without_an_opening_it_sweeps_pressed_once_per_yaw_then_releases_and_retracts():
     world = ToyWorld(**NO_OPENING)
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     swept = run(world, machine)
     assert reasons(machine) == [
         "grasped", "above_the_opening", "pattern_done", "released", "retracted",
@@ -70,7 +72,7 @@ def test_without_an_opening_it_sweeps_pressed_once_per_yaw_then_releases_and_ret
 
 def test_over_the_opening_it_catches_pushes_to_the_floor_and_releases():
     world = ToyWorld()  # the opening 1.5 mm off the nominal, 12 mm deep
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     run(world, machine)
     assert reasons(machine) == [
         "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
@@ -78,7 +80,8 @@ def test_over_the_opening_it_catches_pushes_to_the_floor_and_releases():
     bottomed = machine.transitions[3]
     assert bottomed.rule == "force"
     rules = [c.rule for c in world.commands]
-    assert {"blind.tare", "blind.touch", "blind.sweep", "blind.probe", "blind.push"} <= set(rules)
+    expected = {"search.tare", "search.touch", "search.sweep", "search.probe", "insert.push"}
+    assert expected <= set(rules)
     # the push ended on the floor: the tip was held down to it, the force at the stop
     assert min(c for c in world_tip_heights(world)) == pytest.approx(
         world.hole.z_m - world.depth_limit_m - SMALL.stop_force_n / world.k_arm_n_m, abs=3e-4
@@ -97,7 +100,7 @@ def world_tip_heights(world: ToyWorld) -> list[float]:
 
 def test_a_catch_that_stops_short_of_the_entry_is_a_jam_and_the_sweep_goes_on():
     world = ToyWorld(depth_limit_m=0.0015)  # an opening 1.5 mm deep: never entry_m (2 mm) in
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     run(world, machine)
     assert "caught" in reasons(machine) and "jammed" in reasons(machine)
     assert "bottomed" not in reasons(machine)
@@ -106,14 +109,14 @@ def test_a_catch_that_stops_short_of_the_entry_is_a_jam_and_the_sweep_goes_on():
 
 def test_the_tare_takes_up_the_sensor_bias():
     world = ToyWorld(force_bias_n=3.0)  # above the touch force: untared it would "touch" at once
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     run(world, machine)
     assert "bottomed" in reasons(machine)
 
 
 def test_an_arm_without_a_force_reading_fails_at_once_naming_it():
     world = ToyWorld(arm_force=False)
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     run(world, machine)
     assert machine.phase is Phase.FAILED
     assert (machine.transitions[-1].reason, machine.transitions[-1].rule) == (
@@ -124,7 +127,7 @@ def test_an_arm_without_a_force_reading_fails_at_once_naming_it():
 
 def test_its_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
     world = ToyWorld()
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     world.run_until(machine, Phase.APPROACH)
     targets = [c.gripper for c in world.commands if c.gripper is not None]
     g = SMALL.gripper
@@ -136,11 +139,11 @@ def test_its_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
 
 def test_it_fails_on_the_timeout_and_on_a_device_fault():
     world = ToyWorld()
-    machine = BlindMachine(replace(SMALL, timeout_s=2.0), world.plug, world.hole)
+    machine = SpiralMachine(replace(SMALL, timeout_s=2.0), world.plug, world.hole)
     run(world, machine)
     assert machine.phase is Phase.FAILED and machine.transitions[-1].reason == "timeout"
     world = ToyWorld()
-    machine = BlindMachine(SMALL, world.plug, world.hole)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
     world.run_until(machine, Phase.SEARCH)
     world.arm_error = 31
     run(world, machine)

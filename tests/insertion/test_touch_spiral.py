@@ -9,10 +9,11 @@ from dataclasses import replace
 
 import pytest
 
-from controller.insertion.blind import BlindMachine, TouchSpiralConfig
 from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
+from controller.insertion.spiral.search import SearchStage
 from controller.run.controllers import CONTROLLERS
 from controller.run.task import load_task
 from core.config import ConfigError
@@ -28,7 +29,7 @@ SPIRAL = TouchSpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002
                            rewind=True)  # fmt: skip
 
 
-def run(world: ToyWorld, machine: BlindMachine, max_s: float = 80.0) -> None:
+def run(world: ToyWorld, machine: SpiralMachine, max_s: float = 80.0) -> None:
     """Step to a terminal phase (or ``max_s``)."""
     while world.t_s < max_s and machine.phase not in (Phase.DONE, Phase.FAILED):
         world.step(machine)
@@ -40,9 +41,9 @@ def touch_world(**kwargs) -> ToyWorld:
     return ToyWorld(arm_force=False, axial_share=SHARE, open_gel_zeroes=True, **kwargs)
 
 
-def spiral(world: ToyWorld, config: TouchSpiralConfig = SPIRAL) -> BlindMachine:
+def spiral(world: ToyWorld, config: TouchSpiralConfig = SPIRAL) -> SpiralMachine:
     reading = TactileAxialForce(config.axial_weights, config.force_window)
-    return BlindMachine(config, world.plug, world.hole, reading)
+    return SpiralMachine(config, world.plug, world.hole, reading)
 
 
 def test_by_touch_alone_it_catches_pushes_to_the_floor_and_releases():
@@ -68,7 +69,7 @@ def test_without_the_tactile_force_it_never_touches_and_inserts_nothing():
     run(world, machine, max_s=40.0)
     assert "caught" not in reasons(machine)
     rules = {c.rule for c in world.commands}
-    assert "blind.sweep" not in rules  # the board is never felt: the descent goes on
+    assert "search.sweep" not in rules  # the board is never felt: the descent goes on
 
 
 def test_a_single_frames_outlier_is_no_catch():
@@ -106,11 +107,11 @@ def test_a_probe_rewinds_the_pattern_to_the_frames_capture_time():
     world = touch_world(frame_every=4)  # slow frames: the reading lags the tip by more
     machine = spiral(world)
     while machine.phase is not Phase.INSERT and world.t_s < 40.0:
-        before = (machine._stage, machine._s_m)
+        before = (machine.stage, machine.memory.s_m)
         world.step(machine)
-        if before[0] == "sweep" and machine._stage == "probe":
-            assert machine._s_m < before[1]  # back along the pattern
-            assert machine._s_m == pytest.approx(machine._s_at(machine._force_t_s))
+        if before[0] is SearchStage.SWEEP and machine.stage is SearchStage.PROBE:
+            assert machine.memory.s_m < before[1]  # back along the pattern
+            assert machine.memory.s_m == pytest.approx(machine.memory.s_at(machine.force_t_s))
             break
     else:
         pytest.fail("no probe")
@@ -120,10 +121,10 @@ def test_without_rewind_a_probe_holds_the_swept_length():
     world = touch_world(frame_every=4)
     machine = spiral(world, replace(SPIRAL, rewind=False))
     while world.t_s < 40.0:
-        before = (machine._stage, machine._s_m)
+        before = (machine.stage, machine.memory.s_m)
         world.step(machine)
-        if before[0] == "sweep" and machine._stage == "probe":
-            assert machine._s_m == before[1]
+        if before[0] is SearchStage.SWEEP and machine.stage is SearchStage.PROBE:
+            assert machine.memory.s_m == before[1]
             break
     else:
         pytest.fail("no probe")
@@ -132,7 +133,7 @@ def test_without_rewind_a_probe_holds_the_swept_length():
 def test_the_controller_reads_the_tasks_touch_spiral_section():
     config = load_task("usb_c", ["touch_spiral.force_window=4"]).config
     machine = CONTROLLERS["touch_spiral"].machine(config)
-    assert isinstance(machine, BlindMachine)
+    assert isinstance(machine, SpiralMachine)
     assert machine.config is config.touch_spiral
     assert not CONTROLLERS["touch_spiral"].arm_force  # no F/T sensor
 

@@ -1,0 +1,10 @@
+"""The press-spiral machine (``SpiralMachine``): a force-threshold spiral with yaw steps, on
+the arm's F/T sensor (the ``blind`` baseline) or on the tactile axial force
+(``touch_spiral``). One module per phase; the table and sub-stages in ``machine.SPIRAL``."""
+
+from controller.insertion.spiral.config import AxialWeights, SpiralConfig, TouchSpiralConfig
+from controller.insertion.spiral.machine import NO_FORCE, SPIRAL, SpiralMachine
+
+__all__ = [
+    "NO_FORCE", "SPIRAL", "AxialWeights", "SpiralConfig", "SpiralMachine", "TouchSpiralConfig",
+]  # fmt: skip

@@ -1,0 +1,111 @@
+"""The press-spiral machine's settings: the task file's ``blind:`` section (the machine on the
+arm's F/T sensor) and its ``touch_spiral:`` section (the same machine on the tactile
+estimate's axial force). Lengths in m, speeds in m/s, angles in rad, forces in N (the tared
+upward force on the tool, z in B), times in s.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from controller.insertion.machine_config import GripperSettings
+from core.config import Config, config_dataclass, number
+
+
+@config_dataclass
+class SpiralConfig(Config):
+    """The task file's ``blind:`` section (see the module doc for the units).
+
+    ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
+    ``touch_force_n``: the board is met; ``press_force_n``: held while sweeping;
+    ``force_gain_m_s_n``: the admittance, z speed per N of force error; ``force_window``: the
+    force is the mean of this many readings; ``wrist_z_stiffness_n_m``: the compliant
+    wrist's axial stiffness, as the integrator measures it on the cell (the tip's drop is
+    the TCP's less the wrist's compression); ``settle_band``: the press has settled within
+    this share of it; ``catch_ratio``: the force under this share of the press pauses the
+    pattern; ``catch_drop_m``: the tip this far below its height at the press is a catch;
+    ``probe_s``: the longest a pause lasts; ``push_speed_m_s``, ``stop_force_n``: the push
+    and the force that ends it; ``stall_s``, ``stall_m``: a push whose TCP has gone no more
+    than ``stall_m`` lower for ``stall_s`` has ended too (the arm's own limit); ``entry_m``:
+    the least drop of the tip below its height at the press that counts as in;
+    ``jam_skip_m``: after a jam the pattern goes on this much further along; ``tare_s``: the
+    sensor's zero is averaged over this at the hover; ``sweep_speed_m_s``: along the path;
+    ``descend_speed_m_s``: down to the touch; ``yaw_step_rad``, ``yaw_range_rad``: the
+    passes' yaw offsets (``yaw_offsets``); ``turn_tol_rad``: a pass's yaw counts as reached
+    within this; ``hover_m``: tip height above the board between passes;
+    ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
+    x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
+    ``timeout_s``: the whole run; ``rewind``: a probe first takes the pattern back to where
+    it was at the time the force's reading describes (the force's delay, swept past the
+    opening), once per stretch of the pattern; ``open_frames``: with a tactile reading, the
+    new frames the grasp waits for while the estimator takes the open gel (more than it
+    takes)."""
+
+    gripper: GripperSettings
+    pattern: Literal["spiral", "raster"] = "spiral"
+    pitch_m: float = number(1e-5, 0.01, default=0.0004)
+    half_width_m: float = number(0.0, 0.05, default=0.003)
+    touch_force_n: float = number(0.05, 50.0, default=1.0)
+    press_force_n: float = number(0.05, 50.0, default=2.0)
+    force_gain_m_s_n: float = number(1e-5, 0.05, default=0.005)
+    force_window: int = number(1, 100, default=5)
+    wrist_z_stiffness_n_m: float = number(10.0, 1e6, default=1000.0)
+    settle_band: float = number(0.01, 1.0, default=0.2)
+    catch_ratio: float = number(0.0, 1.0, default=0.4)
+    catch_drop_m: float = number(1e-5, 0.02, default=0.001)
+    probe_s: float = number(0.01, 10.0, default=0.5)
+    push_speed_m_s: float = number(1e-4, 0.05, default=0.004)
+    stop_force_n: float = number(0.1, 100.0, default=8.0)
+    stall_s: float = number(0.01, 10.0, default=0.3)
+    stall_m: float = number(1e-6, 0.01, default=1e-4)
+    entry_m: float = number(0.0, 0.05, default=0.002)
+    jam_skip_m: float = number(0.0, 0.05, default=0.001)
+    tare_s: float = number(0.0, 5.0, default=0.2)
+    sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)
+    descend_speed_m_s: float = number(1e-4, 0.1, default=0.005)
+    yaw_step_rad: float = number(1e-4, 0.5, default=0.02)
+    yaw_range_rad: float = number(0.0, 0.5, default=0.0524)
+    turn_tol_rad: float = number(1e-5, 0.1, default=0.002)
+    hover_m: float = number(0.0, 0.05, default=0.002)
+    move_speed_m_s: float = number(1e-4, 0.2, default=0.02)
+    pose_gain_1_s: float = number(0.1, 100.0, default=10.0)
+    rotate_speed_rad_s: float = number(1e-3, 3.0, default=0.5)
+    pose_tol_m: float = number(1e-6, 0.01, default=0.0002)
+    retract_m: float = number(0.0, 0.2, default=0.03)
+    timeout_s: float = number(1.0, 3600.0, default=120.0)
+    rewind: bool = False
+    open_frames: int = number(1, 100, default=6)
+
+    def __post_init__(self) -> None:
+        if not self.touch_force_n < self.press_force_n < self.stop_force_n:
+            raise ValueError(
+                "keys 'touch_force_n', 'press_force_n', 'stop_force_n': expected increasing "
+                f"forces, got {self.touch_force_n}, {self.press_force_n}, {self.stop_force_n}"
+            )
+
+    @property
+    def yaw_offsets(self) -> tuple[float, ...]:
+        """The passes' yaw offsets from the nominal, rad: 0, +step, -step, +2 step, -2 step,
+        ... while within ``yaw_range_rad``."""
+        steps = int(math.floor(self.yaw_range_rad / self.yaw_step_rad + 1e-9))
+        offsets = [0.0]
+        for k in range(1, steps + 1):
+            offsets += [k * self.yaw_step_rad, -k * self.yaw_step_rad]
+        return tuple(offsets)
+
+
+AxialWeights = tuple[float, float, float, float, float, float, float, float, float]
+
+
+@config_dataclass
+class TouchSpiralConfig(SpiralConfig):
+    """The task file's ``touch_spiral:`` section: the blind baseline's search with the force
+    read by touch (``force_reading.TactileAxialForce``), every key as ``blind:``'s, forces
+    on the whole plug; ``axial_weights``: N on the plug per unit of each of the estimate's
+    ``force_reading.AXIAL_TERMS`` (nine: tau_x, tau_y, tau_z in N*m, shear_x, shear_y,
+    normal in N, the three torques' magnitudes). The default reads the force channel along
+    T z (S's shear_y) over the sensing finger's share of the load (two alike fingers).
+    ``force_window`` counts tactile frames here, and the force is their median."""
+
+    axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)

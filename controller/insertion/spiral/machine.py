@@ -1,0 +1,329 @@
+"""The press-spiral machine: the strongest search an integrator would build without touch
+(``blind``, on the arm's F/T sensor) and the same search by touch (``touch_spiral``, on the
+tactile estimate's axial force: controller/insertion/force_reading.py).
+
+It grasps, moves the plug upright above the nominal opening and, for each yaw in
+``yaw_offsets``, tares the force at the hover, touches the board, sweeps the pattern pressed
+and, where the force drops, probes, pushes and releases (each phase's module says how:
+grasp.py, approach.py, search.py, insert.py, release.py). A trial scores it as every
+controller (evaluation/trials/trial.py): DONE with the tip at the depth at some time.
+
+Phases: GRASP -> APPROACH -> SEARCH <-> INSERT -> RELEASE -> RETRACT -> DONE; FAILED on a
+device fault, the timeout, or an arm without a force reading (``device_fault``, its rule
+``no_force``: the arm file's ``ft_sensor`` is off). The table and every phase's sub-stages
+are data (``SPIRAL``), checked when the machine is built; every command names the rule
+(``Command.rule``, ``phase.rule``) and the sub-stage (``Command.stage``) that decided it.
+The machine ignores the gamepad (it runs in batch comparisons).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any, TypeVar
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from controller.insertion.definition import Definition, Edge, check_definition
+from controller.insertion.force_reading import ArmForce, ForceReading
+from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
+from controller.insertion.motion import bounded_twist, rotation_error
+from controller.insertion.phases.overrides import TerminalStage
+from controller.insertion.search_path import SearchPattern
+from controller.insertion.spiral import approach, grasp, insert, release, search
+from controller.insertion.spiral.config import SpiralConfig
+from core.devices import Twist
+from core.spatial import clamp_norm, rotation_from_rpy
+from core.task_geometry import HolePose, PlugGeometry
+
+LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s
+HISTORY_TICKS = 100  # the sweep's (time, length) kept for a rewind: 1 s at 100 Hz
+NO_FORCE = "no_force"  # the FAILED transition's rule when the arm reports no force
+
+F = FailureReason
+_WORKING = (
+    Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.INSERT, Phase.RELEASE, Phase.RETRACT,
+)  # fmt: skip
+SPIRAL = Definition(
+    phases=(*_WORKING, Phase.DONE, Phase.FAILED),
+    initial=Phase.GRASP,
+    terminal=(Phase.DONE, Phase.FAILED),
+    edges=(
+        Edge(Phase.GRASP, Phase.APPROACH, "grasped"),
+        Edge(Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
+        Edge(Phase.SEARCH, Phase.INSERT, "caught"),
+        Edge(Phase.INSERT, Phase.SEARCH, "jammed"),
+        Edge(Phase.INSERT, Phase.RELEASE, "bottomed"),
+        Edge(Phase.SEARCH, Phase.RELEASE, "pattern_done"),
+        Edge(Phase.RELEASE, Phase.RETRACT, "released"),
+        Edge(Phase.RETRACT, Phase.DONE, "retracted"),
+        *(Edge(p, Phase.FAILED, r.value) for p in _WORKING for r in (F.TIMEOUT, F.DEVICE_FAULT)),
+    ),
+    stages={
+        Phase.GRASP: tuple(grasp.GraspStage),
+        Phase.APPROACH: tuple(approach.ApproachStage),
+        Phase.SEARCH: tuple(search.SearchStage),
+        Phase.INSERT: tuple(insert.InsertStage),
+        Phase.RELEASE: tuple(release.ReleaseStage),
+        Phase.RETRACT: tuple(release.RetractStage),
+        Phase.DONE: (TerminalStage.HOLD,),
+        Phase.FAILED: (TerminalStage.HOLD,),
+    },
+)
+
+
+@dataclass
+class TerminalState:
+    """DONE's or FAILED's one sub-stage."""
+
+    stage: TerminalStage = TerminalStage.HOLD
+
+
+@dataclass
+class SearchMemory:
+    """What SEARCH and INSERT share through the run: the pass (``pass_index`` into
+    ``yaw_offsets``), the pattern's path length swept in it (``s_m``, m) and its recent
+    history (time s, length m) for a rewind, the length at the last rewound probe
+    (``rewound_to_m``), the tared zero (``bias_n``, N) and the TCP's height at the settled
+    press (``press_z_m``, B, m; None until the press settles after a tare)."""
+
+    pass_index: int = 0
+    s_m: float = 0.0
+    s_history: deque[tuple[float, float]] = field(
+        default_factory=lambda: deque(maxlen=HISTORY_TICKS)
+    )
+    rewound_to_m: float = -math.inf
+    bias_n: float = 0.0
+    press_z_m: float | None = None
+
+    def s_at(self, t_s: float) -> float:
+        """The pattern's swept length at time ``t_s`` (the earliest kept, if older)."""
+        for t, s_m in reversed(self.s_history):
+            if t <= t_s:
+                return s_m
+        return self.s_history[0][1] if self.s_history else self.s_m
+
+
+_ENTER: dict[Phase, Callable[[Observation], Any]] = {
+    Phase.GRASP: grasp.enter,
+    Phase.APPROACH: approach.enter,
+    Phase.SEARCH: search.enter,
+    Phase.INSERT: insert.enter,
+    Phase.RELEASE: release.enter_release,
+    Phase.RETRACT: release.enter_retract,
+    Phase.DONE: lambda obs: TerminalState(),
+    Phase.FAILED: lambda obs: TerminalState(),
+}
+_STEP: dict[Phase, Callable[[SpiralMachine, Observation], Command]] = {
+    Phase.GRASP: grasp.step,
+    Phase.APPROACH: approach.step,
+    Phase.SEARCH: search.step,
+    Phase.INSERT: insert.step,
+    Phase.RELEASE: release.release,
+    Phase.RETRACT: release.retract,
+}
+StateT = TypeVar("StateT")
+
+
+class SpiralMachine:
+    """The press-spiral machine (see the module doc); a ``Machine`` for the control loop.
+    ``reading``: where the force comes from (the arm's F/T sensor by default)."""
+
+    def __init__(
+        self,
+        config: SpiralConfig,
+        plug: PlugGeometry,
+        hole: HolePose,
+        reading: ForceReading | None = None,
+    ) -> None:
+        check_definition(SPIRAL)
+        self.config, self.plug, self.hole = config, plug, hole
+        self.reading = reading if reading is not None else ArmForce(config.force_window)
+        self.memory = SearchMemory()
+        self.force_n = 0.0  # the reading's last force (N) and the time it describes (s)
+        self.force_t_s = 0.0
+        self.tick_s = 0.0  # time since the previous tick, s
+        self._pattern = SearchPattern(config.pattern, config.pitch_m, config.half_width_m)
+        self._phase = Phase.GRASP
+        self._state: Any = None  # the present phase's state (its module's dataclass)
+        self._transitions: list[Transition] = []
+        self._start_t_s: float | None = None
+        self._last_t_s = 0.0
+        self._decided: tuple[Phase, Enum, str] | None = None  # this tick's sub-stage, rule
+
+    # -- the Machine protocol ------------------------------------------------------------
+
+    @property
+    def phase(self) -> Phase:
+        return self._phase
+
+    @property
+    def stage(self) -> Enum:
+        """The present phase's sub-stage (GRASP's start before the first step)."""
+        return grasp.GraspStage.START if self._state is None else self._state.stage
+
+    @property
+    def transitions(self) -> tuple[Transition, ...]:
+        return tuple(self._transitions)
+
+    def step(self, obs: Observation) -> Command:
+        """One tick: the command for ``obs``, naming the rule and the sub-stage that decided
+        it."""
+        if self._state is None:
+            self._state = _ENTER[self._phase](obs)
+        self._decided = None
+        command = self._decide(obs)
+        phase, stage, rule = self._decided or (self._phase, self._state.stage, "")
+        if stage not in SPIRAL.stages[phase]:
+            raise RuntimeError(f"sub-stage {phase.name}.{stage.name} is not in the definition")
+        return dataclasses.replace(command, rule=rule, stage=f"{phase.value}.{stage.value}")
+
+    def _decide(self, obs: Observation) -> Command:
+        if self._phase in (Phase.DONE, Phase.FAILED):
+            self.fire("hold")
+            return self.hold()
+        if self._start_t_s is None:
+            self._start_t_s = self._last_t_s = obs.t_s
+        self.tick_s, self._last_t_s = obs.t_s - self._last_t_s, obs.t_s
+        if obs.fault or obs.arm.error_code or obs.gripper.fault_code:
+            return self._fail(obs, F.DEVICE_FAULT)
+        if not self.reading.available(obs):
+            return self._fail(obs, F.DEVICE_FAULT, NO_FORCE)
+        if obs.t_s - self._start_t_s > self.config.timeout_s:
+            return self._fail(obs, F.TIMEOUT)
+        return _STEP[self._phase](self, obs)
+
+    # -- what the phases act through -------------------------------------------------------
+
+    def state(self, kind: type[StateT]) -> StateT:
+        """The present phase's state, of type ``kind`` (RuntimeError if it is not)."""
+        if not isinstance(self._state, kind):
+            raise RuntimeError(f"phase {self._phase.name} has no {kind.__name__}")
+        return self._state
+
+    def fire(self, rule: str) -> None:
+        """Name the rule deciding this tick's command (``phase.rule``), in the present
+        sub-stage."""
+        self._decided = (self._phase, self._state.stage, f"{self._phase.value}.{rule}")
+
+    def go(self, obs: Observation, target: Phase, guard: str, rule: str = "") -> None:
+        """Move to ``target`` under ``guard`` (``rule``: which of the guard's rules fired);
+        the tick's rule is the guard unless a phase named one."""
+        if not SPIRAL.allows(self._phase, target, guard):
+            raise RuntimeError(f"spiral machine: no edge {self._phase} -> {target} ({guard})")
+        if self._decided is None:
+            self.fire(guard)
+        self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
+        self._phase, self._state = target, _ENTER[target](obs)
+
+    def _fail(self, obs: Observation, reason: FailureReason, rule: str = "") -> Command:
+        self.go(obs, Phase.FAILED, reason.value, rule)
+        return self.hold()
+
+    @staticmethod
+    def hold() -> Command:
+        """Still."""
+        return Command(twist=Twist())
+
+    @property
+    def pattern_length_m(self) -> float:
+        """The search pattern's whole path length, m."""
+        return self._pattern.length_m
+
+    # -- the force --------------------------------------------------------------------------
+
+    def read_force(self, obs: Observation) -> bool:
+        """Take the reading's newest force and its time, if it has one (True)."""
+        reading = self.reading.read(obs)
+        if reading is not None:
+            self.force_n, self.force_t_s = reading
+        return reading is not None
+
+    def tared_force(self, obs: Observation) -> float:
+        """The upward force on the tool (z in B, N) less the tare: the reading's newest (its
+        last while it has none)."""
+        self.read_force(obs)
+        return self.force_n - self.memory.bias_n
+
+    def tip_drop_m(self, obs: Observation, force: float) -> float:
+        """How far the tip has gone below its height at the settled press, m: the TCP's drop
+        less the wrist's extra compression (force above the press over its stiffness)."""
+        press_z = self.memory.press_z_m
+        assert press_z is not None  # set before any catch
+        cfg = self.config
+        tcp_drop = press_z - obs.arm.tcp.xyz_m[2]
+        return tcp_drop - (force - cfg.press_force_n) / cfg.wrist_z_stiffness_n_m
+
+    # -- where the tool goes ----------------------------------------------------------------
+
+    def _upright(self) -> Rotation:
+        """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
+        yaw = self.hole.yaw_rad + self.config.yaw_offsets[self.memory.pass_index]
+        return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
+
+    def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
+        """The tip's target in B (m) at path length ``s_m`` of the pattern, ``height_m``
+        above the nominal board."""
+        u, v = self._pattern.offset(s_m)
+        planar = Rotation.from_euler("z", self.hole.yaw_rad).apply([u, v, 0.0])
+        return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
+
+    def _tcp_target(self, tip: np.ndarray) -> np.ndarray:
+        return tip - self._upright().apply([0.0, 0.0, self.plug.length_m])
+
+    def reach(self, obs: Observation, tip: np.ndarray) -> bool:
+        """The TCP is within ``pose_tol_m`` of where it puts the tip at ``tip`` (B, m)."""
+        error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
+        return bool(np.linalg.norm(error) <= self.config.pose_tol_m)
+
+    def turned(self, obs: Observation) -> bool:
+        """The TCP is within ``turn_tol_rad`` of this pass's orientation."""
+        turn = rotation_error(rotation_from_rpy(obs.arm.tcp.rpy_rad), self._upright())
+        return bool(np.linalg.norm(turn) <= self.config.turn_tol_rad)
+
+    def servo(self, obs: Observation, tip: np.ndarray) -> Command:
+        """Toward the TCP pose that puts the tip at ``tip`` (B, m)."""
+        cfg = self.config
+        error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
+        return self._command(obs, cfg.pose_gain_1_s * error)
+
+    def pressed(self, obs: Observation, force: float, moving: bool = False) -> Command:
+        """x, y on the pattern at the swept length (its velocity ahead when ``moving``), z by
+        the admittance on the press (``force``: the tared force, N)."""
+        cfg = self.config
+        now = self._tcp_target(self.tip_target(self.memory.s_m, 0.0))
+        v = cfg.pose_gain_1_s * (now - np.asarray(obs.arm.tcp.xyz_m))
+        if moving:
+            ahead = self._tcp_target(
+                self.tip_target(self.memory.s_m + cfg.sweep_speed_m_s * LEAD_S, 0.0)
+            )
+            v += (ahead - now) / LEAD_S
+        v[2] = cfg.force_gain_m_s_n * (force - cfg.press_force_n)
+        return self._command(obs, v)
+
+    def descend(
+        self, obs: Observation, speed_m_s: float, hold_xy: np.ndarray | None = None
+    ) -> Command:
+        """Down at ``speed_m_s`` (up when negative), x, y held on the pattern's point (or at
+        ``hold_xy``, B, m)."""
+        cfg = self.config
+        if hold_xy is not None:
+            xy = hold_xy
+        else:
+            xy = self._tcp_target(self.tip_target(self.memory.s_m, 0.0))[:2]
+        v = np.zeros(3)
+        v[:2] = cfg.pose_gain_1_s * (xy - np.asarray(obs.arm.tcp.xyz_m[:2]))
+        v[2] = -speed_m_s
+        return self._command(obs, v)
+
+    def _command(self, obs: Observation, v: np.ndarray) -> Command:
+        cfg = self.config
+        v = clamp_norm(v, cfg.move_speed_m_s)
+        turn = rotation_error(rotation_from_rpy(obs.arm.tcp.rpy_rad), self._upright())
+        w = clamp_norm(cfg.pose_gain_1_s * turn, cfg.rotate_speed_rad_s)
+        return Command(twist=bounded_twist(v, w, cfg.move_speed_m_s, cfg.rotate_speed_rad_s))

@@ -1,0 +1,121 @@
+"""SEARCH of the press-spiral machine, one pass per yaw offset (``yaw_offsets``):
+
+* **tare**: still at ``hover_m`` above the board for ``tare_s``; the mean force over the
+  readings is the sensor's zero (the F/T sensor drifts; the tactile reading has none while
+  the estimator re-zeroes);
+* **touch**: down at ``descend_speed_m_s`` until the tared upward force reaches
+  ``touch_force_n``;
+* **sweep**: the pattern at ``sweep_speed_m_s`` while the admittance holds the press; the
+  press's height (the TCP's when the force first settles within ``settle_band`` of the
+  press) is the reference. A force under ``catch_ratio`` x the press pauses the pattern
+  (**probe**; with ``rewind``, first back to where it was at the time the reading
+  describes, once per stretch) and the admittance lowers the TCP: the tip ``catch_drop_m``
+  below its height at the press is caught (INSERT); the force back at the press, or
+  ``probe_s``, and the pattern goes on;
+* **rise**: at the pattern's end, up to the hover, then **turn** to the next yaw's start
+  (or RELEASE after the last, ``pattern_done``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from controller.insertion.interface import Command, Observation, Phase
+from controller.insertion.phases.stage import Staged
+
+if TYPE_CHECKING:
+    from controller.insertion.spiral.machine import SpiralMachine
+
+
+class SearchStage(Enum):
+    """SEARCH's sub-stages (see the module doc)."""
+
+    TARE = "tare"
+    TOUCH = "touch"
+    SWEEP = "sweep"
+    PROBE = "probe"
+    RISE = "rise"
+    TURN = "turn"
+
+
+@dataclass
+class SearchState(Staged[SearchStage]):
+    """SEARCH's sub-stage, and the forces taken for the tare so far (N)."""
+
+    tare_n: list[float] = field(default_factory=list)
+
+
+def enter(obs: Observation) -> SearchState:
+    return SearchState(SearchStage.TARE, obs.t_s)
+
+
+def step(m: SpiralMachine, obs: Observation) -> Command:
+    """See the module doc."""
+    cfg, state, run = m.config, m.state(SearchState), m.memory
+    if state.stage is SearchStage.TARE:  # over readings only
+        if m.read_force(obs):
+            state.tare_n.append(m.force_n)
+        if obs.t_s - state.since_t_s >= cfg.tare_s and state.tare_n:
+            run.bias_n, run.press_z_m = float(np.mean(state.tare_n)), None
+            state.tare_n, state.stage = [], SearchStage.TOUCH
+        m.fire("tare")
+        return m.servo(obs, m.tip_target(run.s_m, cfg.hover_m))
+    force = m.tared_force(obs)
+    if state.stage is SearchStage.TOUCH:
+        m.fire("touch")
+        if force >= cfg.touch_force_n:
+            state.next(SearchStage.SWEEP, obs.t_s)
+            return m.pressed(obs, force)
+        return m.descend(obs, cfg.descend_speed_m_s)
+    if state.stage in (SearchStage.SWEEP, SearchStage.PROBE):
+        return _sweep_or_probe(m, obs, state, force)
+    if state.stage is SearchStage.TURN:  # to the pattern's start at the next yaw
+        target = m.tip_target(0.0, cfg.hover_m)
+        if m.reach(obs, target) and m.turned(obs):
+            state.next(SearchStage.TARE, obs.t_s)
+        m.fire("turn")
+        return m.servo(obs, target)
+    target = m.tip_target(run.s_m, cfg.hover_m)  # RISE
+    m.fire("rise")
+    if m.reach(obs, target):
+        if run.pass_index + 1 >= len(cfg.yaw_offsets):
+            m.go(obs, Phase.RELEASE, "pattern_done")
+            return m.hold()
+        run.pass_index, run.s_m = run.pass_index + 1, 0.0
+        state.stage = SearchStage.TURN
+    return m.servo(obs, target)
+
+
+def _sweep_or_probe(
+    m: SpiralMachine, obs: Observation, state: SearchState, force: float
+) -> Command:
+    cfg, run = m.config, m.memory
+    if run.press_z_m is None and abs(force - cfg.press_force_n) <= (
+        cfg.settle_band * cfg.press_force_n
+    ):
+        run.press_z_m = obs.arm.tcp.xyz_m[2]
+    if state.stage is SearchStage.PROBE:
+        m.fire("probe")
+        if run.press_z_m is not None and m.tip_drop_m(obs, force) >= cfg.catch_drop_m:
+            m.go(obs, Phase.INSERT, "caught")
+            return m.hold()
+        if force >= cfg.press_force_n or obs.t_s - state.since_t_s >= cfg.probe_s:
+            state.stage = SearchStage.SWEEP
+        return m.pressed(obs, force)
+    if run.press_z_m is not None and force < cfg.catch_ratio * cfg.press_force_n:
+        state.next(SearchStage.PROBE, obs.t_s)
+        if cfg.rewind and run.s_m > run.rewound_to_m:
+            run.rewound_to_m = run.s_m
+            run.s_m = run.s_at(m.force_t_s)
+        m.fire("probe")
+        return m.pressed(obs, force)
+    run.s_m += cfg.sweep_speed_m_s * m.tick_s
+    run.s_history.append((obs.t_s, run.s_m))
+    if run.s_m >= m.pattern_length_m:
+        state.stage = SearchStage.RISE
+    m.fire("sweep")
+    return m.pressed(obs, force, moving=True)
