@@ -33,6 +33,11 @@ class ForceReading(Protocol):
         """The force (N) and the time it describes (s), or None while there is none yet."""
         ...
 
+    def torque_t(self) -> np.ndarray | None:
+        """The torques on the plug at the last reading (N*m, about T's axes), or None for a
+        source without them."""
+        ...
+
 
 class ArmForce:
     """The F/T sensor's force at the flange (``ArmStatus.external_force_n``, z in B): the mean
@@ -53,6 +58,9 @@ class ArmForce:
         self._forces.append((float(force[2]), obs.t_s))
         mean = np.mean(self._forces, axis=0)
         return float(mean[0]), float(mean[1])
+
+    def torque_t(self) -> np.ndarray | None:
+        return None
 
 
 #: the estimate's channels an axial-force map weighs, in order: the six of S, then the
@@ -82,13 +90,18 @@ class TactileAxialForce:
     at their median capture time. Zeroing frames give nothing. The weights are the task's
     ``touch_spiral.axial_weights``: fitted against the plug's true axial force by
     ``scripts/fit_axial_map.py``, or the force channel along T z over the sensing finger's
-    share of the load."""
+    share of the load. ``s2t``: the rotation R_S2T (3 x 3) that gives the newest frame's
+    torques in T (``torque_t``)."""
 
     zeroes_tactile = True
 
-    def __init__(self, weights: Sequence[float], window: int) -> None:
+    def __init__(
+        self, weights: Sequence[float], window: int, s2t: np.ndarray | None = None
+    ) -> None:
         self._weights = np.asarray(weights, dtype=float)
         self._frames: deque[tuple[float, float]] = deque(maxlen=window)
+        self._s2t = np.eye(3) if s2t is None else np.asarray(s2t, dtype=float)
+        self._torque_t: np.ndarray | None = None
 
     def available(self, obs: Observation) -> bool:
         return True
@@ -97,9 +110,15 @@ class TactileAxialForce:
         w = obs.wrench
         if w is None or w.zeroing:
             self._frames.clear()
+            self._torque_t = None
             return None
         if not self._frames or w.t_s != self._frames[-1][1]:
-            force = float(self._weights @ axial_terms(estimate_channels(w)))
+            channels = estimate_channels(w)
+            force = float(self._weights @ axial_terms(channels))
             self._frames.append((force, w.t_s))
+            self._torque_t = self._s2t @ np.asarray(channels[:3])
         median = np.median(self._frames, axis=0)
         return float(median[0]), float(median[1])
+
+    def torque_t(self) -> np.ndarray | None:
+        return self._torque_t

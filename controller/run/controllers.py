@@ -25,7 +25,9 @@ from typing import Any
 
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.force_reading import TactileAxialForce
+from controller.insertion.machine_config import s2t_matrix
 from controller.insertion.spiral import SpiralMachine
+from controller.insertion.spiral.torque_servo import TorqueServo
 from controller.run.task import TaskConfig
 from controller.tactile import TactileEstimator, TransformedSource, WrenchEstimate, WrenchSource
 
@@ -73,8 +75,10 @@ def _blind_machine(config: TaskConfig) -> Machine:
 
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
     spiral = config.touch_spiral
-    reading = TactileAxialForce(spiral.axial_weights, spiral.force_window)
-    return SpiralMachine(spiral, config.plug, config.hole, reading)
+    s2t = s2t_matrix(config.machine.signals.torque_axes)
+    reading = TactileAxialForce(spiral.axial_weights, spiral.force_window, s2t)
+    servo = TorqueServo(spiral.push_servo) if spiral.push_servo.on else None
+    return SpiralMachine(spiral, config.plug, config.hole, reading, servo)
 
 
 def _the_estimator(estimator: TactileEstimator, world: Any, seed: int) -> TactileEstimator:

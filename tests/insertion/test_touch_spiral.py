@@ -14,6 +14,7 @@ from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
 from controller.insertion.spiral.search import SearchStage
+from controller.insertion.spiral.torque_servo import TorqueServo, TorqueServoSettings
 from controller.run.controllers import CONTROLLERS
 from controller.run.task import load_task
 from core.config import ConfigError
@@ -166,3 +167,17 @@ def test_the_weights_read_every_term_and_the_torques_magnitudes():
 def test_axial_weights_other_than_nine_finite_numbers_are_refused(weights, message):
     with pytest.raises(ConfigError, match=message):
         load_task("usb_c", [f"touch_spiral.axial_weights={weights}"])
+
+
+def test_with_the_torque_servo_it_pushes_turning_about_the_tip_and_still_inserts():
+    world = touch_world()
+    config = replace(SPIRAL, push_servo=TorqueServoSettings((20.0, 20.0, 20.0)))
+    reading = TactileAxialForce(config.axial_weights, config.force_window)
+    machine = SpiralMachine(config, world.plug, world.hole, reading, TorqueServo(config.push_servo))
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    pushes = [c for c in world.commands if c.rule == "insert.servo_push"]
+    assert pushes and all(c.stage == "insert.push" for c in pushes)
+    assert not any(c.rule == "insert.push" for c in world.commands)

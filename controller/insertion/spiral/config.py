@@ -10,6 +10,7 @@ import math
 from typing import Literal
 
 from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral.torque_servo import TorqueServoSettings
 from core.config import Config, config_dataclass, number
 
 
@@ -106,6 +107,8 @@ class TouchSpiralConfig(SpiralConfig):
     ``force_reading.AXIAL_TERMS`` (nine: tau_x, tau_y, tau_z in N*m, shear_x, shear_y,
     normal in N, the three torques' magnitudes). The default reads the force channel along
     T z (S's shear_y) over the sensing finger's share of the load (two alike fingers).
-    ``force_window`` counts tactile frames here, and the force is their median."""
+    ``force_window`` counts tactile frames here, and the force is their median.
+    ``push_servo``: INSERT's yield to the torques while pushing (``torque_servo``)."""
 
     axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
+    push_servo: TorqueServoSettings = TorqueServoSettings()

@@ -31,11 +31,14 @@ class InsertStage(Enum):
 
 @dataclass
 class InsertState(Staged[InsertStage]):
-    """INSERT's sub-stage; ``hold_xy``: the TCP's x, y at the catch (B, m); the push's lowest
+    """INSERT's sub-stage; ``hold_xy``: the TCP's x, y at the catch (B, m), and ``tip_xy``
+    the tip's at the first push (B, m; held instead when the torque servo turns the TCP
+    about the tip); the push's lowest
     TCP height so far (``stall_z_m``, m; none before the first push) and when it was reached
     (``stall_t_s``, s)."""
 
     hold_xy: np.ndarray = field(default_factory=lambda: np.zeros(2))
+    tip_xy: np.ndarray | None = None
     stall_z_m: float = math.inf
     stall_t_s: float = 0.0
 
@@ -68,5 +71,11 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         state.stage = InsertStage.LIFT
         m.fire("lift")
         return m.descend(obs, -cfg.push_speed_m_s, hold_xy=state.hold_xy)
+    torque_t = m.reading.torque_t()
+    if m.torque_servo is not None and torque_t is not None:
+        if state.tip_xy is None:
+            state.tip_xy = m.tip_xy(obs)
+        m.fire("servo_push")
+        return m.servoed_push(obs, cfg.push_speed_m_s, state.tip_xy, torque_t)
     m.fire("push")
     return m.descend(obs, cfg.push_speed_m_s, hold_xy=state.hold_xy)

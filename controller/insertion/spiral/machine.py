@@ -32,11 +32,12 @@ from scipy.spatial.transform import Rotation
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
 from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
-from controller.insertion.motion import bounded_twist, rotation_error
+from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error, tip_position
 from controller.insertion.phases.overrides import TerminalStage
 from controller.insertion.search_path import SearchPattern
 from controller.insertion.spiral import approach, grasp, insert, release, search
 from controller.insertion.spiral.config import SpiralConfig
+from controller.insertion.spiral.torque_servo import TorqueServo
 from core.devices import Twist
 from core.spatial import clamp_norm, rotation_from_rpy
 from core.task_geometry import HolePose, PlugGeometry
@@ -132,7 +133,9 @@ StateT = TypeVar("StateT")
 
 class SpiralMachine:
     """The press-spiral machine (see the module doc); a ``Machine`` for the control loop.
-    ``reading``: where the force comes from (the arm's F/T sensor by default)."""
+    ``reading``: where the force comes from (the arm's F/T sensor by default); ``torque_servo``:
+    INSERT's yield to the reading's torques while pushing (none: the plug held at the pass's
+    orientation)."""
 
     def __init__(
         self,
@@ -140,9 +143,11 @@ class SpiralMachine:
         plug: PlugGeometry,
         hole: HolePose,
         reading: ForceReading | None = None,
+        torque_servo: TorqueServo | None = None,
     ) -> None:
         check_definition(SPIRAL)
         self.config, self.plug, self.hole = config, plug, hole
+        self.torque_servo = torque_servo
         self.reading = reading if reading is not None else ArmForce(config.force_window)
         self.memory = SearchMemory()
         self.force_n = 0.0  # the reading's last force (N) and the time it describes (s)
@@ -320,6 +325,27 @@ class SpiralMachine:
         v[:2] = cfg.pose_gain_1_s * (xy - np.asarray(obs.arm.tcp.xyz_m[:2]))
         v[2] = -speed_m_s
         return self._command(obs, v)
+
+    def tip_xy(self, obs: Observation) -> np.ndarray:
+        """The plug's tip's x, y in B (m), for the nominal grasp."""
+        return tip_position(obs.arm.tcp, self.plug.length_m)[:2]
+
+    def servoed_push(
+        self, obs: Observation, speed_m_s: float, tip_xy: np.ndarray, torque_t: np.ndarray
+    ) -> Command:
+        """The tip down at ``speed_m_s`` and held at ``tip_xy`` (B, m) while the TCP turns
+        about it as the torque servo says for ``torque_t`` (N*m, in T)."""
+        assert self.torque_servo is not None
+        cfg = self.config
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        p_tcp = np.asarray(obs.arm.tcp.xyz_m, dtype=float)
+        p_tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        v_tip = np.zeros(3)
+        v_tip[:2] = cfg.pose_gain_1_s * (tip_xy - p_tip[:2])
+        v_tip[2] = -speed_m_s
+        w = self.torque_servo.rate_b(torque_t, rotation, self._upright())
+        v, w = pivot_twist(p_tcp, p_tip, clamp_norm(v_tip, cfg.move_speed_m_s), w)
+        return Command(twist=bounded_twist(v, w, cfg.move_speed_m_s, cfg.rotate_speed_rad_s))
 
     def _command(self, obs: Observation, v: np.ndarray) -> Command:
         cfg = self.config
