@@ -181,3 +181,18 @@ def test_with_the_torque_servo_it_pushes_turning_about_the_tip_and_still_inserts
     pushes = [c for c in world.commands if c.rule == "insert.servo_push"]
     assert pushes and all(c.stage == "insert.push" for c in pushes)
     assert not any(c.rule == "insert.push" for c in world.commands)
+
+
+@pytest.mark.parametrize(("source", "credited"), [("tip", True), ("tcp", False)])
+def test_the_probe_credits_the_wrists_extension_only_when_asked(source, credited):
+    world = touch_world()
+    machine = spiral(world, replace(SPIRAL, catch_drop_from=source))
+    obs = world.observe()
+    machine.memory.press_z_m = obs.arm.tcp.xyz_m[2] + 0.0002  # the TCP 0.2 mm below the press
+    low = 0.5  # N, a reading 1.5 N under the press: the wrist extended by 1.5 mm, if true
+    expected = 0.0002 + (SPIRAL.press_force_n - low) / SPIRAL.wrist_z_stiffness_n_m
+    drop = machine.catch_drop_m(obs, low)
+    assert drop == pytest.approx(expected if credited else 0.0002)
+    # above the press both count the wrist's compression against the drop
+    high = SPIRAL.press_force_n + 1.0
+    assert machine.catch_drop_m(obs, high) == pytest.approx(0.0002 - 1.0 / 1000.0)

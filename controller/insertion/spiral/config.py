@@ -25,7 +25,11 @@ class SpiralConfig(Config):
     wrist's axial stiffness, as the integrator measures it on the cell (the tip's drop is
     the TCP's less the wrist's compression); ``settle_band``: the press has settled within
     this share of it; ``catch_ratio``: the force under this share of the press pauses the
-    pattern; ``catch_drop_m``: the tip this far below its height at the press is a catch;
+    pattern; ``catch_drop_m``: the tip this far below its height at the press is a catch,
+    with ``catch_drop_from``: ``tip``, the TCP's drop less the wrist's compression from the
+    force (a force under the press counts as the wrist extending), or ``tcp``, the same
+    without crediting that extension (a reading that drops without the load stays no catch
+    until the TCP itself has gone down);
     ``probe_s``: the longest a pause lasts; ``push_speed_m_s``, ``stop_force_n``: the push
     and the force that ends it; ``stall_s``, ``stall_m``: a push whose TCP has gone no more
     than ``stall_m`` lower for ``stall_s`` has ended too (the arm's own limit); ``entry_m``:
@@ -55,6 +59,7 @@ class SpiralConfig(Config):
     settle_band: float = number(0.01, 1.0, default=0.2)
     catch_ratio: float = number(0.0, 1.0, default=0.4)
     catch_drop_m: float = number(1e-5, 0.02, default=0.001)
+    catch_drop_from: Literal["tip", "tcp"] = "tip"
     probe_s: float = number(0.01, 10.0, default=0.5)
     push_speed_m_s: float = number(1e-4, 0.05, default=0.004)
     stop_force_n: float = number(0.1, 100.0, default=8.0)

@@ -264,6 +264,13 @@ class SpiralMachine:
         tcp_drop = press_z - obs.arm.tcp.xyz_m[2]
         return tcp_drop - (force - cfg.press_force_n) / cfg.wrist_z_stiffness_n_m
 
+    def catch_drop_m(self, obs: Observation, force: float) -> float:
+        """The probe's drop (m): ``tip_drop_m``, or with ``catch_drop_from: tcp`` the same
+        without crediting the wrist's extension under a force below the press."""
+        if self.config.catch_drop_from == "tip":
+            return self.tip_drop_m(obs, force)
+        return self.tip_drop_m(obs, max(force, self.config.press_force_n))
+
     # -- where the tool goes ----------------------------------------------------------------
 
     def _upright(self) -> Rotation:

@@ -100,7 +100,7 @@ def _sweep_or_probe(
         run.press_z_m = obs.arm.tcp.xyz_m[2]
     if state.stage is SearchStage.PROBE:
         m.fire("probe")
-        if run.press_z_m is not None and m.tip_drop_m(obs, force) >= cfg.catch_drop_m:
+        if run.press_z_m is not None and m.catch_drop_m(obs, force) >= cfg.catch_drop_m:
             m.go(obs, Phase.INSERT, "caught")
             return m.hold()
         if force >= cfg.press_force_n or obs.t_s - state.since_t_s >= cfg.probe_s:
