@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from controller.insertion.interface import Command, GripperTarget, Observation, TeleopInput
-from controller.insertion.machine_config import MachineConfig
+from controller.insertion.machine_config import GripperSettings, MachineConfig
 from controller.insertion.motion import bounded_twist, pivot_twist, tip_position
 from core.devices import Twist
 from core.task_geometry import PlugGeometry
@@ -45,14 +45,12 @@ def tip_command(
 
 def close_target(config: MachineConfig) -> GripperTarget:
     """The gripper's close command (``gripper.close_*``)."""
-    g = config.gripper
-    return GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n)
+    return config.gripper.close_target()
 
 
 def open_target(config: MachineConfig, width_m: float) -> GripperTarget:
     """The gripper's open command to ``width_m`` (m)."""
-    g = config.gripper
-    return GripperTarget(width_m, g.open_speed_m_s, g.close_force_n)
+    return config.gripper.open_target(width_m)
 
 
 def capture_open(config: MachineConfig, plug: PlugGeometry, obs: Observation) -> Command:
@@ -61,19 +59,21 @@ def capture_open(config: MachineConfig, plug: PlugGeometry, obs: Observation) ->
     return Command(twist=Twist(), gripper=gripper, capture_open_tactile=True)
 
 
-def operator_command(teleop: TeleopInput, config: MachineConfig) -> Command:
-    """The operator's command in TELEOP: the pad's twist (TCP, in B) bounded by the
-    machine's ``limits`` speeds, and a gripper target on a gripper button's press."""
-    limits = config.limits
+def operator_command(
+    teleop: TeleopInput, gripper: GripperSettings, max_linear_m_s: float, max_angular_rad_s: float
+) -> Command:
+    """The operator's command in TELEOP: the pad's twist (TCP, in B) bounded by
+    ``max_linear_m_s`` and ``max_angular_rad_s``, and a gripper target on a gripper button's
+    press (``gripper``'s close, or its open to ``open_width_m``)."""
     twist = bounded_twist(
         np.asarray(teleop.twist.linear_m_s),
         np.asarray(teleop.twist.angular_rad_s),
-        limits.max_linear_speed_m_s,
-        limits.max_angular_speed_rad_s,
+        max_linear_m_s,
+        max_angular_rad_s,
     )
-    gripper = None
+    target = None
     if teleop.gripper_close:
-        gripper = close_target(config)
+        target = gripper.close_target()
     elif teleop.gripper_open:
-        gripper = open_target(config, config.gripper.open_width_m)
-    return Command(twist=twist, gripper=gripper)
+        target = gripper.open_target(gripper.open_width_m)
+    return Command(twist=twist, gripper=target)

@@ -64,6 +64,14 @@ class GripperSettings(Config):
             return None
         return GripperTarget(preclose_m, self.preclose_speed_m_s, self.close_force_n)
 
+    def close_target(self) -> GripperTarget:
+        """The close command (``close_*``)."""
+        return GripperTarget(self.close_width_m, self.close_speed_m_s, self.close_force_n)
+
+    def open_target(self, width_m: float) -> GripperTarget:
+        """The open command to ``width_m`` (m) at ``open_speed_m_s``."""
+        return GripperTarget(width_m, self.open_speed_m_s, self.close_force_n)
+
 
 @config_dataclass
 class NoiseFloor(Config):

@@ -111,7 +111,11 @@ class TeleopOnlyMachine:
         if self._rezero_wanted:
             self._rezero_wanted = False
             return Command(twist=Twist(), rezero_tactile=True)
-        return operator_command(teleop, self.config)
+        limits = self.config.limits
+        return operator_command(
+            teleop, self.config.gripper, limits.max_linear_speed_m_s,
+            limits.max_angular_speed_rad_s,
+        )  # fmt: skip
 
     def request_rezero(self) -> None:
         """Re-zero the tactile reference at the next TELEOP tick (the view's key; safe to

@@ -73,7 +73,11 @@ def teleop(machine: InsertionMachine, obs: Observation) -> Command:
         resume(machine, obs, resume_phase(machine, obs), "hand_back")
         return hold()
     machine.fire("operator")
-    return operator_command(obs.teleop, machine.config)
+    limits = machine.config.limits
+    return operator_command(
+        obs.teleop, machine.config.gripper, limits.max_linear_speed_m_s,
+        limits.max_angular_speed_rad_s,
+    )  # fmt: skip
 
 
 def resume_phase(machine: InsertionMachine, obs: Observation) -> Phase:

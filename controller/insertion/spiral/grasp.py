@@ -9,7 +9,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import TYPE_CHECKING
 
-from controller.insertion.interface import Command, GripperTarget, Observation, Phase
+from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from core.devices import Twist
 
@@ -56,8 +56,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             return Command(twist=Twist())
         state.next(GraspStage.CLOSE, obs.t_s)
         m.fire("close")
-        close = GripperTarget(g.close_width_m, g.close_speed_m_s, g.close_force_n)
-        return Command(twist=Twist(), gripper=close)
+        return Command(twist=Twist(), gripper=g.close_target())
     if not (obs.gripper.holding and not obs.gripper.moving):
         state.since_t_s = obs.t_s
     elif obs.t_s - state.since_t_s >= g.settle_s:

@@ -8,12 +8,17 @@ and, where the force drops, probes, pushes and releases (each phase's module say
 grasp.py, approach.py, search.py, insert.py, release.py). A trial scores it as every
 controller (evaluation/trials/trial.py): DONE with the tip at the depth at some time.
 
-Phases: GRASP -> APPROACH -> SEARCH <-> INSERT -> RELEASE -> RETRACT -> DONE; FAILED on a
-device fault, the timeout, or an arm without a force reading (``device_fault``, its rule
-``no_force``: the arm file's ``ft_sensor`` is off). The table and every phase's sub-stages
-are data (``SPIRAL``), checked when the machine is built; every command names the rule
-(``Command.rule``, ``phase.rule``) and the sub-stage (``Command.stage``) that decided it.
-The machine ignores the gamepad (it runs in batch comparisons).
+Phases: GRASP -> APPROACH -> SEARCH <-> INSERT -> RELEASE -> RETRACT -> DONE. Each tick,
+in this order: a device fault ends the run (FAILED, ``device_fault``); the e-stop button
+latches ESTOP; an operator in control takes over (TELEOP; overrides.py says where autonomy
+resumes); an arm without a force reading ends it (``device_fault``, its rule ``no_force``:
+the arm file's ``ft_sensor`` is off), as does the budget ``timeout_s`` of autonomous time
+(``timeout``); with the plug in hand (APPROACH, SEARCH, INSERT), the gripper no longer
+holding or the estimate's gross slip (``slip``), and the tared force over ``force_limit_n``
+or the TCP tilted more than ``max_tilt_rad`` (``limit_exceeded``); then the phase's step.
+The table and every phase's sub-stages are data (``SPIRAL``), checked when the machine is
+built; every command names the rule (``Command.rule``, ``phase.rule``) and the sub-stage
+(``Command.stage``) that decided it.
 """
 
 from __future__ import annotations
@@ -33,13 +38,13 @@ from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
 from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
 from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error, tip_position
-from controller.insertion.phases.overrides import TerminalStage
+from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
 from controller.insertion.search_path import SearchPattern
-from controller.insertion.spiral import approach, grasp, insert, release, search
+from controller.insertion.spiral import approach, grasp, insert, overrides, release, search
 from controller.insertion.spiral.config import SpiralConfig
 from controller.insertion.spiral.torque_servo import TorqueServo
 from core.devices import Twist
-from core.spatial import clamp_norm, rotation_from_rpy
+from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation
 from core.task_geometry import HolePose, PlugGeometry
 
 LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s
@@ -50,8 +55,16 @@ F = FailureReason
 _WORKING = (
     Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.INSERT, Phase.RELEASE, Phase.RETRACT,
 )  # fmt: skip
+_HOLDING = (Phase.APPROACH, Phase.SEARCH, Phase.INSERT)  # the plug in hand, near the board
+_RESUMED = (Phase.GRASP, Phase.RETRACT)  # where autonomy resumes (overrides.resume)
+
+
+def _edges(sources: tuple[Phase, ...], target: Phase, *guards: str) -> tuple[Edge, ...]:
+    return tuple(Edge(source, target, guard) for source in sources for guard in guards)
+
+
 SPIRAL = Definition(
-    phases=(*_WORKING, Phase.DONE, Phase.FAILED),
+    phases=(*_WORKING, Phase.TELEOP, Phase.ESTOP, Phase.DONE, Phase.FAILED),
     initial=Phase.GRASP,
     terminal=(Phase.DONE, Phase.FAILED),
     edges=(
@@ -63,7 +76,16 @@ SPIRAL = Definition(
         Edge(Phase.SEARCH, Phase.RELEASE, "pattern_done"),
         Edge(Phase.RELEASE, Phase.RETRACT, "released"),
         Edge(Phase.RETRACT, Phase.DONE, "retracted"),
-        *(Edge(p, Phase.FAILED, r.value) for p in _WORKING for r in (F.TIMEOUT, F.DEVICE_FAULT)),
+        *_edges(_WORKING, Phase.FAILED, F.TIMEOUT.value, F.DEVICE_FAULT.value),
+        *_edges(_HOLDING, Phase.FAILED, F.SLIP.value, F.LIMIT_EXCEEDED.value),
+        *_edges(_WORKING, Phase.TELEOP, "operator_takeover"),
+        *_edges((*_WORKING, Phase.TELEOP), Phase.ESTOP, "estop"),
+        *_edges((Phase.TELEOP,), _RESUMED[0], "hand_back"),
+        *_edges((Phase.TELEOP,), _RESUMED[1], "hand_back"),
+        *_edges((Phase.ESTOP,), _RESUMED[0], "estop_acknowledged"),
+        *_edges((Phase.ESTOP,), _RESUMED[1], "estop_acknowledged"),
+        Edge(Phase.ESTOP, Phase.TELEOP, "estop_acknowledged"),
+        *_edges((Phase.TELEOP, Phase.ESTOP), Phase.FAILED, F.DEVICE_FAULT.value),
     ),
     stages={
         Phase.GRASP: tuple(grasp.GraspStage),
@@ -72,6 +94,8 @@ SPIRAL = Definition(
         Phase.INSERT: tuple(insert.InsertStage),
         Phase.RELEASE: tuple(release.ReleaseStage),
         Phase.RETRACT: tuple(release.RetractStage),
+        Phase.TELEOP: (TeleopStage.OPERATOR,),
+        Phase.ESTOP: (EstopStage.HOLD,),
         Phase.DONE: (TerminalStage.HOLD,),
         Phase.FAILED: (TerminalStage.HOLD,),
     },
@@ -90,7 +114,8 @@ class SearchMemory:
     """What SEARCH and INSERT share through the run: the pass (``pass_index`` into
     ``yaw_offsets``), the pattern's path length swept in it (``s_m``, m) and its recent
     history (time s, length m) for a rewind, the length at the last rewound probe
-    (``rewound_to_m``), the tared zero (``bias_n``, N) and the TCP's height at the settled
+    (``rewound_to_m``), the tared zero (``bias_n``, N; ``tared`` once one is taken) and the
+    TCP's height at the settled
     press (``press_z_m``, B, m; None until the press settles after a tare)."""
 
     pass_index: int = 0
@@ -100,6 +125,7 @@ class SearchMemory:
     )
     rewound_to_m: float = -math.inf
     bias_n: float = 0.0
+    tared: bool = False
     press_z_m: float | None = None
 
     def s_at(self, t_s: float) -> float:
@@ -117,6 +143,8 @@ _ENTER: dict[Phase, Callable[[Observation], Any]] = {
     Phase.INSERT: insert.enter,
     Phase.RELEASE: release.enter_release,
     Phase.RETRACT: release.enter_retract,
+    Phase.TELEOP: overrides.enter_teleop,
+    Phase.ESTOP: overrides.enter_estop,
     Phase.DONE: lambda obs: TerminalState(),
     Phase.FAILED: lambda obs: TerminalState(),
 }
@@ -159,6 +187,8 @@ class SpiralMachine:
         self._transitions: list[Transition] = []
         self._start_t_s: float | None = None
         self._last_t_s = 0.0
+        self._override_s = 0.0  # time spent in TELEOP and ESTOP, s
+        self.released = False  # RELEASE was entered
         self._decided: tuple[Phase, Enum, str] | None = None  # this tick's sub-stage, rule
 
     # -- the Machine protocol ------------------------------------------------------------
@@ -197,11 +227,31 @@ class SpiralMachine:
         self.tick_s, self._last_t_s = obs.t_s - self._last_t_s, obs.t_s
         if obs.fault or obs.arm.error_code or obs.gripper.fault_code:
             return self._fail(obs, F.DEVICE_FAULT)
+        if obs.teleop.estop and self._phase is not Phase.ESTOP:
+            self.go(obs, Phase.ESTOP, "estop")
+        if obs.teleop.in_control and self._phase in _WORKING:
+            self.go(obs, Phase.TELEOP, "operator_takeover")
+        if self._phase in (Phase.ESTOP, Phase.TELEOP):
+            self._override_s += self.tick_s
+            step = overrides.estop if self._phase is Phase.ESTOP else overrides.teleop
+            return step(self, obs)
         if not self.reading.available(obs):
             return self._fail(obs, F.DEVICE_FAULT, NO_FORCE)
-        if obs.t_s - self._start_t_s > self.config.timeout_s:
+        if obs.t_s - self._start_t_s - self._override_s > self.config.timeout_s:
             return self._fail(obs, F.TIMEOUT)
+        if self._phase in _HOLDING:
+            if not obs.gripper.holding or (obs.wrench is not None and obs.wrench.slip_gross):
+                return self._fail(obs, F.SLIP)
+            if self._limit_exceeded(obs):
+                return self._fail(obs, F.LIMIT_EXCEEDED)
         return _STEP[self._phase](self, obs)
+
+    def _limit_exceeded(self, obs: Observation) -> bool:
+        """The tared force over ``force_limit_n`` (once a tare is taken), or the TCP tilted
+        more than ``max_tilt_rad`` from straight down."""
+        tilt = tilt_of_rotation(rotation_from_rpy(obs.arm.tcp.rpy_rad))
+        tared = self.memory.tared and self.force_n - self.memory.bias_n > self.config.force_limit_n
+        return bool(tilt > self.config.max_tilt_rad or tared)
 
     # -- what the phases act through -------------------------------------------------------
 
@@ -225,6 +275,7 @@ class SpiralMachine:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
         self._phase, self._state = target, _ENTER[target](obs)
+        self.released = self.released or target is Phase.RELEASE
 
     def _fail(self, obs: Observation, reason: FailureReason, rule: str = "") -> Command:
         self.go(obs, Phase.FAILED, reason.value, rule)

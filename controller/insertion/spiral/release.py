@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import TYPE_CHECKING
 
-from controller.insertion.interface import Command, GripperTarget, Observation, Phase
+from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from core.devices import Twist
 
@@ -54,8 +54,7 @@ def release(m: SpiralMachine, obs: Observation) -> Command:
     m.fire("open")
     if state.stage is ReleaseStage.START:
         state.next(ReleaseStage.OPEN, obs.t_s)
-        opening = GripperTarget(g.open_width_m, g.open_speed_m_s, g.close_force_n)
-        return Command(twist=Twist(), gripper=opening)
+        return Command(twist=Twist(), gripper=g.open_target(g.open_width_m))
     if obs.t_s - state.since_t_s >= g.settle_s and not obs.gripper.moving:
         m.go(obs, Phase.RETRACT, "released")
         return m.hold()

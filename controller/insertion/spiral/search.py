@@ -60,7 +60,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         if m.read_force(obs):
             state.tare_n.append(m.force_n)
         if obs.t_s - state.since_t_s >= cfg.tare_s and state.tare_n:
-            run.bias_n, run.press_z_m = float(np.mean(state.tare_n)), None
+            run.bias_n, run.tared, run.press_z_m = float(np.mean(state.tare_n)), True, None
             state.tare_n, state.stage = [], SearchStage.TOUCH
         m.fire("tare")
         return m.servo(obs, m.tip_target(run.s_m, cfg.hover_m))
