@@ -14,7 +14,8 @@ latches ESTOP; an operator in control takes over (TELEOP; overrides.py says wher
 resumes); an arm without a force reading ends it (``device_fault``, its rule ``no_force``:
 the arm file's ``ft_sensor`` is off), as does the budget ``timeout_s`` of autonomous time
 (``timeout``); with the plug in hand (APPROACH, SEARCH, INSERT), the gripper no longer
-holding or the estimate's gross slip (``slip``), and the tared force over ``force_limit_n``
+holding (``slip``; not the estimate's slip flags: their false alarms while the plug sweeps
+the board pressed would end runs that insert), and the tared force over ``force_limit_n``
 or the TCP tilted more than ``max_tilt_rad`` (``limit_exceeded``); then the phase's step.
 The table and every phase's sub-stages are data (``SPIRAL``), checked when the machine is
 built; every command names the rule (``Command.rule``, ``phase.rule``) and the sub-stage
@@ -240,7 +241,7 @@ class SpiralMachine:
         if obs.t_s - self._start_t_s - self._override_s > self.config.timeout_s:
             return self._fail(obs, F.TIMEOUT)
         if self._phase in _HOLDING:
-            if not obs.gripper.holding or (obs.wrench is not None and obs.wrench.slip_gross):
+            if not obs.gripper.holding:
                 return self._fail(obs, F.SLIP)
             if self._limit_exceeded(obs):
                 return self._fail(obs, F.LIMIT_EXCEEDED)
