@@ -105,7 +105,6 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
     """Exit with the code of ``module.main()`` (None: 0), 130 on SIGINT, 143 on SIGTERM.
     ``first``: ``"module:function"`` to call before ``module`` is imported (e.g. to limit
     the threads of the numerical libraries it loads)."""
-    prog = Path(sys.argv[0]).stem
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, raise_terminated)
     sys.unraisablehook = _redeliver_lost_stops(sys.unraisablehook)
@@ -130,8 +129,8 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
         )
     signal.signal(signal.SIGINT, _exit_at_once)
     signal.signal(signal.SIGTERM, _exit_at_once)
-    if stopped_by is not None:
-        print(f"{prog}: {stopped_by}", file=sys.stderr)
+    if stopped_by is not None:  # the name the tool runs under (``tactile trial``: core.commands)
+        print(f"{Path(sys.argv[0]).stem}: {stopped_by}", file=sys.stderr)
     try:  # before a signal could end the process without flushing them
         sys.stdout.flush()
     except BrokenPipeError:  # the reader left (``| head``): quietly, as SIGPIPE would

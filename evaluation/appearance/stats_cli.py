@@ -1,6 +1,6 @@
 """The appearance statistics of gel images, real or rendered (evaluation/appearance/stats.py).
 
-    python scripts/gel_stats.py INPUT [INPUT ...] [--size 320x240|native] [--every K]
+    python -m evaluation gel_stats INPUT [INPUT ...] [--size 320x240|native] [--every K]
         [--json OUT.json]
 
 Each INPUT is an image file, a folder of images (natural sort order) or a video OpenCV can

@@ -8,7 +8,7 @@ sub-pixel warps of a rendered marker-gel image. Two families of warps: "smooth" 
 bumps 40-120 px wide, like a broad press) and "contact" (15-40 px wide, like the edge of a
 peg's contact patch), each at peak displacements 0.1, 0.5, 1, 2 and 3 px.
 
-    python scripts/bench_estimation.py [--write docs/BENCHMARKS.md] [--repeats 5] [--quick]
+    python -m evaluation bench_estimation [--write docs/BENCHMARKS.md] [--repeats 5] [--quick]
     (``make bench``)
 """
 
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
             "",
             "## Estimation pipeline: latency and field error",
             "",
-            "Regenerate with `make bench` (`python scripts/bench_estimation.py --write "
+            "Regenerate with `make bench` (`python -m evaluation bench_estimation --write "
             "docs/BENCHMARKS.md`).",
             "",
             f"Machine: {describe_machine('1 thread (cv2.setNumThreads(1))')}.",

@@ -14,7 +14,7 @@ reference from as many frames once the grasp has settled (until then a push only
 captures). Reported: simulated seconds per wall second and per CPU second (the median over
 runs), the frames, the final insertion depth and the largest contact force.
 
-    python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
+    python -m evaluation bench_insertion_scene [--task usb_c] [--runs 3] [--no-estimate]
         [--set KEY=VALUE ...] [--against CHECKOUT] [--fingerprint] [--profile]
 
 The task's ``estimator:`` (null: the sensor's own, the default) is the estimator, as in a

@@ -14,7 +14,7 @@ tactile tap and the tick logger, as every trial); ``--view`` adds the teleop dem
 (its own process, fed by the episode writer, drawing each frame; headless with
 ``SDL_VIDEODRIVER=dummy``), so the loop's timing can be compared with and without them.
 
-Run: ``.venv/bin/python scripts/bench_loop.py [--duration-s 20] [--rate-hz 100]
+Run: ``.venv/bin/python -m evaluation bench_loop [--duration-s 20] [--rate-hz 100]
 [--rt-priority 50] [--episode] [--view]`` (SCHED_FIFO, ``loop.rt_priority``; needs
 CAP_SYS_NICE).
 """

@@ -7,7 +7,7 @@ occlusion) and with motion blur; then the stages of the plain coarse render, and
 spline renderer (``MarkerImageRenderer``) for comparison. The cases are timed in turn within
 each round, so a load change on the machine affects them alike.
 
-    python scripts/bench_render.py [--repeats 200]
+    python -m evaluation bench_render [--repeats 200]
 
 The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads.
 """

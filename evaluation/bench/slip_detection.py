@@ -6,7 +6,7 @@ each frame: the worst case) and quiet frames (no evaluation), as median / p90 ov
 frames. Also times ``TactileEstimator.push`` on rendered frames with the detector enabled
 and disabled.
 
-    python scripts/bench_slip.py [--frames 2000] [--write docs/BENCHMARKS.md]
+    python -m evaluation bench_slip [--frames 2000] [--write docs/BENCHMARKS.md]
 
 ``--write`` replaces (or appends) the "## Slip detector" section of the file.
 """
@@ -92,7 +92,7 @@ def report(update: dict[str, str], push: dict[str, str], frames: int) -> str:
     lines = [
         SECTION,
         "",
-        "Regenerate with `python scripts/bench_slip.py --write docs/BENCHMARKS.md`. "
+        "Regenerate with `python -m evaluation bench_slip --write docs/BENCHMARKS.md`. "
         f"Machine: {machine}. {frames} frames per detector case (a tenth of that per push "
         "case); the detector's budget is 0.2 ms per frame.",
         "",

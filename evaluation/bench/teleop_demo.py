@@ -11,7 +11,7 @@
    latency is from the unplug to the arm's ``stop()`` (the watchdog's safe stop), both on
    the run's clock. One control period (10 ms) is the bound the issue sets.
 
-Run: ``.venv/bin/python scripts/bench_teleop.py [--frames 500] [--runs 10]
+Run: ``.venv/bin/python -m evaluation bench_teleop [--frames 500] [--runs 10]
 [--rt-priority 50]`` (the demo's loop under SCHED_FIFO; needs CAP_SYS_NICE).
 """
 

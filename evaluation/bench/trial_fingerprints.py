@@ -1,13 +1,13 @@
 """What whole simulated trials decided, one digest per seed, to show that a change (a
 speed-up, a refactor) leaves every trial's outcome as it was.
 
-    python scripts/trial_fingerprints.py --task usb_c|usb_a|PATH.yaml --seeds A:B
+    python -m evaluation trial_fingerprints --task usb_c|usb_a|PATH.yaml --seeds A:B
         [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
         [--set KEY=VALUE ...] [--out FILE.csv] [--against OTHER.csv]
-    python scripts/trial_fingerprints.py --compare BEFORE.csv AFTER.csv
+    python -m evaluation trial_fingerprints --compare BEFORE.csv AFTER.csv
 
 Each seed runs the trial tools' own path (``evaluation.trials.trial.run``, as
-``scripts/run_trial.py`` and the batch tools run it), as fast as possible, in this process,
+``tactile trial`` and the batch tools run it), as fast as possible, in this process,
 one after the other, writing nothing but this tool's table. A seed's row holds:
 
 * ``outcome``: a digest of everything the trial decided, the ``TrialResult``'s fields
@@ -32,7 +32,7 @@ as every tool's (evaluation/common/cli_support.py): bad input is one line and ex
 difference against ``OTHER.csv`` is reported, not an error (exit 0).
 
 Like the scene's benchmark it limits OpenMP, OpenBLAS and MKL to one thread before NumPy
-loads (``scripts/trial_fingerprints.py``) and OpenCV to one thread, so that the digests do
+loads (``python -m evaluation trial_fingerprints``) and OpenCV to one thread, so that the digests do
 not depend on the machine's cores.
 """
 

@@ -42,7 +42,7 @@ from core.entry_point import (
 from core.errors import DeviceError
 
 EXIT_ERROR = 2
-EXIT_DEVICE = 1  # a device could not be reached or failed (as scripts/check_hardware.py)
+EXIT_DEVICE = 1  # a device could not be reached or failed (as tactile check-hardware)
 
 
 class ToolError(Exception):

@@ -1,5 +1,5 @@
-"""The episode tools: ``replay SUBCOMMAND EP ...`` (scripts/replay.py, the installed
-``tactile-replay``; docs/EPISODES.md, "Tools").
+"""The episode tools: ``replay SUBCOMMAND EP ...`` (tactile replay, the installed
+``tactile replay``; docs/EPISODES.md, "Tools").
 
     replay summary EP                      topics, counts, rates, duration, outcome,
                                            transitions, drops

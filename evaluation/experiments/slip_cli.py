@@ -1,6 +1,6 @@
 """Score the estimator's slip flags on the simulated gel (evaluation/experiments/slip_eval.py).
 
-    python scripts/eval_slip.py [--method NAME] [--grips 10,7,14] [--seed 11]
+    python -m evaluation eval_slip [--method NAME] [--grips 10,7,14] [--seed 11]
         [--noise-grey 1.0] [--objects plate,square_peg] [--quick] [--out SLIP.md]
 
 ``make evaluate`` runs the same evaluation and puts its tables in docs/EVALUATION.md; this

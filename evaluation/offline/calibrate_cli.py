@@ -1,12 +1,12 @@
 """Fit the torque constants of an estimator on a calibration dataset, recorded or simulated.
 
-    python scripts/calibrate.py DATASET [--method NAME] [--out calibration.yaml]
+    tactile calibrate DATASET [--method NAME] [--out calibration.yaml]
 
 Runs the estimator over the dataset's frames (zeroed on its reference interval), fits each
 axis that has segments (c_x, c_y and c_z: our dipole / NHHD torque, and the FingerVision
 baseline's, side by side), prints a table of slope, RMSE (N*mm) and R^2, and writes the
 calibration file (``Calibration.to_yaml``: the fits, and the sensor profile and estimator
-configuration they were fitted for) that ``scripts/estimate.py --calibration`` reads.
+configuration they were fitted for) that ``tactile estimate --calibration`` reads.
 
 ``--out`` is checked before any work (not an input, writable) and written atomically. An
 incomplete or inconsistent dataset, or an axis with segments that cannot be fitted, is an

@@ -1,6 +1,6 @@
 """Fit a task's calibration in its simulated scene (part of the task's set-up).
 
-    python scripts/calibrate_task.py --task usb_c [--seed 0] [--set KEY=VALUE ...]
+    python -m evaluation calibrate_task --task usb_c [--seed 0] [--set KEY=VALUE ...]
         --out configs/calibrations/usb_c.yaml
 
 Applies known wrenches to the grasped plug in the task's scene, records the estimator's raw

@@ -1,6 +1,6 @@
 """Offline estimation on recorded tactile video or a folder of images.
 
-    python scripts/estimate.py INPUT [IMAGE ...] --reference SPEC --out OUT.csv
+    tactile estimate INPUT [IMAGE ...] --reference SPEC --out OUT.csv
         [--sensor gelsight_mini] [--method NAME] [--open SPEC] [--calibration FILE [--force]]
         [--fps F] [--allow-damaged]
 
@@ -437,7 +437,7 @@ def build_parser() -> argparse.ArgumentParser:
         "(default: the sensor profile's estimator)",
     )
     parser.add_argument(
-        "--calibration", type=Path, default=None, help="calibration YAML from scripts/calibrate.py"
+        "--calibration", type=Path, default=None, help="calibration YAML from tactile calibrate"
     )
     parser.add_argument(
         "--force",

@@ -5,7 +5,7 @@ drivers/sim/scenes/synthetic_sequence.py) into OUT/frames/, runs the offline est
 exactly as on a recording (evaluation/offline/estimate_cli.py), and writes OUT/estimates.csv,
 OUT/truth.csv and OUT/estimates.png, then prints how well each estimate follows its pattern
 (correlation), for the dipole/NHHD estimates and the FingerVision baseline side by side.
-Run by ``make estimator-demo`` (scripts/demo.py).
+Run by ``make estimator-demo`` (python -m evaluation demo).
 """
 
 from __future__ import annotations

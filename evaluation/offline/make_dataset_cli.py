@@ -1,10 +1,10 @@
 """Write a simulated calibration dataset (the jig scene; format: evaluation/offline/dataset.py).
 
-    python scripts/make_dataset.py OUT [--sensor gelsight_mini|digit] [--object plate|
+    python -m evaluation make_dataset OUT [--sensor gelsight_mini|digit] [--object plate|
         square_peg|round_peg] [--axes x y z] [--amplitudes-nmm 20 40 60]
         [--frames-per-axis 12500] [--scene calibration_jig] [--seed 0]
 
-The paper's runs held about 12,500 frames per axis. Calibrate with scripts/calibrate.py OUT.
+The paper's runs held about 12,500 frames per axis. Calibrate with tactile calibrate OUT.
 OUT must not exist; it is checked (and every argument) before any work. The dataset is
 built in a hidden folder beside OUT and renamed to OUT only when complete: an error or an
 interruption leaves no OUT. Expected failures print one line ``make_dataset: error: ...``

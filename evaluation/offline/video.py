@@ -9,7 +9,7 @@ counting the failed reads, when the container gives no usable time), so a lost f
 leaves a gap in the numbers and the frames after it keep their true times. After a pass,
 ``ReadLog.damage`` lists what is missing: gaps in the numbering, and an end that disagrees
 with the frame count in the container's header (a truncated file). The callers decide
-whether that is an error (datasets, and ``scripts/estimate.py`` by default) or a warning.
+whether that is an error (datasets, and ``tactile estimate`` by default) or a warning.
 """
 
 from __future__ import annotations

@@ -198,7 +198,7 @@ def run_one(
     tilt, fv, seconds, degenerate, zero, slip = _push_all(
         estimator, sequence, axis, fps, divergences
     )
-    # Without the open gel, the offline tool's choice (scripts/estimate.py): estimated again
+    # Without the open gel, the offline tool's choice (tactile estimate): estimated again
     # about the contact's support found in the whole recording (recording_support.py).
     choice = recording_fallback(estimator, divergences or [], open_gel, flow)
     if choice is not None:

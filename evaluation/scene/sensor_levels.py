@@ -3,7 +3,7 @@
 captures with markers, against the ``realistic`` gel rendered with optical blurs of
 increasing sigma (the median over seeds 20-23, as the appearance fit's figure).
 
-    python scripts/sensor_levels.py [--blur 0,0.3,0.5,0.7]
+    python -m evaluation sensor_levels [--blur 0,0.3,0.5,0.7]
 """
 
 from __future__ import annotations

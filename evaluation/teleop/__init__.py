@@ -1,2 +1,2 @@
-"""The teleoperated alignment demo (scripts/teleop_demo.py): its command line, its gamepad
+"""The teleoperated alignment demo (tactile teleop): its command line, its gamepad
 scripts and the manoeuvres' torque signs."""

@@ -1,4 +1,4 @@
-"""``scripts/teleop_demo.py`` (``tactile-teleop-demo``): the teleoperated alignment demo.
+"""``tactile teleop`` (``tactile teleop``): the teleoperated alignment demo.
 
     teleop_demo.py [--task usb_c|usb_a|PATH] [--backend sim|real] [--script FILE]
                    [--autonomy] [--no-view] [--foxglove [--foxglove-host H] [--foxglove-port P]]

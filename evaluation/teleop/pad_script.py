@@ -1,4 +1,4 @@
-"""Gamepad scripts for the simulated pad (``--script FILE`` of scripts/teleop_demo.py).
+"""Gamepad scripts for the simulated pad (``--script FILE`` of tactile teleop).
 
 A script is YAML with one key, ``events``: a list in time order, each a mapping with
 

@@ -1,4 +1,4 @@
-"""``scripts/teleop_screenshot.py``: the live view's picture at a moment of a recorded
+"""``python -m evaluation teleop_screenshot``: the live view's picture at a moment of a recorded
 episode, drawn by the view's own code from the episode's streams.
 
     teleop_screenshot.py EPISODE --at T --out PICTURE.png

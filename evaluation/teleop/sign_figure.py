@@ -1,5 +1,6 @@
-"""``scripts/teleop_sign_figure.py``: the drawing of the alignment demo's two manoeuvres and
-the signs of the tilt torques they give (docs/figures/teleop_signs.png, docs/TELEOP.md).
+"""``python -m evaluation teleop_sign_figure``: the drawing of the alignment demo's two
+manoeuvres and the signs of the tilt torques they give (docs/figures/teleop_signs.png,
+docs/TELEOP.md).
 
     teleop_sign_figure.py --out docs/figures/teleop_signs.png
 """

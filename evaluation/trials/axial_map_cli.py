@@ -1,4 +1,4 @@
-"""``scripts/fit_axial_map.py``: the touch spiral's axial-force map, fitted on recorded
+"""``python -m evaluation fit_axial_map``: the touch spiral's axial-force map, fitted on recorded
 trials (evaluation/trials/axial_map.py).
 
     fit_axial_map.py --fit RECORD [RECORD ...] --check RECORD [RECORD ...]

@@ -1,4 +1,5 @@
-"""Which of the scene's per-seed draws a batch's failures share (``scripts/draw_failures.py``).
+"""Which of the scene's per-seed draws a batch's failures share (``python -m evaluation
+draw_failures``).
 
     draw_failures.py OUT [--bins N]
 

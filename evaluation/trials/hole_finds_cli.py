@@ -1,5 +1,5 @@
-"""``scripts/hole_finds.py``: where the tip really was at each hole find, and how the press
-that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
+"""``python -m evaluation hole_finds``: where the tip really was at each hole find, and how
+the press that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
 
     hole_finds.py --task usb_c|usb_a|PATH.yaml --seeds A:B [--workers N] [--set KEY=VALUE ...]
 

@@ -2,7 +2,7 @@
 scored against the simulator's truth.
 
 ``run_trial(spec)`` is the batch's trial function (evaluation/trials/spec.py); ``run(...)``
-is what ``scripts/run_trial.py`` calls. The controller sees only what the devices give
+is what ``tactile trial`` calls. The controller sees only what the devices give
 (rendered tactile frames, the arm's and the gripper's status); the scene's truth goes to the
 record (``truth.npz``) and to the outcome, and, for the ``oracle`` controller only, in place
 of the estimate (evaluation/trials/oracle.py). On the real backend the same run path runs

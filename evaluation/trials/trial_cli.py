@@ -1,4 +1,4 @@
-"""``scripts/run_trial.py``: one insertion trial, simulated (default) or on the robot.
+"""``tactile trial``: one insertion trial, simulated (default) or on the robot.
 
     run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
                  [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
@@ -84,7 +84,7 @@ def _run(args: argparse.Namespace) -> int:
     print(f"run_trial: wrote {args.out}")
     episode = args.out / EPISODE_FILE
     print(f"run_trial: episode {episode}; summarise it with:")
-    print(f"  .venv/bin/python scripts/replay.py summary {episode}")
+    print(f"  .venv/bin/tactile replay summary {episode}")
     stopped = signal_exit(
         "run_trial", outcome.loop, f"the record is complete up to then: {args.out}"
     )

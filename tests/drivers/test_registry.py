@@ -201,7 +201,7 @@ SIM_ONLY = textwrap.dedent(
     import runpy
 
     try:
-        runpy.run_path("scripts/check_hardware.py", run_name="__main__")
+        runpy.run_path("tactile check-hardware", run_name="__main__")
     except SystemExit as end:
         print("check_hardware exit", end.code)
     print("loaded:", sorted({m.partition(".")[0] for m in sys.modules} & BLOCKED))

@@ -1,4 +1,4 @@
-"""Dataset format round trip, its errors, and scripts/calibrate.py on a small simulated jig
+"""Dataset format round trip, its errors, and tactile calibrate on a small simulated jig
 dataset."""
 
 import os

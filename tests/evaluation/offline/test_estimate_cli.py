@@ -1,4 +1,4 @@
-"""The offline estimator as a user runs it: python scripts/estimate.py ..."""
+"""The offline estimator as a user runs it: tactile estimate ..."""
 
 import csv
 import json

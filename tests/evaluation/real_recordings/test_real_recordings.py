@@ -1,4 +1,4 @@
-"""scripts/estimate.py on real gel images, real-texture recordings and their checks."""
+"""tactile estimate on real gel images, real-texture recordings and their checks."""
 
 import csv
 import dataclasses
@@ -53,7 +53,7 @@ def all_finite(rows):
     return all(math.isfinite(float(r[k])) for r in rows for k in ("tau_x", "tau_y", "tau_z"))
 
 
-# --- scripts/estimate.py on real images -----------------------------------------------------
+# --- tactile estimate on real images -----------------------------------------------------
 
 
 @pytest.mark.parametrize(

@@ -1,4 +1,4 @@
-"""scripts/draw_failures.py: a batch's failures against the scene's per-seed draws."""
+"""python -m evaluation draw_failures: a batch's failures against the scene's per-seed draws."""
 
 import csv
 import json

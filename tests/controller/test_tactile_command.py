@@ -1,0 +1,96 @@
+"""The one installed command, ``tactile``: a subcommand per job that hands the rest of the
+command line to its tool (controller/cli/tactile.py, core/commands.py), from a module light
+enough that a signal while the tool loads is handled; the research tools behind ``python -m
+evaluation`` (evaluation/tools.py) the same way."""
+
+import importlib.util
+import re
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from controller.cli import tactile
+from evaluation import tools
+
+ROOT = Path(__file__).resolve().parents[2]
+JOBS = [job for group in tactile.GROUPS for job in group.jobs]
+TOOLS = [job for group in tools.GROUPS for job in group.jobs]
+
+
+def run(*args: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, *args], capture_output=True, text=True, cwd=ROOT)
+
+
+def test_the_one_installed_command_is_tactile():
+    commands = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
+    assert commands == {"tactile": "controller.cli.tactile:run"}
+
+
+def test_each_job_and_tool_names_a_module_with_a_main():
+    names = [job.name for job in JOBS + TOOLS]
+    assert len(names) == len(set(names))
+    assert {"trial", "trials", "compare", "teleop", "replay", "estimate", "calibrate",
+            "check-hardware"} <= {job.name for job in JOBS}  # fmt: skip
+    for job in JOBS + TOOLS:
+        assert importlib.util.find_spec(job.module) is not None, job.name
+        assert re.search(r"^def main\(", importlib.util.find_spec(job.module).loader
+                         .get_source(job.module), re.M), job.name  # fmt: skip
+
+
+def test_scripts_hold_only_the_product_jobs():
+    scripts = sorted((ROOT / "scripts").glob("*.py"))
+    assert len(scripts) <= 10
+    for script in scripts:
+        module = re.search(r'run_main\("([\w.]+)"\)', script.read_text()).group(1)
+        assert module == "controller.cli.tactile" or module in {job.module for job in JOBS}
+
+
+def test_the_help_lists_every_job_by_group():
+    done = run("-m", "controller.cli", "--help")
+    assert done.returncode == 0 and done.stderr == ""
+    for group in tactile.GROUPS:
+        assert f"\n{group.title}:\n" in done.stdout
+        for job in group.jobs:
+            assert re.search(rf"^  {re.escape(job.name)} +\S", done.stdout, re.M), job.name
+
+
+@pytest.mark.parametrize("argv", [[], ["tiral", "--task", "usb_c"]])
+def test_no_job_or_an_unknown_one_is_one_line_and_exit_2(argv):
+    done = run("-m", "controller.cli", *argv)
+    assert done.returncode == 2 and done.stdout == ""
+    assert done.stderr.startswith("tactile: error: ") and done.stderr.count("\n") == 1
+    assert "trial, trials, compare" in done.stderr
+
+
+def test_a_job_gets_the_rest_of_the_command_line():
+    done = run("-m", "controller.cli", "trial", "--task", "usb_c", "--seed", "-1", "--out", "o")
+    assert done.returncode == 2 and "Traceback" not in done.stderr  # the tool's parser's
+    assert done.stderr.splitlines()[-1].startswith("run_trial: error: argument --seed")
+
+
+def test_the_research_tools_answer_help():
+    done = run("-m", "evaluation", "--help")
+    assert done.returncode == 0
+    assert all(job.name in done.stdout for job in TOOLS)
+    done = run("-m", "evaluation", "bench_gel", "--steps", "0")
+    assert done.returncode == 2 and "--steps" in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.parametrize(
+    "module", ["controller.cli.tactile", "evaluation.tools", "controller.cli.__main__"]
+)
+def test_the_commands_module_loads_no_heavy_library(module):
+    code = f"import sys; sys.argv = ['x', '--help']; import {module}; print(sorted(sys.modules))"
+    if module.endswith("__main__"):  # it runs the command: the help, then exit
+        code = (
+            "import runpy, sys; sys.argv = ['tactile', '--help']\n"
+            "try:\n    runpy.run_module('controller.cli', run_name='__main__')\n"
+            "except SystemExit:\n    pass\nprint(sorted(sys.modules))"
+        )
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            cwd=ROOT, check=True).stdout  # fmt: skip
+    for heavy in ("'numpy'", "'cv2'", "'mujoco'", "'evaluation.trials'", "'drivers.sim'"):
+        assert heavy not in loaded
