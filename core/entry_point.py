@@ -5,7 +5,7 @@ A script is two lines, ``from core.entry_point import run_main`` and
 ``run_main("package.module")``. ``run_main`` turns SIGINT into KeyboardInterrupt and SIGTERM
 into ``Terminated`` *before* it imports the tool's module, so a signal while NumPy, OpenCV
 or MuJoCo load is handled like one during the work: the tool's own handler
-(``evaluation.common.cli_support.run_tool``) reports it while the tool works, and
+(``controller.cli.support.run_tool``) reports it while the tool works, and
 ``run_main`` reports what reaches it (``PROG: interrupted by SIGINT``, exit 130;
 ``PROG: ended by SIGTERM``, exit 143; no traceback). Once ``main`` has returned, its outputs
 are complete and a signal during the interpreter's shutdown ends the process at once with

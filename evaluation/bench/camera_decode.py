@@ -20,8 +20,8 @@ import time
 import cv2
 import numpy as np
 
+from controller.cli.support import SEED, integer, run_tool
 from drivers.tactile.decode import FrameProcessor, decode_jpeg
-from evaluation.common.cli_support import SEED, integer, run_tool
 from evaluation.common.machine_info import describe_machine
 
 WIDTH_PX, HEIGHT_PX = 3280, 2464

@@ -22,14 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import integer, run_tool
 from controller.tactile import EstimatorConfig, TactileEstimator
 from controller.tactile.flow import DenseGridFlow, GridFlow, make_grid_flow
 from controller.tactile.grid_pipeline import GridPipeline
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.experiments.configurations import estimator_variants
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)

@@ -33,7 +33,7 @@ STAGES = {
     "camera": "image_field_px",
 }
 
-from evaluation.common.cli_support import integer, run_tool  # noqa: E402
+from controller.cli.support import integer, run_tool  # noqa: E402
 
 
 def sequence(steps: int) -> list[tuple[float, Wrench]]:

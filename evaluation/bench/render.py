@@ -40,7 +40,7 @@ STATIC_EFFECTS = ImageEffects(
     marker_dropout_fraction=0.1,
     occlusion_count=2,
 )
-from evaluation.common.cli_support import integer, run_tool  # noqa: E402
+from controller.cli.support import integer, run_tool  # noqa: E402
 
 N_FIELDS = 8
 

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evaluation.common.cli_support import ToolError, one_line
+from controller.cli.support import ToolError, one_line
 
 TOOLS = Path("evaluation") / "tools.py"
 TOOL = ["-m", "evaluation", "bench_insertion_scene"]

@@ -22,14 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import integer, run_tool
 from controller.tactile import TactileEstimator, VectorField, estimator_for_sensor
 from controller.tactile.field import grid_axes_mm
 from controller.tactile.nhhd import NHHD
 from controller.tactile.slip import SlipDetector
 from drivers.sim.render.marker_images import MarkerImageRenderer
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.common.outputs import check_output_file, write_text
 
 SECTION = "## Slip detector"
 

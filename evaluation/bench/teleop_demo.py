@@ -25,10 +25,10 @@ from typing import Any
 
 import numpy as np
 
+from controller.cli.support import ToolError, integer, run_tool
 from controller.run import load_task, run_task
 from core.sensor_profile import sensor_profile
 from drivers.sim.twins.gamepad import PadEvent
-from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.common.machine_info import describe_machine
 from evaluation.teleop import demo_cli
 

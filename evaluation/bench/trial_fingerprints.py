@@ -28,7 +28,7 @@ the same task and controller (e.g. from another commit): it prints the seeds who
 ``outcome`` or ``truth`` differ, field by field, and the count of identical ones;
 ``--compare BEFORE.csv AFTER.csv`` does the same for two tables already written (AFTER's
 rows against BEFORE's), running no trial. Exit codes
-as every tool's (evaluation/common/cli_support.py): bad input is one line and exit 2; a
+as every tool's (controller/cli/support.py): bad input is one line and exit 2; a
 difference against ``OTHER.csv`` is reported, not an error (exit 0).
 
 Like the scene's benchmark it limits OpenMP, OpenBLAS and MKL to one thread before NumPy
@@ -51,11 +51,11 @@ from typing import Any
 import cv2
 import numpy as np
 
+from controller.cli.outputs import atomic_text, check_output_file
+from controller.cli.support import ToolError, add_override_argument, run_tool
 from controller.insertion.interface import Transition
 from controller.run.task import Task, load_task
-from evaluation.common.cli_support import ToolError, run_tool
-from evaluation.common.outputs import atomic_text, check_output_file
-from evaluation.trials.batch_cli import add_override_argument, seeds_type
+from evaluation.trials.batch_cli import seeds_type
 from evaluation.trials.guard import error_result
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult

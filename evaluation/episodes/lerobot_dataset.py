@@ -28,7 +28,7 @@ its sampled frames into per-channel histograms (evaluation/episodes/image_stats.
 only the numeric rows of the episodes already written stay in memory.
 
 The dataset is built in a hidden folder beside DIR and renamed to DIR only when complete
-(``evaluation.common.outputs``): an error or an interruption leaves no DIR.
+(``controller.cli.outputs``): an error or an interruption leaves no DIR.
 """
 
 from __future__ import annotations
@@ -44,7 +44,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
+from controller.cli.outputs import discard_folder, partial_folder, publish_folder
 from evaluation.episodes.image_stats import ImageStats
 from evaluation.episodes.lerobot_stats import (
     Stats,

@@ -24,7 +24,7 @@ chunk. Outputs are checked before any work, never written over an input, and
 written atomically (a temporary file or folder renamed into place when complete). Expected
 failures (a missing, foreign or truncated file, a bad configuration, an output that cannot
 be written) print one line ``replay: error: ...`` and exit with code 2; SIGINT and SIGTERM
-exit with 130 and 143 (evaluation/common/cli_support.py).
+exit with 130 and 143 (controller/cli/support.py).
 """
 
 from __future__ import annotations
@@ -38,25 +38,25 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
-from controller.episode import Episode, EpisodeError, read_episode
-from controller.episode.repair import repair as repair_file
-from controller.episode.topics import LOOP_TICK
-from controller.tactile import estimator_for_sensor
-from controller.tactile.settings import sensor_estimator
-from core.sensor_profile import sensor_profile
-from evaluation.common.cli_support import (
+from controller.cli.outputs import (
+    atomic_file,
+    atomic_text,
+    check_output_file,
+    check_output_folder,
+)
+from controller.cli.support import (
     ToolError,
     distinct,
     nonblank,
     resolved_config_path,
     run_tool,
 )
-from evaluation.common.outputs import (
-    atomic_file,
-    atomic_text,
-    check_output_file,
-    check_output_folder,
-)
+from controller.episode import Episode, EpisodeError, read_episode
+from controller.episode.repair import repair as repair_file
+from controller.episode.topics import LOOP_TICK
+from controller.tactile import estimator_for_sensor
+from controller.tactile.settings import sensor_estimator
+from core.sensor_profile import sensor_profile
 from evaluation.episodes import episode_streams, reestimation
 from evaluation.episodes.episode_chart import write_episode_chart
 from evaluation.episodes.episode_summary import CRC_NOTE, summary_lines

@@ -36,17 +36,17 @@ import time
 from multiprocessing import get_context
 from pathlib import Path
 
-from controller.tactile import estimator_for_sensor
-from core.config import ConfigError
-from evaluation.common.cli_support import (
+from controller.cli.outputs import check_output_file, check_output_folder, staged_folder
+from controller.cli.support import (
     ignore_interrupts_in_worker,
     integer,
     one_line,
     resolved_config_path,
     run_tool,
 )
+from controller.tactile import estimator_for_sensor
+from core.config import ConfigError
 from evaluation.common.machine_info import describe_machine, one_thread_env
-from evaluation.common.outputs import check_output_file, check_output_folder, staged_folder
 from evaluation.experiments import slip_eval, slip_false_alarms
 from evaluation.experiments.calibration_runs import (
     CalibrationCase,

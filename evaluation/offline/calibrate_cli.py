@@ -11,7 +11,7 @@ configuration they were fitted for) that ``tactile estimate --calibration`` read
 ``--out`` is checked before any work (not an input, writable) and written atomically. An
 incomplete or inconsistent dataset, or an axis with segments that cannot be fitted, is an
 error. Expected failures print one line ``calibrate: error: ...`` and exit with code 2;
-SIGINT and SIGTERM exit with 130 and 143 (evaluation/common/cli_support.py).
+SIGINT and SIGTERM exit with 130 and 143 (controller/cli/support.py).
 """
 
 from __future__ import annotations
@@ -21,12 +21,12 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import ToolError, resolved_config_path, run_tool
 from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
 from core.config import ConfigError
 from core.sensor_profile import sensor_profile
-from evaluation.common.cli_support import ToolError, resolved_config_path, run_tool
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.offline.dataset import Dataset
 from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 

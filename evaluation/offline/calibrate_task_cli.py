@@ -19,12 +19,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import add_override_argument, integer, run_tool
 from controller.run.task import load_task
 from controller.tactile.calibration import Calibration
-from evaluation.common.cli_support import integer, run_tool
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.offline.scene_calibration import fit_scene_calibration, record_in_scene
-from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.spec import MAX_SEED
 
 

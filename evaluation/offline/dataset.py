@@ -47,8 +47,8 @@ import cv2
 import numpy as np
 import yaml
 
+from controller.cli.outputs import discard_folder, partial_folder, publish_folder
 from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
-from evaluation.common.outputs import discard_folder, partial_folder, publish_folder
 from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 FORMAT = "tactile-insertion/dataset/v1"

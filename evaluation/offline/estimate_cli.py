@@ -41,7 +41,7 @@ leaves an earlier OUT as it was. Expected failures (unreadable input, empty fold
 mismatched frame sizes (naming the image), several inputs that are not all image files,
 reference out of range, bad configuration, an OUT that is an input
 or cannot be written) print one line ``estimate: error: ...`` and exit with code 2; SIGINT
-and SIGTERM exit with 130 and 143 (evaluation/common/cli_support.py).
+and SIGTERM exit with 130 and 143 (controller/cli/support.py).
 """
 
 from __future__ import annotations
@@ -60,6 +60,12 @@ from typing import TextIO
 import numpy as np
 from tqdm import tqdm
 
+from controller.cli.outputs import atomic_text, check_output_file
+from controller.cli.support import (
+    ToolError,
+    resolved_config_path,
+    run_tool,
+)
 from controller.tactile import (
     Calibration,
     EstimatorConfig,
@@ -69,12 +75,6 @@ from controller.tactile import (
 )
 from controller.tactile.wrench import VALUE_FIELDS
 from core.sensor_profile import sensor_profile
-from evaluation.common.cli_support import (
-    ToolError,
-    resolved_config_path,
-    run_tool,
-)
-from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.common.quiet_decoding import read_image
 from evaluation.offline.open_gel import open_gel_doubt
 from evaluation.offline.recording_support import recording_fallback, uses_recording

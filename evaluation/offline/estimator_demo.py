@@ -17,11 +17,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import atomic_text, check_output_folder
+from controller.cli.support import SEED, resolved_config_path, run_tool
 from controller.tactile import estimator_for_sensor
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import PHASES, demo_sequence
-from evaluation.common.cli_support import SEED, resolved_config_path, run_tool
-from evaluation.common.outputs import atomic_text, check_output_folder
 from evaluation.offline.estimate_cli import estimate_file
 from evaluation.offline.plotting import plot_series_against_truth
 

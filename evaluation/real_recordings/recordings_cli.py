@@ -17,11 +17,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.cli.outputs import atomic_text, check_output_file
+from controller.cli.support import ToolError, run_tool
 from controller.tactile import estimator_for_sensor
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.real_texture import real_gel_names
-from evaluation.common.cli_support import ToolError, run_tool
-from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.real_recordings.recording_checks import (
     QUIET_MAX,
     SIGN_FLOOR,

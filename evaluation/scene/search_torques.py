@@ -21,9 +21,9 @@ from collections import Counter
 
 import numpy as np
 
+from controller.cli.support import number_list, run_tool
 from controller.insertion import Phase
 from controller.run import load_task
-from evaluation.common.cli_support import number_list, run_tool
 from evaluation.trials.spec import parse_seeds
 from evaluation.trials.trial import run
 

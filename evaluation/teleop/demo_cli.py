@@ -30,7 +30,7 @@ Exit: 0 when the demo ended (hand-back, the duration, the window closed); 130 / 
 SIGINT / SIGTERM after the safe stop; 2 for bad input; 1 if a device could not be reached
 or the run ended in a fault (a watchdog trip: an unplugged pad while the operator drives,
 late ticks; after the safe stop, one line naming it; a simulated real-time run on a loaded
-machine is told to need an idle core, evaluation/common/run_outcome.py).
+machine is told to need an idle core, controller/cli/run_outcome.py).
 """
 
 from __future__ import annotations
@@ -45,6 +45,15 @@ from contextlib import ExitStack
 from pathlib import Path
 from typing import Any
 
+from controller.cli.outputs import check_output_folder
+from controller.cli.run_outcome import fault_exit, pace_line, signal_exit
+from controller.cli.support import (
+    ToolError,
+    add_override_argument,
+    integer,
+    number,
+    run_tool,
+)
 from controller.episode import Episode, read_episode
 from controller.episode.session import EPISODE_FILE, EpisodeRecording
 from controller.insertion.teleop_only import TeleopOnlyMachine
@@ -54,16 +63,7 @@ from controller.run.task import Task, TaskConfig, load_task
 from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
 from drivers import registry
-from evaluation.common.cli_support import (
-    ToolError,
-    integer,
-    number,
-    run_tool,
-)
-from evaluation.common.outputs import check_output_folder
-from evaluation.common.run_outcome import fault_exit, pace_line, signal_exit
 from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
-from evaluation.trials.batch_cli import add_override_argument
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
 START_DEPTH_M = 0.002

@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError
 from controller.insertion.force_reading import AXIAL_TERMS, axial_terms
-from evaluation.common.cli_support import ToolError
 
 PHASES = ("search", "insert")  # the phases whose frames are samples
 

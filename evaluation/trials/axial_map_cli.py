@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError, run_tool
 from controller.insertion.blind import TouchSpiralConfig
 from controller.insertion.force_reading import AXIAL_TERMS
 from controller.insertion.machine_config import GripperSettings
-from evaluation.common.cli_support import ToolError, run_tool
 from evaluation.trials.axial_map import fit_weights, joined, record_samples, rms_error_n
 
 

@@ -44,8 +44,8 @@ from typing import Any, TextIO
 
 from tqdm import tqdm
 
-from evaluation.common.cli_support import Terminated, ToolError, one_line
-from evaluation.common.outputs import atomic_file, check_output_folder, write_text
+from controller.cli.outputs import atomic_file, check_output_folder, write_text
+from controller.cli.support import Terminated, ToolError, one_line
 from evaluation.trials.executors import Executor
 from evaluation.trials.records import (
     RECORDS,

@@ -39,9 +39,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from controller.cli.outputs import write_text
+from controller.cli.support import ToolError, distinct, number_list, run_tool
 from core.config import ConfigError, parse_override
-from evaluation.common.cli_support import ToolError, distinct, number_list, run_tool
-from evaluation.common.outputs import write_text
 from evaluation.trials.batch import Batch, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,

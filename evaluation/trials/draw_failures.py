@@ -40,10 +40,10 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError, integer, run_tool
 from controller.run.task import load_task
 from core.task_geometry import HolePose
 from drivers.sim.scenes.insertion.draws import SceneDraw, draw_scene
-from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_batch
 from evaluation.trials.compare import CELLS
 

@@ -13,7 +13,7 @@ published) is UTF-8 text and every chart it links is a file in its folder; the r
 there, is UTF-8 text; a task folder in DOCS/trials holds its comparison.md. A
 bad input is one error line naming the file, and nothing is written. Each task's folder is
 built beside its place and renamed into it, and the page and the report are written
-atomically (evaluation/common/outputs.py).
+atomically (controller/cli/outputs.py).
 """
 
 from __future__ import annotations
@@ -25,14 +25,14 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
-from evaluation.common.cli_support import ToolError, run_tool
-from evaluation.common.outputs import (
+from controller.cli.outputs import (
     check_output_folder,
     discard_folder,
     partial_folder,
     publish_folder,
     write_text,
 )
+from controller.cli.support import ToolError, run_tool
 from evaluation.trials.compare import TABLE
 
 PAGE = "TRIALS.md"

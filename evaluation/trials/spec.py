@@ -19,7 +19,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import overload
 
-from evaluation.common.cli_support import ToolError
+from controller.cli.support import ToolError
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.records import unfinished_record
 from evaluation.trials.result import TrialResult

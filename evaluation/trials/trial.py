@@ -20,12 +20,12 @@ from typing import Any
 
 import numpy as np
 
+from controller.cli.support import Terminated
 from controller.episode.session import EPISODE_FILE, EpisodeOptions, EpisodeRecording
 from controller.insertion import Phase
 from controller.loop import LoopResult
 from controller.run import RunOutcome, Task, load_task, run_task
 from core.atomic_files import atomic_file
-from evaluation.common.cli_support import Terminated
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec

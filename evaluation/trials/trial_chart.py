@@ -20,7 +20,7 @@ import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
-from evaluation.common.outputs import atomic_file
+from controller.cli.outputs import atomic_file
 from evaluation.trials.result import TrialResult
 
 CHART_NAME = "summary.png"

@@ -12,9 +12,9 @@ phase bands, the wrist's true force, the tip's true
 path). ``--set`` overrides any key of the task file by its dotted path, checked as the file
 is. ``--realtime`` paces the simulation to the wall clock; the default runs as fast as
 possible. Times printed are seconds from the run's start. Exit codes as every tool's
-(evaluation/common/cli_support.py); a trial that fails still exits 0 (the outcome is the
+(controller/cli/support.py); a trial that fails still exits 0 (the outcome is the
 result), but one that ended in a fault (a watchdog trip, an exception in a tick) exits 1
-after its safe stop with one line naming it (evaluation/common/run_outcome.py); a run
+after its safe stop with one line naming it (controller/cli/run_outcome.py); a run
 stopped by SIGINT/SIGTERM exits 130/143 after its safe stop, with the record kept.
 """
 
@@ -23,12 +23,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.cli.outputs import check_output_folder
+from controller.cli.run_outcome import fault_exit, signal_exit
+from controller.cli.support import ToolError, add_override_argument, integer, run_tool
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run.task import load_task
-from evaluation.common.cli_support import ToolError, integer, run_tool
-from evaluation.common.outputs import check_output_folder
-from evaluation.common.run_outcome import fault_exit, signal_exit
-from evaluation.trials.batch_cli import add_override_argument
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import MAX_SEED
 from evaluation.trials.trial import TrialOutcome, run

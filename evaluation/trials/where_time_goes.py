@@ -25,7 +25,7 @@ from itertools import pairwise
 from pathlib import Path
 from statistics import median
 
-from evaluation.common.cli_support import ToolError, number, run_tool
+from controller.cli.support import ToolError, number, run_tool
 from evaluation.trials.records import RECORDS
 
 TRIAL_NAME = "trial.json"

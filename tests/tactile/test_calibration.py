@@ -1,9 +1,9 @@
 import numpy as np
 import pytest
 
+from controller.cli.outputs import write_text
 from controller.tactile.calibration import AxisFit, Calibration, fit_axis
 from core.config import ConfigError
-from evaluation.common.outputs import write_text
 
 
 def series(rng, slope=0.004, offset=0.0, noise=0.0):

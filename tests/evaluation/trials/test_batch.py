@@ -14,9 +14,9 @@ from pathlib import Path
 
 import pytest
 
+from controller.cli.support import ToolError
 from controller.episode import read_episode
 from core.config import CONFIG_ROOT, ConfigError
-from evaluation.common.cli_support import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
 from evaluation.trials.batch_cli import TRIAL_FUNCTION
 from evaluation.trials.batch_cli import main as batch_main

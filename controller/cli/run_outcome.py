@@ -18,8 +18,8 @@ import os
 import sys
 from typing import Any
 
+from controller.cli.support import EXIT_DEVICE, EXIT_SIGINT, EXIT_SIGTERM, one_line
 from controller.loop import LoopResult
-from evaluation.common.cli_support import EXIT_DEVICE, EXIT_SIGINT, EXIT_SIGTERM, one_line
 
 
 def signal_exit(prog: str, loop: LoopResult, kept: str) -> int | None:

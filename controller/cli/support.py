@@ -1,4 +1,5 @@
-"""What every command-line tool shares: one-line errors, exit codes, signals, argument types.
+"""What every command-line tool shares (the product's jobs and the research tools alike):
+one-line errors, exit codes, signals, argument types (``--set KEY=VALUE`` overrides too).
 
 Exit codes (docs/ARCHITECTURE.md, "Failure behaviour"):
 
@@ -11,7 +12,7 @@ Exit codes (docs/ARCHITECTURE.md, "Failure behaviour"):
   more is written, no message, the code of a tool ended by SIGPIPE as standard tools are;
 * 130 -- interrupted by SIGINT (Ctrl-C), 143 -- ended by SIGTERM: one line
   ``PROG: interrupted by SIGINT ...``. Outputs in progress are discarded (they are written
-  to temporary files and renamed into place only when complete, ``evaluation.common.outputs``), so
+  to temporary files and renamed into place only when complete, ``controller.cli.outputs``), so
   an earlier result stays as it was.
 
 Argument types for argparse (``type=``) refuse what is not finite, not in range, or not an
@@ -29,7 +30,7 @@ import threading
 from collections.abc import Callable
 from pathlib import Path
 
-from core.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT, ConfigError, parse_override
 from core.entry_point import (
     EXIT_SIGINT,
     EXIT_SIGPIPE,
@@ -204,3 +205,24 @@ def quiet_video_decoder() -> None:
     """Keep FFmpeg's own decoder messages off the terminal (the tools report damaged video
     in their own words); must run before the first capture is opened."""
     os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+
+
+def _override(text: str) -> str:
+    try:
+        parse_override(text)
+    except ConfigError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
+def add_override_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """``--set KEY=VALUE`` (repeatable, into ``overrides``), each checked as it is parsed."""
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        metavar="KEY=VALUE",
+        type=_override,
+        action="append",
+        default=[],
+        help=help_text,
+    )

@@ -32,8 +32,8 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 
+from controller.cli.support import ToolError
 from core.atomic_files import atomic_file, atomic_text, fsync_file, hidden_sibling, write_text
-from evaluation.common.cli_support import ToolError
 
 __all__ = [
     "atomic_file", "atomic_text", "check_output_file", "check_output_folder",

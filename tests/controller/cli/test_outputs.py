@@ -1,12 +1,11 @@
-"""evaluation/common/outputs.py: output paths are checked before work and written atomically."""
+"""controller/cli/outputs.py: output paths are checked before work and written atomically."""
 
 import os
 from pathlib import Path
 
 import pytest
 
-from evaluation.common.cli_support import ToolError
-from evaluation.common.outputs import (
+from controller.cli.outputs import (
     atomic_file,
     atomic_text,
     check_output_file,
@@ -16,6 +15,7 @@ from evaluation.common.outputs import (
     staged_folder,
     write_text,
 )
+from controller.cli.support import ToolError
 
 
 @pytest.fixture
@@ -151,7 +151,7 @@ def test_staged_files_move_into_place_only_on_success(tmp_path):
 def test_refusals_of_unwritable_places_as_the_os_reports_them(tmp_path, monkeypatch):
     """The same checks as above, for a user without permission, when the tests run as root:
     the OS's answers are stood in for."""
-    import evaluation.common.outputs as outputs
+    import controller.cli.outputs as outputs
 
     kept = tmp_path / "kept.csv"
     kept.write_text("mine")

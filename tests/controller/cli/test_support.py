@@ -4,7 +4,7 @@ import argparse
 
 import pytest
 
-from evaluation.common.cli_support import number, number_list
+from controller.cli.support import number, number_list
 from evaluation.trials.compare import main as compare_main
 
 
