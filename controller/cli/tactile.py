@@ -23,7 +23,7 @@ GROUPS = (
     Group(
         "insertion trials",
         (
-            Job("trial", "evaluation.trials.trial_cli",
+            Job("trial", "controller.cli.trial",
                 "one insertion trial, simulated (default) or on the robot (--backend real)"),
             Job("trials", "evaluation.trials.batch_cli", "a batch of simulated trials"),
             Job("compare", "evaluation.trials.compare",
@@ -33,7 +33,7 @@ GROUPS = (
     Group(
         "teleop demo",
         (
-            Job("teleop", "evaluation.teleop.demo_cli",
+            Job("teleop", "controller.cli.teleop",
                 "the teleoperated alignment demo, simulated or on the robot"),
         ),
     ),

@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from controller.cli import teleop as demo_cli
 from controller.cli.support import ToolError, integer, run_tool
 from controller.run import load_task, run_task
 from core.sensor_profile import sensor_profile
 from drivers.sim.twins.gamepad import PadEvent
 from evaluation.common.machine_info import describe_machine
-from evaluation.teleop import demo_cli
 
 UNPLUG_S = 4.0
 """When the pad is unplugged (s after the start; the grasp ends at about 2.3 s)."""

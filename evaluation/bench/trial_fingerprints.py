@@ -54,11 +54,11 @@ import numpy as np
 from controller.cli.outputs import atomic_text, check_output_file
 from controller.cli.support import ToolError, add_override_argument, run_tool
 from controller.insertion.interface import Transition
+from controller.run.result import TrialResult
 from controller.run.task import Task, load_task
 from evaluation.trials.batch_cli import seeds_type
 from evaluation.trials.guard import error_result
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
 from evaluation.trials.trial import raise_if_interrupted, run
 

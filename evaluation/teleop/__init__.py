@@ -1,2 +1,2 @@
-"""The teleoperated alignment demo (tactile teleop): its command line, its gamepad
-scripts and the manoeuvres' torque signs."""
+"""Pictures of the teleoperated alignment demo (``tactile teleop``, controller/cli/teleop.py):
+the live view's screenshot at a moment of an episode and the manoeuvres' sign drawing."""

@@ -7,7 +7,7 @@ import math
 import time
 
 from controller.cli.support import one_line
-from evaluation.trials.result import TrialResult
+from controller.run.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
 

@@ -21,8 +21,8 @@ from types import TracebackType
 from typing import Any
 
 from controller.cli.support import ToolError, one_line
+from controller.run.result import TrialResult
 from evaluation.trials.guard import error_result, guarded
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
 

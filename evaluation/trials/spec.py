@@ -20,11 +20,10 @@ from pathlib import Path
 from typing import overload
 
 from controller.cli.support import ToolError
+from controller.run.result import TrialResult
+from controller.run.trial import MAX_SEED
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.records import unfinished_record
-from evaluation.trials.result import TrialResult
-
-MAX_SEED = 2**32 - 1
 
 
 class SpecError(ToolError, ValueError):

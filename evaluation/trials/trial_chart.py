@@ -21,7 +21,7 @@ from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 
 from controller.cli.outputs import atomic_file
-from evaluation.trials.result import TrialResult
+from controller.run.result import TrialResult
 
 CHART_NAME = "summary.png"
 

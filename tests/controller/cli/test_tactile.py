@@ -15,7 +15,7 @@ import pytest
 from controller.cli import tactile
 from evaluation import tools
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 JOBS = [job for group in tactile.GROUPS for job in group.jobs]
 TOOLS = [job for group in tools.GROUPS for job in group.jobs]
 
@@ -94,3 +94,23 @@ def test_the_commands_module_loads_no_heavy_library(module):
                             cwd=ROOT, check=True).stdout  # fmt: skip
     for heavy in ("'numpy'", "'cv2'", "'mujoco'", "'evaluation.trials'", "'drivers.sim'"):
         assert heavy not in loaded
+
+
+def test_the_product_names_evaluation_modules_only_where_a_simulated_job_is_chosen():
+    """The product never imports evaluation/ (tests/test_layers.py); the command table and
+    the trial's simulated backend name a module of it, imported only when chosen."""
+    naming = {
+        str(path.relative_to(ROOT))
+        for path in (ROOT / "controller").rglob("*.py")
+        if re.search(r'"evaluation\.[\w.]+"', path.read_text())
+    }
+    assert naming == {"controller/cli/tactile.py", "controller/cli/trial.py"}
+
+
+def test_the_trial_command_offers_the_trial_tools_controllers():
+    from controller.cli import trial as command
+    from controller.run import CONTROLLERS
+    from evaluation.trials.oracle import TRIAL_CONTROLLERS
+
+    assert [*CONTROLLERS, *command.SIM_ONLY_CONTROLLERS] == list(TRIAL_CONTROLLERS)
+    assert importlib.util.find_spec(command.SIMULATION) is not None

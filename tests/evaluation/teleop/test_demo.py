@@ -6,11 +6,11 @@ import signal
 
 import pytest
 
+from controller.cli import teleop as demo_cli
+from controller.cli.teleop_signs import manoeuvres, measured_signs
 from controller.episode import read_episode
 from controller.view.live_stream import FoxgloveLiveStream
-from evaluation.teleop import demo_cli
-from evaluation.teleop.pad_script import load_pad_script
-from evaluation.teleop.signs import manoeuvres, measured_signs
+from drivers.sim.twins.pad_script import load_pad_script
 from tests.conftest import made_once
 
 

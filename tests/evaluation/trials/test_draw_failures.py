@@ -4,11 +4,11 @@ import csv
 import json
 import math
 
+from controller.run.result import TrialResult
 from controller.run.task import load_task
 from drivers.sim.scenes.insertion.draws import draw_scene
 from evaluation.trials.batch import CSV_COLUMNS
 from evaluation.trials.draw_failures import binned, main
-from evaluation.trials.result import TrialResult
 
 SEEDS = range(40)
 YAW_LIMIT_DEG = 1.5

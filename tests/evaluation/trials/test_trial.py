@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from controller.cli.support import Terminated
+from controller.cli.trial import main
 from controller.loop import ControlLoop
 from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError
@@ -20,7 +21,6 @@ from drivers.sim.scenes.insertion import TruthLog
 from evaluation.trials import trial
 from evaluation.trials.oracle import TrueWrench
 from evaluation.trials.spec import TrialSpec
-from evaluation.trials.trial_cli import main
 
 ROOT = Path(__file__).resolve().parents[3]
 

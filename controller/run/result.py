@@ -1,4 +1,6 @@
-"""The outcome of one insertion trial, as the batch tools collect it."""
+"""The outcome of one insertion trial: on the robot, the machine's own (no truth: the true
+forces are NaN); in simulation, scored against the simulator's truth (evaluation/trials/),
+as the batch tools collect it."""
 
 from __future__ import annotations
 

@@ -18,16 +18,25 @@ second after it starts to its end) against the second before it.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 
 from controller.episode import Episode
 
-if TYPE_CHECKING:  # the scripted pad's events: the simulated pad, never loaded on the robot
-    from drivers.sim.twins.gamepad import PadEvent
+
+class PadEvent(Protocol):
+    """A gamepad script's event (the simulated pad's, drivers/sim/twins/gamepad.py): at
+    ``t_s`` (s on the demo's clock) these ``axes`` take these values (in [-1, 1])."""
+
+    @property
+    def t_s(self) -> float: ...
+
+    @property
+    def axes(self) -> Mapping[str, float]: ...
+
 
 AXES = {"vy": ("tau_x", 1.0), "wz": ("tau_y", -1.0)}
 """Pad action -> (the torque it drives, the sign of that torque per unit of the action)."""

@@ -1,8 +1,8 @@
 """``tactile trial``: one insertion trial, simulated (default) or on the robot.
 
-    run_trial.py --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
-                 [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
-                 [--realtime] [--set KEY=VALUE ...] [--episode-images jpeg|png]
+    tactile trial --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
+                  [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
+                  [--realtime] [--set KEY=VALUE ...] [--episode-images jpeg|png]
 
 It prints the phase timeline and the outcome, and writes into DIR the trial's episode
 (``episode.mcap``: every stream, docs/EPISODES.md; its tactile frames as JPEG, or losslessly
@@ -16,22 +16,34 @@ possible. Times printed are seconds from the run's start. Exit codes as every to
 result), but one that ended in a fault (a watchdog trip, an exception in a tick) exits 1
 after its safe stop with one line naming it (controller/cli/run_outcome.py); a run
 stopped by SIGINT/SIGTERM exits 130/143 after its safe stop, with the record kept.
+
+On the robot (``--backend real``) the trial is the product's (controller/run/trial.py). In
+simulation it is scored against the simulator's truth by the trial tools of evaluation/
+(``SIMULATION``), imported by name only then: a run on the robot never loads them, nor the
+simulator (the product never imports evaluation/ or drivers.sim: tests/test_layers.py).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 from pathlib import Path
 
 from controller.cli.outputs import check_output_folder
 from controller.cli.run_outcome import fault_exit, signal_exit
 from controller.cli.support import ToolError, add_override_argument, integer, run_tool
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
+from controller.run import CONTROLLERS
 from controller.run.task import load_task
-from evaluation.trials.oracle import TRIAL_CONTROLLERS
-from evaluation.trials.spec import MAX_SEED
-from evaluation.trials.trial import TrialOutcome, run
-from evaluation.trials.trial_chart import write_trial_chart
+from controller.run.trial import MAX_SEED, TrialOutcome, run
+
+SIMULATION = "evaluation.trials.trial"
+"""The module whose ``run`` (with ``run``'s signature) runs a trial in simulation, scored
+against the simulator's truth, and whose ``write_trial_chart(folder, result)`` draws its
+``summary.png``: imported only for ``--backend sim``."""
+
+SIM_ONLY_CONTROLLERS = ("oracle",)
+"""The controllers that read the simulator's truth (evaluation/trials/oracle.py): sim only."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -39,7 +51,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--seed", type=integer(0, MAX_SEED), default=0)
-    parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
+    parser.add_argument(
+        "--controller", choices=[*CONTROLLERS, *SIM_ONLY_CONTROLLERS], default="dipole"
+    )
     parser.add_argument("--realtime", action="store_true", help="pace to the wall clock")
     add_override_argument(
         parser, "override a task key by dotted path, e.g. scene.friction=0.5 (repeatable)"
@@ -57,7 +71,7 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    if args.backend == "real" and args.controller == "oracle":
+    if args.backend == "real" and args.controller in SIM_ONLY_CONTROLLERS:
         parser.error("argument --controller: 'oracle' reads the simulator's truth: sim only")
     return run_tool("run_trial", lambda: _run(args))
 
@@ -67,7 +81,8 @@ def _run(args: argparse.Namespace) -> int:
     check_output_folder(args.out, [task.path], option="--out")
     if args.out.exists() and any(args.out.iterdir()):
         raise ToolError(f"--out '{args.out}': the folder is not empty")
-    outcome = run(
+    simulation = importlib.import_module(SIMULATION) if args.backend == "sim" else None
+    outcome = (simulation.run if simulation is not None else run)(
         task,
         args.controller,
         args.seed,
@@ -78,8 +93,8 @@ def _run(args: argparse.Namespace) -> int:
         episode=EpisodeOptions(image_format=args.episode_images),
     )
     print(timeline(outcome))
-    if outcome.truth is not None:
-        write_trial_chart(args.out, outcome.result)
+    if simulation is not None and outcome.truth is not None:
+        simulation.write_trial_chart(args.out, outcome.result)
     print(f"run_trial: wrote {args.out}")
     episode = args.out / EPISODE_FILE
     print(f"run_trial: episode {episode}; summarise it with:")

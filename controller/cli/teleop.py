@@ -10,7 +10,7 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
 
 * ``--backend sim`` (default): the simulated world in real time; the pad is a real one if SDL
   sees a game controller, else the scripted twin playing ``--script FILE``
-  (evaluation/teleop/pad_script.py) or the default script configs/teleop/alignment_demo.yaml.
+  (drivers/sim/twins/pad_script.py) or the default script configs/teleop/alignment_demo.yaml.
   ``--fast`` runs a scripted demo as fast as the simulation goes (the view, if open, shows
   what it can and drops the rest).
 * ``--backend real``: the configured devices, the same code.
@@ -54,6 +54,7 @@ from controller.cli.support import (
     number,
     run_tool,
 )
+from controller.cli.teleop_signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 from controller.episode import Episode, read_episode
 from controller.episode.session import EPISODE_FILE, EpisodeRecording
 from controller.insertion.teleop_only import TeleopOnlyMachine
@@ -63,7 +64,6 @@ from controller.run.task import Task, TaskConfig, load_task
 from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
 from drivers import registry
-from evaluation.teleop.signs import Manoeuvre, SignCheck, manoeuvres, measured_signs
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
 START_DEPTH_M = 0.002
@@ -118,12 +118,13 @@ def _run(args: argparse.Namespace) -> int:
     if task.config.devices.gamepad is None:
         raise ToolError(f"{task.path}: key 'devices.gamepad': the demo needs a gamepad")
     script = None
-    if args.backend == "sim" and (args.script or args.fast or not real_pad_attached()):
-        # imported here: a script plays the simulated pad, which a real run never loads
-        from evaluation.teleop.pad_script import load_pad_script
-
+    if args.backend == "sim" and (
+        args.script or args.fast or not registry.real_pad_attached()
+    ):  # a script plays the simulated pad (the registry loads it), which a real run never loads
         mapping = pad_mapping(task)
-        script = load_pad_script(args.script or DEFAULT_SCRIPT, mapping.axes, mapping.buttons)
+        script = registry.load_pad_script(
+            args.script or DEFAULT_SCRIPT, mapping.axes, mapping.buttons
+        )
     created = not args.out.exists()
     args.out.mkdir(parents=True, exist_ok=True)
     try:
@@ -132,17 +133,6 @@ def _run(args: argparse.Namespace) -> int:
         if created and not any(args.out.iterdir()):
             args.out.rmdir()  # no empty folder left that looks like a run's
         raise
-
-
-def real_pad_attached() -> bool:
-    """True if SDL lists a game controller (a real pad is plugged in)."""
-    from drivers.gamepad.pad import init_sdl, sdl_controller
-
-    try:
-        init_sdl()
-    except Exception:
-        return False
-    return any(sdl_controller.is_controller(i) for i in range(sdl_controller.get_count()))
 
 
 def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
