@@ -40,16 +40,16 @@ GROUPS = (
     Group(
         "episodes",
         (
-            Job("replay", "evaluation.episodes.replay_cli",
+            Job("replay", "controller.cli.replay",
                 "an episode's summary | plot | reestimate | export | repair"),
         ),
     ),
     Group(
         "sensor and estimator",
         (
-            Job("estimate", "evaluation.offline.estimate_cli",
+            Job("estimate", "controller.cli.estimate",
                 "torques estimated offline on recorded tactile frames or a video"),
-            Job("calibrate", "evaluation.offline.calibrate_cli",
+            Job("calibrate", "controller.cli.calibrate",
                 "the estimator's calibration fitted on a dataset"),
         ),
     ),

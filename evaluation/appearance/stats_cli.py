@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.estimate import IMAGE_SUFFIXES, InputError, open_source
+from controller.offline.quiet_decoding import read_image
+from controller.offline.video import ReadLog
 from drivers.sim.render.real_texture import fit_to_size
 from evaluation.appearance.stats import AppearanceStats, format_table, measure, summarise
-from evaluation.common.quiet_decoding import read_image
-from evaluation.offline.estimate_cli import IMAGE_SUFFIXES, InputError, open_source
-from evaluation.offline.video import ReadLog
 
 
 def parse_size(text: str) -> tuple[int, int] | None:

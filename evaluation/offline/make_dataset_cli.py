@@ -1,4 +1,4 @@
-"""Write a simulated calibration dataset (the jig scene; format: evaluation/offline/dataset.py).
+"""Write a simulated calibration dataset (the jig scene; format: controller/offline/dataset.py).
 
     python -m evaluation make_dataset OUT [--sensor gelsight_mini|digit] [--object plate|
         square_peg|round_peg] [--axes x y z] [--amplitudes-nmm 20 40 60]

@@ -1,7 +1,7 @@
 """The checks of an estimate on a recording against its true program (issue 12, section 6).
 
 A recording (evaluation/real_recordings/recording_video.py) is estimated by
-``tactile estimate``'s own code (evaluation/offline/estimate_cli.py ``estimate_file``,
+``tactile estimate``'s own code (controller/cli/estimate.py ``estimate_file``,
 zeroed on frame 0, no calibration: raw values), and the estimate's CSV is held against the
 truth CSV:
 
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evaluation.offline.estimate_cli import estimate_file
+from controller.cli.estimate import estimate_file
 from evaluation.real_recordings.recording_video import (
     VIDEO_SUFFIX,
     Truth,

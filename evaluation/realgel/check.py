@@ -19,15 +19,15 @@ from dataclasses import asdict, dataclass, replace
 import cv2
 import numpy as np
 
-from controller.tactile.estimator import GridFlowFactory, TactileEstimator
-from controller.tactile.flow import make_grid_flow
-from controller.tactile.settings import EstimatorConfig
-from core.sensor_profile import sensor_profile
-from evaluation.offline.recording_support import (
+from controller.offline.recording_support import (
     FallbackChoice,
     recording_fallback,
     uses_recording,
 )
+from controller.tactile.estimator import GridFlowFactory, TactileEstimator
+from controller.tactile.flow import make_grid_flow
+from controller.tactile.settings import EstimatorConfig
+from core.sensor_profile import sensor_profile
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import TEXTURES

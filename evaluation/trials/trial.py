@@ -22,6 +22,7 @@ import numpy as np
 from controller.cli.support import Terminated
 from controller.episode.session import EpisodeOptions, EpisodeRecording
 from controller.insertion import Phase
+from controller.replay.trial_chart import write_trial_chart
 from controller.run import RunOutcome, Task, load_task
 from controller.run import trial as product_trial
 from controller.run.result import TrialResult
@@ -29,7 +30,6 @@ from controller.run.trial import TrialOutcome
 from core.atomic_files import atomic_file
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import TrialSpec
-from evaluation.trials.trial_chart import write_trial_chart
 
 
 def check_spec(spec: TrialSpec) -> None:

@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
+from controller.cli.estimate import main as estimate_main
 from drivers.sim.render.real_texture import REAL_GELS_DIR
 from drivers.sim.scenes.press_tilt import press_tilt_program
 from evaluation.common.rendering import make_renderer
-from evaluation.offline.estimate_cli import main as estimate_main
 from evaluation.real_recordings.recording_checks import (
     Estimate,
     check_recording,

@@ -8,15 +8,15 @@ import tracemalloc
 import numpy as np
 import pytest
 
-from evaluation.episodes.image_stats import ImageStats
-from evaluation.episodes.lerobot_alignment import (
+from controller.replay.image_stats import ImageStats
+from controller.replay.lerobot_alignment import (
     AlignmentError,
     camera_fps,
     frame_times,
     windows,
 )
-from evaluation.episodes.lerobot_dataset import DatasetEpisode, VectorFeature, write_dataset
-from evaluation.episodes.lerobot_stats import (
+from controller.replay.lerobot_dataset import DatasetEpisode, VectorFeature, write_dataset
+from controller.replay.lerobot_stats import (
     QUANTILES,
     aggregate,
     downsampled,

@@ -5,7 +5,7 @@ Agg).
 
 ``draw_trial_chart(series, path, title)`` draws a ``TrialSeries`` (plain arrays); a trial's
 record (``trial_series(folder)``: ticks.jsonl, truth.npz) and an episode file
-(evaluation/episodes/episode_chart.py) both give one, so both charts are the same chart.
+(controller/replay/episode_chart.py) both give one, so both charts are the same chart.
 ``write_trial_chart`` puts a trial's in its record as ``summary.png``.
 """
 

@@ -11,11 +11,11 @@ import time
 import numpy as np
 import pytest
 
+from controller.cli.replay import main
 from controller.episode import read_episode
+from controller.replay import episode_streams, reestimation
 from controller.tactile import estimator_for_sensor
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.episodes import episode_streams, reestimation
-from evaluation.episodes.replay_cli import main
 
 
 def one_error_line(capsys) -> str:

@@ -11,7 +11,7 @@ import numpy as np
 
 from controller.episode import Episode
 from controller.episode.topics import LOOP_TICK, METADATA_REPAIR
-from evaluation.episodes import episode_streams
+from controller.replay import episode_streams
 
 RUN_KEYS = ("task", "seed", "controller", "backend", "package_version", "git_revision",
             "tactile_image_format", "jpeg_quality", "started_utc", "machine")  # fmt: skip

@@ -1,9 +1,9 @@
-"""The contact's support from a whole recording (evaluation/offline/recording_support.py)."""
+"""The contact's support from a whole recording (controller/offline/recording_support.py)."""
 
 import numpy as np
 import pytest
 
-from evaluation.offline.recording_support import (
+from controller.offline.recording_support import (
     MIN_FRAMES,
     MOTION_SIGNIFICANCE,
     motion_significance,

@@ -5,7 +5,7 @@ A damaged input makes the decoders write to the process's stderr themselves: Ope
 libjpeg's ``Premature end of JPEG file``, OpenCV's AVI parser's ``Unexpected element``. The
 last three bypass OpenCV's log level (``cv2.utils.logging``, ``OPENCV_LOG_LEVEL``), so the
 tools decode with file descriptor 2 pointed at /dev/null and report the damage in their own
-one line (evaluation/offline/video.py, estimate_cli.py, appearance/stats_cli.py).
+one line (controller/offline/video.py, estimate_cli.py, appearance/stats_cli.py).
 """
 
 from __future__ import annotations

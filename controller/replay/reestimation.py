@@ -5,7 +5,7 @@ The loop's calls into the wrench source are logged in order on ``/tactile/push``
 the episode's tactile sensor with the configuration asked for, pushing each logged frame at
 its capture time. With the run's own configuration and frames logged losslessly (PNG, the
 recorder's ``tactile_image_format``) this is the run's estimator again, so its estimates are
-the logged ones bit for bit (tests/evaluation/episodes check it); JPEG frames differ from what
+the logged ones bit for bit (tests/controller/replay check it); JPEG frames differ from what
 the estimator saw, by the compression.
 
 Scores, per torque axis (tau_x, tau_y, tau_z):
@@ -38,12 +38,12 @@ from controller.episode.topics import (
     TACTILE_IMAGE,
     TACTILE_PUSH,
 )
+from controller.replay import episode_streams
 from controller.tactile import TactileEstimator, WrenchEstimate, estimator_for_sensor
 from controller.tactile.calibration import Calibration, fit_axis
 from controller.tactile.settings import EstimatorConfig
 from core.config import CONFIG_ROOT, ConfigError
 from drivers import registry
-from evaluation.episodes import episode_streams
 
 AXES = ("tau_x", "tau_y", "tau_z")
 TRUTH_COLUMNS = {"tau_x": 3, "tau_y": 4, "tau_z": 5}

@@ -16,9 +16,9 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 import pytest
 
+from controller.cli.replay import main
 from controller.episode import read_episode
-from evaluation.episodes import episode_streams
-from evaluation.episodes.replay_cli import main
+from controller.replay import episode_streams
 from tests.conftest import made_once
 
 INFO_KEYS = {

@@ -23,12 +23,12 @@ import numpy as np
 
 from controller.cli.outputs import check_output_file, write_text
 from controller.cli.support import ToolError, resolved_config_path, run_tool
+from controller.offline.dataset import Dataset
+from controller.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
 from core.config import ConfigError
 from core.sensor_profile import sensor_profile
-from evaluation.offline.dataset import Dataset
-from evaluation.offline.dataset_fit import calibration_from_fits, estimate_dataset, fit_dataset
 
 
 def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
@@ -51,7 +51,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="calibrate", description="Fit c_x, c_y (and c_z) on a calibration dataset."
     )
-    parser.add_argument("dataset", type=Path, help="dataset folder (evaluation/offline/dataset.py)")
+    parser.add_argument("dataset", type=Path, help="dataset folder (controller/offline/dataset.py)")
     parser.add_argument(
         "--method",
         default=None,

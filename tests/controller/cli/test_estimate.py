@@ -14,13 +14,13 @@ import cv2
 import numpy as np
 import pytest
 
+from controller.cli.estimate import CSV_COLUMNS, main
 from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import phase_patterns
-from evaluation.offline.estimate_cli import CSV_COLUMNS, main
 from tests.script_runs import exit_code
 from tests.video_faults import corrupt_frame, truncate_inside_frame, write_mjpg
 
@@ -176,7 +176,7 @@ def test_unwritable_outputs_are_refused_before_any_frame_is_read(
 ):
     (tmp_path / "f.png").write_bytes(b"")
     monkeypatch.chdir(tmp_path)
-    import evaluation.offline.estimate_cli as cli
+    import controller.cli.estimate as cli
 
     monkeypatch.setattr(cli, "open_source", lambda path: pytest.fail("work began"))
     code, err = run_main(capsys, folder, "--out", out)
@@ -233,7 +233,7 @@ def test_a_signal_mid_run_exits_cleanly_and_keeps_the_previous_csv(
 SLOW_RUN = """
 import sys, time
 from controller.tactile.estimator import TactileEstimator
-from evaluation.offline.estimate_cli import main
+from controller.cli.estimate import main
 original = TactileEstimator.push
 def slow(self, frame, t_s):
     time.sleep(0.3)
@@ -587,8 +587,8 @@ def test_without_open_frames_the_tool_takes_the_contact_from_the_whole_recording
     --open the tool keeps the configuration and removes an old record."""
     from dataclasses import replace
 
-    from evaluation.offline.estimate_cli import fallback_sidecar
-    from evaluation.offline.recording_support import (
+    from controller.cli.estimate import fallback_sidecar
+    from controller.offline.recording_support import (
         NOISE_EMA_ALPHA,
         SUPPORT_REASON,
         UNGATED_REASON,

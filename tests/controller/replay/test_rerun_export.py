@@ -10,8 +10,8 @@ from collections import defaultdict
 import numpy as np
 import pytest
 
+from controller.cli.replay import main
 from controller.episode import read_episode
-from evaluation.episodes.replay_cli import main
 
 rerun_chunk = pytest.importorskip("rerun.chunk")  # the 'rerun' extra, in dev
 

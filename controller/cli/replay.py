@@ -38,6 +38,7 @@ import time
 from collections.abc import Iterator
 from pathlib import Path
 
+from controller.cli.estimate import CSV_COLUMNS, csv_row
 from controller.cli.outputs import (
     atomic_file,
     atomic_text,
@@ -54,16 +55,15 @@ from controller.cli.support import (
 from controller.episode import Episode, EpisodeError, read_episode
 from controller.episode.repair import repair as repair_file
 from controller.episode.topics import LOOP_TICK
+from controller.replay import episode_streams, reestimation
+from controller.replay.episode_chart import write_episode_chart
+from controller.replay.episode_summary import CRC_NOTE, summary_lines
+from controller.replay.lerobot_alignment import AlignedEpisode, AlignmentError, align
+from controller.replay.lerobot_dataset import DatasetEpisode, write_dataset
+from controller.replay.rerun_export import LOOP_TIMELINE, RerunMissing, rerun_sdk, write_recording
 from controller.tactile import estimator_for_sensor
 from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
-from evaluation.episodes import episode_streams, reestimation
-from evaluation.episodes.episode_chart import write_episode_chart
-from evaluation.episodes.episode_summary import CRC_NOTE, summary_lines
-from evaluation.episodes.lerobot_alignment import AlignedEpisode, AlignmentError, align
-from evaluation.episodes.lerobot_dataset import DatasetEpisode, write_dataset
-from evaluation.episodes.rerun_export import LOOP_TIMELINE, RerunMissing, rerun_sdk, write_recording
-from evaluation.offline.estimate_cli import CSV_COLUMNS, csv_row
 
 PROG = "replay"
 

@@ -1,7 +1,7 @@
 """Streaming statistics of RGB uint8 frames, in bounded memory: ``ImageStats``.
 
 LeRobot's image statistics of an episode are per channel over the pixels of its sampled
-frames (evaluation/episodes/lerobot_stats.py says which), scaled to [0, 1]: min, max, mean,
+frames (controller/replay/lerobot_stats.py says which), scaled to [0, 1]: min, max, mean,
 std and the quantiles q01, q10, q50, q90, q99, each of shape (3, 1, 1), and ``count`` (the
 frames). A uint8 channel has 256 values, so a histogram of 256 counts per channel holds
 everything these need: they come out as NumPy gives them on the stacked pixels
@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from evaluation.episodes.lerobot_stats import QUANTILE_KEYS, QUANTILES
+from controller.replay.lerobot_stats import QUANTILE_KEYS, QUANTILES
 
 LEVELS = 256
 

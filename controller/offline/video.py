@@ -3,7 +3,7 @@
 OpenCV (FFmpeg backend) hides damage: a frame whose data does not decode ends the stream
 (the frames after it are only found by reading on), a damaged frame may be patched, and a
 truncated file simply ends early. The decoders' own messages are kept off the terminal
-(evaluation/common/quiet_decoding.py). This reader reads on past failures and numbers each frame
+(controller/offline/quiet_decoding.py). This reader reads on past failures and numbers each frame
 it returns by the container's presentation time (``round(pts * fps)``; by its position,
 counting the failed reads, when the container gives no usable time), so a lost frame
 leaves a gap in the numbers and the frames after it keep their true times. After a pass,
@@ -22,7 +22,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from evaluation.common.quiet_decoding import native_stderr_muted
+from controller.offline.quiet_decoding import native_stderr_muted
 
 UNREADABLE_IN_A_ROW = 50  # failed reads in a row that end a pass (the end of the file)
 

@@ -19,12 +19,12 @@ LeRobot")::
 
 Every episode goes into chunk 0, file 0 (one export is far below LeRobot's 100 MB data and
 200 MB video file sizes). Statistics are taken per episode and aggregated over the dataset
-as LeRobot does (evaluation/episodes/lerobot_stats.py): the numeric features over every row,
+as LeRobot does (controller/replay/lerobot_stats.py): the numeric features over every row,
 the video over the frames LeRobot samples, per RGB channel, scaled to [0, 1], shape (3, 1, 1).
 
 Memory: the episodes are taken one at a time from any iterable (a generator that reads
 each episode file when asked): each one's frames go to the video encoder as they come and
-its sampled frames into per-channel histograms (evaluation/episodes/image_stats.py), so
+its sampled frames into per-channel histograms (controller/replay/image_stats.py), so
 only the numeric rows of the episodes already written stay in memory.
 
 The dataset is built in a hidden folder beside DIR and renamed to DIR only when complete
@@ -45,15 +45,15 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from controller.cli.outputs import discard_folder, partial_folder, publish_folder
-from evaluation.episodes.image_stats import ImageStats
-from evaluation.episodes.lerobot_stats import (
+from controller.replay.image_stats import ImageStats
+from controller.replay.lerobot_stats import (
     Stats,
     aggregate_features,
     downsampled,
     numeric_stats,
     sample_indices,
 )
-from evaluation.episodes.lerobot_video import open_video, video_info
+from controller.replay.lerobot_video import open_video, video_info
 
 CODEBASE_VERSION = "v3.0"
 CHUNKS_SIZE = 1000

@@ -1,4 +1,4 @@
-"""An episode's chart: the trial summary's chart (evaluation/trials/trial_chart.py) drawn
+"""An episode's chart: the trial summary's chart (controller/replay/trial_chart.py) drawn
 from the episode's streams (torques with the phase bands, the commands, and the truth where
 the episode has it)."""
 
@@ -11,8 +11,8 @@ import numpy as np
 import yaml
 
 from controller.episode import Episode
-from evaluation.episodes import episode_streams
-from evaluation.trials.trial_chart import (
+from controller.replay import episode_streams
+from controller.replay.trial_chart import (
     TORQUES,
     TrialSeries,
     chart_title,

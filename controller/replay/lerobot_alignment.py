@@ -35,10 +35,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.episode import Episode
+from controller.replay import episode_streams
+from controller.replay.episode_streams import LoggedFrame, Ticks
+from controller.replay.lerobot_dataset import DatasetEpisode, VectorFeature
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.episodes import episode_streams
-from evaluation.episodes.episode_streams import LoggedFrame, Ticks
-from evaluation.episodes.lerobot_dataset import DatasetEpisode, VectorFeature
 
 TICK_TOLERANCE_S = 1e-6
 """A tick this much after a frame's push time (s) still counts as at it (float rounding)."""

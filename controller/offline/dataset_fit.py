@@ -11,13 +11,14 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 
+from controller.offline.dataset import Dataset
 from controller.tactile import TactileEstimator
 from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256, fit_axis
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.offline.dataset import Dataset
 
 # axis -> (our estimate, the baseline's, the torque column of a (fx..tau_z) row)
 TORQUE_AXES = {
@@ -142,4 +143,5 @@ def calibration_from_fits(
     for (axis, method), fit in fits.items():
         ours, baseline, _ = TORQUE_AXES[axis]
         axes[ours if method == "ours" else baseline] = fit
-    return Calibration(sensor, estimator.config_name, axes, estimator_sha256(estimator.config))
+    name = cast(str, estimator.config_name)  # the configuration's name or path it was built from
+    return Calibration(sensor, name, axes, estimator_sha256(estimator.config))

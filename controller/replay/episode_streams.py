@@ -34,8 +34,8 @@ from controller.episode.topics import (
     TACTILE_WRENCH,
     TRANSITION,
 )
+from controller.replay.trial_chart import ChartTruth
 from controller.tactile.wrench import VALUE_FIELDS
-from evaluation.trials.trial_chart import ChartTruth
 
 HOLE_FRAME = "H"
 """The true hole's child frame on ``/sim/tf``."""

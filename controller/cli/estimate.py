@@ -12,14 +12,14 @@ images; either orientation). SPEC is a frame number (``0``) or a range ``a:b`` w
 of the open gel (before the grasp, nothing touching), in the same form: the
 ``grasp_centroid`` dipole origin takes the contact's centre from the reference against them
 (without, the tool finds the contact's support from the whole recording, each cell's
-divergence power against its frame-to-frame noise (evaluation/offline/recording_support.py),
+divergence power against its frame-to-frame noise (controller/offline/recording_support.py),
 estimates the recording again about it, or on the whole grid through the paper's EMA when no
 cell's divergence varies clearly more than the noise alone would, behind the no-contact gate
 unless that gate never saw a press from the open gel (the recording was zeroed in the grasp),
 says so in one line and records the choice in ``OUT.fallback.json``). The open frames must
 end before the reference begins (overlapping or later ranges are refused); open frames that
 differ from each other or from the recording's first frame far beyond the camera noise are
-used with one warning (evaluation/offline/open_gel.py). ``--method`` names an estimator
+used with one warning (controller/offline/open_gel.py). ``--method`` names an estimator
 configuration (configs/estimators/NAME.yaml) or is a path to one; without it the
 sensor profile's ``estimator`` is used. A calibration file fitted for another sensor or
 estimator configuration is refused unless ``--force``.
@@ -66,6 +66,10 @@ from controller.cli.support import (
     resolved_config_path,
     run_tool,
 )
+from controller.offline.open_gel import open_gel_doubt
+from controller.offline.quiet_decoding import read_image
+from controller.offline.recording_support import recording_fallback, uses_recording
+from controller.offline.video import ReadLog, VideoError, VideoFile
 from controller.tactile import (
     Calibration,
     EstimatorConfig,
@@ -75,10 +79,6 @@ from controller.tactile import (
 )
 from controller.tactile.wrench import VALUE_FIELDS
 from core.sensor_profile import sensor_profile
-from evaluation.common.quiet_decoding import read_image
-from evaluation.offline.open_gel import open_gel_doubt
-from evaluation.offline.recording_support import recording_fallback, uses_recording
-from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")
@@ -376,7 +376,9 @@ def estimate_file(
 
     sidecar = fallback_sidecar(out_csv)
     choice = None
-    divergences = [] if uses_recording(estimator, open_range is not None) else None
+    divergences: list[np.ndarray] | None = (
+        [] if uses_recording(estimator, open_range is not None) else None
+    )
     with atomic_text(out_csv, newline="") as handle:
         count, problems = _write_rows(estimator, source, rate_hz, handle, divergences)
         if problems and not allow_damaged:

@@ -8,8 +8,8 @@ import json
 import numpy as np
 
 from controller.episode import read_episode
-from evaluation.episodes.episode_chart import episode_series, episode_title
-from evaluation.trials.trial_chart import trial_series
+from controller.replay.episode_chart import episode_series, episode_title
+from controller.replay.trial_chart import trial_series
 
 
 def test_the_episode_gives_the_trial_records_series(episode_path):

@@ -15,7 +15,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from fractions import Fraction
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import av
 import numpy as np
@@ -77,7 +77,7 @@ def video_info(path: Path) -> dict[str, object]:
             "video.codec": stream.codec_context.codec.canonical_name,
             "video.pix_fmt": stream.pix_fmt,
             "video.is_depth_map": False,
-            "video.fps": int(stream.base_rate),
+            "video.fps": int(cast(Fraction, stream.base_rate)),  # the MP4s written here have one
             "video.channels": 3,
             "has_audio": len(container.streams.audio) > 0,
         }

@@ -48,8 +48,8 @@ import numpy as np
 import yaml
 
 from controller.cli.outputs import discard_folder, partial_folder, publish_folder
+from controller.offline.video import ReadLog, VideoError, VideoFile
 from core.config import Config, ConfigError, build, config_dataclass, load_yaml, number
-from evaluation.offline.video import ReadLog, VideoError, VideoFile
 
 FORMAT = "tactile-insertion/dataset/v1"
 VIDEO, FRAMES_CSV, FT_CSV, TRUTH_CSV, META = (
@@ -154,7 +154,7 @@ class DatasetWriter:
             self._video = cv2.VideoWriter(
                 str(self._partial / VIDEO),
                 cv2.CAP_OPENCV_MJPEG,
-                cv2.VideoWriter_fourcc(*"MJPG"),
+                cv2.VideoWriter.fourcc(*"MJPG"),
                 self._rate,
                 (width, height),
             )

@@ -2,8 +2,8 @@
 
 import numpy as np
 
+from controller.offline.open_gel import TOLERANCE_GREY, change_grey, open_gel_doubt
 from drivers.sim.render.marker_images import MarkerImageRenderer
-from evaluation.offline.open_gel import TOLERANCE_GREY, change_grey, open_gel_doubt
 
 
 def test_noise_and_exposure_pass_and_a_shift_of_the_markers_does_not():
