@@ -3,6 +3,7 @@ command line to its tool (controller/cli/tactile.py, core/commands.py), from a m
 enough that a signal while the tool loads is handled; the research tools behind ``python -m
 evaluation`` (evaluation/tools.py) the same way."""
 
+import importlib
 import importlib.util
 import re
 import subprocess
@@ -114,3 +115,12 @@ def test_the_trial_command_offers_the_trial_tools_controllers():
 
     assert [*CONTROLLERS, *command.SIM_ONLY_CONTROLLERS] == list(TRIAL_CONTROLLERS)
     assert importlib.util.find_spec(command.SIMULATION) is not None
+
+
+@pytest.mark.parametrize("job", JOBS, ids=lambda job: job.name)
+def test_every_job_answers_help(job, capsys):
+    main = importlib.import_module(job.module).main
+    with pytest.raises(SystemExit) as stop:
+        main(["--help"])
+    assert stop.value.code == 0
+    assert "usage:" in capsys.readouterr().out

@@ -5,7 +5,7 @@ from hypothesis import strategies as st
 
 from controller.tactile.field import VectorField, grid_axes_mm
 from controller.tactile.nhhd import NHHD, CurlFreePart, greens_self_term
-from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, source
+from tests.controller.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, source
 
 nhhd = NHHD(X_MM, Y_MM)
 

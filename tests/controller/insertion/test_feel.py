@@ -1,5 +1,5 @@
-"""FEEL on the toy world (tests/insertion/world.py, whose plug may be turned in the hand):
-the tilt found by rocking, the search aimed with it, and a face that never lies flat."""
+"""FEEL on the toy world (tests/controller/insertion/world.py, whose plug may be turned in the
+hand): the tilt found by rocking, the search aimed with it, and a face that never lies flat."""
 
 from dataclasses import replace
 
@@ -9,7 +9,7 @@ import pytest
 from controller.insertion.interface import Phase
 from controller.insertion.machine_config import MachineConfig
 from controller.insertion.phases.feel import FeelStage
-from tests.insertion.world import ToyWorld, make_machine, path, toy_config
+from tests.controller.insertion.world import ToyWorld, make_machine, path, toy_config
 
 
 def feeling() -> MachineConfig:

@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from controller.tactile.dipole import DipoleMomentCalculator
 from controller.tactile.field import VectorField
-from tests.tactile.fields import GRID_X, X_MM, Y_MM, charge_on, charge_pair, source
+from tests.controller.tactile.fields import GRID_X, X_MM, Y_MM, charge_on, charge_pair, source
 
 dipole = DipoleMomentCalculator(X_MM, Y_MM)
 

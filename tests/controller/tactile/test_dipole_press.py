@@ -15,7 +15,7 @@ from controller.tactile.dipole import (
 )
 from controller.tactile.field import VectorField, block_mean, divergence
 from controller.tactile.nhhd import CurlFreePart
-from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_on, charge_pair
+from tests.controller.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_on, charge_pair
 
 # The default's dipole grid: the 16 x 12 field block-averaged onto 4 x 4 blocks of 4 x 3 cells,
 # then the divergence of its NHHD curl-free part there (as TactileEstimator does).

@@ -14,7 +14,7 @@ from controller.insertion.interface import Phase
 from controller.insertion.machine import InsertionMachine
 from controller.insertion.machine_config import MachineConfig
 from core.task_geometry import HolePose, PlugGeometry
-from tests.insertion.world import ToyWorld
+from tests.controller.insertion.world import ToyWorld
 
 
 def build(definition):

@@ -1,5 +1,5 @@
-"""The insertion machine on synthetic observation sequences (tests/insertion/world.py): every
-transition and every failure path."""
+"""The insertion machine on synthetic observation sequences (tests/controller/insertion/world.py):
+every transition and every failure path."""
 
 from dataclasses import replace
 
@@ -20,7 +20,7 @@ from controller.insertion.phases.align import AlignStage
 from controller.insertion.phases.search import SearchStage
 from controller.insertion.search_path import SearchPattern
 from core.spatial import tilt_of_rotation
-from tests.insertion.world import ToyWorld, make_machine, path, toy_config
+from tests.controller.insertion.world import ToyWorld, make_machine, path, toy_config
 
 HAPPY = [
     ("GRASP", "APPROACH", "grasped_and_zeroed"),

@@ -10,7 +10,7 @@ from controller.insertion.interface import Phase, TeleopInput
 from controller.insertion.machine_config import MachineConfig, Timeouts
 from controller.insertion.phases.grasp import GraspStage
 from core.devices import Twist
-from tests.insertion.world import ToyWorld, make_machine, path
+from tests.controller.insertion.world import ToyWorld, make_machine, path
 
 OPERATOR = TeleopInput(connected=True, in_control=True, twist=Twist((0.0, 0.0, 0.01)))
 STILL = Twist()

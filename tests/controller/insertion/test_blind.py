@@ -15,7 +15,7 @@ from controller.insertion.interface import Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.run.task import load_task
 from core.config import ConfigError
-from tests.insertion.world import ToyWorld
+from tests.controller.insertion.world import ToyWorld
 
 SMALL = BlindConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002, touch_force_n=1.0,
                     press_force_n=2.0, stop_force_n=6.0, sweep_speed_m_s=0.01,

@@ -23,8 +23,8 @@ from controller.insertion.phases import (
 )
 from core.config import ConfigError
 from core.task_geometry import HolePose, PlugGeometry
-from tests.insertion.test_config import example, load_edited
-from tests.insertion.world import ToyWorld, make_machine, toy_config
+from tests.controller.insertion.test_config import example, load_edited
+from tests.controller.insertion.world import ToyWorld, make_machine, toy_config
 
 STAGE_ENUMS = (
     grasp.GraspStage, approach.ApproachStage, search.SearchStage, align.AlignStage,

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from controller.tactile.field import VectorField, block_mean, grid_axes_mm, require_finite
-from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM
+from tests.controller.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM
 
 
 def test_grid_axes_have_half_cell_offset_and_are_centred():

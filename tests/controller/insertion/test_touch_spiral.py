@@ -16,8 +16,8 @@ from controller.insertion.machine_config import GripperSettings
 from controller.run.controllers import CONTROLLERS
 from controller.run.task import load_task
 from core.config import ConfigError
-from tests.insertion.test_blind import reasons
-from tests.insertion.world import ToyWorld, estimate
+from tests.controller.insertion.test_blind import reasons
+from tests.controller.insertion.world import ToyWorld, estimate
 
 SHARE = 0.5
 SPIRAL = TouchSpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002,

@@ -11,7 +11,7 @@ from controller.tactile import TactileEstimator, estimator_config
 from controller.tactile.dipole import DipoleMomentCalculator, GraspSupport, grasp_support
 from controller.tactile.field import VectorField
 from core.sensor_profile import sensor_profile
-from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_on
+from tests.controller.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_on
 
 # An off-centre rectangular contact (mm, frame S) on the 16 x 12 grid, its pressure spread
 # as many small Gaussian charges 0.25 mm apart (the gel smears its edges by ~0.6 mm).

@@ -7,7 +7,7 @@ from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase, TeleopInput
 from controller.insertion.teleop_only import TELEOP_ONLY, TeleopOnlyMachine
 from core.devices import Twist
-from tests.insertion.world import ToyWorld, toy_config
+from tests.controller.insertion.world import ToyWorld, toy_config
 
 DRIVE = TeleopInput(connected=True, in_control=True, deadman=True,
                     twist=Twist((0.0, 0.01, 0.0), (0.0, 0.0, 0.0)))  # fmt: skip

@@ -179,7 +179,7 @@ def test_push_allocates_nothing_of_its_own_per_frame(renderer, method):
     frames = [renderer.render(a * PATTERNS["tilt_x"]) for a in (0.3, 0.6, 0.9)]
     for frame in frames:
         est.push(frame, 0.0)
-    ours = str(Path(__file__).resolve().parents[2] / "controller")
+    ours = str(Path(__file__).resolve().parents[3] / "controller")
     tracemalloc.start()
     try:
         before = tracemalloc.take_snapshot()

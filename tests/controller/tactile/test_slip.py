@@ -22,7 +22,7 @@ from controller.tactile.slip import (
     next_rezero_state,
 )
 from core.sensor_profile import sensor_profile
-from tests.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_pair
+from tests.controller.tactile.fields import GRID_X, GRID_Y, X_MM, Y_MM, charge_pair
 
 CONFIG = estimator_config("default")
 SLIP = CONFIG.slip

@@ -6,7 +6,7 @@ import pytest
 from controller.insertion.machine_config import NoiseFloor, SignalSettings
 from controller.insertion.signals import TactileSignals
 from controller.tactile.wrench import WrenchEstimate
-from tests.insertion.world import TOY_FLOOR, estimate
+from tests.controller.insertion.world import TOY_FLOOR, estimate
 
 
 def zeroing(t_s):
