@@ -3,4 +3,5 @@
 
 from core.entry_point import run_main
 
-run_main("evaluation.tools")
+if __name__ == "__main__":
+    run_main("evaluation.tools")

@@ -2,4 +2,5 @@
 
 from controller.cli.tactile import run
 
-run()
+if __name__ == "__main__":
+    run()
