@@ -129,7 +129,7 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
         )
     signal.signal(signal.SIGINT, _exit_at_once)
     signal.signal(signal.SIGTERM, _exit_at_once)
-    if stopped_by is not None:  # the name the tool runs under (``tactile trial``: core.commands)
+    if stopped_by is not None:  # the name the tool runs under (``tactile trial``: core.subcommands)
         print(f"{Path(sys.argv[0]).stem}: {stopped_by}", file=sys.stderr)
     try:  # before a signal could end the process without flushing them
         sys.stdout.flush()

@@ -1,13 +1,13 @@
 """The research, figure and benchmark tools, apart from the product's command: ``python -m
 evaluation TOOL [ARGS ...]`` (``python -m evaluation --help`` lists them; ``TOOL --help``
 gives a tool's options). Each tool is its module's ``main``, imported only when chosen
-(core/commands.py), through ``core.entry_point.run_main``."""
+(core/subcommands.py), through ``core.entry_point.run_main``."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
-from core.commands import Group, Job, dispatch
+from core.subcommands import Group, Job, dispatch
 
 ONE_THREAD = "evaluation.common.machine_info:one_thread_env"
 """Called before a speed benchmark's modules load: the numerical libraries on one thread."""

@@ -10,7 +10,7 @@ import re
 from collections.abc import Callable
 from pathlib import Path
 
-from core.commands import find_job
+from core.subcommands import find_job
 from evaluation.tools import GROUPS
 
 SCRIPTS = Path(__file__).resolve().parents[1] / "scripts"

@@ -26,7 +26,7 @@ class Blocker(importlib.abc.MetaPathFinder):
 
 sys.meta_path.insert(0, Blocker())
 sys.argv = {argv!r}
-runpy.run_module("controller.cli", run_name="__main__", alter_sys=True)
+runpy.run_module("controller.cli.command", run_name="__main__", alter_sys=True)
 """
 
 

@@ -85,7 +85,7 @@ def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path)
 
 
 def test_tactile_lists_every_job_and_each_job_answers_help(installed, tmp_path):
-    from controller.cli.tactile import GROUPS
+    from controller.cli.command import GROUPS
 
     listed = run([str(installed / "tactile"), "--help"], cwd=tmp_path, timeout_s=120.0).stdout
     for job in (job for group in GROUPS for job in group.jobs):

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from controller.cli import teleop as demo_cli
+from controller.cli import alignment_demo as demo_cli
 from controller.cli.support import ToolError, integer, run_tool
 from controller.run import load_task, run_task
 from core.sensor_profile import sensor_profile

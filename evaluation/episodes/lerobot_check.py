@@ -5,7 +5,7 @@ LeRobot itself").
 Runs in the separate Python 3.12 environment that ``make check-lerobot`` makes (``lerobot``
 needs Python 3.12 and torch; the project does not import it), with the project's folder on
 ``PYTHONPATH`` for ``python -m evaluation check_lerobot`` (evaluation/tools.py,
-core/commands.py, core/entry_point.py: standard library only); it imports nothing else of the
+core/subcommands.py, core/entry_point.py: standard library only); it imports nothing else of the
 project. For each ``--episode TASK=FRAMES`` (in episode order: the task sentence and the
 number of tactile frames its episode file holds) it checks, through ``LeRobotDataset``:
 

@@ -21,8 +21,8 @@ from pathlib import Path
 
 from controller.cli.outputs import check_output_file, write_text
 from controller.cli.support import add_override_argument, integer, run_tool
+from controller.run.insertion_trial import MAX_SEED
 from controller.run.task import load_task
-from controller.run.trial import MAX_SEED
 from controller.tactile.calibration import Calibration
 from evaluation.offline.scene_calibration import fit_scene_calibration, record_in_scene
 

@@ -1,2 +1,3 @@
-"""Pictures of the teleoperated alignment demo (``tactile teleop``, controller/cli/teleop.py):
-the live view's screenshot at a moment of an episode and the manoeuvres' sign drawing."""
+"""Pictures of the teleoperated alignment demo (``tactile teleop``,
+controller/cli/alignment_demo.py): the live view's screenshot at a moment of an episode and
+the manoeuvres' sign drawing."""

@@ -20,8 +20,8 @@ from pathlib import Path
 from typing import overload
 
 from controller.cli.support import ToolError
+from controller.run.insertion_trial import MAX_SEED
 from controller.run.result import TrialResult
-from controller.run.trial import MAX_SEED
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.records import unfinished_record
 

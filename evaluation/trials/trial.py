@@ -1,4 +1,4 @@
-"""One simulated insertion trial: a run of the product's trial (``controller.run.trial``),
+"""One simulated insertion trial: a run of the product's trial (``controller.run.insertion_trial``),
 scored against the simulator's truth.
 
 ``run_trial(spec)`` is the batch's trial function (evaluation/trials/spec.py); ``run(...)``
@@ -24,9 +24,9 @@ from controller.episode.session import EpisodeOptions, EpisodeRecording
 from controller.insertion import Phase
 from controller.replay.trial_chart import write_trial_chart
 from controller.run import RunOutcome, Task, load_task
-from controller.run import trial as product_trial
+from controller.run import insertion_trial as product_trial
+from controller.run.insertion_trial import TrialOutcome
 from controller.run.result import TrialResult
-from controller.run.trial import TrialOutcome
 from core.atomic_files import atomic_file
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import TrialSpec
@@ -68,8 +68,8 @@ def run(
     **run_options: Any,
 ) -> TrialOutcome:
     """Run one trial of ``task`` with ``controller`` (see the module doc): the product's trial
-    (``controller.run.trial.run``) with the trial tools' controllers (the oracle too) and the
-    same ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored
+    (``controller.run.insertion_trial.run``) with the trial tools' controllers (the oracle too)
+    and the same ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored
     against the simulated world's truth; ``out_dir``: the run's record, with ``truth.npz``
     and the trial's summary in ``trial.json``; ``episode``: also write
     ``out_dir/episode.mcap`` (docs/EPISODES.md) with these options, the truth on ``/sim/``
@@ -87,7 +87,7 @@ def run(
 
 
 class SimTruthScoring:
-    """A simulated trial scored against the world's truth (``controller.run.trial``'s
+    """A simulated trial scored against the world's truth (``controller.run.insertion_trial``'s
     ``TruthScoring``): with an episode, the truth goes to its ``/sim/`` topics each tick."""
 
     def __init__(self) -> None:

@@ -201,7 +201,7 @@ SIM_ONLY = textwrap.dedent(
     import runpy
 
     try:
-        runpy.run_module("controller.cli", run_name="__main__", alter_sys=True)
+        runpy.run_module("controller.cli.command", run_name="__main__", alter_sys=True)
     except SystemExit as end:
         print("check_hardware exit", end.code)
     print("loaded:", sorted({m.partition(".")[0] for m in sys.modules} & BLOCKED))

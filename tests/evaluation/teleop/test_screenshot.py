@@ -3,7 +3,7 @@ damaged episode drawn from what is readable."""
 
 import pytest
 
-from controller.cli import teleop as demo_cli
+from controller.cli import alignment_demo as demo_cli
 from evaluation.teleop import screenshot
 
 

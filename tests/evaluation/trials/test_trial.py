@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from controller.cli.support import Terminated
-from controller.cli.trial import main
+from controller.cli.trial_cli import main
 from controller.loop import ControlLoop
 from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError

@@ -17,7 +17,7 @@ result), but one that ended in a fault (a watchdog trip, an exception in a tick)
 after its safe stop with one line naming it (controller/cli/run_outcome.py); a run
 stopped by SIGINT/SIGTERM exits 130/143 after its safe stop, with the record kept.
 
-On the robot (``--backend real``) the trial is the product's (controller/run/trial.py). In
+On the robot (``--backend real``) the trial is the product's (controller/run/insertion_trial.py). In
 simulation it is scored against the simulator's truth by the trial tools of evaluation/
 (``SIMULATION``), imported by name only then: a run on the robot never loads them, nor the
 simulator (the product never imports evaluation/ or drivers.sim: tests/test_layers.py).
@@ -34,8 +34,8 @@ from controller.cli.run_outcome import fault_exit, signal_exit
 from controller.cli.support import ToolError, add_override_argument, integer, run_tool
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import CONTROLLERS
+from controller.run.insertion_trial import MAX_SEED, TrialOutcome, run
 from controller.run.task import load_task
-from controller.run.trial import MAX_SEED, TrialOutcome, run
 
 SIMULATION = "evaluation.trials.trial"
 """The module whose ``run`` (with ``run``'s signature) runs a trial in simulation, scored

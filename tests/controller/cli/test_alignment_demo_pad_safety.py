@@ -5,8 +5,8 @@ The joystick is moved from the loop's observer, so each change is seen at the ne
 
 import pytest
 
-from controller.cli import teleop as demo_cli
-from controller.cli.teleop import TELEOP_CONTROLLER, _pad_preparation
+from controller.cli import alignment_demo as demo_cli
+from controller.cli.alignment_demo import TELEOP_CONTROLLER, _pad_preparation
 from controller.insertion import Phase
 from controller.run import load_task, run_task
 from tests.drivers.virtual_joystick import VirtualJoystick, pygame_sdl_or_skip

@@ -6,7 +6,7 @@ import signal
 
 import pytest
 
-from controller.cli import teleop as demo_cli
+from controller.cli import alignment_demo as demo_cli
 from controller.cli.teleop_signs import manoeuvres, measured_signs
 from controller.episode import read_episode
 from controller.view.live_stream import FoxgloveLiveStream

@@ -1,5 +1,5 @@
 """The one installed command, ``tactile``: a subcommand per job that hands the rest of the
-command line to its tool (controller/cli/tactile.py, core/commands.py), from a module light
+command line to its tool (controller/cli/command.py, core/subcommands.py), from a module light
 enough that a signal while the tool loads is handled; the research tools behind ``python -m
 evaluation`` (evaluation/tools.py) the same way."""
 
@@ -13,11 +13,11 @@ from pathlib import Path
 
 import pytest
 
-from controller.cli import tactile
+from controller.cli import command
 from evaluation import tools
 
 ROOT = Path(__file__).resolve().parents[3]
-JOBS = [job for group in tactile.GROUPS for job in group.jobs]
+JOBS = [job for group in command.GROUPS for job in group.jobs]
 TOOLS = [job for group in tools.GROUPS for job in group.jobs]
 
 
@@ -27,7 +27,7 @@ def run(*args: str) -> subprocess.CompletedProcess:
 
 def test_the_one_installed_command_is_tactile():
     commands = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["scripts"]
-    assert commands == {"tactile": "controller.cli.tactile:run"}
+    assert commands == {"tactile": "controller.cli.command:run"}
 
 
 def test_each_job_and_tool_names_a_module_with_a_main():
@@ -46,13 +46,13 @@ def test_scripts_hold_only_the_product_jobs():
     assert len(scripts) <= 10
     for script in scripts:
         module = re.search(r'run_main\("([\w.]+)"\)', script.read_text()).group(1)
-        assert module == "controller.cli.tactile" or module in {job.module for job in JOBS}
+        assert module == "controller.cli.command" or module in {job.module for job in JOBS}
 
 
 def test_the_help_lists_every_job_by_group():
-    done = run("-m", "controller.cli", "--help")
+    done = run("-m", "controller.cli.command", "--help")
     assert done.returncode == 0 and done.stderr == ""
-    for group in tactile.GROUPS:
+    for group in command.GROUPS:
         assert f"\n{group.title}:\n" in done.stdout
         for job in group.jobs:
             assert re.search(rf"^  {re.escape(job.name)} +\S", done.stdout, re.M), job.name
@@ -60,14 +60,15 @@ def test_the_help_lists_every_job_by_group():
 
 @pytest.mark.parametrize("argv", [[], ["tiral", "--task", "usb_c"]])
 def test_no_job_or_an_unknown_one_is_one_line_and_exit_2(argv):
-    done = run("-m", "controller.cli", *argv)
+    done = run("-m", "controller.cli.command", *argv)
     assert done.returncode == 2 and done.stdout == ""
     assert done.stderr.startswith("tactile: error: ") and done.stderr.count("\n") == 1
     assert "trial, trials, compare" in done.stderr
 
 
 def test_a_job_gets_the_rest_of_the_command_line():
-    done = run("-m", "controller.cli", "trial", "--task", "usb_c", "--seed", "-1", "--out", "o")
+    argv = ["trial", "--task", "usb_c", "--seed", "-1", "--out", "o"]
+    done = run("-m", "controller.cli.command", *argv)
     assert done.returncode == 2 and "Traceback" not in done.stderr  # the tool's parser's
     assert done.stderr.splitlines()[-1].startswith("run_trial: error: argument --seed")
 
@@ -81,14 +82,14 @@ def test_the_research_tools_answer_help():
 
 
 @pytest.mark.parametrize(
-    "module", ["controller.cli.tactile", "evaluation.tools", "controller.cli.__main__"]
+    "module", ["controller.cli.command", "evaluation.tools", "the command run as main"]
 )
 def test_the_commands_module_loads_no_heavy_library(module):
     code = f"import sys; sys.argv = ['x', '--help']; import {module}; print(sorted(sys.modules))"
-    if module.endswith("__main__"):  # it runs the command: the help, then exit
+    if module == "the command run as main":  # python -m controller.cli.command --help
         code = (
             "import runpy, sys; sys.argv = ['tactile', '--help']\n"
-            "try:\n    runpy.run_module('controller.cli', run_name='__main__')\n"
+            "try:\n    runpy.run_module('controller.cli.command', run_name='__main__')\n"
             "except SystemExit:\n    pass\nprint(sorted(sys.modules))"
         )
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
@@ -105,16 +106,16 @@ def test_the_product_names_evaluation_modules_only_where_a_simulated_job_is_chos
         for path in (ROOT / "controller").rglob("*.py")
         if re.search(r'"evaluation\.[\w.]+"', path.read_text())
     }
-    assert naming == {"controller/cli/tactile.py", "controller/cli/trial.py"}
+    assert naming == {"controller/cli/command.py", "controller/cli/trial_cli.py"}
 
 
 def test_the_trial_command_offers_the_trial_tools_controllers():
-    from controller.cli import trial as command
+    from controller.cli import trial_cli
     from controller.run import CONTROLLERS
     from evaluation.trials.oracle import TRIAL_CONTROLLERS
 
-    assert [*CONTROLLERS, *command.SIM_ONLY_CONTROLLERS] == list(TRIAL_CONTROLLERS)
-    assert importlib.util.find_spec(command.SIMULATION) is not None
+    assert [*CONTROLLERS, *trial_cli.SIM_ONLY_CONTROLLERS] == list(TRIAL_CONTROLLERS)
+    assert importlib.util.find_spec(trial_cli.SIMULATION) is not None
 
 
 @pytest.mark.parametrize("job", JOBS, ids=lambda job: job.name)
