@@ -38,3 +38,13 @@ def exit_code(name: str, argv: list[str]) -> int:
     except SystemExit as stop:
         code = stop.code
     return 0 if code is None else int(code)
+
+
+def answers_help(module: str, capsys) -> bool:
+    """Whether ``module``'s ``main(["--help"])``, run in this process, exits 0 with its usage
+    on stdout (``capsys``: the test's capture)."""
+    try:
+        importlib.import_module(module).main(["--help"])
+    except SystemExit as stop:
+        return stop.code == 0 and "usage:" in capsys.readouterr().out
+    return False

@@ -15,6 +15,7 @@ import pytest
 
 from controller.cli import command
 from evaluation import tools
+from tests.script_runs import answers_help
 
 ROOT = Path(__file__).resolve().parents[3]
 JOBS = [job for group in command.GROUPS for job in group.jobs]
@@ -120,8 +121,4 @@ def test_the_trial_command_offers_the_trial_tools_controllers():
 
 @pytest.mark.parametrize("job", JOBS, ids=lambda job: job.name)
 def test_every_job_answers_help(job, capsys):
-    main = importlib.import_module(job.module).main
-    with pytest.raises(SystemExit) as stop:
-        main(["--help"])
-    assert stop.value.code == 0
-    assert "usage:" in capsys.readouterr().out
+    assert answers_help(job.module, capsys)
