@@ -33,10 +33,10 @@ $(STAMP): pyproject.toml
 
 demo: $(STAMP)
 	rm -rf out/demo
-	MPLBACKEND=Agg $(BIN)/python scripts/run_trial.py --task usb_c --seed 0 --out out/demo
+	MPLBACKEND=Agg $(BIN)/tactile trial --task usb_c --seed 0 --out out/demo
 
 estimator-demo: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python scripts/demo.py --out out/estimator-demo
+	MPLBACKEND=Agg $(BIN)/python -m evaluation demo --out out/estimator-demo
 
 test: $(STAMP)
 	MPLBACKEND=Agg SDL_VIDEODRIVER=dummy $(BIN)/python -m pytest
@@ -45,23 +45,23 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 bench: $(STAMP)
-	$(BIN)/python scripts/bench_estimation.py --write docs/BENCHMARKS.md
+	$(BIN)/python -m evaluation bench_estimation --write docs/BENCHMARKS.md
 
 evaluate: $(STAMP)
-	MPLBACKEND=Agg $(BIN)/python scripts/evaluate.py --docs docs --work out/evaluate
+	MPLBACKEND=Agg $(BIN)/python -m evaluation evaluate --docs docs --work out/evaluate
 
 calibrations: $(STAMP)
-	$(BIN)/python scripts/calibrate_task.py --task usb_c --out configs/calibrations/usb_c.yaml
-	$(BIN)/python scripts/calibrate_task.py --task usb_a --out configs/calibrations/usb_a.yaml
+	$(BIN)/python -m evaluation calibrate_task --task usb_c --out configs/calibrations/usb_c.yaml
+	$(BIN)/python -m evaluation calibrate_task --task usb_a --out configs/calibrations/usb_a.yaml
 
 trials: $(STAMP)
 	@for task in usb_c usb_a; do \
 	  resume=$$(test -f out/trials/$$task/comparison.json -o -d out/trials/$$task/cells && echo --resume); \
-	  MPLBACKEND=Agg $(BIN)/python scripts/compare_trials.py --task $$task --controllers $(CONTROLLERS) \
+	  MPLBACKEND=Agg $(BIN)/tactile compare --task $$task --controllers $(CONTROLLERS) \
 	    --seeds $(SEEDS) --speeds $(SPEEDS) --workers $(WORKERS) --out out/trials/$$task $$resume \
 	    || exit $$?; \
 	done
-	$(BIN)/python scripts/publish_trials.py out/trials --docs docs
+	$(BIN)/python -m evaluation publish_trials out/trials --docs docs
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
@@ -75,13 +75,13 @@ $(LEROBOT_STAMP):
 check-lerobot: $(STAMP) $(LEROBOT_STAMP)
 	rm -rf $(CHECK_OUT)
 	@for task in usb_c usb_a; do \
-	  MPLBACKEND=Agg $(BIN)/python scripts/run_trial.py --task $$task --seed 0 --out $(CHECK_OUT)/$$task > /dev/null || exit $$?; \
+	  MPLBACKEND=Agg $(BIN)/tactile trial --task $$task --seed 0 --out $(CHECK_OUT)/$$task > /dev/null || exit $$?; \
 	done
-	$(BIN)/python scripts/replay.py export $(CHECK_OUT)/usb_c/episode.mcap $(CHECK_OUT)/usb_a/episode.mcap \
+	$(BIN)/tactile replay export $(CHECK_OUT)/usb_c/episode.mcap $(CHECK_OUT)/usb_a/episode.mcap \
 	  --lerobot $(CHECK_OUT)/dataset
-	@frames() { $(BIN)/python scripts/replay.py summary $(CHECK_OUT)/$$1/episode.mcap \
+	@frames() { $(BIN)/tactile replay summary $(CHECK_OUT)/$$1/episode.mcap \
 	            | awk '$$1 == "/tactile/image" {print $$2}'; }; \
-	set -x; PYTHONPATH=$(CURDIR) $(LEROBOT_VENV)/bin/python scripts/check_lerobot.py $(CHECK_OUT)/dataset \
+	set -x; PYTHONPATH=$(CURDIR) $(LEROBOT_VENV)/bin/python -m evaluation check_lerobot $(CHECK_OUT)/dataset \
 	  --episode "insert the usb_c plug=$$(frames usb_c)" --episode "insert the usb_a plug=$$(frames usb_a)"
 
 clean:

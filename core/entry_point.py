@@ -5,7 +5,7 @@ A script is two lines, ``from core.entry_point import run_main`` and
 ``run_main("package.module")``. ``run_main`` turns SIGINT into KeyboardInterrupt and SIGTERM
 into ``Terminated`` *before* it imports the tool's module, so a signal while NumPy, OpenCV
 or MuJoCo load is handled like one during the work: the tool's own handler
-(``evaluation.common.cli_support.run_tool``) reports it while the tool works, and
+(``controller.cli.support.run_tool``) reports it while the tool works, and
 ``run_main`` reports what reaches it (``PROG: interrupted by SIGINT``, exit 130;
 ``PROG: ended by SIGTERM``, exit 143; no traceback). Once ``main`` has returned, its outputs
 are complete and a signal during the interpreter's shutdown ends the process at once with
@@ -105,7 +105,6 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
     """Exit with the code of ``module.main()`` (None: 0), 130 on SIGINT, 143 on SIGTERM.
     ``first``: ``"module:function"`` to call before ``module`` is imported (e.g. to limit
     the threads of the numerical libraries it loads)."""
-    prog = Path(sys.argv[0]).stem
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, raise_terminated)
     sys.unraisablehook = _redeliver_lost_stops(sys.unraisablehook)
@@ -130,8 +129,8 @@ def run_main(module: str, first: str | None = None) -> NoReturn:
         )
     signal.signal(signal.SIGINT, _exit_at_once)
     signal.signal(signal.SIGTERM, _exit_at_once)
-    if stopped_by is not None:
-        print(f"{prog}: {stopped_by}", file=sys.stderr)
+    if stopped_by is not None:  # the name the tool runs under (``tactile trial``: core.subcommands)
+        print(f"{Path(sys.argv[0]).stem}: {stopped_by}", file=sys.stderr)
     try:  # before a signal could end the process without flushing them
         sys.stdout.flush()
     except BrokenPipeError:  # the reader left (``| head``): quietly, as SIGPIPE would

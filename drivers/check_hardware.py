@@ -1,7 +1,7 @@
 """Check the configured devices: connect each, read one sample, disconnect; one line each.
 
-    python scripts/check_hardware.py                          # the default set (configs/)
-    python scripts/check_hardware.py configs/gripper/hande.yaml --backend real
+    tactile check-hardware                          # the default set (configs/)
+    tactile check-hardware configs/gripper/hande.yaml --backend real
 
 Each argument is a device YAML (see drivers/registry.py for the layout); ``--backend``
 overrides the files' ``backend:`` key. Nothing moves: the arm is connected and read, the

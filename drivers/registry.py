@@ -315,6 +315,25 @@ class DeviceSet:
     world: Any = None
 
 
+PAD_ATTACHED = "drivers.gamepad.pad:controller_attached"
+"""Whether SDL lists a game controller (the real pad's driver; pygame, the ``hw`` extra)."""
+
+PAD_SCRIPT = "drivers.sim.twins.pad_script:load_pad_script"
+"""A gamepad script for the simulated pad, read and checked (the simulator's twin)."""
+
+
+def real_pad_attached() -> bool:
+    """True if a real game controller is plugged in (SDL lists one)."""
+    return bool(_load(PAD_ATTACHED)())
+
+
+def load_pad_script(path: Path, axes: Any, buttons: Any) -> Any:
+    """The simulated pad's script at ``path`` (drivers/sim/twins/pad_script.py), checked
+    against the mapping's ``axes`` and ``buttons`` action names; imports the simulator's
+    twin."""
+    return _load(PAD_SCRIPT)(path, axes, buttons)
+
+
 def scene_config(raw: Mapping[str, Any], source: str) -> Any:
     """A task's ``scene:`` mapping checked into the simulator's config dataclass
     (ConfigError naming ``source`` and the key); imports the simulator's config."""

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""One insertion trial, simulated or on the robot; see evaluation/trials/trial_cli.py."""
+"""One insertion trial, simulated or on the robot; see controller/cli/trial_cli.py."""
 
 from core.entry_point import run_main
 
 if __name__ == "__main__":
-    run_main("evaluation.trials.trial_cli")
+    run_main("controller.cli.trial_cli")

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
-"""The teleoperated alignment demo; see evaluation/teleop/demo_cli.py."""
+"""The teleoperated alignment demo; see controller/cli/alignment_demo.py."""
 
 from core.entry_point import run_main
 
 if __name__ == "__main__":
-    run_main("evaluation.teleop.demo_cli")
+    run_main("controller.cli.alignment_demo")

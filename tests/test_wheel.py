@@ -1,5 +1,5 @@
 """The product as a user installs it: the wheel built, installed into a fresh venv with its
-dependencies, and its console scripts run from a folder outside the checkout (the configs
+dependencies, and its command, ``tactile``, run from a folder outside the checkout (the configs
 are package data, found through importlib.resources, not through the source tree).
 
 Slow (it installs the dependencies into a new venv); ``.ci/run`` runs it.
@@ -54,15 +54,15 @@ def test_the_installed_package_is_not_the_checkout(installed, tmp_path):
 
 def test_a_one_seed_trial_runs_from_outside_the_checkout(installed, tmp_path):
     out = tmp_path / "trial"
-    done = run([str(installed / "tactile-run-trial"), "--task", "usb_c", "--seed", "0",
+    done = run([str(installed / "tactile"), "trial", "--task", "usb_c", "--seed", "0",
                 "--out", str(out)], cwd=tmp_path)  # fmt: skip
     assert "outcome: INSERTED" in done.stdout
     assert (out / "trial.json").is_file() and (out / "ticks.jsonl").stat().st_size > 0
     episode = str(out / "episode.mcap")
-    summary = run([str(installed / "tactile-replay"), "summary", episode], cwd=tmp_path)
+    summary = run([str(installed / "tactile"), "replay", "summary", episode], cwd=tmp_path)
     assert "file: complete" in summary.stdout and "/tactile/image" in summary.stdout
     dataset = tmp_path / "lerobot"
-    run([str(installed / "tactile-replay"), "export", episode, "--lerobot", str(dataset)],
+    run([str(installed / "tactile"), "replay", "export", episode, "--lerobot", str(dataset)],
         cwd=tmp_path)  # fmt: skip
     assert (dataset / "videos" / "observation.images.tactile" / "chunk-000").is_dir()
     assert (dataset / "meta" / "info.json").is_file()
@@ -77,18 +77,21 @@ def test_an_offline_estimate_runs_from_outside_the_checkout(installed, tmp_path)
     for k in range(6):  # the gel, then shifted by up to 2 px: a field to estimate
         cv2.imwrite(str(frames / f"{k:03d}.png"), np.roll(image, k // 3, axis=1))
     out = tmp_path / "estimates.csv"
-    run([str(installed / "tactile-estimate"), str(frames), "--reference", "0",
+    run([str(installed / "tactile"), "estimate", str(frames), "--reference", "0",
          "--out", str(out)], cwd=tmp_path)  # fmt: skip
     with out.open() as handle:
         rows = list(csv.DictReader(line for line in handle if not line.startswith("#")))
     assert len(rows) == 6 and {"tau_x", "tau_y", "tau_z"} <= set(rows[0])
 
 
-def test_every_console_script_answers_help(installed, tmp_path):
-    scripts = [
-        "tactile-run-trial", "tactile-run-trials", "tactile-compare-trials",
-        "tactile-estimate", "tactile-calibrate", "tactile-check-hardware", "tactile-replay",
-    ]  # fmt: skip
-    for name in scripts:
-        done = run([str(installed / name), "--help"], cwd=tmp_path, timeout_s=120.0)
-        assert "usage:" in done.stdout, name
+def test_tactile_lists_every_job_and_each_job_answers_help(installed, tmp_path):
+    from controller.cli.command import GROUPS
+
+    listed = run([str(installed / "tactile"), "--help"], cwd=tmp_path, timeout_s=120.0).stdout
+    for job in (job for group in GROUPS for job in group.jobs):
+        assert f"  {job.name} " in listed, job.name
+        done = run([str(installed / "tactile"), job.name, "--help"], cwd=tmp_path,
+                   timeout_s=120.0)  # fmt: skip
+        assert "usage:" in done.stdout, job.name
+    done = run([str(installed / "python"), "-m", "evaluation", "--help"], cwd=tmp_path)
+    assert "bench_gel" in done.stdout

@@ -147,7 +147,7 @@ def load_task(
     """The task ``name_or_path`` with ``overrides`` (``KEY=VALUE``, dotted keys) applied,
     checked for ``backend`` (``sim`` also checks ``scene:``) and, ``with_calibration``, with
     its calibration file loaded and checked against the sensor, the estimator and the
-    grasp's scene (``scripts/calibrate_task.py`` loads the task without it, to fit it);
+    grasp's scene (``python -m evaluation calibrate_task`` loads the task without it, to fit it);
     ConfigError (one line, naming the file and the key) for anything wrong."""
     if backend not in BACKENDS:
         raise ConfigError(f"backend {backend!r}: expected one of {', '.join(BACKENDS)}")

@@ -1,5 +1,5 @@
 """A task's calibration: the estimator's per-axis fit for the grasped plug, fitted in the
-task's scene (``scripts/calibrate_task.py``) and named by the task file's ``calibration:``
+task's scene (``python -m evaluation calibrate_task``) and named by the task file's ``calibration:``
 key (a path relative to configs/, e.g. ``calibrations/usb_c.yaml``).
 
 The file records what it was fitted for: the sensor profile, the estimator configuration's
@@ -77,7 +77,7 @@ def load_task_calibration(
     scene fingerprint (None: not checked, on hardware); ConfigError (one line naming
     ``source`` and the key) otherwise."""
     path = calibration_path(name)
-    refit = f"re-run scripts/calibrate_task.py --task {task} --out {path}"
+    refit = f"re-run python -m evaluation calibrate_task --task {task} --out {path}"
     if not path.is_file():
         raise ConfigError(f"{source}: key 'calibration': {path} does not exist; {refit}")
     try:

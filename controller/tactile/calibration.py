@@ -12,11 +12,11 @@ is applied to WrenchEstimates; axes absent from the file stay raw.
 
 A calibration file records what it was fitted for: the sensor profile's name and the
 estimator configuration's name and fingerprint (``estimator_sha256``); a calibration fitted
-in a task's simulated scene (``scripts/calibrate_task.py``) also records the task and the
+in a task's simulated scene (``python -m evaluation calibrate_task``) also records the task and the
 fingerprint of the scene it was fitted in (``scene``, ``scene_sha256``; None for the offline
 calibration on a dataset), and each axis's noise at rest (``AxisFit.rest_std``, truth
 units). ``mismatch`` says why a calibration does not fit another sensor or configuration;
-the tools refuse to apply it then (``scripts/estimate.py --force`` overrides). Files load
+the tools refuse to apply it then (``tactile estimate --force`` overrides). Files load
 through the configuration loader (``core.config``) into these frozen dataclasses.
 """
 
@@ -148,7 +148,7 @@ class Calibration(Config):
         if self.estimator_sha256 is None:
             return (
                 "it does not record which estimator configuration it was fitted for "
-                f"(format {FORMAT_V1}); re-run scripts/calibrate.py"
+                f"(format {FORMAT_V1}); re-run tactile calibrate"
             )
         if estimator_sha256(config) != self.estimator_sha256:
             return (
@@ -184,7 +184,7 @@ class Calibration(Config):
         if fit is None or fit.rest_std is None:
             raise ValueError(
                 f"the calibration records no noise at rest for '{axis}' "
-                "(re-run scripts/calibrate_task.py)"
+                "(re-run python -m evaluation calibrate_task)"
             )
         return fit.rest_std
 

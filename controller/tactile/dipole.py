@@ -32,7 +32,8 @@ paper's result where both regions are comparable and makes p continuous, indeed 
 for any change of the divergence, per axis,
 |delta p| <= (2 + 2.625 / full_midpoint_ratio) (R / N) sum_i |delta div_i|, R the grid's
 largest |coordinate| on that axis (the weak region's centroid moves by up to R / Q per unit
-change, and w D / Q stays below 1.125 / full_midpoint_ratio; tests/tactile/test_dipole_press.py).
+change, and w D / Q stays below 1.125 / full_midpoint_ratio;
+tests/controller/tactile/test_dipole_press.py).
 
 Sign: pressure rising toward +y makes the gel spread there (div > 0 at +y, < 0 at -y), so
 p_y > 0 and tau_x > 0: the torque about S's x axis that the gel exerts on the grasped object

@@ -188,7 +188,7 @@ class TactileEstimator:
         contact's support for the ``grasp_centroid`` dipole of every reference set from now on
         for which the open gel gives none (no open gel, or no contact against it); None to
         forget it. For a support found elsewhere, e.g. offline from a whole recording
-        (evaluation/offline/recording_support.py). Unlike the open gel's, it does not stand
+        (controller/offline/recording_support.py). Unlike the open gel's, it does not stand
         for a contact seen: the no-contact gate stays. A support that does not fit the
         reference's grid makes ``set_reference`` raise ValueError."""
         self._given_support = support

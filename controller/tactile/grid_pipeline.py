@@ -182,7 +182,8 @@ class GridPipeline:
             fv_tau_x=fv_x,
             fv_tau_y=fv_y,
             # The baseline's in-plane torque is the field's curl too: negated like tau_z,
-            # so both methods give one sign for one twist (tests/tactile/test_fv_sign.py).
+            # so both methods give one sign for one twist
+            # (tests/controller/tactile/test_fv_sign.py).
             fv_tau_z=-fv_z,
             contact=contact,
             degenerate=dipole.degenerate,

@@ -66,6 +66,16 @@ BUTTON_IDS = {
 _HOTPLUG_EVENTS = (pygame.CONTROLLERDEVICEADDED, pygame.CONTROLLERDEVICEREMOVED)
 
 
+def controller_attached() -> bool:
+    """True if SDL lists a game controller (a real pad is plugged in); False if SDL cannot
+    start."""
+    try:
+        init_sdl()
+    except Exception:
+        return False
+    return any(sdl_controller.is_controller(i) for i in range(sdl_controller.get_count()))
+
+
 def init_sdl() -> None:
     """Start the SDL parts the driver needs (idempotent; see the module doc).
 

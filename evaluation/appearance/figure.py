@@ -1,7 +1,7 @@
 """Real gel captures beside rendered frames, and their appearance statistics side by side
 (docs/SIMULATION.md, "Appearance").
 
-    python scripts/appearance_figure.py [--out docs/figures/appearance.png]
+    python -m evaluation appearance_figure [--out docs/figures/appearance.png]
 
 The figure (PNG, matplotlib Agg) shows at native resolution: the GelSight capture with
 markers beside the ``realistic`` and ``speckle`` renders of the simulated Mini (its marker

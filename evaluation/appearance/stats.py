@@ -1,8 +1,8 @@
 """Appearance statistics of a tactile gel image, real or rendered: what the renderer's
 ``realistic`` appearance is fitted to and checked against (docs/SIMULATION.md).
 
-All are measured at the image's own size (``scripts/gel_stats.py`` first brings an image to
-the sensor's working size, 320 x 240) in px and grey levels (OpenCV's BGR luma unless a
+All are measured at the image's own size (``python -m evaluation gel_stats`` first brings an
+image to the sensor's working size, 320 x 240) in px and grey levels (OpenCV's BGR luma unless a
 channel is named):
 
 * **Markers** (drivers/sim/render/gel_analysis.py finds them): their count, the median

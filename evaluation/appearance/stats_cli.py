@@ -1,6 +1,6 @@
 """The appearance statistics of gel images, real or rendered (evaluation/appearance/stats.py).
 
-    python scripts/gel_stats.py INPUT [INPUT ...] [--size 320x240|native] [--every K]
+    python -m evaluation gel_stats INPUT [INPUT ...] [--size 320x240|native] [--every K]
         [--json OUT.json]
 
 Each INPUT is an image file, a folder of images (natural sort order) or a video OpenCV can
@@ -26,11 +26,11 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.estimate import IMAGE_SUFFIXES, InputError, open_source
+from controller.offline.quiet_decoding import read_image
+from controller.offline.video import ReadLog
 from drivers.sim.render.real_texture import fit_to_size
 from evaluation.appearance.stats import AppearanceStats, format_table, measure, summarise
-from evaluation.common.quiet_decoding import read_image
-from evaluation.offline.estimate_cli import IMAGE_SUFFIXES, InputError, open_source
-from evaluation.offline.video import ReadLog
 
 
 def parse_size(text: str) -> tuple[int, int] | None:

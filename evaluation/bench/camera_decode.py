@@ -9,7 +9,7 @@ qualities, time on one thread (cv2.setNumThreads(1)):
 
 Prints a markdown table of median and p90 milliseconds per frame and the mean absolute
 difference (uint8 levels) of each reduced output against the full-decode output, then the
-machine. Run: ``.venv/bin/python scripts/bench_camera_decode.py [--runs 40]``.
+machine. Run: ``.venv/bin/python -m evaluation bench_camera_decode [--runs 40]``.
 """
 
 from __future__ import annotations
@@ -20,8 +20,8 @@ import time
 import cv2
 import numpy as np
 
+from controller.cli.support import SEED, integer, run_tool
 from drivers.tactile.decode import FrameProcessor, decode_jpeg
-from evaluation.common.cli_support import SEED, integer, run_tool
 from evaluation.common.machine_info import describe_machine
 
 WIDTH_PX, HEIGHT_PX = 3280, 2464

@@ -27,7 +27,7 @@
 The last lines sum up the two targets: the writer's median CPU at the default rates and the
 worst SIGKILL loss.
 
-    python scripts/bench_episode.py [--kills 20] [--runs 5] [--seed 0]
+    python -m evaluation bench_episode [--kills 20] [--runs 5] [--seed 0]
 """
 
 from __future__ import annotations

@@ -9,7 +9,7 @@ last line therefore also gives the real-time estimate: the records' work per sec
 time plus one flush's mean cost times the flushes a real-time second makes. The timers add
 about a microsecond per record.
 
-    python scripts/bench_episode_stages.py [--seconds 20] [--seed 1]
+    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1]
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ sub-pixel warps of a rendered marker-gel image. Two families of warps: "smooth" 
 bumps 40-120 px wide, like a broad press) and "contact" (15-40 px wide, like the edge of a
 peg's contact patch), each at peak displacements 0.1, 0.5, 1, 2 and 3 px.
 
-    python scripts/bench_estimation.py [--write docs/BENCHMARKS.md] [--repeats 5] [--quick]
+    python -m evaluation bench_estimation [--write docs/BENCHMARKS.md] [--repeats 5] [--quick]
     (``make bench``)
 """
 
@@ -22,14 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import integer, run_tool
 from controller.tactile import EstimatorConfig, TactileEstimator
 from controller.tactile.flow import DenseGridFlow, GridFlow, make_grid_flow
 from controller.tactile.grid_pipeline import GridPipeline
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer, area_mean_field
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.experiments.configurations import estimator_variants
 
 AMPLITUDES_PX = (0.1, 0.5, 1.0, 2.0, 3.0)
@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
             "",
             "## Estimation pipeline: latency and field error",
             "",
-            "Regenerate with `make bench` (`python scripts/bench_estimation.py --write "
+            "Regenerate with `make bench` (`python -m evaluation bench_estimation --write "
             "docs/BENCHMARKS.md`).",
             "",
             f"Machine: {describe_machine('1 thread (cv2.setNumThreads(1))')}.",

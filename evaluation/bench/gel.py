@@ -7,7 +7,7 @@ step's solution (``start=``), as a scene does, and cold (no start). Reported: me
 p90 ms per solve over the sequence, and the share of each stage (normal contact,
 tangential contact, layer convolution, camera) from a profiled pass.
 
-    python scripts/bench_gel.py [--steps 240] [--repeats 3]
+    python -m evaluation bench_gel [--steps 240] [--repeats 3]
 
 The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads.
 """
@@ -33,7 +33,7 @@ STAGES = {
     "camera": "image_field_px",
 }
 
-from evaluation.common.cli_support import integer, run_tool  # noqa: E402
+from controller.cli.support import integer, run_tool  # noqa: E402
 
 
 def sequence(steps: int) -> list[tuple[float, Wrench]]:

@@ -14,7 +14,7 @@ reference from as many frames once the grasp has settled (until then a push only
 captures). Reported: simulated seconds per wall second and per CPU second (the median over
 runs), the frames, the final insertion depth and the largest contact force.
 
-    python scripts/bench_insertion_scene.py [--task usb_c] [--runs 3] [--no-estimate]
+    python -m evaluation bench_insertion_scene [--task usb_c] [--runs 3] [--no-estimate]
         [--set KEY=VALUE ...] [--against CHECKOUT] [--fingerprint] [--profile]
 
 The task's ``estimator:`` (null: the sensor's own, the default) is the estimator, as in a
@@ -53,6 +53,7 @@ import mujoco
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from controller.cli.support import add_override_argument, integer, run_tool
 from controller.run import Task, load_task
 from controller.tactile import TactileEstimator, estimator_for_sensor
 from core.devices import Pose
@@ -63,9 +64,7 @@ from drivers.sim.scenes.insertion.frames import S_IN_T
 from evaluation.bench.run_fingerprint import RunFingerprint
 from evaluation.bench.scene_pairs import check_checkout, print_pairs
 from evaluation.bench.scene_profile import part_clock, part_times, profile_call, top_functions
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.trials.batch_cli import add_override_argument
 
 RATE_HZ = 100.0
 TILT_RAD = 0.15  # the tilted approach's tilt, about the hole's y

@@ -14,7 +14,7 @@ tactile tap and the tick logger, as every trial); ``--view`` adds the teleop dem
 (its own process, fed by the episode writer, drawing each frame; headless with
 ``SDL_VIDEODRIVER=dummy``), so the loop's timing can be compared with and without them.
 
-Run: ``.venv/bin/python scripts/bench_loop.py [--duration-s 20] [--rate-hz 100]
+Run: ``.venv/bin/python -m evaluation bench_loop [--duration-s 20] [--rate-hz 100]
 [--rt-priority 50] [--episode] [--view]`` (SCHED_FIFO, ``loop.rt_priority``; needs
 CAP_SYS_NICE).
 """
@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import integer, number, run_tool
 from controller.episode.session import EpisodeRecording
 from controller.insertion.interface import Command, Observation, Phase, Transition
 from controller.loop import ControlLoop, LoopConfig, LoopResult, TickRecord
@@ -40,7 +41,6 @@ from core.config import CONFIG_ROOT
 from core.devices import Devices, Twist
 from core.sensor_profile import sensor_profile
 from drivers import registry
-from evaluation.common.cli_support import integer, number, run_tool
 from evaluation.common.machine_info import describe_machine
 
 MINI_MM_PER_PX = sensor_profile("gelsight_mini").mm_per_px

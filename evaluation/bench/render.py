@@ -7,7 +7,7 @@ occlusion) and with motion blur; then the stages of the plain coarse render, and
 spline renderer (``MarkerImageRenderer``) for comparison. The cases are timed in turn within
 each round, so a load change on the machine affects them alike.
 
-    python scripts/bench_render.py [--repeats 200]
+    python -m evaluation bench_render [--repeats 200]
 
 The script limits OpenMP, OpenBLAS and MKL to one thread before NumPy loads.
 """
@@ -40,7 +40,7 @@ STATIC_EFFECTS = ImageEffects(
     marker_dropout_fraction=0.1,
     occlusion_count=2,
 )
-from evaluation.common.cli_support import integer, run_tool  # noqa: E402
+from controller.cli.support import integer, run_tool  # noqa: E402
 
 N_FIELDS = 8
 

@@ -3,12 +3,13 @@ one seed at a time, each in a fresh process, the two sides alternating.
 
 A speed-up measured as "before" on one day and "after" on another mostly measures the
 machine's load, which moves CPU seconds too (other jobs share the caches and the memory
-bus). Here each seed runs ``scripts/bench_insertion_scene.py --runs 1 --seed S`` in this
+bus). Here each seed runs ``python -m evaluation bench_insertion_scene --runs 1 --seed S`` in this
 checkout and in the other one, back to back (this side first on even seeds, the other
 first on odd ones, so a drift in the load falls on both alike), each in its own process
 (so both pay the same first-run costs: imports are outside the timed part, the estimator's
 per-process constants inside it). The other checkout runs its own virtualenv's Python
-(``CHECKOUT/.venv/bin/python``, this one's if it has none) and its own script, so it must
+(``CHECKOUT/.venv/bin/python``, this one's if it has none) and its own benchmark (a checkout
+from before ``python -m evaluation``: its ``scripts/bench_insertion_scene.py``), so it must
 print the same table row: ``| seed | sim s | wall s | x real time | CPU s | x per CPU s |
 frames | depth mm |``. Reported per seed: both sides' speed per CPU second and per wall
 second and the ratio this / other per CPU second; then the medians, the median of the
@@ -26,9 +27,13 @@ from pathlib import Path
 
 import numpy as np
 
-from evaluation.common.cli_support import ToolError, one_line
+from controller.cli.support import ToolError, one_line
 
+TOOLS = Path("evaluation") / "tools.py"
+TOOL = ["-m", "evaluation", "bench_insertion_scene"]
+"""How a checkout with ``TOOLS`` runs the benchmark (its Python's arguments, in the checkout)."""
 SCRIPT = Path("scripts") / "bench_insertion_scene.py"
+"""The benchmark's script in a checkout from before ``TOOLS``."""
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -59,12 +64,22 @@ def checkout_python(checkout: Path) -> str:
     return str(own) if own.is_file() else sys.executable
 
 
+def benchmark_arguments(checkout: Path) -> list[str] | None:
+    """The arguments of ``checkout``'s Python that run its benchmark (in ``checkout``), or
+    None if it has none."""
+    if (checkout / SCRIPT).is_file():
+        return [str(checkout / SCRIPT)]
+    if (checkout / TOOLS).is_file():
+        return list(TOOL)
+    return None
+
+
 def check_checkout(checkout: Path) -> Path:
-    """``checkout`` resolved; ToolError unless it holds the benchmark's script."""
-    if not (checkout / SCRIPT).is_file():
+    """``checkout`` resolved; ToolError unless it holds the benchmark."""
+    if benchmark_arguments(checkout) is None:
         raise ToolError(
-            f"--against '{checkout}': no {SCRIPT} there; expected the root of another "
-            "checkout of this project (e.g. a git worktree at the base commit)"
+            f"--against '{checkout}': no {SCRIPT} there, nor {TOOLS}; expected the root of "
+            "another checkout of this project (e.g. a git worktree at the base commit)"
         )
     return checkout.resolve()
 
@@ -84,7 +99,8 @@ def parse_row(output: str, seed: int) -> SideRun:
 def run_side(checkout: Path, seed: int, options: Sequence[str]) -> SideRun:
     """One timed run of ``seed`` by ``checkout``'s benchmark in a fresh process (``options``:
     the task, ``--no-estimate``, overrides); ToolError naming the checkout if it fails."""
-    command = [checkout_python(checkout), str(checkout / SCRIPT), "--runs", "1", "--seed"]
+    arguments = benchmark_arguments(checkout) or [str(checkout / SCRIPT)]
+    command = [checkout_python(checkout), *arguments, "--runs", "1", "--seed"]
     done = subprocess.run(
         [*command, str(seed), *options], cwd=checkout, capture_output=True, text=True
     )

@@ -6,7 +6,7 @@ each frame: the worst case) and quiet frames (no evaluation), as median / p90 ov
 frames. Also times ``TactileEstimator.push`` on rendered frames with the detector enabled
 and disabled.
 
-    python scripts/bench_slip.py [--frames 2000] [--write docs/BENCHMARKS.md]
+    python -m evaluation bench_slip [--frames 2000] [--write docs/BENCHMARKS.md]
 
 ``--write`` replaces (or appends) the "## Slip detector" section of the file.
 """
@@ -22,14 +22,14 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import integer, run_tool
 from controller.tactile import TactileEstimator, VectorField, estimator_for_sensor
 from controller.tactile.field import grid_axes_mm
 from controller.tactile.nhhd import NHHD
 from controller.tactile.slip import SlipDetector
 from drivers.sim.render.marker_images import MarkerImageRenderer
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.common.outputs import check_output_file, write_text
 
 SECTION = "## Slip detector"
 
@@ -92,7 +92,7 @@ def report(update: dict[str, str], push: dict[str, str], frames: int) -> str:
     lines = [
         SECTION,
         "",
-        "Regenerate with `python scripts/bench_slip.py --write docs/BENCHMARKS.md`. "
+        "Regenerate with `python -m evaluation bench_slip --write docs/BENCHMARKS.md`. "
         f"Machine: {machine}. {frames} frames per detector case (a tenth of that per push "
         "case); the detector's budget is 0.2 ms per frame.",
         "",

@@ -11,7 +11,7 @@
    latency is from the unplug to the arm's ``stop()`` (the watchdog's safe stop), both on
    the run's clock. One control period (10 ms) is the bound the issue sets.
 
-Run: ``.venv/bin/python scripts/bench_teleop.py [--frames 500] [--runs 10]
+Run: ``.venv/bin/python -m evaluation bench_teleop [--frames 500] [--runs 10]
 [--rt-priority 50]`` (the demo's loop under SCHED_FIFO; needs CAP_SYS_NICE).
 """
 
@@ -25,12 +25,12 @@ from typing import Any
 
 import numpy as np
 
+from controller.cli import alignment_demo as demo_cli
+from controller.cli.support import ToolError, integer, run_tool
 from controller.run import load_task, run_task
 from core.sensor_profile import sensor_profile
 from drivers.sim.twins.gamepad import PadEvent
-from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.common.machine_info import describe_machine
-from evaluation.teleop import demo_cli
 
 UNPLUG_S = 4.0
 """When the pad is unplugged (s after the start; the grasp ends at about 2.3 s)."""

@@ -1,13 +1,13 @@
 """What whole simulated trials decided, one digest per seed, to show that a change (a
 speed-up, a refactor) leaves every trial's outcome as it was.
 
-    python scripts/trial_fingerprints.py --task usb_c|usb_a|PATH.yaml --seeds A:B
+    python -m evaluation trial_fingerprints --task usb_c|usb_a|PATH.yaml --seeds A:B
         [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
         [--set KEY=VALUE ...] [--out FILE.csv] [--against OTHER.csv]
-    python scripts/trial_fingerprints.py --compare BEFORE.csv AFTER.csv
+    python -m evaluation trial_fingerprints --compare BEFORE.csv AFTER.csv
 
 Each seed runs the trial tools' own path (``evaluation.trials.trial.run``, as
-``scripts/run_trial.py`` and the batch tools run it), as fast as possible, in this process,
+``tactile trial`` and the batch tools run it), as fast as possible, in this process,
 one after the other, writing nothing but this tool's table. A seed's row holds:
 
 * ``outcome``: a digest of everything the trial decided, the ``TrialResult``'s fields
@@ -28,11 +28,11 @@ the same task and controller (e.g. from another commit): it prints the seeds who
 ``outcome`` or ``truth`` differ, field by field, and the count of identical ones;
 ``--compare BEFORE.csv AFTER.csv`` does the same for two tables already written (AFTER's
 rows against BEFORE's), running no trial. Exit codes
-as every tool's (evaluation/common/cli_support.py): bad input is one line and exit 2; a
+as every tool's (controller/cli/support.py): bad input is one line and exit 2; a
 difference against ``OTHER.csv`` is reported, not an error (exit 0).
 
 Like the scene's benchmark it limits OpenMP, OpenBLAS and MKL to one thread before NumPy
-loads (``scripts/trial_fingerprints.py``) and OpenCV to one thread, so that the digests do
+loads (``python -m evaluation trial_fingerprints``) and OpenCV to one thread, so that the digests do
 not depend on the machine's cores.
 """
 
@@ -51,14 +51,14 @@ from typing import Any
 import cv2
 import numpy as np
 
+from controller.cli.outputs import atomic_text, check_output_file
+from controller.cli.support import ToolError, add_override_argument, run_tool
 from controller.insertion.interface import Transition
+from controller.run.result import TrialResult
 from controller.run.task import Task, load_task
-from evaluation.common.cli_support import ToolError, run_tool
-from evaluation.common.outputs import atomic_text, check_output_file
-from evaluation.trials.batch_cli import add_override_argument, seeds_type
+from evaluation.trials.batch_cli import seeds_type
 from evaluation.trials.guard import error_result
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
 from evaluation.trials.trial import raise_if_interrupted, run
 

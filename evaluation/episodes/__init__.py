@@ -1,3 +1,3 @@
-"""The episode tools (``scripts/replay.py``, docs/EPISODES.md "Tools"): an episode file's
-summary, chart, re-estimation, LeRobot v3.0 export and repair, on top of the product's reader
-(``controller.episode``)."""
+"""The LeRobot check of an episode export (lerobot_check, ``make check-lerobot``): the real
+``lerobot`` loads the export in its own environment. The episode tools themselves are the
+product's (``tactile replay``: controller/cli/replay.py, controller/replay/)."""

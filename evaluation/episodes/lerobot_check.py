@@ -4,10 +4,10 @@ LeRobot itself").
 
 Runs in the separate Python 3.12 environment that ``make check-lerobot`` makes (``lerobot``
 needs Python 3.12 and torch; the project does not import it), with the project's folder on
-``PYTHONPATH`` for scripts/check_lerobot.py's ``core.entry_point`` (standard library only); it
-imports nothing else of the project. For each ``--episode TASK=FRAMES`` (in episode order:
-the task sentence and the number of tactile frames its episode file holds) it checks,
-through ``LeRobotDataset``:
+``PYTHONPATH`` for ``python -m evaluation check_lerobot`` (evaluation/tools.py,
+core/subcommands.py, core/entry_point.py: standard library only); it imports nothing else of the
+project. For each ``--episode TASK=FRAMES`` (in episode order: the task sentence and the
+number of tactile frames its episode file holds) it checks, through ``LeRobotDataset``:
 
 * the episode has FRAMES rows (one per tactile frame: none dropped, none repeated),
   ``frame_index`` 0..FRAMES-1 and ``timestamp == frame_index / fps`` (within 1e-6 s);
@@ -19,7 +19,7 @@ through ``LeRobotDataset``:
 Prints a short report; exit 0 when every check passes, 1 when one fails, 2 (one line) for
 bad arguments or a dataset LeRobot cannot load.
 
-    PYTHONPATH=. .venv-lerobot/bin/python scripts/check_lerobot.py DIR \
+    PYTHONPATH=. .venv-lerobot/bin/python -m evaluation check_lerobot DIR \
         --episode "insert the usb_c plug=321" ...
 """
 

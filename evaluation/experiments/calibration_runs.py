@@ -11,12 +11,8 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controller.tactile import Calibration, estimator_for_sensor
-from controller.tactile.calibration import AxisFit
-from evaluation.common.rendering import make_renderer
-from evaluation.common.sim_setup import gel_model, jig_config
-from evaluation.offline.dataset import Dataset
-from evaluation.offline.dataset_fit import (
+from controller.offline.dataset import Dataset
+from controller.offline.dataset_fit import (
     TORQUE_AXES,
     EstimateSeries,
     calibration_from_fits,
@@ -24,6 +20,10 @@ from evaluation.offline.dataset_fit import (
     fit_dataset,
     segment_mask,
 )
+from controller.tactile import Calibration, estimator_for_sensor
+from controller.tactile.calibration import AxisFit
+from evaluation.common.rendering import make_renderer
+from evaluation.common.sim_setup import gel_model, jig_config
 from evaluation.offline.jig_dataset import paper_experiments, write_jig_dataset
 
 NOMINAL_AMPLITUDES_NM = (0.02, 0.04, 0.06)  # applied by the hand; each gel carries half

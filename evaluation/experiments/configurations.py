@@ -6,8 +6,8 @@ start, iterations, smoothness, the dipole's grid), and the DIS family around ``d
 (the default until session 6: flow preset, image scale, grey or per-channel, patch stride,
 variational refinement, divergence of the raw field or of its NHHD part, the dipole's grid,
 temporal filter) and cheaper Farneback settings. The grid stride is varied through the
-dipole's grid: with square blocks pooling is exact (tests/tactile/test_estimator.py), so a
-flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and ``DEFAULT`` are the labels of
+dipole's grid: with square blocks pooling is exact (tests/controller/tactile/test_estimator.py),
+so a flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and ``DEFAULT`` are the labels of
 the paper's and the Mini's default configuration."""
 
 from __future__ import annotations

@@ -26,15 +26,15 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.ticker import ScalarFormatter
 
-from controller.tactile import EstimatorConfig, TactileEstimator
-from core.sensor_profile import sensor_profile
-from evaluation.offline.dataset import Dataset
-from evaluation.offline.dataset_fit import (
+from controller.offline.dataset import Dataset
+from controller.offline.dataset_fit import (
     estimate_frames,
     fit_dataset,
     reference_frames,
     segment_mask,
 )
+from controller.tactile import EstimatorConfig, TactileEstimator
+from core.sensor_profile import sensor_profile
 from evaluation.realgel.check import Row, sequence_specs
 from evaluation.realgel.sequences import SequenceSpec
 from evaluation.realgel.textures import TEXTURES

@@ -1,6 +1,6 @@
 """How the tilt estimate behaves when a ball is pressed and rolled on the simulated gel.
 
-    python scripts/eval_press_roll.py [--methods default,paper] [--seed 0] [--noise-grey 2]
+    python -m evaluation eval_press_roll [--methods default,paper] [--seed 0] [--noise-grey 2]
         [--sensor gelsight_mini]
 
 The scene (drivers/sim/scenes/press_roll.py) presses a ball into the gel with a rising

@@ -1,6 +1,6 @@
 """Score the estimator's slip flags on the simulated gel (evaluation/experiments/slip_eval.py).
 
-    python scripts/eval_slip.py [--method NAME] [--grips 10,7,14] [--seed 11]
+    python -m evaluation eval_slip [--method NAME] [--grips 10,7,14] [--seed 11]
         [--noise-grey 1.0] [--objects plate,square_peg] [--quick] [--out SLIP.md]
 
 ``make evaluate`` runs the same evaluation and puts its tables in docs/EVALUATION.md; this
@@ -16,11 +16,8 @@ import sys
 import time
 from pathlib import Path
 
-from controller.tactile.settings import sensor_estimator
-from core.config import ConfigError
-from core.sensor_profile import sensor_profile
-from drivers.sim.gel.profile import SHAPES
-from evaluation.common.cli_support import (
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import (
     SEED,
     distinct,
     number,
@@ -29,8 +26,11 @@ from evaluation.common.cli_support import (
     resolved_config_path,
     run_tool,
 )
+from controller.tactile.settings import sensor_estimator
+from core.config import ConfigError
+from core.sensor_profile import sensor_profile
+from drivers.sim.gel.profile import SHAPES
 from evaluation.common.machine_info import cpu_model
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.experiments.slip_eval import GRIPS_N, OBJECTS, SENSOR, evaluate
 from evaluation.experiments.slip_tables import slip_tables
 

@@ -34,6 +34,7 @@ import cv2
 import matplotlib.pyplot as plt
 import numpy as np
 
+from controller.offline.dataset_fit import estimate_frames
 from controller.tactile import Calibration, TactileEstimator, estimator_for_sensor
 from drivers.sim.gel.model import Wrench
 from drivers.sim.render.image_effects import ImageEffects
@@ -43,7 +44,6 @@ from drivers.sim.scenes.jig import Experiment, JigConfig, JigGel, jig_program, t
 from evaluation.common.rendering import NOMINAL_EFFECTS, Appearance, make_renderer
 from evaluation.common.sim_setup import gel_model, jig_config
 from evaluation.experiments.slip_eval import INCIPIENT_SLIP_FRACTION, confusion
-from evaluation.offline.dataset_fit import estimate_frames
 
 SWEEP_AMPLITUDE_NM = 0.04
 ROTATION_CENTRE = "NHHD tau_z about its rotation centre"

@@ -1,6 +1,6 @@
 """Fit a task's calibration in its simulated scene (part of the task's set-up).
 
-    python scripts/calibrate_task.py --task usb_c [--seed 0] [--set KEY=VALUE ...]
+    python -m evaluation calibrate_task --task usb_c [--seed 0] [--set KEY=VALUE ...]
         --out configs/calibrations/usb_c.yaml
 
 Applies known wrenches to the grasped plug in the task's scene, records the estimator's raw
@@ -19,13 +19,12 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.cli.outputs import check_output_file, write_text
+from controller.cli.support import add_override_argument, integer, run_tool
+from controller.run.insertion_trial import MAX_SEED
 from controller.run.task import load_task
 from controller.tactile.calibration import Calibration
-from evaluation.common.cli_support import integer, run_tool
-from evaluation.common.outputs import check_output_file, write_text
 from evaluation.offline.scene_calibration import fit_scene_calibration, record_in_scene
-from evaluation.trials.batch_cli import add_override_argument
-from evaluation.trials.spec import MAX_SEED
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -2,10 +2,10 @@
 
 Renders a marker-gel image sequence (tilt about x, tilt about y, twist, shear; see
 drivers/sim/scenes/synthetic_sequence.py) into OUT/frames/, runs the offline estimator on it
-exactly as on a recording (evaluation/offline/estimate_cli.py), and writes OUT/estimates.csv,
+exactly as on a recording (controller/cli/estimate.py), and writes OUT/estimates.csv,
 OUT/truth.csv and OUT/estimates.png, then prints how well each estimate follows its pattern
 (correlation), for the dipole/NHHD estimates and the FingerVision baseline side by side.
-Run by ``make estimator-demo`` (scripts/demo.py).
+Run by ``make estimator-demo`` (python -m evaluation demo).
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.estimate import estimate_file
+from controller.cli.outputs import atomic_text, check_output_folder
+from controller.cli.support import SEED, resolved_config_path, run_tool
 from controller.tactile import estimator_for_sensor
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.synthetic_sequence import PHASES, demo_sequence
-from evaluation.common.cli_support import SEED, resolved_config_path, run_tool
-from evaluation.common.outputs import atomic_text, check_output_folder
-from evaluation.offline.estimate_cli import estimate_file
 from evaluation.offline.plotting import plot_series_against_truth
 
 SENSOR = "gelsight_mini"

@@ -1,5 +1,5 @@
 """Simulated calibration datasets: the jig scene rendered frame by frame into the dataset
-format of ``evaluation.offline.dataset`` (the same one a recording uses)."""
+format of ``controller.offline.dataset`` (the same one a recording uses)."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from typing import Protocol
 
 import numpy as np
 
+from controller.offline.dataset import DatasetMeta, DatasetWriter, Segment
 from drivers.sim.gel.model import GelModel
 from drivers.sim.scenes.jig import (
     Experiment,
@@ -20,7 +21,6 @@ from drivers.sim.scenes.jig import (
     jig_program,
     tactile_times,
 )
-from evaluation.offline.dataset import DatasetMeta, DatasetWriter, Segment
 
 
 class FrameRenderer(Protocol):

@@ -1,14 +1,14 @@
-"""Write a simulated calibration dataset (the jig scene; format: evaluation/offline/dataset.py).
+"""Write a simulated calibration dataset (the jig scene; format: controller/offline/dataset.py).
 
-    python scripts/make_dataset.py OUT [--sensor gelsight_mini|digit] [--object plate|
+    python -m evaluation make_dataset OUT [--sensor gelsight_mini|digit] [--object plate|
         square_peg|round_peg] [--axes x y z] [--amplitudes-nmm 20 40 60]
         [--frames-per-axis 12500] [--scene calibration_jig] [--seed 0]
 
-The paper's runs held about 12,500 frames per axis. Calibrate with scripts/calibrate.py OUT.
+The paper's runs held about 12,500 frames per axis. Calibrate with tactile calibrate OUT.
 OUT must not exist; it is checked (and every argument) before any work. The dataset is
 built in a hidden folder beside OUT and renamed to OUT only when complete: an error or an
 interruption leaves no OUT. Expected failures print one line ``make_dataset: error: ...``
-and exit with code 2; SIGINT and SIGTERM exit with 130 and 143 (evaluation/common/cli_support.py).
+and exit with code 2; SIGINT and SIGTERM exit with 130 and 143 (controller/cli/support.py).
 """
 
 from __future__ import annotations
@@ -17,9 +17,8 @@ import argparse
 import time
 from pathlib import Path
 
-from core.sensor_profile import sensor_profile
-from drivers.sim.gel.profile import SHAPES
-from evaluation.common.cli_support import (
+from controller.cli.outputs import check_output_folder
+from controller.cli.support import (
     SEED,
     ToolError,
     distinct,
@@ -28,7 +27,8 @@ from evaluation.common.cli_support import (
     resolved_config_path,
     run_tool,
 )
-from evaluation.common.outputs import check_output_folder
+from core.sensor_profile import sensor_profile
+from drivers.sim.gel.profile import SHAPES
 from evaluation.common.rendering import make_renderer
 from evaluation.common.sim_setup import gel_model, jig_config
 from evaluation.offline.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiments, write_jig_dataset

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from evaluation.common.outputs import atomic_file  # noqa: E402
+from controller.cli.outputs import atomic_file  # noqa: E402
 
 
 def plot_series_against_truth(

@@ -1,7 +1,7 @@
 """The checks of an estimate on a recording against its true program (issue 12, section 6).
 
 A recording (evaluation/real_recordings/recording_video.py) is estimated by
-``scripts/estimate.py``'s own code (evaluation/offline/estimate_cli.py ``estimate_file``,
+``tactile estimate``'s own code (controller/cli/estimate.py ``estimate_file``,
 zeroed on frame 0, no calibration: raw values), and the estimate's CSV is held against the
 truth CSV:
 
@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from evaluation.offline.estimate_cli import estimate_file
+from controller.cli.estimate import estimate_file
 from evaluation.real_recordings.recording_video import (
     VIDEO_SUFFIX,
     Truth,
@@ -76,7 +76,7 @@ class RecordingCheck:
 
 
 def read_estimate(path: Path) -> Estimate:
-    """The estimate CSV written by ``scripts/estimate.py``."""
+    """The estimate CSV written by ``tactile estimate``."""
     with open(path, newline="") as handle:
         rows = list(csv.DictReader(handle))
     torques = np.array([[float(r["tau_x"]), float(r["tau_y"]), float(r["tau_z"])] for r in rows])
@@ -150,7 +150,7 @@ def score(estimate: Estimate, truth: Truth, estimator: str, capture: str) -> Rec
 
 def check_recording(capture: str, folder: Path, estimator: str) -> RecordingCheck:
     """Estimate the recording ``folder/<capture>.mkv`` with ``estimator`` (a name of
-    configs/estimators or a YAML path) through ``scripts/estimate.py``'s code, writing
+    configs/estimators or a YAML path) through ``tactile estimate``'s code, writing
     ``folder/<capture>.<estimator>.csv``, and check it against ``folder/<capture>.csv``."""
     out_csv = folder / f"{capture}.{Path(estimator).stem}.csv"
     video = folder / f"{capture}{VIDEO_SUFFIX}"

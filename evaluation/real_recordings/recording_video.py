@@ -27,9 +27,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from controller.cli.outputs import atomic_text
 from drivers.sim.render.real_texture import real_gel_names
 from drivers.sim.scenes.press_tilt import PressTiltConfig, press_tilt_program, press_tilt_states
-from evaluation.common.outputs import atomic_text
 from evaluation.common.rendering import make_renderer
 from evaluation.common.sim_setup import gel_model
 

@@ -1,12 +1,12 @@
 """Render real-texture recordings and check estimators on them (issue 12, section 6).
 
-    python scripts/check_real_recordings.py [--estimators default,dis_half,paper]
+    python -m evaluation check_real_recordings [--estimators default,dis_half,paper]
         [--captures all] [--work out/real_recordings] [--seed 0] [--table FILE]
 
 For each capture of drivers/sim/render/real_gels/, the press-tilt-release program is rendered
 on it and written to WORK as ``<capture>.mkv`` with its truth ``<capture>.csv``
 (evaluation/real_recordings/recording_video.py); each estimator's estimate goes beside them as
-``<capture>.<estimator>.csv``, made by ``scripts/estimate.py``'s code, and is checked
+``<capture>.<estimator>.csv``, made by ``tactile estimate``'s code, and is checked
 (evaluation/real_recordings/recording_checks.py). The markdown table (estimator x capture)
 is printed, and written to ``--table`` when given. Exit code 0 when every check passed, 1
 when one failed, 2 for bad input (one line ``check_real_recordings: error: ...``).
@@ -17,11 +17,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from controller.cli.outputs import atomic_text, check_output_file
+from controller.cli.support import ToolError, run_tool
 from controller.tactile import estimator_for_sensor
 from core.sensor_profile import sensor_profile
 from drivers.sim.render.real_texture import real_gel_names
-from evaluation.common.cli_support import ToolError, run_tool
-from evaluation.common.outputs import atomic_text, check_output_file
 from evaluation.real_recordings.recording_checks import (
     QUIET_MAX,
     SIGN_FLOOR,

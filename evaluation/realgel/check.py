@@ -19,15 +19,15 @@ from dataclasses import asdict, dataclass, replace
 import cv2
 import numpy as np
 
-from controller.tactile.estimator import GridFlowFactory, TactileEstimator
-from controller.tactile.flow import make_grid_flow
-from controller.tactile.settings import EstimatorConfig
-from core.sensor_profile import sensor_profile
-from evaluation.offline.recording_support import (
+from controller.offline.recording_support import (
     FallbackChoice,
     recording_fallback,
     uses_recording,
 )
+from controller.tactile.estimator import GridFlowFactory, TactileEstimator
+from controller.tactile.flow import make_grid_flow
+from controller.tactile.settings import EstimatorConfig
+from core.sensor_profile import sensor_profile
 from evaluation.realgel.scoring import held_out_fit
 from evaluation.realgel.sequences import RenderedSequence, SequenceSpec, render
 from evaluation.realgel.textures import TEXTURES
@@ -198,7 +198,7 @@ def run_one(
     tilt, fv, seconds, degenerate, zero, slip = _push_all(
         estimator, sequence, axis, fps, divergences
     )
-    # Without the open gel, the offline tool's choice (scripts/estimate.py): estimated again
+    # Without the open gel, the offline tool's choice (tactile estimate): estimated again
     # about the contact's support found in the whole recording (recording_support.py).
     choice = recording_fallback(estimator, divergences or [], open_gel, flow)
     if choice is not None:

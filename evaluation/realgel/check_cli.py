@@ -1,6 +1,6 @@
 """The independent real-gel check: estimators on real gel textures deformed by a half-space.
 
-    python scripts/realgel_check.py [--estimators default,paper,dis_ultrafast,markers]
+    python -m evaluation realgel_check [--estimators default,paper,dis_ultrafast,markers]
         [--textures all|NAME,...] [--amplitudes 0.4] [--frames 160] [--seed 0]
         [--lighting 0] [--shading moves|fixed] [--contact centred|varied]
         [--open-gel both|with|without] [--oracle] [--quick] [--out REPORT.md] [--json ROWS.json]
@@ -142,7 +142,7 @@ def main(argv: list[str] | None = None) -> int:
     began = time.perf_counter()
     rows = run_check(specs, entries)
     seconds = time.perf_counter() - began
-    command = "python scripts/realgel_check.py " + " ".join(
+    command = "python -m evaluation realgel_check " + " ".join(
         argv if argv is not None else sys.argv[1:]
     )
     text = "\n".join(

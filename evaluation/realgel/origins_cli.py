@@ -1,6 +1,6 @@
 """The dipole's origin under pushing, scored on the true field (evaluation/realgel/origins.py).
 
-    python scripts/realgel_origins.py [--estimators default,paper] [--dipole-grids config]
+    python -m evaluation realgel_origins [--estimators default,paper] [--dipole-grids config]
         [--amplitudes 0.4] [--frames 160] [--seed 0]
 
 ``--dipole-grids``: "config" (each configuration's own), or comma-separated "COLSxROWS" /
@@ -63,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
     results = [
         (label, spec, origin_scores(spec, config)) for label, config in configs for spec in specs
     ]
-    command = "python scripts/realgel_origins.py " + " ".join(
+    command = "python -m evaluation realgel_origins " + " ".join(
         argv if argv is not None else sys.argv[1:]
     )
     lines = [

@@ -2,7 +2,7 @@
 stiffness: the sweep that brackets the wrist (docs/SIMULATION.md, "The compliant wrist").
 
 For each ``scene.wrist.tilt_stiffness_nm_rad`` value and each seed, one trial of the task
-with the controller (the product's run path, as ``scripts/run_trial.py`` runs it); from the
+with the controller (the product's run path, as ``tactile trial`` runs it); from the
 scene's truth, the sensing gel's true torques (tau_x, tau_y, tau_z of ``gel_wrench_s``,
 N*mm) over the SEARCH phase(s), each relative to its value when SEARCH began (what the
 machine's zeroed estimate can see), and the wrist's deflection at the plug's tip. Printed
@@ -10,7 +10,7 @@ as a Markdown table: per stiffness, the median over seeds of each torque's p95 a
 tip's largest lateral deflection, the outcome counts, and the lateral stiffness at the tip
 (tilt stiffness / lever^2, lever: pivot to tip).
 
-    python scripts/search_torques.py [--task usb_c] [--seeds 0:5]
+    python -m evaluation search_torques [--task usb_c] [--seeds 0:5]
         [--stiffness 0.5,5,15,45] [--controller dipole]
 """
 
@@ -21,9 +21,9 @@ from collections import Counter
 
 import numpy as np
 
+from controller.cli.support import number_list, run_tool
 from controller.insertion import Phase
 from controller.run import load_task
-from evaluation.common.cli_support import number_list, run_tool
 from evaluation.trials.spec import parse_seeds
 from evaluation.trials.trial import run
 

@@ -3,7 +3,7 @@
 captures with markers, against the ``realistic`` gel rendered with optical blurs of
 increasing sigma (the median over seeds 20-23, as the appearance fit's figure).
 
-    python scripts/sensor_levels.py [--blur 0,0.3,0.5,0.7]
+    python -m evaluation sensor_levels [--blur 0,0.3,0.5,0.7]
 """
 
 from __future__ import annotations
@@ -12,11 +12,11 @@ import argparse
 
 import numpy as np
 
+from controller.cli.support import number_list, run_tool
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.real_texture import load_capture
 from evaluation.appearance.stats import measure, table_rows
-from evaluation.common.cli_support import number_list, run_tool
 
 CAPTURES = ("gelsight_markers_a", "gelsight_markers_b")
 KEYS = ("marker edge 10-90 % px", "mean B", "mean G", "mean R", "noise")

@@ -1,2 +1,3 @@
-"""The teleoperated alignment demo (scripts/teleop_demo.py): its command line, its gamepad
-scripts and the manoeuvres' torque signs."""
+"""Pictures of the teleoperated alignment demo (``tactile teleop``,
+controller/cli/alignment_demo.py): the live view's screenshot at a moment of an episode and
+the manoeuvres' sign drawing."""

@@ -1,4 +1,4 @@
-"""``scripts/teleop_screenshot.py``: the live view's picture at a moment of a recorded
+"""``python -m evaluation teleop_screenshot``: the live view's picture at a moment of a recorded
 episode, drawn by the view's own code from the episode's streams.
 
     teleop_screenshot.py EPISODE --at T --out PICTURE.png
@@ -24,14 +24,14 @@ from typing import Any
 import numpy as np
 import yaml
 
+from controller.cli.outputs import check_output_file
+from controller.cli.support import ToolError, number, run_tool
 from controller.episode import EpisodeError, decode_image, grid_arrays, read_episode
 from controller.view.snapshot import ViewSnapshot
 from core.atomic_files import atomic_file
 from core.config import CONFIG_ROOT, resolve_config_path
 from core.sensor_profile import sensor_profile
 from drivers import registry
-from evaluation.common.cli_support import ToolError, number, run_tool
-from evaluation.common.outputs import check_output_file
 
 
 def _warn(message: str) -> None:

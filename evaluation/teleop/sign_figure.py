@@ -1,5 +1,6 @@
-"""``scripts/teleop_sign_figure.py``: the drawing of the alignment demo's two manoeuvres and
-the signs of the tilt torques they give (docs/figures/teleop_signs.png, docs/TELEOP.md).
+"""``python -m evaluation teleop_sign_figure``: the drawing of the alignment demo's two
+manoeuvres and the signs of the tilt torques they give (docs/figures/teleop_signs.png,
+docs/TELEOP.md).
 
     teleop_sign_figure.py --out docs/figures/teleop_signs.png
 """
@@ -16,8 +17,8 @@ import matplotlib.patches as patches  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 
+from controller.cli.support import ToolError, run_tool  # noqa: E402
 from core.atomic_files import atomic_file  # noqa: E402
-from evaluation.common.cli_support import ToolError, run_tool  # noqa: E402
 
 BOARD = "#b0a58f"
 PLUG = "#6a7fa8"

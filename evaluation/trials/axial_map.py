@@ -1,5 +1,5 @@
 """The touch spiral's axial-force map (``touch_spiral.axial_weights``), fitted on recorded
-trials against the simulator's truth (``scripts/fit_axial_map.py``).
+trials against the simulator's truth (``python -m evaluation fit_axial_map``).
 
 Each trial record (``run_trials.py --records``: ticks.jsonl and truth.npz) gives one
 sample per new tactile frame while the machine searches or pushes (SEARCH, INSERT): the
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError
 from controller.insertion.force_reading import AXIAL_TERMS, axial_terms
-from evaluation.common.cli_support import ToolError
 
 PHASES = ("search", "insert")  # the phases whose frames are samples
 

@@ -1,4 +1,4 @@
-"""``scripts/fit_axial_map.py``: the touch spiral's axial-force map, fitted on recorded
+"""``python -m evaluation fit_axial_map``: the touch spiral's axial-force map, fitted on recorded
 trials (evaluation/trials/axial_map.py).
 
     fit_axial_map.py --fit RECORD [RECORD ...] --check RECORD [RECORD ...]
@@ -19,10 +19,10 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError, run_tool
 from controller.insertion.force_reading import AXIAL_TERMS
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import TouchSpiralConfig
-from evaluation.common.cli_support import ToolError, run_tool
 from evaluation.trials.axial_map import fit_weights, joined, record_samples, rms_error_n
 
 

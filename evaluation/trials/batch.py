@@ -44,8 +44,9 @@ from typing import Any, TextIO
 
 from tqdm import tqdm
 
-from evaluation.common.cli_support import Terminated, ToolError, one_line
-from evaluation.common.outputs import atomic_file, check_output_folder, write_text
+from controller.cli.outputs import atomic_file, check_output_folder, write_text
+from controller.cli.support import Terminated, ToolError, one_line
+from controller.run.result import TrialResult
 from evaluation.trials.executors import Executor
 from evaluation.trials.records import (
     RECORDS,
@@ -53,7 +54,6 @@ from evaluation.trials.records import (
     keep_record,
     kept_record,
 )
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 from evaluation.trials.stop_signals import StopSignals
 from evaluation.trials.summary import summarize

@@ -1,6 +1,6 @@
 """A batch of simulated insertion trials on consecutive seeds, locally or on Ray.
 
-    python scripts/run_trials.py --task usb_c --seeds 0:200 --out out/trials/usb_c
+    tactile trials --task usb_c --seeds 0:200 --out out/trials/usb_c
         [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle] [--workers N]
         [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records] [--episodes]
         [--resume]
@@ -41,11 +41,11 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from core.config import ConfigError, parse_override
-from evaluation.common.cli_support import (
+from controller.cli.support import (
     EXIT_SIGINT,
     EXIT_SIGTERM,
     ToolError,
+    add_override_argument,
     integer,
     one_line,
     run_tool,
@@ -83,27 +83,6 @@ def seeds_type(text: str) -> range:
         return parse_seeds(text)
     except SpecError as exc:
         raise argparse.ArgumentTypeError(str(exc).removeprefix("seeds ")) from None
-
-
-def _override(text: str) -> str:
-    try:
-        parse_override(text)
-    except ConfigError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
-
-
-def add_override_argument(parser: argparse.ArgumentParser, help_text: str) -> None:
-    """``--set KEY=VALUE`` (repeatable, into ``overrides``), each checked as it is parsed."""
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        metavar="KEY=VALUE",
-        type=_override,
-        action="append",
-        default=[],
-        help=help_text,
-    )
 
 
 def add_run_arguments(parser: argparse.ArgumentParser) -> None:

@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from evaluation.common.outputs import atomic_file
+from controller.cli.outputs import atomic_file
 
 DPI = 90
 DODGE = 0.012  # relative horizontal shift between controllers, so equal points stay visible

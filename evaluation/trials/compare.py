@@ -1,6 +1,6 @@
 """Controllers compared side by side on the same seeds, across insertion speed settings.
 
-    python scripts/compare_trials.py --task usb_c --seeds 0:200 --out out/compare/usb_c
+    tactile compare --task usb_c --seeds 0:200 --out out/compare/usb_c
         [--controllers dipole,fingervision,zero_torque,torque_only,blind,oracle]
         [--speeds 0.002,0.004,0.008]
         [--speed-key machine.insert.speed_m_s] [--workers N] [--executor local|ray]
@@ -39,9 +39,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from controller.cli.outputs import write_text
+from controller.cli.support import ToolError, distinct, number_list, run_tool
 from core.config import ConfigError, parse_override
-from evaluation.common.cli_support import ToolError, distinct, number_list, run_tool
-from evaluation.common.outputs import write_text
 from evaluation.trials.batch import Batch, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,
@@ -325,7 +325,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _command(args: argparse.Namespace) -> str:
     parts = [
-        "python scripts/compare_trials.py",
+        "tactile compare",
         f"--task {args.task}",
         f"--seeds {format_seeds(args.seeds)}",
         f"--controllers {','.join(args.controllers)}",

@@ -1,4 +1,5 @@
-"""Which of the scene's per-seed draws a batch's failures share (``scripts/draw_failures.py``).
+"""Which of the scene's per-seed draws a batch's failures share (``python -m evaluation
+draw_failures``).
 
     draw_failures.py OUT [--bins N]
 
@@ -39,10 +40,10 @@ from pathlib import Path
 
 import numpy as np
 
+from controller.cli.support import ToolError, integer, run_tool
 from controller.run.task import load_task
 from core.task_geometry import HolePose
 from drivers.sim.scenes.insertion.draws import SceneDraw, draw_scene
-from evaluation.common.cli_support import ToolError, integer, run_tool
 from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_batch
 from evaluation.trials.compare import CELLS
 

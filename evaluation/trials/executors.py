@@ -22,10 +22,10 @@ from itertools import islice
 from types import TracebackType
 from typing import Protocol
 
+from controller.run.result import TrialResult
 from evaluation.common.machine_info import one_thread_env
 from evaluation.common.worker_processes import kill_pool, worker_pool
 from evaluation.trials.guard import error_result, guarded
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
 EXECUTORS = ("local", "ray")

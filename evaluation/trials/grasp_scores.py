@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from evaluation.trials.result import TrialResult
+from controller.run.result import TrialResult
 
 
 def _stats(values: Sequence[float], scale: float) -> dict[str, float] | None:

@@ -6,8 +6,8 @@ from __future__ import annotations
 import math
 import time
 
-from evaluation.common.cli_support import one_line
-from evaluation.trials.result import TrialResult
+from controller.cli.support import one_line
+from controller.run.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
 

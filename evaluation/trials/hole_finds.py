@@ -1,5 +1,5 @@
 """Where the plug's tip really was each time SEARCH declared the hole found, and what the
-press that followed did: the diagnosis of false hole finds (``scripts/hole_finds.py``).
+press that followed did: the diagnosis of false hole finds (``python -m evaluation hole_finds``).
 
 The controller never sees this: it is read from the simulator's truth after the trial. The
 tip is the centre of the plug's tip face, in the opening's frame O (origin at the true

@@ -1,5 +1,5 @@
-"""``scripts/hole_finds.py``: where the tip really was at each hole find, and how the press
-that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
+"""``python -m evaluation hole_finds``: where the tip really was at each hole find, and how
+the press that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
 
     hole_finds.py --task usb_c|usb_a|PATH.yaml --seeds A:B [--workers N] [--set KEY=VALUE ...]
 
@@ -15,11 +15,11 @@ from __future__ import annotations
 import argparse
 from functools import partial
 
+from controller.cli.support import add_override_argument, integer, run_tool
 from controller.run.task import load_task
-from evaluation.common.cli_support import integer, run_tool
 from evaluation.common.machine_info import one_thread_env
 from evaluation.common.worker_processes import kill_pool, ordered_map, worker_pool
-from evaluation.trials.batch_cli import MAX_WORKERS, add_override_argument, seeds_type
+from evaluation.trials.batch_cli import MAX_WORKERS, seeds_type
 from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_finds
 
 

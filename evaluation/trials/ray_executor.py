@@ -20,9 +20,9 @@ from itertools import islice
 from types import TracebackType
 from typing import Any
 
-from evaluation.common.cli_support import ToolError, one_line
+from controller.cli.support import ToolError, one_line
+from controller.run.result import TrialResult
 from evaluation.trials.guard import error_result, guarded
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialFunction, TrialSpec
 
 

@@ -15,7 +15,7 @@ import os
 import shutil
 from pathlib import Path
 
-from evaluation.common.cli_support import ToolError
+from controller.cli.support import ToolError
 
 RECORDS = "records"
 PARTIAL = ".partial"

@@ -19,12 +19,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import overload
 
-from evaluation.common.cli_support import ToolError
+from controller.cli.support import ToolError
+from controller.run.insertion_trial import MAX_SEED
+from controller.run.result import TrialResult
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.records import unfinished_record
-from evaluation.trials.result import TrialResult
-
-MAX_SEED = 2**32 - 1
 
 
 class SpecError(ToolError, ValueError):

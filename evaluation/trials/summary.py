@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from scipy.stats import binomtest
 
+from controller.run.result import TrialResult
 from evaluation.trials.grasp_scores import grasp_estimate_summary
-from evaluation.trials.result import TrialResult
 
 CONFIDENCE = 0.95
 

@@ -1,46 +1,35 @@
-"""One insertion trial: a run of the product's run path (``controller.run.run_task``),
+"""One simulated insertion trial: a run of the product's trial (``controller.run.insertion_trial``),
 scored against the simulator's truth.
 
 ``run_trial(spec)`` is the batch's trial function (evaluation/trials/spec.py); ``run(...)``
-is what ``scripts/run_trial.py`` calls. The controller sees only what the devices give
+is what ``tactile trial`` calls in simulation. The controller sees only what the devices give
 (rendered tactile frames, the arm's and the gripper's status); the scene's truth goes to the
-record (``truth.npz``) and to the outcome, and, for the ``oracle`` controller only, in place
-of the estimate (evaluation/trials/oracle.py). On the real backend the same run path runs
-on the robot, and the outcome is the machine's (no truth).
+record (``truth.npz``), to the episode (``/sim/`` topics) and to the outcome, and, for the
+``oracle`` controller only, in place of the estimate (evaluation/trials/oracle.py). With
+``backend="real"`` the same run runs on the robot, and the outcome is the machine's (no
+truth).
 """
 
 from __future__ import annotations
 
 import dataclasses
-import json
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from controller.episode.session import EPISODE_FILE, EpisodeOptions, EpisodeRecording
+from controller.cli.support import Terminated
+from controller.episode.session import EpisodeOptions, EpisodeRecording
 from controller.insertion import Phase
-from controller.loop import LoopResult
-from controller.run import RunOutcome, Task, load_task, run_task
+from controller.replay.trial_chart import write_trial_chart
+from controller.run import RunOutcome, Task, load_task
+from controller.run import insertion_trial as product_trial
+from controller.run.insertion_trial import TrialOutcome
+from controller.run.result import TrialResult
 from core.atomic_files import atomic_file
-from evaluation.common.cli_support import Terminated
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
-from evaluation.trials.trial_chart import write_trial_chart
-
-
-@dataclass(frozen=True)
-class TrialOutcome:
-    """A finished trial: its ``result``, the loop's, the machine's transitions and, in
-    simulation, the ground truth arrays (None on hardware)."""
-
-    result: TrialResult
-    loop: LoopResult
-    transitions: tuple
-    truth: dict[str, np.ndarray] | None
 
 
 def check_spec(spec: TrialSpec) -> None:
@@ -78,67 +67,42 @@ def run(
     episode: EpisodeOptions | None = None,
     **run_options: Any,
 ) -> TrialOutcome:
-    """Run one trial of ``task`` with ``controller`` (see the module doc): the product's
-    ``run_task`` with the trial tools' controllers (the oracle too) and the same
-    ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored against
-    the simulated world's truth; ``out_dir``: the run's record, with ``truth.npz`` and the
-    trial's summary in ``trial.json``; ``episode``: also write ``out_dir/episode.mcap``
-    (docs/EPISODES.md) with these options, the truth on ``/sim/`` topics in simulation and
-    the trial's result in its outcome."""
-    if episode is None:
-        return _run(task, controller, seed, out_dir, None, run_options)
-    if out_dir is None:
-        raise ValueError("episode: a trial writes its episode into out_dir; give one")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    recording = EpisodeRecording(
-        out_dir / EPISODE_FILE,
-        task.raw,
-        task=task.config.task,
-        task_file=task.path,
-        overrides=task.overrides,
-        seed=seed,
-        controller=controller,
-        backend=run_options.get("backend", "sim"),
-        options=episode,
-        calibration=task.calibration,
+    """Run one trial of ``task`` with ``controller`` (see the module doc): the product's trial
+    (``controller.run.insertion_trial.run``) with the trial tools' controllers (the oracle too)
+    and the same ``run_options`` (``backend``, ``realtime``, ``observers``, ``prepare``), scored
+    against the simulated world's truth; ``out_dir``: the run's record, with ``truth.npz``
+    and the trial's summary in ``trial.json``; ``episode``: also write
+    ``out_dir/episode.mcap`` (docs/EPISODES.md) with these options, the truth on ``/sim/``
+    topics in simulation and the trial's result in its outcome."""
+    return product_trial.run(
+        task,
+        controller,
+        seed,
+        out_dir=out_dir,
+        episode=episode,
+        controllers=TRIAL_CONTROLLERS,
+        scoring=SimTruthScoring(),
+        **run_options,
     )
-    try:
-        outcome = _run(task, controller, seed, out_dir, recording, run_options)
-    except BaseException as error:
-        recording.close({"error": f"{type(error).__name__}: {error}"})
-        raise
-    recording.close(episode_outcome(outcome))
-    return outcome
 
 
-def episode_outcome(outcome: TrialOutcome) -> dict[str, str]:
-    """The episode's ``outcome`` metadata of a finished trial."""
-    loop = outcome.loop
-    return {
-        "reason": loop.reason,
-        "message": loop.message,
-        "phase": loop.phase.value,
-        "result": json.dumps(outcome.result.as_row(), default=str),
-        "error": "",
-    }
+class SimTruthScoring:
+    """A simulated trial scored against the world's truth (``controller.run.insertion_trial``'s
+    ``TruthScoring``): with an episode, the truth goes to its ``/sim/`` topics each tick."""
 
+    def __init__(self) -> None:
+        self.truth_logger: Any = None
 
-def _run(
-    task: Task,
-    controller: str,
-    seed: int,
-    out_dir: Path | None,
-    recording: EpisodeRecording | None,
-    run_options: dict[str, Any],
-) -> TrialOutcome:
-    truth_logger = None
-    if recording is not None and run_options.get("backend", "sim") == "sim":
+    def run_options(
+        self, recording: EpisodeRecording | None, run_options: dict[str, Any]
+    ) -> dict[str, Any]:
+        if recording is None:
+            return run_options
         # imported here: the truth's columns come from the simulator, which a real run
         # never loads
         from evaluation.trials.episode_truth import SimTruthLogger
 
-        truth_logger = SimTruthLogger(recording)
-    if truth_logger is not None:
+        truth_logger = self.truth_logger = SimTruthLogger(recording)
         prepare = run_options.pop("prepare", None)
 
         def prepare_and_attach(device_set: Any) -> None:
@@ -146,35 +110,24 @@ def _run(
             if prepare is not None:
                 prepare(device_set)
 
-        run_options = {
+        return {
             **run_options,
             "prepare": prepare_and_attach,
             "observers": [*run_options.get("observers", ()), truth_logger],
         }
-    ran = run_task(
-        task,
-        controller,
-        seed,
-        out_dir=out_dir,
-        controllers=TRIAL_CONTROLLERS,
-        episode=recording,
-        **run_options,
-    )
-    world = ran.devices.world
-    if world is None:
-        result = _result_on_hardware(task, controller, seed, ran)
-        truth = None
-    else:
+
+    def score(
+        self, task: Task, controller: str, seed: int, ran: RunOutcome, out_dir: Path | None
+    ) -> tuple[TrialResult, dict[str, np.ndarray]]:
+        world = ran.devices.world
         world.sync()
         truth = world.truth.arrays()
         result = _result(task, controller, seed, ran, truth)
-        if truth_logger is not None:
-            truth_logger.drain()
+        if self.truth_logger is not None:
+            self.truth_logger.drain()
         if out_dir is not None:
             write_truth(out_dir, truth, dataclasses.asdict(world.truth.hole))
-    if ran.recorder is not None:
-        ran.recorder.write_summary(_summary(task, controller, seed, result, ran))
-    return TrialOutcome(result, ran.loop, ran.transitions, truth)
+        return result, truth
 
 
 def write_truth(folder: Path, truth: dict[str, np.ndarray], hole: dict[str, float]) -> None:
@@ -260,44 +213,4 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
         "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
         "tip_x_true_m": float(truth.tip_t_m[0]),
         "tip_y_true_m": float(truth.tip_t_m[1]),
-    }
-
-
-def _result_on_hardware(task, controller, seed, ran: RunOutcome) -> TrialResult:
-    """The machine's own outcome (no truth on hardware; ``seed`` is recorded only)."""
-    success = ran.machine.phase is Phase.DONE
-    failed = [tr.reason for tr in ran.transitions if tr.target is Phase.FAILED]
-    return TrialResult(
-        task=task.config.task,
-        controller=controller,
-        seed=seed,
-        success=success,
-        status="inserted" if success else "failed",
-        failure_reason=None if success else (failed[-1] if failed else ran.loop.reason),
-        time_to_insert_s=None,
-        duration_s=ran.wall_s,
-        max_wrist_force_n=float("nan"),
-        force_limit_n=task.config.force_limit_n,
-        wall_time_s=ran.wall_s,
-        max_contact_force_n=float("nan"),
-        p99_contact_force_n=float("nan"),
-        contact_force_limit_n=task.config.contact_force_limit_n,
-    )
-
-
-def _summary(task, controller, seed, result, ran: RunOutcome) -> dict[str, Any]:
-    loop = ran.loop
-    return {
-        "task": task.config.task,
-        "task_file": str(task.path),
-        "overrides": list(task.overrides),
-        "controller": controller,
-        "seed": seed,
-        "result": result.as_row(),
-        "loop": {"reason": loop.reason, "message": loop.message, **dataclasses.asdict(loop.stats)},
-        "transitions": [
-            {"t_s": tr.t_s, "from": tr.source.value, "to": tr.target.value, "reason": tr.reason}
-            for tr in ran.transitions
-        ],
-        "config": task.raw,
     }

@@ -1,5 +1,5 @@
 """Where a batch's trials spend their time, rule by rule, and where its failures end
-(``scripts/where_time_goes.py OUT``).
+(``python -m evaluation where_time_goes OUT``).
 
 OUT is a ``run_trials --records`` folder (its ``records/<controller>-<seed>/``) or one
 trial's record (``run_trial --out``). Each record's ``trial.json`` and ``ticks.jsonl``
@@ -25,7 +25,7 @@ from itertools import pairwise
 from pathlib import Path
 from statistics import median
 
-from evaluation.common.cli_support import ToolError, number, run_tool
+from controller.cli.support import ToolError, number, run_tool
 from evaluation.trials.records import RECORDS
 
 TRIAL_NAME = "trial.json"

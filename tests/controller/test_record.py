@@ -46,7 +46,7 @@ def test_a_run_whose_record_cannot_be_written_stops_safely(tmp_path):
         import resource, signal, sys
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
         resource.setrlimit(resource.RLIMIT_FSIZE, (200_000, 200_000))
-        from evaluation.trials.trial_cli import main
+        from controller.cli.trial_cli import main
         sys.exit(main(sys.argv[1:]))
     """)
     out = tmp_path / "trial"

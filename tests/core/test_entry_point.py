@@ -155,7 +155,7 @@ def test_an_import_error_of_its_own_is_still_a_traceback(tmp_path):
 
 def test_a_reader_that_leaves_early_ends_the_tool_quietly(tmp_path):
     (tmp_path / "chatty_tool.py").write_text(
-        "from evaluation.common.cli_support import run_tool\n"
+        "from controller.cli.support import run_tool\n"
         "def main():\n"
         "    return run_tool('chatty', lambda: [print('line', i) for i in range(100000)] and 0)\n"
     )

@@ -1,4 +1,4 @@
-"""scripts/check_hardware.py (drivers/check_hardware.py) as a user runs it: one line per
+"""tactile check-hardware (drivers/check_hardware.py) as a user runs it: one line per
 device, exit 0/1/2."""
 
 from __future__ import annotations

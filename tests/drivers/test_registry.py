@@ -197,11 +197,11 @@ SIM_ONLY = textwrap.dedent(
             READS[spec.kind](device)
         print(spec.kind, type(device).__name__)
 
-    sys.argv = ["check_hardware", *sys.argv[2:]]
+    sys.argv = ["tactile", "check-hardware", *sys.argv[2:]]
     import runpy
 
     try:
-        runpy.run_path("scripts/check_hardware.py", run_name="__main__")
+        runpy.run_module("controller.cli.command", run_name="__main__", alter_sys=True)
     except SystemExit as end:
         print("check_hardware exit", end.code)
     print("loaded:", sorted({m.partition(".")[0] for m in sys.modules} & BLOCKED))

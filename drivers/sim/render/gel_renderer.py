@@ -1,5 +1,5 @@
 """Fast seeded marker-gel images for the simulated tactile camera (about 1-2 ms per 320 x 240
-frame on one core; ``python scripts/bench_render.py`` measures it).
+frame on one core; ``python -m evaluation bench_render`` measures it).
 
 The image is the gel of the chosen appearance (drivers/sim/render/appearance.py: the original
 ``speckle`` gel of drivers/sim/render/gel_pattern.py by default, a ``realistic`` gel fitted to

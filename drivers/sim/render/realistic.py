@@ -2,7 +2,7 @@
 
 ``RealisticLook`` holds the numbers; ``REALISTIC`` is fitted to the two GelSight captures
 with markers, ``REALISTIC_DIGIT`` to the two DIGIT captures (drivers/sim/render/real_gels/).
-They were fitted by ``python scripts/fit_appearance.py`` (evaluation/appearance/fit.py):
+They were fitted by ``python -m evaluation fit_appearance`` (evaluation/appearance/fit.py):
 starting from a guess, it renders the look with a few seeds, measures the rendered frames
 with the same statistics as the captures (evaluation/appearance/stats.py), and scales each
 parameter by the ratio of the captures' statistic to the rendered one, eight times over.
@@ -74,7 +74,7 @@ REALISTIC = RealisticLook(
     light_correlation_bg_br_gr=(-0.7194, -0.09037, -0.5199),
     light_scale_px=100.0,
 )
-"""Fitted to gelsight_markers_a and _b (``python scripts/fit_appearance.py realistic``)."""
+"""Fitted to gelsight_markers_a and _b (``python -m evaluation fit_appearance realistic``)."""
 
 REALISTIC_DIGIT = RealisticLook(
     marker_diameter_px=11.66,
@@ -87,6 +87,6 @@ REALISTIC_DIGIT = RealisticLook(
     light_correlation_bg_br_gr=(-0.2279, 0.6662, -0.0158),
     light_scale_px=100.0,
 )
-"""Fitted to digit_background_a and _b, which have no markers (``python
-scripts/fit_appearance.py realistic_digit``); its marker numbers are REALISTIC's, for a DIGIT
-gel given printed markers."""
+"""Fitted to digit_background_a and _b, which have no markers (``python -m
+evaluation fit_appearance realistic_digit``); its marker numbers are REALISTIC's, for a
+DIGIT gel given printed markers."""

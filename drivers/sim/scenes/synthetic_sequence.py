@@ -35,7 +35,8 @@ class SyntheticFrame:
 
 
 def _charge(xs: np.ndarray, ys: np.ndarray, cx: float, cy: float, width: float) -> np.ndarray:
-    """Unit-peak field of a Gaussian charge at (cx, cy) px (see tests/tactile/fields.py)."""
+    """Unit-peak field of a Gaussian charge at (cx, cy) px (see
+    tests/controller/tactile/fields.py)."""
     dx, dy = xs - cx, ys - cy
     r2 = np.maximum(dx**2 + dy**2, 1e-9)
     k = -np.expm1(-r2 / (2 * width**2)) / r2

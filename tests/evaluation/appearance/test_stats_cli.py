@@ -1,4 +1,4 @@
-"""The appearance statistics tool as a user runs it: python scripts/gel_stats.py ..."""
+"""The appearance statistics tool as a user runs it: python -m evaluation gel_stats ..."""
 
 import json
 import subprocess
@@ -84,7 +84,7 @@ def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):
 def test_the_script_runs_as_a_user_runs_it(tmp_path):
     capture = REAL_GELS_DIR / "gelsight_markers_a.png"
     result = subprocess.run(
-        [sys.executable, str(ROOT / "scripts" / "gel_stats.py"), str(capture)],
+        [sys.executable, "-m", "evaluation", "gel_stats", str(capture)],
         capture_output=True,
         text=True,
         cwd=tmp_path,

@@ -8,9 +8,9 @@ from pathlib import Path
 
 import pytest
 
+from controller.cli.support import ToolError
 from evaluation.bench.insertion_scene import main
 from evaluation.bench.scene_pairs import SCRIPT, SideRun, paired_runs, parse_row, run_side
-from evaluation.common.cli_support import ToolError
 
 TABLE = """Machine: x
 | seed | sim s | wall s | x real time | CPU s | x per CPU s | frames | depth mm |

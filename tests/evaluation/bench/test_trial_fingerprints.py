@@ -10,9 +10,9 @@ import pytest
 
 from controller.insertion import Phase
 from controller.insertion.interface import Transition
+from controller.run.result import TrialResult
 from evaluation.bench import trial_fingerprints
 from evaluation.bench.trial_fingerprints import COLUMNS, compare, main, outcome_digest, read_table
-from evaluation.trials.result import TrialResult
 
 SHORT = ["--set", "machine.timeouts.total_s=6.0"]  # grasp and the start of the approach only
 

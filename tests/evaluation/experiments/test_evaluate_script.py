@@ -1,4 +1,5 @@
-"""scripts/evaluate.py --quick end to end (slow: about a minute), and make_dataset's errors."""
+"""python -m evaluation evaluate --quick end to end (slow: about a minute), and
+make_dataset's errors."""
 
 import pytest
 

@@ -14,14 +14,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from controller.cli.calibrate import main as calibrate_main
+from controller.cli.estimate import main as estimate_main
 from controller.tactile.calibration import AxisFit, Calibration, estimator_sha256
 from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
 from drivers.sim.scenes.jig import Experiment
 from evaluation.common.rendering import make_renderer
 from evaluation.common.sim_setup import gel_model, jig_config
-from evaluation.offline.calibrate_cli import main as calibrate_main
-from evaluation.offline.estimate_cli import main as estimate_main
 from evaluation.offline.jig_dataset import write_jig_dataset
 from tests.video_faults import write_mjpg
 

@@ -1,4 +1,4 @@
-"""Dataset format round trip, its errors, and scripts/calibrate.py on a small simulated jig
+"""Dataset format round trip, its errors, and tactile calibrate on a small simulated jig
 dataset."""
 
 import os
@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 import yaml
 
+from controller.cli.calibrate import main as calibrate_main
+from controller.offline.dataset import META, Dataset, DatasetMeta, DatasetWriter
 from controller.tactile.calibration import Calibration
 from controller.tactile.settings import sensor_estimator
 from core.config import ConfigError
@@ -19,8 +21,6 @@ from core.sensor_profile import sensor_profile
 from drivers.sim.render.marker_images import MarkerImageRenderer
 from drivers.sim.scenes.jig import Experiment
 from evaluation.common.sim_setup import gel_model, jig_config
-from evaluation.offline.calibrate_cli import main as calibrate_main
-from evaluation.offline.dataset import META, Dataset, DatasetMeta, DatasetWriter
 from evaluation.offline.jig_dataset import write_jig_dataset
 from evaluation.offline.make_dataset_cli import main as make_dataset_main
 from tests.conftest import made_once
@@ -248,7 +248,7 @@ def test_an_axis_whose_segments_cannot_be_fitted_is_an_error(copy, capsys):
     ],
 )
 def test_calibrate_checks_out_before_any_work(copy, tmp_path, capsys, monkeypatch, out, message):
-    import evaluation.offline.calibrate_cli as cli
+    import controller.cli.calibrate as cli
 
     monkeypatch.setattr(cli, "estimate_dataset", lambda *a: pytest.fail("work began"))
     before = (copy / META).read_bytes()
@@ -371,9 +371,9 @@ def test_make_dataset_checks_out_before_any_work(tmp_path, capsys, monkeypatch, 
 def test_zeroed_on_the_grasp_the_estimator_sees_the_open_gel(dataset_folder, monkeypatch):
     """A dataset with an ``open`` interval hands its frames to the estimator as the open gel
     (before the grasp reference); zeroed on the open interval itself it does not."""
+    from controller.offline.dataset_fit import estimate_dataset
     from controller.tactile import estimator_for_sensor
     from controller.tactile.estimator import TactileEstimator
-    from evaluation.offline.dataset_fit import estimate_dataset
 
     dataset = Dataset(dataset_folder)
     seen = []

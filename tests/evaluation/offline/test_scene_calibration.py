@@ -1,5 +1,6 @@
 """The calibration fitted in a task's scene (evaluation/offline/scene_calibration.py,
-scripts/calibrate_task.py) and the task's check of it (controller/run/task_calibration.py):
+python -m evaluation calibrate_task) and the task's check of it
+(controller/run/task_calibration.py):
 a source of known gain is recovered; the product's estimator gives the dipole's and the
 FingerVision baseline's in-plane torques one sign for one twist; a calibration fitted for
 another grasp, estimator or sensor is refused in one line."""
@@ -102,7 +103,7 @@ def test_a_calibration_for_another_grasp_or_estimator_is_one_line(override, reas
         load_task("usb_c", [override])
     message = str(error.value)
     assert "\n" not in message and reason in message
-    assert "key 'calibration'" in message and "calibrate_task.py --task usb_c" in message
+    assert "key 'calibration'" in message and "evaluation calibrate_task --task usb_c" in message
 
 
 def test_a_search_setting_keeps_the_calibration():
@@ -111,7 +112,8 @@ def test_a_search_setting_keeps_the_calibration():
 
 
 def test_a_missing_calibration_file_is_one_line(tmp_path):
-    with pytest.raises(ConfigError, match="does not exist; re-run scripts/calibrate_task.py"):
+    refit = "does not exist; re-run python -m evaluation calibrate_task"
+    with pytest.raises(ConfigError, match=refit):
         load_task("usb_c", [f"calibration={tmp_path / 'none.yaml'}"])
 
 

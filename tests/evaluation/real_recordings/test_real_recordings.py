@@ -1,4 +1,4 @@
-"""scripts/estimate.py on real gel images, real-texture recordings and their checks."""
+"""tactile estimate on real gel images, real-texture recordings and their checks."""
 
 import csv
 import dataclasses
@@ -9,10 +9,10 @@ import cv2
 import numpy as np
 import pytest
 
+from controller.cli.estimate import main as estimate_main
 from drivers.sim.render.real_texture import REAL_GELS_DIR
 from drivers.sim.scenes.press_tilt import press_tilt_program
 from evaluation.common.rendering import make_renderer
-from evaluation.offline.estimate_cli import main as estimate_main
 from evaluation.real_recordings.recording_checks import (
     Estimate,
     check_recording,
@@ -53,7 +53,7 @@ def all_finite(rows):
     return all(math.isfinite(float(r[k])) for r in rows for k in ("tau_x", "tau_y", "tau_z"))
 
 
-# --- scripts/estimate.py on real images -----------------------------------------------------
+# --- tactile estimate on real images -----------------------------------------------------
 
 
 @pytest.mark.parametrize(

@@ -353,7 +353,7 @@ def test_without_the_open_gel_a_tilt_at_the_noise_is_taken_on_the_whole_grid(mon
     whole grid instead, through the paper's EMA, and is within 0.02 of `paper` or better;
     without the EMA it falls short. (A pressed recording keeps the support: the swinging
     grip's test above.)"""
-    from evaluation.offline import recording_support
+    from controller.offline import recording_support
     from evaluation.realgel.check import run_one
 
     spec = sequence_specs(["digit_background_b"], [0.4], 80, 200, contact="varied")[0]

@@ -3,7 +3,8 @@ damaged episode drawn from what is readable."""
 
 import pytest
 
-from evaluation.teleop import demo_cli, screenshot
+from controller.cli import alignment_demo as demo_cli
+from evaluation.teleop import screenshot
 
 
 @pytest.fixture(scope="module")

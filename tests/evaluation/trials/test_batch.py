@@ -14,9 +14,10 @@ from pathlib import Path
 
 import pytest
 
+from controller.cli.support import ToolError
 from controller.episode import read_episode
+from controller.run.result import TrialResult
 from core.config import CONFIG_ROOT, ConfigError
-from evaluation.common.cli_support import ToolError
 from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
 from evaluation.trials.batch_cli import TRIAL_FUNCTION
 from evaluation.trials.batch_cli import main as batch_main
@@ -24,7 +25,6 @@ from evaluation.trials.charts import inserted_within, speed_success_chart, succe
 from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.records import keep_record, unfinished_record
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import SeedSpecs, SpecError, TrialSpec, format_seeds, parse_seeds
 from evaluation.trials.summary import summarize, wilson_ci
 

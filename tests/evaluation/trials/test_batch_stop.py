@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
+from controller.run.result import TrialResult
 from evaluation.trials.batch import CSV_NAME, SUMMARY_NAME
 from evaluation.trials.batch_cli import main as batch_main
-from evaluation.trials.result import TrialResult
 from evaluation.trials.spec import TrialSpec
 
 ROOT = Path(__file__).resolve().parents[3]

@@ -1,14 +1,14 @@
-"""scripts/draw_failures.py: a batch's failures against the scene's per-seed draws."""
+"""python -m evaluation draw_failures: a batch's failures against the scene's per-seed draws."""
 
 import csv
 import json
 import math
 
+from controller.run.result import TrialResult
 from controller.run.task import load_task
 from drivers.sim.scenes.insertion.draws import draw_scene
 from evaluation.trials.batch import CSV_COLUMNS
 from evaluation.trials.draw_failures import binned, main
-from evaluation.trials.result import TrialResult
 
 SEEDS = range(40)
 YAW_LIMIT_DEG = 1.5

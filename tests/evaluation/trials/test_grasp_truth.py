@@ -6,9 +6,9 @@ import math
 
 import pytest
 
+from controller.run.result import TrialResult
 from drivers.sim.scenes.insertion.draws import GraspPose
 from evaluation.trials.grasp_truth import grasp_truth
-from evaluation.trials.result import TrialResult
 from evaluation.trials.summary import summarize
 
 

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from evaluation.common.cli_support import ToolError
+from controller.cli.support import ToolError
 from evaluation.trials.publish import REPORT, SECTION, main, publish
 
 REPORT_BEFORE = f"# Evaluation\n\n## 1. The calibration\n\nkept\n\n{SECTION}\n\nold trials\n"

@@ -1,6 +1,6 @@
 """The product's targets judged from batch summaries (evaluation/trials/targets.py)."""
 
-from evaluation.trials.result import TrialResult
+from controller.run.result import TrialResult
 from evaluation.trials.summary import summarize
 from evaluation.trials.targets import falls_short, targets_markdown, verdicts
 

@@ -12,15 +12,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from controller.cli.support import Terminated
+from controller.cli.trial_cli import main
 from controller.loop import ControlLoop
 from controller.run.task import load_task
 from core.config import CONFIG_ROOT, ConfigError
 from drivers.sim.scenes.insertion import TruthLog
-from evaluation.common.cli_support import Terminated
 from evaluation.trials import trial
 from evaluation.trials.oracle import TrueWrench
 from evaluation.trials.spec import TrialSpec
-from evaluation.trials.trial_cli import main
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -1,5 +1,5 @@
-"""scripts/where_time_goes.py: where trials spend their time, rule by rule, and where their
-failures end, from the records (synthetic ones here, with known times)."""
+"""python -m evaluation where_time_goes: where trials spend their time, rule by rule, and
+where their failures end, from the records (synthetic ones here, with known times)."""
 
 import json
 

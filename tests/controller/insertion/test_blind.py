@@ -1,0 +1,160 @@
+"""The blind baseline: its definition, its force-threshold sweeps (one per yaw offset), the
+catch, the push and the jam, and its failure paths, in the toy world (kinematic TCP; the
+blind machine reads no tactile signal, only the arm's pose and its F/T force)."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from controller.insertion.definition import check_definition
+from controller.insertion.interface import Phase
+from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral import NO_FORCE, SPIRAL, SpiralConfig, SpiralMachine
+from controller.insertion.spiral.search import SearchStage
+from controller.run.task import load_task
+from core.config import ConfigError
+from tests.controller.insertion.world import ToyWorld
+
+SMALL = SpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002, touch_force_n=1.0,
+                    press_force_n=2.0, stop_force_n=6.0, sweep_speed_m_s=0.01,
+                    descend_speed_m_s=0.005, yaw_step_rad=0.02, yaw_range_rad=0.02,
+                    timeout_s=60.0)  # fmt: skip
+NO_OPENING = dict(hole_offset_m=(0.01, 0.01))  # outside the pattern: the board everywhere
+
+
+def run(world: ToyWorld, machine: SpiralMachine, max_s: float = 80.0) -> list[tuple]:
+    """Step to a terminal phase; (tip, yaw offset, force) of every tick of a sweep."""
+    swept = []
+    while world.t_s < max_s and machine.phase not in (Phase.DONE, Phase.FAILED):
+        world.step(machine)
+        if machine.phase is Phase.SEARCH and machine.stage is SearchStage.SWEEP:
+            force = world.observe().arm.external_force_n[2]
+            yaw = machine.config.yaw_offsets[machine.memory.pass_index]
+            swept.append((world.tip.copy(), yaw, force))
+    return swept
+
+
+def reasons(machine: SpiralMachine) -> list[str]:
+    return [t.reason for t in machine.transitions]
+
+
+def test_the_definition_is_checked_and_sound():
+    check_definition(SPIRAL)
+    assert {Phase.GRASP, Phase.INSERT, Phase.DONE, Phase.FAILED} <= set(SPIRAL.phases)
+
+
+def test_the_yaw_offsets_alternate_within_the_range():
+    assert SMALL.yaw_offsets == (0.0, 0.02, -0.02)
+    assert replace(SMALL, yaw_range_rad=0.0).yaw_offsets == (0.0,)
+    assert replace(SMALL, yaw_range_rad=0.05).yaw_offsets == (0.0, 0.02, -0.02, 0.04, -0.04)
+
+
+def test_without_an_opening_it_sweeps_pressed_once_per_yaw_then_releases_and_retracts():
+    world = ToyWorld(**NO_OPENING)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    swept = run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "pattern_done", "released", "retracted",
+    ]  # fmt: skip
+    assert {yaw for _, yaw, _ in swept} == set(SMALL.yaw_offsets)
+    forces = np.array([force for _, _, force in swept])
+    # the admittance holds the press (after each pass's first settling)
+    assert np.median(forces) == pytest.approx(SMALL.press_force_n, abs=0.2)
+    hole = np.array([world.hole.x_m, world.hole.y_m])
+    reach = np.linalg.norm(np.array([tip[:2] for tip, _, _ in swept]) - hole, axis=1)
+    assert reach.max() <= SMALL.half_width_m * np.sqrt(2) + 3e-4  # within the pattern
+    assert reach.max() >= SMALL.half_width_m  # and out to its edge
+    assert not world.gripper_holding  # released at the end
+
+
+def test_over_the_opening_it_catches_pushes_to_the_floor_and_releases():
+    world = ToyWorld()  # the opening 1.5 mm off the nominal, 12 mm deep
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    bottomed = machine.transitions[3]
+    assert bottomed.rule == "force"
+    rules = [c.rule for c in world.commands]
+    expected = {"search.tare", "search.touch", "search.sweep", "search.probe", "insert.push"}
+    assert expected <= set(rules)
+    # the push ended on the floor: the tip was held down to it, the force at the stop
+    assert min(c for c in world_tip_heights(world)) == pytest.approx(
+        world.hole.z_m - world.depth_limit_m - SMALL.stop_force_n / world.k_arm_n_m, abs=3e-4
+    )
+
+
+def world_tip_heights(world: ToyWorld) -> list[float]:
+    """The tip's heights the toy went through (from the commanded twists, replayed)."""
+    heights, z = [], world.hole.z_m + 0.04
+    for command in world.commands:
+        if command.twist is not None:
+            z += command.twist.linear_m_s[2] * 0.01
+        heights.append(z)
+    return heights
+
+
+def test_a_catch_that_stops_short_of_the_entry_is_a_jam_and_the_sweep_goes_on():
+    world = ToyWorld(depth_limit_m=0.0015)  # an opening 1.5 mm deep: never entry_m (2 mm) in
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert "caught" in reasons(machine) and "jammed" in reasons(machine)
+    assert "bottomed" not in reasons(machine)
+    assert reasons(machine)[-3:] == ["pattern_done", "released", "retracted"]
+
+
+def test_the_tare_takes_up_the_sensor_bias():
+    world = ToyWorld(force_bias_n=3.0)  # above the touch force: untared it would "touch" at once
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert "bottomed" in reasons(machine)
+
+
+def test_an_arm_without_a_force_reading_fails_at_once_naming_it():
+    world = ToyWorld(arm_force=False)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert machine.phase is Phase.FAILED
+    assert (machine.transitions[-1].reason, machine.transitions[-1].rule) == (
+        "device_fault",
+        NO_FORCE,
+    )
+
+
+def test_its_grasp_travels_fast_to_just_above_the_plug_then_closes_slowly():
+    world = ToyWorld()
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    world.run_until(machine, Phase.APPROACH)
+    targets = [c.gripper for c in world.commands if c.gripper is not None]
+    g = SMALL.gripper
+    assert [(t.width_m, t.speed_m_s) for t in targets] == [
+        (pytest.approx(world.plug.thickness_m + g.preclose_gap_m), g.preclose_speed_m_s),
+        (g.close_width_m, g.close_speed_m_s),
+    ]
+
+
+def test_it_fails_on_the_timeout_and_on_a_device_fault():
+    world = ToyWorld()
+    machine = SpiralMachine(replace(SMALL, timeout_s=2.0), world.plug, world.hole)
+    run(world, machine)
+    assert machine.phase is Phase.FAILED and machine.transitions[-1].reason == "timeout"
+    world = ToyWorld()
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    world.run_until(machine, Phase.SEARCH)
+    world.arm_error = 31
+    run(world, machine)
+    assert machine.transitions[-1].reason == "device_fault"
+
+
+def test_a_bad_value_names_its_key():
+    with pytest.raises(ConfigError, match="key 'blind.press_force_n'"):
+        load_task("usb_c", ["blind.press_force_n=-1"])
+
+
+def test_forces_out_of_order_are_refused_naming_the_keys():
+    with pytest.raises(ConfigError, match="'touch_force_n', 'press_force_n', 'stop_force_n'"):
+        load_task("usb_c", ["blind.stop_force_n=1.5"])

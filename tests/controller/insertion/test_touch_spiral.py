@@ -1,0 +1,198 @@
+"""The touch spiral: the blind baseline's search with the force read by touch (the tactile
+estimate's axial force, ``TactileAxialForce``), in the toy world with the arm's F/T sensor
+off: it needs the tactile force to touch, catch and push; a single frame's outlier is no
+catch; a probe rewinds the pattern to where the tip was when the frame was captured."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import pytest
+
+from controller.insertion.force_reading import ArmForce, TactileAxialForce
+from controller.insertion.interface import Observation, Phase
+from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
+from controller.insertion.spiral.search import SearchStage
+from controller.insertion.spiral.torque_servo import TorqueServo, TorqueServoSettings
+from controller.run.controllers import CONTROLLERS
+from controller.run.task import load_task
+from core.config import ConfigError
+from tests.controller.insertion.test_blind import reasons
+from tests.controller.insertion.world import ToyWorld, estimate
+
+SHARE = 0.5
+SPIRAL = TouchSpiralConfig(GripperSettings(), pitch_m=0.0005, half_width_m=0.002,
+                           touch_force_n=1.0, press_force_n=2.0, stop_force_n=6.0,
+                           sweep_speed_m_s=0.01, descend_speed_m_s=0.005, yaw_step_rad=0.02,
+                           yaw_range_rad=0.02, timeout_s=60.0, force_window=3,
+                           axial_weights=(0.0, 0.0, 0.0, 0.0, 1 / SHARE, 0.0, 0.0, 0.0, 0.0),
+                           rewind=True)  # fmt: skip
+
+
+def run(world: ToyWorld, machine: SpiralMachine, max_s: float = 80.0) -> None:
+    """Step to a terminal phase (or ``max_s``)."""
+    while world.t_s < max_s and machine.phase not in (Phase.DONE, Phase.FAILED):
+        world.step(machine)
+
+
+def touch_world(**kwargs) -> ToyWorld:
+    """The toy world without the arm's force; the tactile axial force is the finger's share
+    of the board's push, with the estimate's noise (0.3 mN)."""
+    return ToyWorld(arm_force=False, axial_share=SHARE, open_gel_zeroes=True, **kwargs)
+
+
+def spiral(world: ToyWorld, config: TouchSpiralConfig = SPIRAL) -> SpiralMachine:
+    reading = TactileAxialForce(config.axial_weights, config.force_window)
+    return SpiralMachine(config, world.plug, world.hole, reading)
+
+
+def test_by_touch_alone_it_catches_pushes_to_the_floor_and_releases():
+    world = touch_world()
+    machine = spiral(world)
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    # the open gel taken before the close, the reference after it
+    first_capture = next(i for i, c in enumerate(world.commands) if c.capture_open_tactile)
+    close = next(
+        i for i, c in enumerate(world.commands)
+        if c.gripper is not None and c.gripper.width_m == SPIRAL.gripper.close_width_m
+    )  # fmt: skip
+    assert first_capture < close and world.rezero_count == 1
+
+
+def test_without_the_tactile_force_it_never_touches_and_inserts_nothing():
+    world = touch_world()
+    world.axial_share = 0.0  # the estimate's force is noise only
+    machine = spiral(world)
+    run(world, machine, max_s=40.0)
+    assert "caught" not in reasons(machine)
+    rules = {c.rule for c in world.commands}
+    assert "search.sweep" not in rules  # the board is never felt: the descent goes on
+
+
+def test_a_single_frames_outlier_is_no_catch():
+    reading = TactileAxialForce(SPIRAL.axial_weights, window=3)
+    forces = [2.0, 2.0, 0.0, 2.0, 2.0]  # N on the plug; the third frame drops out
+    read = []
+    for k, force in enumerate(forces):
+        obs = observation(t_s=0.04 * k, shear_y=force * SHARE)
+        read.append(reading.read(obs))
+    assert all(value == pytest.approx(2.0) for value, _ in read[1:])
+    # the median's time is the middle frame's
+    assert read[-1][1] == pytest.approx(0.04 * 3)
+
+
+def test_zeroing_frames_give_no_force_and_start_the_window_again():
+    reading = TactileAxialForce(SPIRAL.axial_weights, window=3)
+    assert reading.read(observation(0.0, shear_y=1.0)) == (pytest.approx(2.0), 0.0)
+    zeroing = replace(observation(0.04, shear_y=0.0), wrench=estimate(0.04, zeroing=True))
+    assert reading.read(zeroing) is None
+    assert reading.read(observation(0.08, shear_y=0.25)) == (pytest.approx(0.5), 0.08)
+
+
+def test_the_arm_force_is_the_window_mean_at_its_mean_time():
+    reading = ArmForce(window=2)
+    world = ToyWorld(force_bias_n=1.0)
+    first = reading.read(world.observe())
+    world.t_s += 0.01
+    world.force_bias_n = 3.0
+    second = reading.read(world.observe())
+    assert first == (pytest.approx(1.0), pytest.approx(0.0))
+    assert second == (pytest.approx(2.0), pytest.approx(0.005))
+
+
+def test_a_probe_rewinds_the_pattern_to_the_frames_capture_time():
+    world = touch_world(frame_every=4)  # slow frames: the reading lags the tip by more
+    machine = spiral(world)
+    while machine.phase is not Phase.INSERT and world.t_s < 40.0:
+        before = (machine.stage, machine.memory.s_m)
+        world.step(machine)
+        if before[0] is SearchStage.SWEEP and machine.stage is SearchStage.PROBE:
+            assert machine.memory.s_m < before[1]  # back along the pattern
+            assert machine.memory.s_m == pytest.approx(machine.memory.s_at(machine.force_t_s))
+            break
+    else:
+        pytest.fail("no probe")
+
+
+def test_without_rewind_a_probe_holds_the_swept_length():
+    world = touch_world(frame_every=4)
+    machine = spiral(world, replace(SPIRAL, rewind=False))
+    while world.t_s < 40.0:
+        before = (machine.stage, machine.memory.s_m)
+        world.step(machine)
+        if before[0] is SearchStage.SWEEP and machine.stage is SearchStage.PROBE:
+            assert machine.memory.s_m == before[1]
+            break
+    else:
+        pytest.fail("no probe")
+
+
+def test_the_controller_reads_the_tasks_touch_spiral_section():
+    config = load_task("usb_c", ["touch_spiral.force_window=4"]).config
+    machine = CONTROLLERS["touch_spiral"].machine(config)
+    assert isinstance(machine, SpiralMachine)
+    assert machine.config is config.touch_spiral
+    assert not CONTROLLERS["touch_spiral"].arm_force  # no F/T sensor
+
+
+def observation(t_s: float, shear_y: float) -> Observation:
+    world = ToyWorld()
+    obs = world.observe()
+    return replace(obs, t_s=t_s, wrench=estimate(t_s, shear_y=shear_y))
+
+
+
+
+def test_the_weights_read_every_term_and_the_torques_magnitudes():
+    weights = (1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0)
+    reading = TactileAxialForce(weights, window=1)
+    obs = observation(0.0, shear_y=0.5)
+    wrench = estimate(0.0, tau_x=-0.1, tau_y=0.2, tau_z=-0.3, shear_x=0.4, shear_y=0.5, normal=0.6)
+    force, _ = reading.read(replace(obs, wrench=wrench))
+    terms = (-0.1, 0.2, -0.3, 0.4, 0.5, 0.6, 0.1, 0.2, 0.3)
+    assert force == pytest.approx(sum(w * t for w, t in zip(weights, terms, strict=True)))
+
+
+@pytest.mark.parametrize(
+    ("weights", "message"),
+    [
+        ("[1.0, 2.0]", r"key 'touch_spiral.axial_weights': expected 9 items"),
+        ("[1, 2, 3, 4, 5, 6, 7, 8, .nan]", r"key 'touch_spiral.axial_weights\[8\]': expected"),
+    ],
+)
+def test_axial_weights_other_than_nine_finite_numbers_are_refused(weights, message):
+    with pytest.raises(ConfigError, match=message):
+        load_task("usb_c", [f"touch_spiral.axial_weights={weights}"])
+
+
+def test_with_the_torque_servo_it_pushes_turning_about_the_tip_and_still_inserts():
+    world = touch_world()
+    config = replace(SPIRAL, push_servo=TorqueServoSettings((20.0, 20.0, 20.0)))
+    reading = TactileAxialForce(config.axial_weights, config.force_window)
+    machine = SpiralMachine(config, world.plug, world.hole, reading, TorqueServo(config.push_servo))
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "caught", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    pushes = [c for c in world.commands if c.rule == "insert.servo_push"]
+    assert pushes and all(c.stage == "insert.push" for c in pushes)
+    assert not any(c.rule == "insert.push" for c in world.commands)
+
+
+@pytest.mark.parametrize(("source", "credited"), [("tip", True), ("tcp", False)])
+def test_the_probe_credits_the_wrists_extension_only_when_asked(source, credited):
+    world = touch_world()
+    machine = spiral(world, replace(SPIRAL, catch_drop_from=source))
+    obs = world.observe()
+    machine.memory.press_z_m = obs.arm.tcp.xyz_m[2] + 0.0002  # the TCP 0.2 mm below the press
+    low = 0.5  # N, a reading 1.5 N under the press: the wrist extended by 1.5 mm, if true
+    expected = 0.0002 + (SPIRAL.press_force_n - low) / SPIRAL.wrist_z_stiffness_n_m
+    drop = machine.catch_drop_m(obs, low)
+    assert drop == pytest.approx(expected if credited else 0.0002)
+    # above the press both count the wrist's compression against the drop
+    high = SPIRAL.press_force_n + 1.0
+    assert machine.catch_drop_m(obs, high) == pytest.approx(0.0002 - 1.0 / 1000.0)
