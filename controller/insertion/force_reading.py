@@ -89,7 +89,7 @@ class TactileAxialForce:
     ``window`` frames (a single frame's outlier never reads as the load's drop), described
     at their median capture time. Zeroing frames give nothing. The weights are the task's
     ``touch_spiral.axial_weights``: fitted against the plug's true axial force by
-    ``scripts/fit_axial_map.py``, or the force channel along T z over the sensing finger's
+    ``python -m evaluation fit_axial_map``, or the force channel along T z over the sensing finger's
     share of the load. ``s2t``: the rotation R_S2T (3 x 3) that gives the newest frame's
     torques in T (``torque_t``)."""
 

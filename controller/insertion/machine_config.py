@@ -9,7 +9,7 @@ Units are SI and in the key names. Tactile thresholds come in two kinds:
   not depend on whether the estimate is calibrated;
 * **calibrated units** (keys ``noise_floor.*``, ``limits.*_limit``, ``insert.force_budget``):
   N*m for torques, N for forces, the units of the estimate calibrated for the task's grasp
-  (the task file's ``calibration:``, fitted in the scene by scripts/calibrate_task.py;
+  (the task file's ``calibration:``, fitted in the scene by python -m evaluation calibrate_task;
   controller/run/task_calibration.py). A budget or limit cannot be relative. The noise
   units above are then derived from them: a channel's noise is at least its floor in N*m
   or N.
