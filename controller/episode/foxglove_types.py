@@ -24,6 +24,7 @@ from foxglove.messages import (
 )
 
 from controller.tactile.field import VectorField
+from drivers.tactile.decode import encode_jpeg
 
 _MESSAGES: dict[str, Any] = {
     "foxglove.CompressedImage": CompressedImage,
@@ -58,12 +59,9 @@ def loop_time_s(stamp: Any, offset_ns: int = 0) -> float:
 def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> bytes:
     """``image`` (uint8 BGR, BGRA or grey) as ``image_format`` ('jpeg' or 'png') bytes;
     PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel."""
-    if image_format == "png":
-        ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
-    else:
-        if image.ndim == 3 and image.shape[2] == 4:
-            image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
-        ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality])
+    if image_format != "png":
+        return encode_jpeg(image, jpeg_quality)
+    ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
     if not ok:
         raise ValueError(f"tactile image of shape {image.shape}: OpenCV cannot encode it")
     return data.tobytes()
@@ -71,14 +69,15 @@ def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> byt
 
 def image_bytes(
     capture_t_s: float,
-    image: np.ndarray,
+    image: np.ndarray | bytes,
     image_format: str,
     jpeg_quality: int,
     offset_ns: int = 0,
 ) -> bytes:
     """A ``foxglove.CompressedImage`` of ``image`` captured at ``capture_t_s`` (loop's clock;
-    stamped plus ``offset_ns``) in frame S."""
-    data = encode_image(image, image_format, jpeg_quality)
+    stamped plus ``offset_ns``) in frame S: ``image`` encoded as ``image_format``, or
+    ``image`` itself when it is bytes already in that format (a camera's JPEG)."""
+    data = image if isinstance(image, bytes) else encode_image(image, image_format, jpeg_quality)
     return CompressedImage(
         timestamp=timestamp(capture_t_s, offset_ns), frame_id="S", data=data, format=image_format
     ).encode()
