@@ -197,7 +197,9 @@ class EpisodeWriter:
             self._mcap.attach(log_time=0, create_time=0, name=name, media_type=media_type,
                               data=data)  # fmt: skip
         self._flush()
-        self._channels: dict[str, Channel] = {}
+        self._channels: dict[str, Callable[[bytes, int], None]] = {}
+        """Each topic's channel's ``log(data, log_time_ns)`` (``foxglove-sdk``'s own, without
+        the ``Channel`` wrapper's checks for the dicts and strings we never pass)."""
         self._queue_size = queue_size
         self._queue: deque[tuple[Topic, int, Encoder, Any]] = deque()
         self.dropped: Counter[str] = Counter()
@@ -343,11 +345,10 @@ class EpisodeWriter:
                 log.error("episode %s: dropping a %s record: %s", self.path, topic.name, error)
             self.dropped[topic.name] += 1
             return
-        channel = self._channels.get(topic.name)
-        if channel is None:
-            channel = self._register(topic)
-        channel.log(data, log_time=t_ns)
-        self._last_ns = max(self._last_ns, t_ns)
+        log_message = self._channels.get(topic.name) or self._register(topic)
+        log_message(data, t_ns)
+        if t_ns > self._last_ns:
+            self._last_ns = t_ns
         if not self._listeners:
             return
         for listener in tuple(self._listeners):
@@ -366,7 +367,7 @@ class EpisodeWriter:
         payload = {"dropped_total": total, "by_topic": dict(self.dropped)}
         self._write((DROPS, t_ns, json_bytes, payload))
 
-    def _register(self, topic: Topic) -> Channel:
+    def _register(self, topic: Topic) -> Callable[[bytes, int], None]:
         name, encoding, data = schema_of(topic)
         channel = Channel(
             topic.name,
@@ -374,5 +375,5 @@ class EpisodeWriter:
             message_encoding=topic.encoding,
             context=self._context,
         )
-        self._channels[topic.name] = channel
-        return channel
+        log_message = self._channels[topic.name] = channel.base.log
+        return log_message

@@ -3,6 +3,11 @@ usb_c trial run as fast as possible for ``--seconds`` of loop time (the search m
 it lasts), with each record's encoding, its write (the MCAP channel's ``log``) and each file
 flush timed on the writer thread (``time.thread_time_ns``), by topic.
 
+The frames' JPEG is the camera's (the simulated twin encodes each frame it renders once an
+episode asks for it, on the loop's thread: ``compress_frames``), so it is not the writer's;
+it is timed too (``encode_jpeg`` as the twin calls it) and reported on its own line, so the
+cost that moved is in view.
+
 The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
 slower than real time their count per second of loop time is not the real-time one; the
 last line therefore also gives the real-time estimate: the records' work per second of loop
@@ -24,6 +29,7 @@ from typing import Any
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
+from drivers.sim.twins import tactile as twin
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -49,6 +55,8 @@ class StageTimes:
         self.flushes = 0
         self.busy_s = 0.0
         self.flush_interval_s = 0.0
+        self.camera_jpeg_ns = 0
+        self.camera_jpegs = 0
 
     def patch(self) -> Any:
         """Patch ``EpisodeWriter`` (log, __init__, close); returns a function that undoes it."""
@@ -73,9 +81,9 @@ class StageTimes:
             stages.flush_interval_s = self.flush_interval_s
 
         def register(self, topic):  # type: ignore[no-untyped-def]
-            channel = _TimedChannel(original_register(self, topic), topic.name, stages)
-            self._channels[topic.name] = channel
-            return channel
+            log = _timed_log(original_register(self, topic), topic.name, stages)
+            self._channels[topic.name] = log
+            return log
 
         def flush(self):  # type: ignore[no-untyped-def]
             began = clock()
@@ -90,25 +98,36 @@ class StageTimes:
         EpisodeWriter.log, EpisodeWriter.close = log, close  # type: ignore[method-assign]
         EpisodeWriter.__init__ = init  # type: ignore[method-assign]
         EpisodeWriter._register, EpisodeWriter._flush = register, flush  # type: ignore[method-assign]
+        original_jpeg = twin.encode_jpeg
+
+        def camera_jpeg(image, quality):  # type: ignore[no-untyped-def]
+            began = clock()
+            data = original_jpeg(image, quality)
+            stages.camera_jpeg_ns += clock() - began
+            stages.camera_jpegs += 1
+            return data
+
+        twin.encode_jpeg = camera_jpeg
 
         def undo() -> None:
             EpisodeWriter.log, EpisodeWriter.close = original_log, original_close  # type: ignore[method-assign]
             EpisodeWriter.__init__ = original_init  # type: ignore[method-assign]
             EpisodeWriter._register, EpisodeWriter._flush = original_register, original_flush  # type: ignore[method-assign]
+            twin.encode_jpeg = original_jpeg
 
         return undo
 
 
-class _TimedChannel:
-    """An MCAP channel whose ``log`` adds its writer-thread CPU to ``stages.add_ns[name]``."""
+def _timed_log(log: Any, name: str, stages: StageTimes) -> Any:
+    """An MCAP channel's ``log(data, log_time_ns)`` that adds its writer-thread CPU to
+    ``stages.add_ns[name]``."""
 
-    def __init__(self, channel: Any, name: str, stages: StageTimes) -> None:
-        self._log, self._name, self._stages = channel.log, name, stages
-
-    def log(self, data: bytes, *, log_time: int) -> None:
+    def timed(data: bytes, log_time: int) -> None:
         began = time.thread_time_ns()
-        self._log(data, log_time=log_time)
-        self._stages.add_ns[self._name] += time.thread_time_ns() - began
+        log(data, log_time)
+        stages.add_ns[name] += time.thread_time_ns() - began
+
+    return timed
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -157,4 +176,8 @@ def main(argv: list[str] | None = None) -> int:
     print(f"real-time estimate (records per s of loop time + a flush every "
           f"{stages.flush_interval_s:g} s): {realtime * 100:.2f} % of a core, without the "
           f"rest")  # fmt: skip
+    each_us = stages.camera_jpeg_ns / max(stages.camera_jpegs, 1) / 1e3
+    print(f"the frames' JPEG, the camera's (the twin's, on the loop's thread; not in the "
+          f"writer's figures): {stages.camera_jpegs} frames, {each_us:.1f} us each, "
+          f"{stages.camera_jpeg_ns / 1e6 / loop_s:.2f} ms per s of loop time")  # fmt: skip
     return 0
