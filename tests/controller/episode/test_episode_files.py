@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 from mcap.writer import Writer
 
-from controller.episode import EpisodeError, read_episode
-from controller.episode.recorder import arm_json
+from controller.episode import EpisodeError, decode_image, read_episode
+from controller.episode.recorder import RecordingSource, arm_json
 from controller.episode.repair import repair
 from controller.episode.topics import (
     ARM_STATUS,
@@ -25,7 +25,15 @@ from controller.episode.topics import (
     TRANSITION,
 )
 from controller.episode.writer import EpisodeWriter, json_bytes
+from controller.tactile.wrench import WrenchEstimate
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT
 from core.devices import ArmMode, ArmState, ArmStatus, Pose
+from drivers.registry import load_device_config
+from drivers.sim.twins.tactile import SimTactileSensor
+from drivers.tactile.decode import encode_jpeg
+
+MINI_CAMERA = load_device_config(CONFIG_ROOT / "sensors" / "gelsight_mini_camera.yaml").config
 
 
 def _writer(path, **options):
@@ -107,6 +115,43 @@ def test_a_failed_write_stops_the_writer_and_close_raises_its_oserror(tmp_path):
     assert writer.dropped["/loop/tick"] >= 1
     ep = read_episode(path)  # what was written before the failure reads
     assert not ep.finished and 0 < ep.counts["/loop/tick"] < 200
+
+
+class _Zero:
+    """A wrench source that answers every frame with a zero estimate."""
+
+    def push(self, frame, t_s):
+        return WrenchEstimate.zero(t_s, zeroing=False, calibrated=False)
+
+    def capture_open(self, n_frames=None):
+        pass
+
+    def rezero(self, n_frames=None):
+        pass
+
+
+@pytest.mark.parametrize("image_format", ["jpeg", "png"])
+def test_the_cameras_jpeg_is_logged_as_it_comes_and_any_other_frame_is_encoded(
+    tmp_path, image_format
+):
+    clock = ManualClock()
+    camera = SimTactileSensor(MINI_CAMERA, clock, np.random.default_rng(0))
+    writer = _writer(tmp_path / "e.mcap")
+    with camera:
+        tap = RecordingSource(_Zero(), writer, clock, image_format=image_format,
+                              jpeg_quality=80, camera=camera)  # fmt: skip
+        clock.advance(0.04)
+        frame = camera.read_latest(0.1)
+        tap.push(frame.image, frame.t_s)  # the camera's JPEG, if it made one
+        tap.push(frame.image.copy(), frame.t_s)  # not the frame handed over: encoded here
+    writer.close({"reason": "done"})
+    first, second = (m.value for m in read_episode(tmp_path / "e.mcap").messages("/tactile/image"))
+    assert (frame.jpeg is not None) == (image_format == "jpeg")  # asked for by a jpeg episode
+    if image_format == "jpeg":
+        assert first.data == frame.jpeg == encode_jpeg(frame.image, 80) == second.data
+    else:
+        np.testing.assert_array_equal(decode_image(first), frame.image)  # lossless
+        assert first.data == second.data
 
 
 def test_a_missing_file_is_one_line_naming_it(tmp_path):
