@@ -24,7 +24,6 @@ from foxglove.messages import (
 )
 
 from controller.tactile.field import VectorField
-from drivers.tactile.decode import encode_jpeg
 
 _MESSAGES: dict[str, Any] = {
     "foxglove.CompressedImage": CompressedImage,
@@ -58,10 +57,14 @@ def loop_time_s(stamp: Any, offset_ns: int = 0) -> float:
 
 def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> bytes:
     """``image`` (uint8 BGR, BGRA or grey) as ``image_format`` ('jpeg' or 'png') bytes;
-    PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel."""
-    if image_format != "png":
-        return encode_jpeg(image, jpeg_quality)
-    ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel. The writer's
+    encoder, and the one an episode gives the camera (``compress_frames``) for its JPEGs."""
+    if image_format == "png":
+        ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
+    else:
+        if image.ndim == 3 and image.shape[2] == 4:
+            image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
+        ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality])
     if not ok:
         raise ValueError(f"tactile image of shape {image.shape}: OpenCV cannot encode it")
     return data.tobytes()

@@ -261,7 +261,7 @@ class CompressingCamera(Protocol):
     """A tactile camera that can hand its frames over compressed too (the GelSight/DIGIT
     driver and its simulated twin): ``TactileFrame.jpeg``."""
 
-    def compress_frames(self, quality: int | None) -> None: ...
+    def compress_frames(self, encode: Callable[[np.ndarray], bytes] | None) -> None: ...
 
     def compressed(self, image: np.ndarray) -> bytes | None: ...
 
@@ -272,11 +272,10 @@ class RecordingSource:
     calls in order (``/tactile/push``), each logged at ``clock.now()``.
 
     The frame is logged as ``image_format`` 'jpeg' or 'png'. With a ``camera`` that
-    compresses (``CompressingCamera``) and 'jpeg', the camera is asked for each frame's JPEG
-    at ``jpeg_quality`` and the writer logs those bytes as they come (the same bytes it would
-    encode: ``drivers.tactile.decode.encode_jpeg``); a frame the camera did not compress
-    (none, or not the image it handed over last) is copied and encoded on the writer's
-    thread."""
+    compresses (``CompressingCamera``) and 'jpeg', the camera is given the writer's own JPEG
+    encoder at ``jpeg_quality`` (``foxglove_types.encode_image``) to run on each frame, and the
+    writer logs those bytes as they come; a frame the camera did not compress (none, or not
+    the image it handed over last) is copied and encoded on the writer's thread."""
 
     def __init__(
         self,
@@ -300,7 +299,11 @@ class RecordingSource:
         self._compressed: Callable[[np.ndarray], bytes | None] | None = None
         if image_format == "jpeg" and hasattr(camera, "compress_frames"):
             compressing = cast(CompressingCamera, camera)
-            compressing.compress_frames(jpeg_quality)
+            compressing.compress_frames(
+                functools.partial(
+                    foxglove_types.encode_image, image_format="jpeg", jpeg_quality=jpeg_quality
+                )
+            )
             self._compressed = compressing.compressed
 
     @property

@@ -70,18 +70,6 @@ def decode_jpeg(buffer: np.ndarray, downscale: int = 1) -> np.ndarray:
     return image
 
 
-def encode_jpeg(image: np.ndarray, quality: int) -> bytes:
-    """``image`` (uint8 BGR or grey; a BGRA image loses its alpha) as a JPEG at ``quality``
-    (1..100; OpenCV's libjpeg, 4:2:0): a frame's compressed form, the camera's
-    (``compress_frames``) or the episode writer's. ValueError if OpenCV cannot encode it."""
-    if image.ndim == 3 and image.shape[2] == 4:
-        image = cv2.cvtColor(image, cv2.COLOR_BGRA2BGR)
-    ok, data = cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, quality])
-    if not ok:
-        raise ValueError(f"image of shape {image.shape}: OpenCV cannot encode it as JPEG")
-    return data.tobytes()
-
-
 def cropped_size(width_px: int, height_px: int, fraction: float, downscale: int) -> tuple[int, int]:
     """(width, height) left after decoding a ``width_px`` x ``height_px`` JPEG at
     1/``downscale`` and cropping ``fraction`` off each border."""

@@ -5,7 +5,7 @@ flush timed on the writer thread (``time.thread_time_ns``), by topic.
 
 The frames' JPEG is the camera's (the simulated twin encodes each frame it renders once an
 episode asks for it, on the loop's thread: ``compress_frames``), so it is not the writer's;
-it is timed too (``encode_jpeg`` as the twin calls it) and reported on its own line, so the
+it is timed too (the encoder the episode gives the twin) and reported on its own line, so the
 cost that moved is in view.
 
 The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
@@ -29,7 +29,7 @@ from typing import Any
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
-from drivers.sim.twins import tactile as twin
+from drivers.sim.twins.tactile import SimTactileSensor
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -98,22 +98,25 @@ class StageTimes:
         EpisodeWriter.log, EpisodeWriter.close = log, close  # type: ignore[method-assign]
         EpisodeWriter.__init__ = init  # type: ignore[method-assign]
         EpisodeWriter._register, EpisodeWriter._flush = register, flush  # type: ignore[method-assign]
-        original_jpeg = twin.encode_jpeg
+        original_compress = SimTactileSensor.compress_frames
 
-        def camera_jpeg(image, quality):  # type: ignore[no-untyped-def]
-            began = clock()
-            data = original_jpeg(image, quality)
-            stages.camera_jpeg_ns += clock() - began
-            stages.camera_jpegs += 1
-            return data
+        def compress_frames(self, encode):  # type: ignore[no-untyped-def]
+            def camera_jpeg(image):  # type: ignore[no-untyped-def]
+                began = clock()
+                data = encode(image)
+                stages.camera_jpeg_ns += clock() - began
+                stages.camera_jpegs += 1
+                return data
 
-        twin.encode_jpeg = camera_jpeg
+            original_compress(self, None if encode is None else camera_jpeg)
+
+        SimTactileSensor.compress_frames = compress_frames  # type: ignore[method-assign]
 
         def undo() -> None:
             EpisodeWriter.log, EpisodeWriter.close = original_log, original_close  # type: ignore[method-assign]
             EpisodeWriter.__init__ = original_init  # type: ignore[method-assign]
             EpisodeWriter._register, EpisodeWriter._flush = original_register, original_flush  # type: ignore[method-assign]
-            twin.encode_jpeg = original_jpeg
+            SimTactileSensor.compress_frames = original_compress  # type: ignore[method-assign]
 
         return undo
 

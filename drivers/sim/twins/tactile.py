@@ -20,11 +20,10 @@ shows the gel at its capture time. The stream starts ``latency_s`` before ``conn
 ``drift_period_s``, the lighting drift level of a frame is the time since the connection
 over that period (the renderer's ``drift``).
 
-Compressed frames (``compress_frames(quality)``, for an episode): each frame rendered from
-then on also carries its JPEG (``TactileFrame.jpeg``, ``drivers.tactile.decode.encode_jpeg``),
-encoded once when the frame is rendered, on the thread that reads it (the loop's); the image
-the estimator takes is unchanged. ``compressed(image)`` gives the JPEG of the newest frame
-handed over.
+Compressed frames (``compress_frames(encode)``, for an episode): each frame rendered from
+then on also carries ``encode(image)``, its JPEG (``TactileFrame.jpeg``), encoded once when the
+frame is rendered, on the thread that reads it (the loop's); the image the estimator takes is
+unchanged. ``compressed(image)`` gives the JPEG of the newest frame handed over.
 
 ``read_latest(max_age_s)`` has the real driver's semantics: the newest frame captured at or
 before ``now()``, or DeviceTimeoutError when it is older than ``max_age_s`` (e.g. after
@@ -53,7 +52,6 @@ from core.sensor_profile import sensor_profile
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.tactile.camera import TactileCameraConfig
-from drivers.tactile.decode import encode_jpeg
 
 FieldSource = Callable[[float], np.ndarray | None]
 """Gives the forward displacement field (h, w, 2) in px at a time in s, or None."""
@@ -167,7 +165,7 @@ class SimTactileSensor(ContextManagedDevice):
         self._t0_s = 0.0  # time of frame 0
         self._stalled_after: int | None = None  # last frame index before a stall
         self._latest: tuple[int, TactileFrame] | None = None
-        self._jpeg_quality: int | None = None
+        self._encode: Callable[[np.ndarray], bytes] | None = None
 
     @classmethod
     def from_config(
@@ -240,15 +238,14 @@ class SimTactileSensor(ContextManagedDevice):
             )
         if self._latest is None or self._latest[0] != index:
             image = self._render(index, self._capture_time(index))
-            quality = self._jpeg_quality
-            jpeg = encode_jpeg(image, quality) if quality is not None else None
+            jpeg = self._encode(image) if self._encode is not None else None
             self._latest = (index, TactileFrame(t_s=t_s, image=image, jpeg=jpeg))
         return self._latest[1]
 
-    def compress_frames(self, quality: int | None) -> None:
-        """Give each frame rendered from now on its JPEG at ``quality`` (1..100) too; None:
-        no more (see the module docstring)."""
-        self._jpeg_quality = quality
+    def compress_frames(self, encode: Callable[[np.ndarray], bytes] | None) -> None:
+        """Give each frame rendered from now on ``encode(image)`` too, its JPEG; None: no
+        more (see the module docstring)."""
+        self._encode = encode
 
     def compressed(self, image: np.ndarray) -> bytes | None:
         """The JPEG of ``image`` if it is the newest frame's image (the same object) and that

@@ -14,6 +14,7 @@ import pytest
 from mcap.writer import Writer
 
 from controller.episode import EpisodeError, decode_image, read_episode
+from controller.episode.foxglove_types import encode_image
 from controller.episode.recorder import RecordingSource, arm_json
 from controller.episode.repair import repair
 from controller.episode.topics import (
@@ -31,7 +32,6 @@ from core.config import CONFIG_ROOT
 from core.devices import ArmMode, ArmState, ArmStatus, Pose
 from drivers.registry import load_device_config
 from drivers.sim.twins.tactile import SimTactileSensor
-from drivers.tactile.decode import encode_jpeg
 
 MINI_CAMERA = load_device_config(CONFIG_ROOT / "sensors" / "gelsight_mini_camera.yaml").config
 
@@ -148,7 +148,7 @@ def test_the_cameras_jpeg_is_logged_as_it_comes_and_any_other_frame_is_encoded(
     first, second = (m.value for m in read_episode(tmp_path / "e.mcap").messages("/tactile/image"))
     assert (frame.jpeg is not None) == (image_format == "jpeg")  # asked for by a jpeg episode
     if image_format == "jpeg":
-        assert first.data == frame.jpeg == encode_jpeg(frame.image, 80) == second.data
+        assert first.data == frame.jpeg == encode_image(frame.image, "jpeg", 80) == second.data
     else:
         np.testing.assert_array_equal(decode_image(first), frame.image)  # lossless
         assert first.data == second.data

@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import example, given, settings
@@ -29,7 +30,6 @@ from drivers.sim.twins.force_torque import SimForceTorque, scripted_wrench
 from drivers.sim.twins.gamepad import PadEvent, SimGamepad
 from drivers.sim.twins.gripper import SimGripper
 from drivers.sim.twins.tactile import SensorTiming, SimTactileSensor
-from drivers.tactile.decode import encode_jpeg
 
 ARM = load_device_config(CONFIGS / "robot" / "xarm6.yaml").config
 GRIPPER = load_device_config(CONFIGS / "gripper" / "hande.yaml").config
@@ -364,18 +364,22 @@ def test_frames_follow_the_field_source(clock):
     assert np.abs(pressed.image.astype(int) - rest.image).mean() > 5
 
 
+def _jpeg(image):
+    return cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
+
+
 def test_compressed_frames_carry_their_jpeg_and_the_same_image(clock):
     plain = SimTactileSensor(MINI, clock, np.random.default_rng(3))
     compressing = SimTactileSensor(MINI, clock, np.random.default_rng(3))
     with plain, compressing:
         first = compressing.read_latest(0.1)  # rendered before: no JPEG
-        compressing.compress_frames(80)
+        compressing.compress_frames(_jpeg)
         clock.advance(0.04)
         frame, other = compressing.read_latest(0.1), plain.read_latest(0.1)
         assert compressing.read_latest(0.1) is frame  # encoded once per frame
         np.testing.assert_array_equal(frame.image, other.image)  # the estimator's pixels
         assert other.jpeg is None and first.jpeg is None
-        assert frame.jpeg == encode_jpeg(frame.image, 80)
+        assert frame.jpeg == _jpeg(frame.image)
         assert compressing.compressed(frame.image) is frame.jpeg
         assert compressing.compressed(frame.image.copy()) is None  # not the frame handed over
         compressing.compress_frames(None)
