@@ -134,10 +134,14 @@ class GripperStatus:
 
 @dataclass(frozen=True)
 class TactileFrame:
-    """A tactile image (uint8, H x W x 3, BGR as OpenCV delivers it) and its capture time."""
+    """A tactile image (uint8, H x W x 3, BGR as OpenCV delivers it) and its capture time;
+    ``jpeg``: the same image compressed as JPEG by the camera's driver, when it was asked to
+    (``compress_frames`` of the camera and its simulated twin: for an episode), else None.
+    The estimator takes ``image``."""
 
     t_s: float
     image: np.ndarray = field(repr=False)
+    jpeg: bytes | None = field(default=None, repr=False)
 
 
 @dataclass(frozen=True)

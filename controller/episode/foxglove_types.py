@@ -57,7 +57,8 @@ def loop_time_s(stamp: Any, offset_ns: int = 0) -> float:
 
 def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> bytes:
     """``image`` (uint8 BGR, BGRA or grey) as ``image_format`` ('jpeg' or 'png') bytes;
-    PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel."""
+    PNG is lossless (BGRA keeps its alpha), JPEG drops an alpha channel. The writer's
+    encoder, and the one an episode gives the camera (``compress_frames``) for its JPEGs."""
     if image_format == "png":
         ok, data = cv2.imencode(".png", image, [cv2.IMWRITE_PNG_COMPRESSION, 1])
     else:
@@ -71,14 +72,15 @@ def encode_image(image: np.ndarray, image_format: str, jpeg_quality: int) -> byt
 
 def image_bytes(
     capture_t_s: float,
-    image: np.ndarray,
+    image: np.ndarray | bytes,
     image_format: str,
     jpeg_quality: int,
     offset_ns: int = 0,
 ) -> bytes:
     """A ``foxglove.CompressedImage`` of ``image`` captured at ``capture_t_s`` (loop's clock;
-    stamped plus ``offset_ns``) in frame S."""
-    data = encode_image(image, image_format, jpeg_quality)
+    stamped plus ``offset_ns``) in frame S: ``image`` encoded as ``image_format``, or
+    ``image`` itself when it is bytes already in that format (a camera's JPEG)."""
+    data = image if isinstance(image, bytes) else encode_image(image, image_format, jpeg_quality)
     return CompressedImage(
         timestamp=timestamp(capture_t_s, offset_ns), frame_id="S", data=data, format=image_format
     ).encode()

@@ -57,7 +57,8 @@ class EpisodeError(ValueError):
 class EpisodeMessage:
     """One decoded message: ``topic``, ``t_s`` (its log time on the loop's clock, s: the
     log time minus the episode's ``offset_ns``),
-    ``sequence`` (the writer's order among messages of equal time) and ``value`` (a dict for
+    ``sequence`` (the MCAP record's: this project's writer numbers each topic's messages on
+    its own, earlier ones one sequence across topics) and ``value`` (a dict for
     a ``json`` topic; a protobuf message of the Foxglove schema for a ``protobuf`` one)."""
 
     topic: str
@@ -162,12 +163,13 @@ class Episode:
         return (self.loop_s(min(times)), self.loop_s(max(times)))
 
     def messages(self, *topics: str) -> Iterator[EpisodeMessage]:
-        """The messages of ``topics`` (every topic if none), decoded, in (log time,
-        sequence) order: the order the loop produced them."""
+        """The messages of ``topics`` (every topic if none), decoded, in log time order and,
+        among messages of equal log time, in the file's order: the order the loop produced
+        them (the writer writes them in that order)."""
         wanted = set(topics)
         ids = {cid for cid, ch in self._channels.items() if not wanted or ch.topic in wanted}
-        chosen = [m for m in self._messages if m.channel_id in ids]
-        chosen.sort(key=lambda m: (m.log_time, m.sequence))
+        chosen = [m for m in self._messages if m.channel_id in ids]  # in the file's order
+        chosen.sort(key=lambda m: m.log_time)  # stable: the file's order among equal times
         offset_ns = self.offset_ns
         for record in chosen:
             channel = self._channels[record.channel_id]

@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import functools
 import math
-from typing import Any
+from collections.abc import Callable
+from typing import Any, Protocol, cast
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -256,11 +257,25 @@ def field_of(estimator: TactileEstimator | None) -> VectorField | None:
         return None
 
 
+class CompressingCamera(Protocol):
+    """A tactile camera that can hand its frames over compressed too (the GelSight/DIGIT
+    driver and its simulated twin): ``TactileFrame.jpeg``."""
+
+    def compress_frames(self, encode: Callable[[np.ndarray], bytes] | None) -> None: ...
+
+    def compressed(self, image: np.ndarray) -> bytes | None: ...
+
+
 class RecordingSource:
     """A ``WrenchSource`` that passes every call to ``source`` and queues into ``writer``:
-    each frame (a copy, encoded as ``image_format`` 'jpeg' or 'png' on the writer's thread),
-    the field after it (if the estimator has one), the estimate it gave, and the calls in
-    order (``/tactile/push``), each logged at ``clock.now()``."""
+    each frame, the field after it (if the estimator has one), the estimate it gave, and the
+    calls in order (``/tactile/push``), each logged at ``clock.now()``.
+
+    The frame is logged as ``image_format`` 'jpeg' or 'png'. With a ``camera`` that
+    compresses (``CompressingCamera``) and 'jpeg', the camera is given the writer's own JPEG
+    encoder at ``jpeg_quality`` (``foxglove_types.encode_image``) to run on each frame, and the
+    writer logs those bytes as they come; a frame the camera did not compress (none, or not
+    the image it handed over last) is copied and encoded on the writer's thread."""
 
     def __init__(
         self,
@@ -270,6 +285,7 @@ class RecordingSource:
         *,
         image_format: str = "jpeg",
         jpeg_quality: int = 80,
+        camera: object = None,
     ) -> None:
         if image_format not in ("jpeg", "png"):
             raise ValueError(f"image_format: expected 'jpeg' or 'png', got {image_format!r}")
@@ -280,6 +296,15 @@ class RecordingSource:
         self.jpeg_quality = jpeg_quality
         self._pushes = 0
         self._estimator = estimator_of(source)
+        self._compressed: Callable[[np.ndarray], bytes | None] | None = None
+        if image_format == "jpeg" and hasattr(camera, "compress_frames"):
+            compressing = cast(CompressingCamera, camera)
+            compressing.compress_frames(
+                functools.partial(
+                    foxglove_types.encode_image, image_format="jpeg", jpeg_quality=jpeg_quality
+                )
+            )
+            self._compressed = compressing.compressed
 
     @property
     def estimator(self) -> WrenchSource:
@@ -298,7 +323,9 @@ class RecordingSource:
             call_json,
             {"call": "push", "push_index": index, "frame_t_s": float(t_s)},
         )
-        log(topics.TACTILE_IMAGE, now, self._image_bytes, (float(t_s), frame.copy()))
+        jpeg = self._compressed(frame) if self._compressed is not None else None
+        image = frame.copy() if jpeg is None else jpeg
+        log(topics.TACTILE_IMAGE, now, self._image_bytes, (float(t_s), image))
         field = field_of(self._estimator)
         if field is not None and not estimate.zeroing:
             log(topics.TACTILE_FIELD, now, self._grid_bytes, (float(t_s), field))
@@ -317,7 +344,7 @@ class RecordingSource:
         row = {"call": call, "push_index": self._pushes, "n_frames": n_frames}
         self.writer.log(topics.TACTILE_PUSH, self.clock.now(), call_json, row)
 
-    def _image_bytes(self, item: tuple[float, np.ndarray]) -> bytes:
+    def _image_bytes(self, item: tuple[float, np.ndarray | bytes]) -> bytes:
         t_s, image = item
         return foxglove_types.image_bytes(
             t_s, image, self.image_format, self.jpeg_quality, self.writer.offset_ns

@@ -157,14 +157,17 @@ class EpisodeRecording:
             raise RuntimeError(f"episode {self.path}: not started")
         return self.writer
 
-    def tap(self, source: WrenchSource, clock: Clock) -> RecordingSource:
-        """``source`` wrapped so every frame, field, estimate and call is recorded."""
+    def tap(self, source: WrenchSource, clock: Clock, camera: object = None) -> RecordingSource:
+        """``source`` wrapped so every frame, field, estimate and call is recorded; a
+        ``camera`` that can compress its frames (``recorder.CompressingCamera``) is asked to,
+        so the writer logs its JPEGs as they come."""
         return RecordingSource(
             source,
             self._started(),
             clock,
             image_format=self.options.image_format,
             jpeg_quality=self.options.jpeg_quality,
+            camera=camera,
         )
 
     def observer(self, mount: Mount | None = None) -> TickLogger:

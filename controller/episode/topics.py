@@ -138,7 +138,8 @@ TACTILE_PUSH = Topic(
     "same order: ``call`` 'push' (``push_index``, ``frame_t_s``: capture time, s), "
     "'capture_open' or 'rezero' (``n_frames``: the frames asked for, absent for the "
     "source's default; ``push_index``: the index of the next push, which is the first frame "
-    "the call affects). Messages of one file are ordered by (log_time, sequence).",
+    "the call affects). Messages of one file are ordered by log_time, and those of equal "
+    "log_time by their order in the file.",
 )
 COMMAND = Topic(
     "/control/command",

@@ -4,10 +4,14 @@ The control loop's thread only enqueues (``log``: the topic, the time, an encode
 payload appended to a deque; no lock, no encoding, no I/O). The logger thread sleeps until
 the next flush is due (every ``flush_interval_s``, or at once when ``flush_soon`` asks, at
 each phase change), then encodes every record queued, appends them to the MCAP file
-(``mcap``'s writer, zstd chunks) and flushes the file (finishing the chunk in progress):
-one wake-up per flush rather than one per record (docs/EPISODES.md, "Cost"). A process
-killed with SIGKILL therefore leaves every record up to the last flush readable
-(controller/episode/reader.py); ``repair`` finishes such a file.
+(``foxglove-sdk``'s MCAP writer, in Rust: zstd chunks, compressed on this thread) and flushes
+the file (finishing the chunk in progress): one wake-up per flush rather than one per record
+(docs/EPISODES.md, "Cost"). A process killed with SIGKILL therefore leaves every record up to
+the last flush readable (controller/episode/reader.py); ``repair`` finishes such a file.
+
+Order: the records are written in the order ``log`` queued them, so the file's order is the
+loop's; readers order messages by log time and keep the file's order among messages of equal
+log time (the MCAP ``sequence`` this writer gives counts each topic's messages on its own).
 
 When the queue is full the record is dropped, not waited for: the drop is counted by topic,
 logged once per topic as a warning, written to ``/episode/drops`` at the next flush and to
@@ -18,12 +22,15 @@ the writer goes on.
 ``close(outcome)`` stops the thread after it has written everything queued, writes the
 ``outcome`` metadata and the file's summary and footer. A failure to write (a full disk)
 stops the logger: later records are counted as dropped, and ``close`` raises OSError naming
-the file.
+the file, with the errno of the failed write. The Rust writer writes through ``_Sink``, a
+file object of ours that keeps the first OSError (the writer itself reports a failed write
+only as a RuntimeError at the next flush, or on stderr when a ``log`` wrote); the logger
+checks it after every batch and every flush.
 """
 
 from __future__ import annotations
 
-import itertools
+import errno
 import json
 import logging
 import threading
@@ -33,8 +40,10 @@ from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import IO, Any
 
+import foxglove
 import orjson
-from mcap.writer import CompressionType, Writer
+from foxglove import Channel, Context, Schema
+from foxglove.mcap import MCAPCompression, MCAPWriteOptions
 
 from controller.episode.topics import (
     DROPS,
@@ -57,6 +66,8 @@ other half (docs/EPISODES.md "Cost", docs/BENCHMARKS.md "Episodes")."""
 CHUNK_SIZE_BYTES = 4 * 1024 * 1024
 """A chunk is finished at this size or at the next flush, whichever comes first."""
 LIBRARY = "tactile-insertion episode writer"
+"""The MCAP header's library of a file ``repair`` finishes (the writer's own files name
+``foxglove-sdk``'s)."""
 
 Encoder = Callable[[Any], bytes]
 """Turns a payload into a message's bytes (run on the logger thread)."""
@@ -91,6 +102,42 @@ def wall_offset_ns(loop_now_s: float) -> int:
     """The offset from the loop's clock (now ``loop_now_s``, s) to the wall clock, integer ns:
     a log time is ``round(t_s * 1e9)`` plus it."""
     return time.time_ns() - round(loop_now_s * NS_PER_S)
+
+
+class _Sink:
+    """The episode's file as the Rust MCAP writer writes it: ``stream``'s ``write``, ``seek``
+    and ``flush``, keeping the first OSError any of them raised (``error``) before raising it
+    on to the writer."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        self.stream = stream
+        self.error: OSError | None = None
+
+    def write(self, data: bytes | bytearray) -> int:
+        try:
+            return self.stream.write(data)
+        except OSError as error:
+            self.error = self.error or error
+            raise
+
+    def seek(self, offset: int, whence: int = 0) -> int:
+        try:
+            return self.stream.seek(offset, whence)
+        except OSError as error:
+            self.error = self.error or error
+            raise
+
+    def flush(self) -> None:
+        try:
+            self.stream.flush()
+        except OSError as error:
+            self.error = self.error or error
+            raise
+
+    def check(self) -> None:
+        """Raise the first OSError of a write, seek or flush, if there was one."""
+        if self.error is not None:
+            raise self.error
 
 
 def schema_of(topic: Topic) -> tuple[str, str, bytes]:
@@ -133,23 +180,28 @@ class EpisodeWriter:
         self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
         self._stream: IO[bytes] = self.path.open("xb")
-        self._mcap = Writer(  # the data section's CRC: damage outside the chunks shows
-            self._stream,
+        self._sink = _Sink(self._stream)
+        self._context = Context()  # the channels and this file only: one per episode
+        options = MCAPWriteOptions(  # the data section's CRC: damage outside the chunks shows
+            compression=MCAPCompression.Zstd,
+            profile=PROFILE,
             chunk_size=CHUNK_SIZE_BYTES,
-            compression=CompressionType.ZSTD,
-            enable_data_crcs=True,
+            calculate_data_section_crc=True,
+            compression_threads=0,  # on the logger thread, counted in ``busy_s``
         )
-        self._mcap.start(profile=PROFILE, library=LIBRARY)
-        self._mcap.add_metadata(
+        self._mcap = foxglove.open_mcap(self._sink, context=self._context, writer_options=options)
+        self._mcap.write_metadata(
             METADATA_EPISODE, {**dict(info), "log_time_offset_ns": str(self.offset_ns)}
         )
         for name, (media_type, data) in attachments.items():
-            self._mcap.add_attachment(0, 0, name, media_type, data)
-        self._mcap.flush()
-        self._channels: dict[str, int] = {}
+            self._mcap.attach(log_time=0, create_time=0, name=name, media_type=media_type,
+                              data=data)  # fmt: skip
+        self._flush()
+        self._channels: dict[str, Callable[[bytes, int], None]] = {}
+        """Each topic's channel's ``log(data, log_time_ns)`` (``foxglove-sdk``'s own, without
+        the ``Channel`` wrapper's checks for the dicts and strings we never pass)."""
         self._queue_size = queue_size
-        self._queue: deque[tuple[Topic, int, int, Encoder, Any]] = deque()
-        self._sequence = itertools.count()
+        self._queue: deque[tuple[Topic, int, Encoder, Any]] = deque()
         self.dropped: Counter[str] = Counter()
         self._dropped_written = 0
         self._last_ns = self.offset_ns  # the newest log time written, ns
@@ -169,10 +221,9 @@ class EpisodeWriter:
         time is that plus ``offset_ns``), encoded
         on the logger thread by ``encode(payload)``; dropped and counted if the queue is
         full or the writer has failed. ``payload`` must not change afterwards."""
-        sequence = next(self._sequence)
         if self._error is None and not self._closed and len(self._queue) < self._queue_size:
             t_ns = round(t_s * NS_PER_S) + self.offset_ns
-            self._queue.append((topic, t_ns, sequence, encode, payload))
+            self._queue.append((topic, t_ns, encode, payload))
             return
         if not self.dropped[topic.name]:
             why = "queue full" if self._error is None and not self._closed else "writer stopped"
@@ -207,12 +258,13 @@ class EpisodeWriter:
                     "dropped_by_topic": json.dumps(dict(self.dropped), sort_keys=True),
                 }
                 self._write_drops(self._last_ns)
-                self._mcap.add_metadata(METADATA_OUTCOME, record)
-                self._mcap.finish()
-                self._stream.flush()
+                self._mcap.write_metadata(METADATA_OUTCOME, record)
+                self._finish()
         except OSError as error:
             self._error = error
         finally:
+            if self._error is not None:
+                self._abandon()
             try:
                 self._stream.close()
             except OSError as error:
@@ -240,7 +292,7 @@ class EpisodeWriter:
                 if stopping:
                     return
                 self._write_drops(self._last_ns)
-                self._mcap.flush()
+                self._flush()
                 next_flush = time.monotonic() + self.flush_interval_s
         except OSError as error:
             self._error = error
@@ -249,13 +301,43 @@ class EpisodeWriter:
             self.busy_s = time.thread_time() - began
 
     def _drain(self) -> None:
-        """Write every record queued now."""
+        """Write every record queued now (OSError if a write failed)."""
         pop, write = self._queue.popleft, self._write
         while self._queue:
             write(pop())
+        self._sink.check()
 
-    def _write(self, item: tuple[Topic, int, int, Encoder, Any]) -> None:
-        topic, t_ns, sequence, encode, payload = item
+    def _flush(self) -> None:
+        """Finish the chunk in progress and flush the file (OSError if that failed)."""
+        try:
+            self._mcap.flush()
+        except RuntimeError as error:  # the Rust writer's failure: the sink has its OSError
+            self._raise_failure(error)
+        self._sink.check()
+
+    def _finish(self) -> None:
+        """Write the summary and the footer (OSError if that failed)."""
+        try:
+            self._mcap.close()
+        except RuntimeError as error:
+            self._raise_failure(error)
+        self._sink.check()
+        self._stream.flush()
+
+    def _abandon(self) -> None:
+        """After a failed write: stop the Rust writer, which writes nothing more once a write
+        has failed (it would otherwise try to finish the file when collected)."""
+        try:
+            self._mcap.close()
+        except RuntimeError:
+            pass  # the failure is ``self._error``
+
+    def _raise_failure(self, error: RuntimeError) -> None:
+        self._sink.check()  # the failed write's own OSError, with its errno
+        raise OSError(errno.EIO, f"MCAP writer: {error}")
+
+    def _write(self, item: tuple[Topic, int, Encoder, Any]) -> None:
+        topic, t_ns, encode, payload = item
         try:
             data = encode(payload)
         except (ValueError, TypeError, OverflowError) as error:  # e.g. a value JSON cannot hold
@@ -263,11 +345,10 @@ class EpisodeWriter:
                 log.error("episode %s: dropping a %s record: %s", self.path, topic.name, error)
             self.dropped[topic.name] += 1
             return
-        channel = self._channels.get(topic.name)
-        if channel is None:
-            channel = self._register(topic)
-        self._mcap.add_message(channel, t_ns, data, t_ns, sequence % 2**32)
-        self._last_ns = max(self._last_ns, t_ns)
+        log_message = self._channels.get(topic.name) or self._register(topic)
+        log_message(data, t_ns)
+        if t_ns > self._last_ns:
+            self._last_ns = t_ns
         if not self._listeners:
             return
         for listener in tuple(self._listeners):
@@ -284,10 +365,15 @@ class EpisodeWriter:
             return
         self._dropped_written = total
         payload = {"dropped_total": total, "by_topic": dict(self.dropped)}
-        self._write((DROPS, t_ns, next(self._sequence), json_bytes, payload))
+        self._write((DROPS, t_ns, json_bytes, payload))
 
-    def _register(self, topic: Topic) -> int:
-        schema_id = self._mcap.register_schema(*schema_of(topic))
-        channel = self._mcap.register_channel(topic.name, topic.encoding, schema_id)
-        self._channels[topic.name] = channel
-        return channel
+    def _register(self, topic: Topic) -> Callable[[bytes, int], None]:
+        name, encoding, data = schema_of(topic)
+        channel = Channel(
+            topic.name,
+            schema=Schema(name=name, encoding=encoding, data=data),
+            message_encoding=topic.encoding,
+            context=self._context,
+        )
+        log_message = self._channels[topic.name] = channel.base.log
+        return log_message

@@ -128,7 +128,7 @@ def run_task(
             stack.callback(recorder.close)
         if episode is not None:  # once connected too; the caller closes it
             episode.start(device_set.clock)
-            source = episode.tap(source, device_set.clock)
+            source = episode.tap(source, device_set.clock, device_set.devices.tactile)
             mount = sensor_mount(config.machine.signals.torque_axes, config.plug.thickness_m)
             observers = [episode.observer(mount), *observers]
         ticks = _fan_out([*([recorder] if recorder is not None else []), *observers])

@@ -27,6 +27,12 @@ waits: it hands the newest frame over, or raises:
   row), or ``max_read_failures`` frames in a row did not decode;
 * DeviceTimeoutError: the newest frame is older than ``max_age_s`` (the stream stalled).
 
+Compressed frames (``compress_frames(encode)``, for an episode): the grabber thread also
+encodes each processed frame with ``encode``, as JPEG (``TactileFrame.jpeg``; the camera's
+own MJPG buffer is the full 3280 x 2464 sensor image, not the cropped and resized frame the
+estimator takes, so it is encoded again, off the control loop's thread).
+``compressed(image)`` gives the JPEG of the frame ``read_latest`` handed over last.
+
 A frame that does not decode (a cut or corrupted JPEG) is skipped, and the first of each run
 of such frames is logged as a warning; the newest good frame stays available, with its own
 grab time, so nothing downstream sees a wrong timestamp.
@@ -165,6 +171,7 @@ class _Grabber:
         self._clock = clock
         self._lock = threading.Lock()
         self._latest: TactileFrame | None = None
+        self.encode: Callable[[np.ndarray], bytes] | None = None  # each frame's JPEG too
         self._fault: str | None = None
         self._lost: str | None = None
         self.open_error: DeviceNotConnectedError | None = None  # opening failed
@@ -261,8 +268,10 @@ class _Grabber:
                     f"frozen stream: the last {identical} frames are identical "
                     "(camera firmware hung?); replug the sensor"
                 )
+            encode = self.encode
+            jpeg = encode(image) if encode is not None else None
             with self._lock:
-                self._latest = TactileFrame(t_s=t_s, image=image)
+                self._latest = TactileFrame(t_s=t_s, image=image, jpeg=jpeg)
                 self._fault = fault
             self._ready.set()
 
@@ -287,6 +296,8 @@ class TactileCamera(ContextManagedDevice):
         self._capture_factory = capture_factory
         self._clock = clock if clock is not None else MonotonicClock()
         self._grabber: _Grabber | None = None
+        self._encode: Callable[[np.ndarray], bytes] | None = None
+        self._handed: TactileFrame | None = None  # the frame ``read_latest`` returned last
 
     @classmethod
     def from_config(
@@ -315,6 +326,7 @@ class TactileCamera(ContextManagedDevice):
         cfg = self.config
         node = find_capture_node(self.name, cfg.by_id_pattern, cfg.by_id_dir)
         grabber = _Grabber(lambda: self._open(node), node, cfg, cfg.frame_processor(), self._clock)
+        grabber.encode = self._encode
         self._grabber = grabber
         try:
             grabber.start()
@@ -428,4 +440,18 @@ class TactileCamera(ContextManagedDevice):
                 f"newest frame is {age_s * 1e3:.0f} ms old (max {max_age_s * 1e3:.0f} ms): "
                 "the stream stalled",
             )
+        self._handed = frame
         return frame
+
+    def compress_frames(self, encode: Callable[[np.ndarray], bytes] | None) -> None:
+        """Give each frame grabbed from now on ``encode(image)`` too, its JPEG, encoded on the
+        grabber thread; None: no more (see the module docstring)."""
+        self._encode = encode
+        if self._grabber is not None:
+            self._grabber.encode = encode
+
+    def compressed(self, image: np.ndarray) -> bytes | None:
+        """The JPEG of ``image`` if it is the image of the frame ``read_latest`` returned last
+        (the same object) and that frame was compressed, else None."""
+        handed = self._handed
+        return handed.jpeg if handed is not None and handed.image is image else None

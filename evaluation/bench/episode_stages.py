@@ -1,7 +1,12 @@
 """Where the episode writer's thread spends its CPU (docs/EPISODES.md "Cost"): a simulated
 usb_c trial run as fast as possible for ``--seconds`` of loop time (the search made to fail so
-it lasts), with each record's encoding and ``mcap`` ``add_message`` and each file flush timed
-on the writer thread (``time.thread_time_ns``), by topic.
+it lasts), with each record's encoding, its write (the MCAP channel's ``log``) and each file
+flush timed on the writer thread (``time.thread_time_ns``), by topic.
+
+The frames' JPEG is the camera's (the simulated twin encodes each frame it renders once an
+episode asks for it, on the loop's thread: ``compress_frames``), so it is not the writer's;
+it is timed too (the encoder the episode gives the twin) and reported on its own line, so the
+cost that moved is in view.
 
 The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
 slower than real time their count per second of loop time is not the real-time one; the
@@ -24,6 +29,7 @@ from typing import Any
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
+from drivers.sim.twins.tactile import SimTactileSensor
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -49,11 +55,14 @@ class StageTimes:
         self.flushes = 0
         self.busy_s = 0.0
         self.flush_interval_s = 0.0
+        self.camera_jpeg_ns = 0
+        self.camera_jpegs = 0
 
     def patch(self) -> Any:
         """Patch ``EpisodeWriter`` (log, __init__, close); returns a function that undoes it."""
         original_log, original_init = EpisodeWriter.log, EpisodeWriter.__init__
         original_close = EpisodeWriter.close
+        original_register, original_flush = EpisodeWriter._register, EpisodeWriter._flush
         clock = time.thread_time_ns
         stages = self
 
@@ -70,23 +79,17 @@ class StageTimes:
         def init(self, *args, **kwargs):  # type: ignore[no-untyped-def]
             original_init(self, *args, **kwargs)
             stages.flush_interval_s = self.flush_interval_s
-            mcap = self._mcap
-            add, flush = mcap.add_message, mcap.flush
-            names: dict[int, str] = {}
 
-            def add_message(channel, log_time, data, publish_time, sequence=0):  # type: ignore[no-untyped-def]
-                began = clock()
-                add(channel, log_time, data, publish_time, sequence)
-                name = names.get(channel) or names.setdefault(channel, _topic_of(self, channel))
-                stages.add_ns[name] += clock() - began
+        def register(self, topic):  # type: ignore[no-untyped-def]
+            log = _timed_log(original_register(self, topic), topic.name, stages)
+            self._channels[topic.name] = log
+            return log
 
-            def flushed() -> None:
-                began = clock()
-                flush()
-                stages.flush_ns += clock() - began
-                stages.flushes += 1
-
-            mcap.add_message, mcap.flush = add_message, flushed
+        def flush(self):  # type: ignore[no-untyped-def]
+            began = clock()
+            original_flush(self)
+            stages.flush_ns += clock() - began
+            stages.flushes += 1
 
         def close(self, outcome=None):  # type: ignore[no-untyped-def]
             original_close(self, outcome)
@@ -94,16 +97,40 @@ class StageTimes:
 
         EpisodeWriter.log, EpisodeWriter.close = log, close  # type: ignore[method-assign]
         EpisodeWriter.__init__ = init  # type: ignore[method-assign]
+        EpisodeWriter._register, EpisodeWriter._flush = register, flush  # type: ignore[method-assign]
+        original_compress = SimTactileSensor.compress_frames
+
+        def compress_frames(self, encode):  # type: ignore[no-untyped-def]
+            def camera_jpeg(image):  # type: ignore[no-untyped-def]
+                began = clock()
+                data = encode(image)
+                stages.camera_jpeg_ns += clock() - began
+                stages.camera_jpegs += 1
+                return data
+
+            original_compress(self, None if encode is None else camera_jpeg)
+
+        SimTactileSensor.compress_frames = compress_frames  # type: ignore[method-assign]
 
         def undo() -> None:
             EpisodeWriter.log, EpisodeWriter.close = original_log, original_close  # type: ignore[method-assign]
             EpisodeWriter.__init__ = original_init  # type: ignore[method-assign]
+            EpisodeWriter._register, EpisodeWriter._flush = original_register, original_flush  # type: ignore[method-assign]
+            SimTactileSensor.compress_frames = original_compress  # type: ignore[method-assign]
 
         return undo
 
 
-def _topic_of(writer: EpisodeWriter, channel: int) -> str:
-    return next((name for name, cid in writer._channels.items() if cid == channel), "?")
+def _timed_log(log: Any, name: str, stages: StageTimes) -> Any:
+    """An MCAP channel's ``log(data, log_time_ns)`` that adds its writer-thread CPU to
+    ``stages.add_ns[name]``."""
+
+    def timed(data: bytes, log_time: int) -> None:
+        began = time.thread_time_ns()
+        log(data, log_time)
+        stages.add_ns[name] += time.thread_time_ns() - began
+
+    return timed
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -133,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time in {wall_s:.1f} s of wall "
           f"time, {sum(stages.count.values())} records, file {size / 1e6:.2f} MB\n")  # fmt: skip
     print(
-        "| topic | records | encode, us each | add_message, us each | CPU per s of loop time, ms |"
+        "| topic | records | encode, us each | write (log), us each | CPU per s of loop time, ms |"
     )
     print("|---|---|---|---|---|")
     for name in sorted(stages.count, key=lambda k: -(stages.encode_ns[k] + stages.add_ns[k])):
@@ -145,11 +172,15 @@ def main(argv: list[str] | None = None) -> int:
     flush_each_s = stages.flush_ns / 1e9 / max(stages.flushes, 1)
     other_s = stages.busy_s - records_s - stages.flush_ns / 1e9
     print(f"\nwriter thread CPU {stages.busy_s:.3f} s = {stages.busy_s / loop_s * 100:.2f} % "
-          f"of a core per s of loop time: records (encode + add) {records_s:.3f} s, "
+          f"of a core per s of loop time: records (encode + write) {records_s:.3f} s, "
           f"{stages.flushes} flushes {stages.flush_ns / 1e9:.3f} s ({flush_each_s * 1e3:.2f} "
           f"ms each), the rest (waiting, queue, timers) {other_s:.3f} s")  # fmt: skip
     realtime = records_s / loop_s + flush_each_s / stages.flush_interval_s
     print(f"real-time estimate (records per s of loop time + a flush every "
           f"{stages.flush_interval_s:g} s): {realtime * 100:.2f} % of a core, without the "
           f"rest")  # fmt: skip
+    each_us = stages.camera_jpeg_ns / max(stages.camera_jpegs, 1) / 1e3
+    print(f"the frames' JPEG, the camera's (the twin's, on the loop's thread; not in the "
+          f"writer's figures): {stages.camera_jpegs} frames, {each_us:.1f} us each, "
+          f"{stages.camera_jpeg_ns / 1e6 / loop_s:.2f} ms per s of loop time")  # fmt: skip
     return 0

@@ -385,6 +385,22 @@ def test_mini_raw_mjpeg_path_matches_full_decode(tmp_path: Path) -> None:
     assert np.abs(images[True].astype(int) - images[False]).mean() < 3.0
 
 
+def test_compressed_frames_are_encoded_on_the_grabber_thread(tmp_path: Path) -> None:
+    def jpeg(image: np.ndarray) -> bytes:
+        return cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
+
+    clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(20)])
+    factory, _ = paced_factory(raw=True, rate_hz=100)
+    with TactileCamera(digit_config(by_id_dir(tmp_path, DIGIT_ID, clip)), factory) as camera:
+        assert camera.read_latest(max_age_s=0.5).jpeg is None
+        camera.compress_frames(jpeg)
+        wait_for(lambda: camera.read_latest(0.5).jpeg is not None)
+        frame = camera.read_latest(max_age_s=0.5)
+        assert frame.jpeg == jpeg(frame.image)
+        assert camera.compressed(frame.image) is frame.jpeg
+        assert camera.compressed(frame.image.copy()) is None
+
+
 def test_stale_frame_raises_timeout_and_recovers(tmp_path: Path) -> None:
     clip = write_avi(tmp_path / "digit.avi", [textured(240, 320, seed=i) for i in range(10)])
     factory, made = paced_factory(raw=True, rate_hz=100)

@@ -20,6 +20,11 @@ shows the gel at its capture time. The stream starts ``latency_s`` before ``conn
 ``drift_period_s``, the lighting drift level of a frame is the time since the connection
 over that period (the renderer's ``drift``).
 
+Compressed frames (``compress_frames(encode)``, for an episode): each frame rendered from
+then on also carries ``encode(image)``, its JPEG (``TactileFrame.jpeg``), encoded once when the
+frame is rendered, on the thread that reads it (the loop's); the image the estimator takes is
+unchanged. ``compressed(image)`` gives the JPEG of the newest frame handed over.
+
 ``read_latest(max_age_s)`` has the real driver's semantics: the newest frame captured at or
 before ``now()``, or DeviceTimeoutError when it is older than ``max_age_s`` (e.g. after
 ``stall()``); DeviceNotConnectedError before ``connect()`` and after ``unplug()`` ("camera
@@ -160,6 +165,7 @@ class SimTactileSensor(ContextManagedDevice):
         self._t0_s = 0.0  # time of frame 0
         self._stalled_after: int | None = None  # last frame index before a stall
         self._latest: tuple[int, TactileFrame] | None = None
+        self._encode: Callable[[np.ndarray], bytes] | None = None
 
     @classmethod
     def from_config(
@@ -232,8 +238,20 @@ class SimTactileSensor(ContextManagedDevice):
             )
         if self._latest is None or self._latest[0] != index:
             image = self._render(index, self._capture_time(index))
-            self._latest = (index, TactileFrame(t_s=t_s, image=image))
+            jpeg = self._encode(image) if self._encode is not None else None
+            self._latest = (index, TactileFrame(t_s=t_s, image=image, jpeg=jpeg))
         return self._latest[1]
+
+    def compress_frames(self, encode: Callable[[np.ndarray], bytes] | None) -> None:
+        """Give each frame rendered from now on ``encode(image)`` too, its JPEG; None: no
+        more (see the module docstring)."""
+        self._encode = encode
+
+    def compressed(self, image: np.ndarray) -> bytes | None:
+        """The JPEG of ``image`` if it is the newest frame's image (the same object) and that
+        frame was compressed, else None."""
+        latest = self._latest
+        return latest[1].jpeg if latest is not None and latest[1].image is image else None
 
     # -- simulation hooks --------------------------------------------------------------
 

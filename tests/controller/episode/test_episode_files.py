@@ -2,7 +2,10 @@
 
 from __future__ import annotations
 
+import errno
 import json
+import resource
+import signal
 import threading
 import time
 
@@ -10,12 +13,27 @@ import numpy as np
 import pytest
 from mcap.writer import Writer
 
-from controller.episode import EpisodeError, read_episode
-from controller.episode.recorder import arm_json
+from controller.episode import EpisodeError, decode_image, read_episode
+from controller.episode.foxglove_types import encode_image
+from controller.episode.recorder import RecordingSource, arm_json
 from controller.episode.repair import repair
-from controller.episode.topics import ARM_STATUS, JSON_SCHEMAS, LOOP_TICK, TRANSITION
+from controller.episode.topics import (
+    ARM_STATUS,
+    COMMAND,
+    JSON_SCHEMAS,
+    LOOP_TICK,
+    TACTILE_PUSH,
+    TRANSITION,
+)
 from controller.episode.writer import EpisodeWriter, json_bytes
+from controller.tactile.wrench import WrenchEstimate
+from core.clock import ManualClock
+from core.config import CONFIG_ROOT
 from core.devices import ArmMode, ArmState, ArmStatus, Pose
+from drivers.registry import load_device_config
+from drivers.sim.twins.tactile import SimTactileSensor
+
+MINI_CAMERA = load_device_config(CONFIG_ROOT / "sensors" / "gelsight_mini_camera.yaml").config
 
 
 def _writer(path, **options):
@@ -51,6 +69,89 @@ def test_a_full_queue_drops_counts_and_records_what_it_dropped(tmp_path):
     assert drops[-1]["by_topic"] == dict(writer.dropped)
     indices = [m.value["index"] for m in ep.messages("/loop/tick")]
     assert indices == sorted(indices)
+
+
+def test_messages_of_equal_time_read_back_in_the_order_logged_across_topics(tmp_path):
+    order = [(COMMAND, 0.0), (LOOP_TICK, 0.0), (TACTILE_PUSH, 0.0), (COMMAND, 0.01),
+             (TACTILE_PUSH, 0.01), (LOOP_TICK, 0.01), (TRANSITION, 0.01), (TACTILE_PUSH, 0.01),
+             (LOOP_TICK, 0.005)]  # fmt: skip
+    writer = _writer(tmp_path / "e.mcap")
+    for i, (topic, t_s) in enumerate(order):
+        writer.log(topic, t_s, json_bytes, {"i": i})
+        if i == 4:
+            writer.flush_soon()  # across a chunk's end too
+            time.sleep(0.05)
+    writer.close({"reason": "done"})
+    expected = sorted(range(len(order)), key=lambda i: order[i][1])  # stable: logged order
+    ep = read_episode(tmp_path / "e.mcap")
+    assert [m.value["i"] for m in ep.messages()] == expected
+    cut = tmp_path / "cut.mcap"  # the same after ``repair``
+    cut.write_bytes((tmp_path / "e.mcap").read_bytes()[:-200])
+    repair(cut, tmp_path / "fixed.mcap")
+    assert [m.value["i"] for m in read_episode(tmp_path / "fixed.mcap").messages()] == expected
+
+
+def test_a_failed_write_stops_the_writer_and_close_raises_its_oserror(tmp_path):
+    path = tmp_path / "e.mcap"
+    writer = _writer(path)
+    time.sleep(0.1)  # the header written
+    limit = path.stat().st_size + 20_000  # the file may not grow past this: EFBIG
+    soft, hard = resource.getrlimit(resource.RLIMIT_FSIZE)
+    handler = signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # the write fails, no signal
+    resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
+    try:
+        noise = np.random.default_rng(0).integers(0, 256, 4000, np.uint8).tobytes()
+        for i in range(200):  # 800 kB that zstd cannot shrink, flushed every 0.05 s
+            writer.log(LOOP_TICK, i * 0.01, lambda _: noise, None)
+            time.sleep(0.002)
+        time.sleep(0.2)
+        writer.log(LOOP_TICK, 3.0, json_bytes, {"index": 0})  # after the failure: dropped
+        with pytest.raises(OSError) as failure:
+            writer.close({"reason": "done"})
+    finally:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (soft, hard))
+        signal.signal(signal.SIGXFSZ, handler)
+    assert failure.value.errno == errno.EFBIG and failure.value.filename == str(path)
+    assert writer.dropped["/loop/tick"] >= 1
+    ep = read_episode(path)  # what was written before the failure reads
+    assert not ep.finished and 0 < ep.counts["/loop/tick"] < 200
+
+
+class _Zero:
+    """A wrench source that answers every frame with a zero estimate."""
+
+    def push(self, frame, t_s):
+        return WrenchEstimate.zero(t_s, zeroing=False, calibrated=False)
+
+    def capture_open(self, n_frames=None):
+        pass
+
+    def rezero(self, n_frames=None):
+        pass
+
+
+@pytest.mark.parametrize("image_format", ["jpeg", "png"])
+def test_the_cameras_jpeg_is_logged_as_it_comes_and_any_other_frame_is_encoded(
+    tmp_path, image_format
+):
+    clock = ManualClock()
+    camera = SimTactileSensor(MINI_CAMERA, clock, np.random.default_rng(0))
+    writer = _writer(tmp_path / "e.mcap")
+    with camera:
+        tap = RecordingSource(_Zero(), writer, clock, image_format=image_format,
+                              jpeg_quality=80, camera=camera)  # fmt: skip
+        clock.advance(0.04)
+        frame = camera.read_latest(0.1)
+        tap.push(frame.image, frame.t_s)  # the camera's JPEG, if it made one
+        tap.push(frame.image.copy(), frame.t_s)  # not the frame handed over: encoded here
+    writer.close({"reason": "done"})
+    first, second = (m.value for m in read_episode(tmp_path / "e.mcap").messages("/tactile/image"))
+    assert (frame.jpeg is not None) == (image_format == "jpeg")  # asked for by a jpeg episode
+    if image_format == "jpeg":
+        assert first.data == frame.jpeg == encode_image(frame.image, "jpeg", 80) == second.data
+    else:
+        np.testing.assert_array_equal(decode_image(first), frame.image)  # lossless
+        assert first.data == second.data
 
 
 def test_a_missing_file_is_one_line_naming_it(tmp_path):

@@ -8,6 +8,7 @@ from __future__ import annotations
 import dataclasses
 import math
 
+import cv2
 import numpy as np
 import pytest
 from hypothesis import example, given, settings
@@ -361,6 +362,29 @@ def test_frames_follow_the_field_source(clock):
     assert pressed.t_s == pytest.approx(0.48)  # the frame of the 25 fps stream before now
     np.testing.assert_array_equal(pressed.image, reference.render(shear((240, 320), 0.96)))
     assert np.abs(pressed.image.astype(int) - rest.image).mean() > 5
+
+
+def _jpeg(image):
+    return cv2.imencode(".jpg", image, [cv2.IMWRITE_JPEG_QUALITY, 80])[1].tobytes()
+
+
+def test_compressed_frames_carry_their_jpeg_and_the_same_image(clock):
+    plain = SimTactileSensor(MINI, clock, np.random.default_rng(3))
+    compressing = SimTactileSensor(MINI, clock, np.random.default_rng(3))
+    with plain, compressing:
+        first = compressing.read_latest(0.1)  # rendered before: no JPEG
+        compressing.compress_frames(_jpeg)
+        clock.advance(0.04)
+        frame, other = compressing.read_latest(0.1), plain.read_latest(0.1)
+        assert compressing.read_latest(0.1) is frame  # encoded once per frame
+        np.testing.assert_array_equal(frame.image, other.image)  # the estimator's pixels
+        assert other.jpeg is None and first.jpeg is None
+        assert frame.jpeg == _jpeg(frame.image)
+        assert compressing.compressed(frame.image) is frame.jpeg
+        assert compressing.compressed(frame.image.copy()) is None  # not the frame handed over
+        compressing.compress_frames(None)
+        clock.advance(0.04)
+        assert compressing.read_latest(0.1).jpeg is None
 
 
 def test_a_coarse_field_renders_like_the_full_one(clock):
