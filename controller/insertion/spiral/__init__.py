@@ -2,8 +2,8 @@
 the arm's F/T sensor (the ``blind`` baseline) or on the tactile axial force
 (``touch_spiral``). One module per phase; the table and sub-stages in ``machine.SPIRAL``."""
 
-from controller.insertion.spiral.config import AxialWeights, SpiralConfig, TouchSpiralConfig
-from controller.insertion.spiral.machine import NO_FORCE, SPIRAL, SpiralMachine
+from controller.insertion.spiral.spiral_config import AxialWeights, SpiralConfig, TouchSpiralConfig
+from controller.insertion.spiral.spiral_machine import NO_FORCE, SPIRAL, SpiralMachine
 
 __all__ = [
     "NO_FORCE", "SPIRAL", "AxialWeights", "SpiralConfig", "SpiralMachine", "TouchSpiralConfig",

@@ -13,7 +13,7 @@ from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import NO_FORCE, SPIRAL, SpiralConfig, SpiralMachine
-from controller.insertion.spiral.search import SearchStage
+from controller.insertion.spiral.spiral_search import SearchStage
 from controller.run.task import load_task
 from core.config import ConfigError
 from tests.controller.insertion.world import ToyWorld

@@ -1,7 +1,8 @@
 """The press-spiral machine outside autonomy and at its limits, in the toy world (the blind
 baseline's F/T reading): the operator takes over at once and hands back to GRASP's settle
 with the plug held (no open gel taken, the pattern's progress kept), the e-stop latches until
-acknowledged, a dropped plug is a slip (the gripper no longer holding), and a force or tilt past the limits stops the run."""
+acknowledged, a dropped plug is a slip (the gripper no longer holding), and a force or tilt
+past the limits stops the run."""
 
 from __future__ import annotations
 
@@ -11,7 +12,7 @@ import pytest
 
 from controller.insertion.interface import Phase, TeleopInput
 from controller.insertion.spiral import SpiralMachine
-from controller.insertion.spiral.grasp import GraspStage
+from controller.insertion.spiral.spiral_grasp import GraspStage
 from core.devices import Twist
 from tests.controller.insertion.test_blind import SMALL, reasons
 from tests.controller.insertion.world import ToyWorld

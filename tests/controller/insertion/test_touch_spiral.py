@@ -13,7 +13,7 @@ from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
-from controller.insertion.spiral.search import SearchStage
+from controller.insertion.spiral.spiral_search import SearchStage
 from controller.insertion.spiral.torque_servo import TorqueServo, TorqueServoSettings
 from controller.run.controllers import CONTROLLERS
 from controller.run.task import load_task

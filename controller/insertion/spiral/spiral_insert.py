@@ -16,10 +16,10 @@ import numpy as np
 
 from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.stage import Staged
-from controller.insertion.spiral.search import SearchStage, SearchState
+from controller.insertion.spiral.spiral_search import SearchStage, SearchState
 
 if TYPE_CHECKING:
-    from controller.insertion.spiral.machine import SpiralMachine
+    from controller.insertion.spiral.spiral_machine import SpiralMachine
 
 
 class InsertStage(Enum):

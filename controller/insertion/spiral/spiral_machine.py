@@ -5,13 +5,14 @@ tactile estimate's axial force: controller/insertion/force_reading.py).
 It grasps, moves the plug upright above the nominal opening and, for each yaw in
 ``yaw_offsets``, tares the force at the hover, touches the board, sweeps the pattern pressed
 and, where the force drops, probes, pushes and releases (each phase's module says how:
-grasp.py, approach.py, search.py, insert.py, release.py). A trial scores it as every
-controller (evaluation/trials/trial.py): DONE with the tip at the depth at some time.
+spiral_grasp.py, spiral_approach.py, spiral_search.py, spiral_insert.py, spiral_release.py).
+A trial scores it as every controller (evaluation/trials/trial.py): DONE with the tip at the
+depth at some time.
 
 Phases: GRASP -> APPROACH -> SEARCH <-> INSERT -> RELEASE -> RETRACT -> DONE. Each tick,
 in this order: a device fault ends the run (FAILED, ``device_fault``); the e-stop button
-latches ESTOP; an operator in control takes over (TELEOP; overrides.py says where autonomy
-resumes); an arm without a force reading ends it (``device_fault``, its rule ``no_force``:
+latches ESTOP; an operator in control takes over (TELEOP; spiral_overrides.py says where
+autonomy resumes); an arm without a force reading ends it (``device_fault``, its rule ``no_force``:
 the arm file's ``ft_sensor`` is off), as does the budget ``timeout_s`` of autonomous time
 (``timeout``); with the plug in hand (APPROACH, SEARCH, INSERT), the gripper no longer
 holding (``slip``; not the estimate's slip flags: their false alarms while the plug sweeps
@@ -41,8 +42,25 @@ from controller.insertion.interface import Command, FailureReason, Observation, 
 from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error, tip_position
 from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
 from controller.insertion.search_path import SearchPattern
-from controller.insertion.spiral import approach, grasp, insert, overrides, release, search
-from controller.insertion.spiral.config import SpiralConfig
+from controller.insertion.spiral import (
+    spiral_approach as approach,
+)
+from controller.insertion.spiral import (
+    spiral_grasp as grasp,
+)
+from controller.insertion.spiral import (
+    spiral_insert as insert,
+)
+from controller.insertion.spiral import (
+    spiral_overrides as overrides,
+)
+from controller.insertion.spiral import (
+    spiral_release as release,
+)
+from controller.insertion.spiral import (
+    spiral_search as search,
+)
+from controller.insertion.spiral.spiral_config import SpiralConfig
 from controller.insertion.spiral.torque_servo import TorqueServo
 from core.devices import Twist
 from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation

@@ -14,7 +14,7 @@ from controller.insertion.phases.stage import Staged
 from core.devices import Twist
 
 if TYPE_CHECKING:
-    from controller.insertion.spiral.machine import SpiralMachine
+    from controller.insertion.spiral.spiral_machine import SpiralMachine
 
 
 class GraspStage(Enum):

@@ -12,10 +12,10 @@ from typing import TYPE_CHECKING
 from controller.insertion.commands import operator_command
 from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.overrides import EstopStage, OverrideState, TeleopStage
-from controller.insertion.spiral.grasp import GraspStage, GraspState
+from controller.insertion.spiral.spiral_grasp import GraspStage, GraspState
 
 if TYPE_CHECKING:
-    from controller.insertion.spiral.machine import SpiralMachine
+    from controller.insertion.spiral.spiral_machine import SpiralMachine
 
 
 def enter_teleop(obs: Observation) -> OverrideState:

@@ -28,7 +28,7 @@ from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.stage import Staged
 
 if TYPE_CHECKING:
-    from controller.insertion.spiral.machine import SpiralMachine
+    from controller.insertion.spiral.spiral_machine import SpiralMachine
 
 
 class SearchStage(Enum):
