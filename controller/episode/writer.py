@@ -104,6 +104,19 @@ def wall_offset_ns(loop_now_s: float) -> int:
     return time.time_ns() - round(loop_now_s * NS_PER_S)
 
 
+class _KeptWriteFailure(logging.Filter):
+    """Drops the Rust writer's warning for each message it could not log after a failed write
+    (logger ``foxglove.log_sink_set``, "error logging message: McapError(Io(...)": one a
+    message, each with the Python traceback of the sink's raise): the sink keeps that OSError
+    and the episode's writer reports it once, naming the file."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return not record.getMessage().startswith("error logging message: McapError(Io(")
+
+
+logging.getLogger("foxglove.log_sink_set").addFilter(_KeptWriteFailure())
+
+
 class _Sink:
     """The episode's file as the Rust MCAP writer writes it: ``stream``'s ``write``, ``seek``
     and ``flush``, keeping the first OSError any of them raised (``error``) before raising it
