@@ -19,6 +19,9 @@ class SpiralConfig(Config):
     """The task file's ``blind:`` section (see the module doc for the units).
 
     ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
+    ``inner_half_width_m``: with the spiral, the passes first sweep it out to this half-width
+    at every yaw, then on to ``half_width_m`` at every yaw (0: the whole spiral at one yaw
+    after another);
     ``touch_force_n``: the board is met; ``press_force_n``: held while sweeping;
     ``force_gain_m_s_n``: the admittance, z speed per N of force error; ``force_window``: the
     force is the mean of this many readings; ``wrist_z_stiffness_n_m``: the compliant
@@ -53,6 +56,7 @@ class SpiralConfig(Config):
     pattern: Literal["spiral", "raster"] = "spiral"
     pitch_m: float = number(1e-5, 0.01, default=0.0004)
     half_width_m: float = number(0.0, 0.05, default=0.003)
+    inner_half_width_m: float = number(0.0, 0.05, default=0.0)
     touch_force_n: float = number(0.05, 50.0, default=1.0)
     press_force_n: float = number(0.05, 50.0, default=2.0)
     force_gain_m_s_n: float = number(1e-5, 0.05, default=0.005)
@@ -93,6 +97,12 @@ class SpiralConfig(Config):
             raise ValueError(
                 "keys 'touch_force_n', 'press_force_n', 'stop_force_n', 'force_limit_n': "
                 f"expected increasing forces, got {', '.join(map(str, forces))}"
+            )
+        inner = self.inner_half_width_m
+        if inner > 0.0 and (self.pattern != "spiral" or inner >= self.half_width_m):
+            raise ValueError(
+                "key 'inner_half_width_m': expected 0, or under 'half_width_m' "
+                f"({self.half_width_m}) with the spiral pattern, got {inner} with {self.pattern}"
             )
 
     @property

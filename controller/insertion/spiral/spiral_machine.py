@@ -2,10 +2,11 @@
 (``blind``, on the arm's F/T sensor) and the same search by touch (``touch_spiral``, on the
 tactile estimate's axial force: controller/insertion/force_reading.py).
 
-It grasps, moves the plug upright above the nominal opening and, for each yaw in
-``yaw_offsets``, tares the force at the hover, touches the board, sweeps the pattern pressed
-and, where the force drops, probes, pushes and releases (each phase's module says how:
-spiral_grasp.py, spiral_approach.py, spiral_search.py, spiral_insert.py, spiral_release.py).
+It grasps, moves the plug upright above the nominal opening and, for each of SEARCH's
+passes (a yaw and a stretch of the pattern: ``spiral_search.plan_passes``), tares the force
+at the hover, touches the board, sweeps the pattern pressed and, where the force drops,
+probes, pushes and releases (each phase's module says how: spiral_grasp.py,
+spiral_approach.py, spiral_search.py, spiral_insert.py, spiral_release.py).
 A trial scores it as every controller (evaluation/trials/trial.py): DONE with the tip at the
 depth at some time.
 
@@ -130,8 +131,8 @@ class TerminalState:
 
 @dataclass
 class SearchMemory:
-    """What SEARCH and INSERT share through the run: the pass (``pass_index`` into
-    ``yaw_offsets``), the pattern's path length swept in it (``s_m``, m) and its recent
+    """What SEARCH and INSERT share through the run: the pass (``pass_index`` into the
+    machine's ``passes``), the pattern's path length swept in it (``s_m``, m) and its recent
     history (time s, length m) for a rewind, the length at the last rewound probe
     (``rewound_to_m``), the tared zero (``bias_n``, N; ``tared`` once one is taken) and the
     TCP's height at the settled
@@ -201,6 +202,7 @@ class SpiralMachine:
         self.force_t_s = 0.0
         self.tick_s = 0.0  # time since the previous tick, s
         self._pattern = SearchPattern(config.pattern, config.pitch_m, config.half_width_m)
+        self.passes = search.plan_passes(config)
         self._phase = Phase.GRASP
         self._state: Any = None  # the present phase's state (its module's dataclass)
         self._transitions: list[Transition] = []
@@ -306,9 +308,9 @@ class SpiralMachine:
         return Command(twist=Twist())
 
     @property
-    def pattern_length_m(self) -> float:
-        """The search pattern's whole path length, m."""
-        return self._pattern.length_m
+    def search_pass(self) -> search.SearchPass:
+        """SEARCH's present pass."""
+        return self.passes[self.memory.pass_index]
 
     # -- the force --------------------------------------------------------------------------
 
@@ -345,7 +347,7 @@ class SpiralMachine:
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
-        yaw = self.hole.yaw_rad + self.config.yaw_offsets[self.memory.pass_index]
+        yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
         return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:

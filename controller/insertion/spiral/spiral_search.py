@@ -1,4 +1,6 @@
-"""SEARCH of the press-spiral machine, one pass per yaw offset (``yaw_offsets``):
+"""SEARCH of the press-spiral machine, in passes (``plan_passes``): one per yaw offset
+(``yaw_offsets``), or, with ``inner_half_width_m``, the spiral's inner part at every yaw and
+then its outer part at every yaw. Each pass:
 
 * **tare**: still at ``hover_m`` above the board for ``tare_s``; the mean force over the
   readings is the sensor's zero (the F/T sensor drifts; the tactile reading has none while
@@ -12,8 +14,8 @@
   describes, once per stretch) and the admittance lowers the TCP: the tip ``catch_drop_m``
   below its height at the press is caught (INSERT); the force back at the press, or
   ``probe_s``, and the pattern goes on;
-* **rise**: at the pattern's end, up to the hover, then **turn** to the next yaw's start
-  (or RELEASE after the last, ``pattern_done``).
+* **rise**: at the pass's end, up to the hover, then **turn** to the next pass's start and
+  yaw (or RELEASE after the last, ``pattern_done``).
 """
 
 from __future__ import annotations
@@ -26,9 +28,35 @@ import numpy as np
 
 from controller.insertion.interface import Command, Observation, Phase
 from controller.insertion.phases.stage import Staged
+from controller.insertion.search_path import SearchPattern
+from controller.insertion.spiral.spiral_config import SpiralConfig
 
 if TYPE_CHECKING:
     from controller.insertion.spiral.spiral_machine import SpiralMachine
+
+
+@dataclass(frozen=True)
+class SearchPass:
+    """One pass of SEARCH: the tool's yaw offset from the nominal opening's (rad) and the
+    stretch of the pattern's path it sweeps, from ``start_m`` to ``end_m`` (path length, m)."""
+
+    yaw_offset_rad: float
+    start_m: float
+    end_m: float
+
+
+def plan_passes(config: SpiralConfig) -> tuple[SearchPass, ...]:
+    """SEARCH's passes in order: the whole pattern at each of ``yaw_offsets`` in turn, or,
+    with ``inner_half_width_m``, the spiral out to it at each yaw, then the rest at each yaw
+    (a tip near the opening's centre is then found at every yaw before the far ring is
+    swept at any)."""
+    whole = SearchPattern(config.pattern, config.pitch_m, config.half_width_m).length_m
+    if config.inner_half_width_m <= 0.0:
+        return tuple(SearchPass(yaw, 0.0, whole) for yaw in config.yaw_offsets)
+    inner = SearchPattern("spiral", config.pitch_m, config.inner_half_width_m).length_m
+    return tuple(SearchPass(yaw, 0.0, inner) for yaw in config.yaw_offsets) + tuple(
+        SearchPass(yaw, inner, whole) for yaw in config.yaw_offsets
+    )
 
 
 class SearchStage(Enum):
@@ -73,8 +101,8 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         return m.descend(obs, cfg.descend_speed_m_s)
     if state.stage in (SearchStage.SWEEP, SearchStage.PROBE):
         return _sweep_or_probe(m, obs, state, force)
-    if state.stage is SearchStage.TURN:  # to the pattern's start at the next yaw
-        target = m.tip_target(0.0, cfg.hover_m)
+    if state.stage is SearchStage.TURN:  # to the next pass's start, at its yaw
+        target = m.tip_target(m.search_pass.start_m, cfg.hover_m)
         if m.reach(obs, target) and m.turned(obs):
             state.next(SearchStage.TARE, obs.t_s)
         m.fire("turn")
@@ -82,10 +110,11 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     target = m.tip_target(run.s_m, cfg.hover_m)  # RISE
     m.fire("rise")
     if m.reach(obs, target):
-        if run.pass_index + 1 >= len(cfg.yaw_offsets):
+        if run.pass_index + 1 >= len(m.passes):
             m.go(obs, Phase.RELEASE, "pattern_done")
             return m.hold()
-        run.pass_index, run.s_m = run.pass_index + 1, 0.0
+        run.pass_index += 1
+        run.s_m = m.search_pass.start_m
         state.stage = SearchStage.TURN
     return m.servo(obs, target)
 
@@ -115,7 +144,7 @@ def _sweep_or_probe(
         return m.pressed(obs, force)
     run.s_m += cfg.sweep_speed_m_s * m.tick_s
     run.s_history.append((obs.t_s, run.s_m))
-    if run.s_m >= m.pattern_length_m:
+    if run.s_m >= m.search_pass.end_m:
         state.stage = SearchStage.RISE
     m.fire("sweep")
     return m.pressed(obs, force, moving=True)

@@ -13,7 +13,7 @@ from controller.insertion.definition import check_definition
 from controller.insertion.interface import Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import NO_FORCE, SPIRAL, SpiralConfig, SpiralMachine
-from controller.insertion.spiral.spiral_search import SearchStage
+from controller.insertion.spiral.spiral_search import SearchStage, plan_passes
 from controller.run.task import load_task
 from core.config import ConfigError
 from tests.controller.insertion.world import ToyWorld
@@ -32,7 +32,7 @@ def run(world: ToyWorld, machine: SpiralMachine, max_s: float = 80.0) -> list[tu
         world.step(machine)
         if machine.phase is Phase.SEARCH and machine.stage is SearchStage.SWEEP:
             force = world.observe().arm.external_force_n[2]
-            yaw = machine.config.yaw_offsets[machine.memory.pass_index]
+            yaw = machine.search_pass.yaw_offset_rad
             swept.append((world.tip.copy(), yaw, force))
     return swept
 
@@ -50,6 +50,34 @@ def test_the_yaw_offsets_alternate_within_the_range():
     assert SMALL.yaw_offsets == (0.0, 0.02, -0.02)
     assert replace(SMALL, yaw_range_rad=0.0).yaw_offsets == (0.0,)
     assert replace(SMALL, yaw_range_rad=0.05).yaw_offsets == (0.0, 0.02, -0.02, 0.04, -0.04)
+
+
+def test_an_inner_half_width_sweeps_the_inner_spiral_at_every_yaw_before_the_rest():
+    rings = replace(SMALL, inner_half_width_m=0.001)
+    passes = plan_passes(rings)
+    assert [p.yaw_offset_rad for p in passes] == list(SMALL.yaw_offsets) * 2
+    inner, whole = passes[0].end_m, passes[-1].end_m
+    assert [(p.start_m, p.end_m) for p in passes] == [(0.0, inner)] * 3 + [(inner, whole)] * 3
+    assert 0.0 < inner < whole
+    assert [(p.start_m, p.end_m) for p in plan_passes(SMALL)] == [(0.0, whole)] * 3
+    world = ToyWorld(**NO_OPENING)
+    machine = SpiralMachine(rings, world.plug, world.hole)
+    swept = run(world, machine)
+    assert reasons(machine)[-3:] == ["pattern_done", "released", "retracted"]
+    hole = np.array([world.hole.x_m, world.hole.y_m])
+    reach = np.array([np.linalg.norm(tip[:2] - hole) for tip, _, _ in swept])
+    yaws = [yaw for _, yaw, _ in swept]
+    far = int(np.argmax(reach > rings.inner_half_width_m * np.sqrt(2) + 3e-4))
+    assert far > 0 and set(yaws[:far]) == set(SMALL.yaw_offsets)  # every yaw, all near
+    assert reach.max() >= SMALL.half_width_m  # then out to the edge
+
+
+@pytest.mark.parametrize(
+    "change", [dict(inner_half_width_m=0.002), dict(inner_half_width_m=0.001, pattern="raster")]
+)
+def test_an_inner_half_width_must_be_inside_the_spiral(change):
+    with pytest.raises(ValueError, match="key 'inner_half_width_m'"):
+        replace(SMALL, **change)
 
 
 def test_without_an_opening_it_sweeps_pressed_once_per_yaw_then_releases_and_retracts():
