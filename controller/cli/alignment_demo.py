@@ -63,6 +63,7 @@ from controller.run.controllers import CONTROLLERS, Controller
 from controller.run.task import Task, TaskConfig, load_task
 from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers import registry
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
@@ -72,7 +73,9 @@ TELEOP_CONTROLLER = "teleop"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="teleop_demo", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("teleop_demo"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--task", default="usb_c", help="usb_c (default), usb_a or a task YAML")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--script", type=Path, help="a gamepad script for the simulated pad")

@@ -26,8 +26,8 @@ this scales the tilt by g.
 Once a contact is established (the statistic above q on ``CONTACT_FRAMES`` frames in a row,
 or the gate fully open once), the gate stays open until the next reference
 (``NoiseGate.until_contact``): zeroed on a grasp, a tilt passing through zero is not a
-return to noise, and gating it would cut a dead band into the tilt (issue 23,
-docs/ARCHITECTURE.md, "Quiet before contact"). Under noise alone a run of three frames above
+return to noise, and gating it would cut a dead band into the tilt
+(docs/ARCHITECTURE.md, "Quiet before contact"). Under noise alone a run of three frames above
 q has a probability of about 1e-6 per frame.
 """
 

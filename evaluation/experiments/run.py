@@ -46,6 +46,7 @@ from controller.cli.support import (
 )
 from controller.tactile import estimator_for_sensor
 from core.config import ConfigError
+from core.subcommands import job_prog
 from evaluation.common.machine_info import describe_machine, one_thread_env
 from evaluation.experiments import slip_eval, slip_false_alarms
 from evaluation.experiments.calibration_runs import (
@@ -115,7 +116,7 @@ def _second_stage_job(job: tuple):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="evaluate", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog=job_prog("evaluate"), description=__doc__.splitlines()[0])
     parser.add_argument("--docs", type=Path, default=Path("docs"))
     parser.add_argument("--work", type=Path, default=Path("out/evaluate"))
     parser.add_argument("--frames-per-axis", type=integer(1, MAX_FRAMES_PER_AXIS), default=400)

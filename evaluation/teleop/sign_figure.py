@@ -12,6 +12,8 @@ from pathlib import Path
 
 import matplotlib
 
+from core.subcommands import job_prog
+
 matplotlib.use("Agg")
 import matplotlib.patches as patches  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
@@ -28,7 +30,9 @@ FORCE = "#c0392b"
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="teleop_sign_figure", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("teleop_sign_figure"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--out", type=Path, required=True, help="the PNG to write")
     args = parser.parse_args(argv)
     return run_tool("teleop_sign_figure", lambda: _run(args.out))
