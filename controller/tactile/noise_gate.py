@@ -3,7 +3,7 @@
 Zeroed on the open gel, the field before contact is camera noise alone, and so is the tilt
 the dipole reads from it. On a markerless gel that noise is not small: with 2 grey levels on
 smooth LED shading the tilt moved by 4-17% of a 0.5 px tilt's peak (seeds 0-5,
-docs/REAL_RECORDINGS.md), near the images' information limit for any linear estimate
+docs/BENCHMARKS.md), near the images' information limit for any linear estimate
 (docs/ARCHITECTURE.md, "Quiet before contact"). What tells a contact from noise is not the
 tilt's size but whether the field differs from noise at all.
 

@@ -9,7 +9,7 @@ The view's snapshots are rebuilt from the episode in the loop's order (each
 frame at ``T`` (s on the episode's clock; a time past its end is refused) is replayed,
 and that frame is drawn
 (``controller.view.view_drawing.draw``) off screen and written atomically. The README's
-picture of the sim demo is made this way (docs/TELEOP.md has the command).
+picture of the sim demo is made this way (docs/USER_GUIDE.md has the command).
 """
 
 from __future__ import annotations

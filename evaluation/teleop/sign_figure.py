@@ -1,6 +1,6 @@
 """``python -m evaluation teleop_sign_figure``: the drawing of the alignment demo's two
 manoeuvres and the signs of the tilt torques they give (docs/figures/teleop_signs.png,
-docs/TELEOP.md).
+docs/USER_GUIDE.md).
 
     teleop_sign_figure.py --out docs/figures/teleop_signs.png
 """
