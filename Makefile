@@ -3,7 +3,7 @@ PYTHON ?= $(shell command -v python3.11 || command -v python3)
 VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
-# make trials: the held-out report (docs/BENCHMARKS.md "Insertion trials" names its seeds
+# make trials: the held-out report (docs/BENCHMARKS.md "Held-out seed ranges" names its seeds
 # before any run on them) of the product's controller, the oracle and the blind baseline, at
 # the default insert speed, on every core; run it again to resume where it stopped
 SEEDS       ?= 4000:4200

@@ -22,6 +22,16 @@ from core.entry_point import silence_closed_stdout
 EXIT_USAGE = 2
 """The exit code of a command line the command cannot read (argparse's)."""
 
+_running: str | None = None
+"""``PROG JOB`` while ``dispatch`` runs a job, else None (``job_prog`` reads it)."""
+
+
+def job_prog(name: str) -> str:
+    """The name a tool's parser shows in its usage line: ``PROG JOB`` (``tactile trial``,
+    ``python -m evaluation bench_gel``) when ``dispatch`` runs it, else the tool's own
+    ``name`` (its script, or its ``main`` called directly)."""
+    return _running or name
+
 
 @dataclass(frozen=True)
 class Job:
@@ -80,7 +90,9 @@ def dispatch(
         print(f"{prog}: error: {said}; expected one of: {names} ({prog} --help)",
               file=sys.stderr)  # fmt: skip
         return EXIT_USAGE
-    sys.argv = [f"{prog} {job.name}", *args[1:]]
+    global _running
+    _running = f"{prog} {job.name}"
+    sys.argv = [_running, *args[1:]]
     if job.first is not None:
         first_module, function = job.first.split(":")
         getattr(importlib.import_module(first_module), function)()

@@ -36,6 +36,7 @@ from typing import Any, NoReturn
 from core.config import CONFIG_ROOT, ConfigError
 from core.devices import Arm, ForceTorqueSensor, Gamepad, Gripper, TactileSensor
 from core.errors import DeviceError, DeviceFaultError, DeviceNotConnectedError
+from core.subcommands import job_prog
 from drivers import registry
 from drivers.arm import xarm_codes, xarm_sdk
 
@@ -203,7 +204,7 @@ class _Parser(argparse.ArgumentParser):
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = _Parser(
-        prog="check_hardware",
+        prog=job_prog("check_hardware"),
         description="Connect each configured device, read one sample, disconnect.",
     )
     parser.add_argument(

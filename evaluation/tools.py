@@ -112,4 +112,4 @@ GROUPS = (
 
 def main(argv: Sequence[str] | None = None) -> int | None:
     """Run the tool ``argv`` names (default ``sys.argv[1:]``); its exit code."""
-    return dispatch("evaluation", DESCRIPTION, GROUPS, argv)
+    return dispatch("python -m evaluation", DESCRIPTION, GROUPS, argv)

@@ -6,7 +6,7 @@
 
 The stick starts grasped, partly inserted (``scene.start_depth_m``, 2 mm) and aligned in the
 simulated hole; after the grasp (about 2 s) the operator drives the arm with the gamepad
-(deadman held) and watches the tilt torques (docs/TELEOP.md: the manoeuvres and their signs).
+(deadman held) and watches the tilt torques (docs/USER_GUIDE.md: the manoeuvres and their signs).
 
 * ``--backend sim`` (default): the simulated world in real time; the pad is a real one if SDL
   sees a game controller, else the scripted twin playing ``--script FILE``
@@ -63,6 +63,7 @@ from controller.run.controllers import CONTROLLERS, Controller
 from controller.run.task import Task, TaskConfig, load_task
 from core.config import CONFIG_ROOT
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers import registry
 
 DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
@@ -72,7 +73,9 @@ TELEOP_CONTROLLER = "teleop"
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="teleop_demo", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("teleop_demo"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--task", default="usb_c", help="usb_c (default), usb_a or a task YAML")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--script", type=Path, help="a gamepad script for the simulated pad")
@@ -277,7 +280,7 @@ def mapping_lines(task: Task) -> list[str]:
 
 def sign_table(episode: Episode, script: list[Manoeuvre]) -> str:
     """Each scripted manoeuvre, the torque it drives, the expected sign and the change
-    the episode recorded, with its unit (docs/TELEOP.md, "Signs")."""
+    the episode recorded, with its unit (docs/USER_GUIDE.md, "Signs")."""
     lines = ["manoeuvre (script s)          torque  expected  measured change        ok"]
     for check in measured_signs(episode, script):
         m = check.manoeuvre

@@ -29,6 +29,7 @@ from controller.tactile import estimator_for_sensor
 from controller.tactile.calibration import AxisFit
 from core.config import ConfigError
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 
 
 def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
@@ -49,7 +50,7 @@ def fit_table(fits: dict[tuple[str, str], AxisFit]) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="calibrate", description="Fit c_x, c_y (and c_z) on a calibration dataset."
+        prog=job_prog("calibrate"), description="Fit c_x, c_y (and c_z) on a calibration dataset."
     )
     parser.add_argument("dataset", type=Path, help="dataset folder (controller/offline/dataset.py)")
     parser.add_argument(

@@ -79,6 +79,7 @@ from controller.tactile import (
 )
 from controller.tactile.wrench import VALUE_FIELDS
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff")
 FLAG_FIELDS = ("contact", "degenerate", "slip_suspected", "slip_gross", "rezero_recommended")
@@ -406,7 +407,7 @@ def estimate_file(
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="estimate",
+        prog=job_prog("estimate"),
         description="Estimate in-grasp torques from recorded visuotactile frames.",
     )
     parser.add_argument(

@@ -64,6 +64,7 @@ from controller.replay.rerun_export import LOOP_TIMELINE, RerunMissing, rerun_sd
 from controller.tactile import estimator_for_sensor
 from controller.tactile.settings import sensor_estimator
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 
 PROG = "replay"
 
@@ -311,7 +312,9 @@ def repair(args: argparse.Namespace) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=PROG, description="Tools for episode files (MCAP).")
+    parser = argparse.ArgumentParser(
+        prog=job_prog(PROG), description="Tools for episode files (MCAP)."
+    )
     commands = parser.add_subparsers(dest="command", required=True, metavar="SUBCOMMAND")
 
     def command(name: str, help_text: str, run) -> argparse.ArgumentParser:

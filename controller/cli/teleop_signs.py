@@ -1,5 +1,5 @@
 """The alignment demo's sign checks: each manoeuvre of a gamepad script, the tilt torque it
-should give, and the one an episode recorded (docs/TELEOP.md has the drawing).
+should give, and the one an episode recorded (docs/USER_GUIDE.md has the drawing).
 
 Manoeuvres in the sensor frame S at the demo's start (the plug upright, hole yaw ~0; with
 configs/gamepad/xbox.yaml ``vy`` moves the TCP along B's y = S's z and ``wz`` turns it

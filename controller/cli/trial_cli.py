@@ -36,6 +36,7 @@ from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.run import CONTROLLERS
 from controller.run.insertion_trial import MAX_SEED, TrialOutcome, run
 from controller.run.task import load_task
+from core.subcommands import job_prog
 
 SIMULATION = "evaluation.trials.trial"
 """The module whose ``run`` (with ``run``'s signature) runs a trial in simulation, scored
@@ -47,7 +48,9 @@ SIM_ONLY_CONTROLLERS = ("oracle",)
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="run_trial", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("run_trial"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--seed", type=integer(0, MAX_SEED), default=0)

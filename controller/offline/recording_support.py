@@ -1,4 +1,4 @@
-"""Without the open gel: where the contact is, from the whole recording (issue 23).
+"""Without the open gel: where the contact is, from the whole recording.
 
 The default's tilt is the moment of the divergence about the contact's support measured
 from the closing press against the open gel (``grasp_centroid``, docs/ARCHITECTURE.md, "Under

@@ -64,7 +64,7 @@ OriginRule = Callable[[np.ndarray, np.ndarray, np.ndarray], tuple[float, float]]
 FULL_MIDPOINT_RATIO = 0.25
 # The grasp's support (``grasp_support``): a cell whose grasp divergence (of the press's own
 # sign, relative to its largest value) is at most SUPPORT_LOW weighs 0, from SUPPORT_HIGH on
-# 1, smoothly between (chosen on the real-gel check, seeds 0 and 1; docs/REALGEL_CHECK.md).
+# 1, smoothly between (chosen on the real-gel check, seeds 0 and 1; docs/BENCHMARKS.md).
 SUPPORT_LOW = 0.2
 SUPPORT_HIGH = 0.7
 

@@ -3,7 +3,7 @@
 Zeroed on the open gel, the field before contact is camera noise alone, and so is the tilt
 the dipole reads from it. On a markerless gel that noise is not small: with 2 grey levels on
 smooth LED shading the tilt moved by 4-17% of a 0.5 px tilt's peak (seeds 0-5,
-docs/REAL_RECORDINGS.md), near the images' information limit for any linear estimate
+docs/BENCHMARKS.md), near the images' information limit for any linear estimate
 (docs/ARCHITECTURE.md, "Quiet before contact"). What tells a contact from noise is not the
 tilt's size but whether the field differs from noise at all.
 
@@ -26,8 +26,8 @@ this scales the tilt by g.
 Once a contact is established (the statistic above q on ``CONTACT_FRAMES`` frames in a row,
 or the gate fully open once), the gate stays open until the next reference
 (``NoiseGate.until_contact``): zeroed on a grasp, a tilt passing through zero is not a
-return to noise, and gating it would cut a dead band into the tilt (issue 23,
-docs/ARCHITECTURE.md, "Quiet before contact"). Under noise alone a run of three frames above
+return to noise, and gating it would cut a dead band into the tilt
+(docs/ARCHITECTURE.md, "Quiet before contact"). Under noise alone a run of three frames above
 q has a probability of about 1e-6 per frame.
 """
 

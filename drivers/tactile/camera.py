@@ -10,8 +10,8 @@ cropped, resized and oriented.
 Facts the defaults rest on:
 
 * GelSight Mini: one mode only, MJPG 3280 x 2464 at 25 fps (``v4l2-ctl --list-formats-ext``
-  in gelsightinc/gsrobotics issue #36); gsrobotics crops 15 % off each border and resizes to
-  320 x 240 (``GelSightMini`` / ``crop_and_resize`` in ``utilities/``).
+  in https://github.com/gelsightinc/gsrobotics/issues/36); gsrobotics crops 15 % off each
+  border and resizes to 320 x 240 (``GelSightMini`` / ``crop_and_resize`` in ``utilities/``).
 * DIGIT: digit-interface streams QVGA 320 x 240 at 60 fps by default (``DigitHandler.STREAMS``)
   and turns each frame with ``cv2.transpose`` then ``cv2.flip(frame, 0)``.
 

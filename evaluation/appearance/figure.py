@@ -18,6 +18,8 @@ from pathlib import Path
 
 import matplotlib
 
+from core.subcommands import job_prog
+
 matplotlib.use("Agg")
 import cv2  # noqa: E402
 import matplotlib.pyplot as plt  # noqa: E402
@@ -106,7 +108,7 @@ def _capture(name: str) -> np.ndarray:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="appearance_figure",
+        prog=job_prog("appearance_figure"),
         description="Real captures beside rendered frames (PNG) and the statistics table.",
     )
     parser.add_argument("--out", type=Path, default=Path("docs/figures/appearance.png"))

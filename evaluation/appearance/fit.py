@@ -33,6 +33,7 @@ import numpy as np
 from scipy.optimize import nnls
 from scipy.spatial import cKDTree
 
+from core.subcommands import job_prog
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.render.real_texture import REAL_GELS_DIR, fit_to_size, load_capture
@@ -234,7 +235,7 @@ def look_source(name: str, look: RealisticLook) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="fit_appearance",
+        prog=job_prog("fit_appearance"),
         description="Fit the realistic looks to the shipped real captures and print them "
         "(paste into drivers/sim/render/realistic.py).",
     )

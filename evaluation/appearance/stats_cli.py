@@ -29,6 +29,7 @@ import numpy as np
 from controller.cli.estimate import IMAGE_SUFFIXES, InputError, open_source
 from controller.offline.quiet_decoding import read_image
 from controller.offline.video import ReadLog
+from core.subcommands import job_prog
 from drivers.sim.render.real_texture import fit_to_size
 from evaluation.appearance.stats import AppearanceStats, format_table, measure, summarise
 
@@ -72,7 +73,7 @@ def stats_of(
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="gel_stats",
+        prog=job_prog("gel_stats"),
         description="Appearance statistics (markers, shading spectrum and colour, noise) of "
         "gel images or videos, real or rendered.",
     )

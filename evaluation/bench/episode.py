@@ -56,6 +56,7 @@ from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.episode.topics import LOOP_TICK
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
+from core.subcommands import job_prog
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -74,7 +75,9 @@ LONG_TRIAL = (
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="bench_episode", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("bench_episode"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--kills", type=int, default=20)
     parser.add_argument("--runs", type=int, default=5, help="real-time trials for the CPU")
     parser.add_argument("--seed", type=int, default=0)

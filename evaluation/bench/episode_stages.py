@@ -29,6 +29,7 @@ from typing import Any
 from controller.episode.session import EPISODE_FILE, EpisodeOptions
 from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
+from core.subcommands import job_prog
 from drivers.sim.twins.tactile import SimTactileSensor
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
@@ -135,7 +136,7 @@ def _timed_log(log: Any, name: str, stages: StageTimes) -> Any:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
-        prog="bench_episode_stages", description=__doc__.splitlines()[0]
+        prog=job_prog("bench_episode_stages"), description=__doc__.splitlines()[0]
     )
     parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
     parser.add_argument("--seed", type=int, default=1)

@@ -6,7 +6,7 @@ Runs ``controller.loop.ControlLoop`` on ``MonotonicClock`` at ``--rate-hz`` for
 configuration) and a trivial machine that commands a zero twist, i.e. the loop's full tick
 without a decision worth timing. Prints, in ms: the tick-start lateness (start minus its
 deadline: the period error of a deadline-paced loop), the deviation of each period from the
-nominal one, the work per tick, then the overruns and the machine. Target (issue 13): p99
+nominal one, the work per tick, then the overruns and the machine. Target: p99
 period error <= 1 ms at 100 Hz.
 
 ``--episode`` records the run to an episode (a temporary file: the writer thread, the

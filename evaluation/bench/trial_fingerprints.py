@@ -56,6 +56,7 @@ from controller.cli.support import ToolError, add_override_argument, run_tool
 from controller.insertion.interface import Transition
 from controller.run.result import TrialResult
 from controller.run.task import Task, load_task
+from core.subcommands import job_prog
 from evaluation.trials.batch_cli import seeds_type
 from evaluation.trials.guard import error_result
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
@@ -190,7 +191,7 @@ def compare(
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog=job_prog(PROG), description=__doc__.splitlines()[0])
     parser.add_argument("--task", help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")
     parser.add_argument("--seeds", type=seeds_type, help="A:B, the seeds A up to B (B excluded)")

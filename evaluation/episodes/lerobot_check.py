@@ -31,6 +31,8 @@ import sys
 import time
 from pathlib import Path
 
+from core.subcommands import job_prog
+
 os.environ.setdefault("HF_HUB_OFFLINE", "1")  # a local root: nothing is downloaded
 os.environ.setdefault("HF_DATASETS_OFFLINE", "1")
 
@@ -110,7 +112,9 @@ def check(root: Path, expected: list[tuple[str, int]]) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="check_lerobot", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("check_lerobot"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("root", type=Path, metavar="DIR", help="the exported dataset")
     parser.add_argument(
         "--episode", type=episode_argument, action="append", required=True,

@@ -1,14 +1,14 @@
 """The estimator configurations compared by the benchmark and the speed-accuracy chart: the
 paper's, the sensors' ``default`` (the Mini's profile's ``estimator``: grid Lucas-Kanade per
 colour channel; the DIGIT's too), ``default_grey`` (on the luminance) and one-knob variants
-of ``default`` (warm
-start, iterations, smoothness, the dipole's grid), and the DIS family around ``dis_half``
-(the default until session 6: flow preset, image scale, grey or per-channel, patch stride,
-variational refinement, divergence of the raw field or of its NHHD part, the dipole's grid,
-temporal filter) and cheaper Farneback settings. The grid stride is varied through the
-dipole's grid: with square blocks pooling is exact (tests/controller/tactile/test_estimator.py),
-so a flow grid of 8x6 gives the 8x6 dipole exactly. ``PAPER`` and ``DEFAULT`` are the labels of
-the paper's and the Mini's default configuration."""
+of ``default`` (warm start, iterations, smoothness, the dipole's grid), and the DIS family
+around ``dis_half`` (a faster configuration for marker gels: flow preset, image scale, grey
+or per-channel, patch stride, variational refinement, divergence of the raw field or of its
+NHHD part, the dipole's grid, temporal filter) and cheaper Farneback settings. The grid
+stride is varied through the dipole's grid: with square blocks pooling is exact
+(tests/controller/tactile/test_estimator.py), so a flow grid of 8x6 gives the 8x6 dipole
+exactly. ``PAPER`` and ``DEFAULT`` are the labels of the paper's and the Mini's default
+configuration."""
 
 from __future__ import annotations
 

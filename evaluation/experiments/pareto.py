@@ -10,7 +10,7 @@ dataset, one configuration at a time, so the workers' contention does not distor
 
 Our datasets come from our own gel model and renderer, so a configuration is eligible for the
 front only if it also holds on data they did not make: the independent real-gel check
-(evaluation/realgel, docs/REALGEL_CHECK.md: the real captures warped by an elastic half-space)
+(evaluation/realgel, docs/BENCHMARKS.md: the real captures warped by an elastic half-space)
 at 0.4 px of tilt motion, with and without pushing, must give every sequence a tilt R^2 of at
 least ``REALGEL_TARGET_R2`` (the estimator issue's accuracy target). The front of all
 configurations, eligible or not, is reported beside it."""
@@ -42,7 +42,7 @@ from evaluation.realgel.textures import TEXTURES
 PARETO_AXES = ("x", "y")
 REALGEL_TARGET_R2 = 0.97
 REALGEL_AMPLITUDE_PX = 0.4
-REALGEL_SEED = 2  # the seed docs/REALGEL_CHECK.md reports (0 and 1 were for exploring)
+REALGEL_SEED = 2  # the seed docs/BENCHMARKS.md reports (0 and 1 were for exploring)
 REALGEL_QUICK_TEXTURES = ("gelsight_markers_a", "digit_background_a")
 
 

@@ -33,6 +33,7 @@ import numpy as np
 from controller.tactile import estimator_for_sensor
 from core.config import ConfigError
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers.sim.render.gel_renderer import GelRenderer
 from drivers.sim.render.image_effects import ImageEffects
 from drivers.sim.scenes.press_roll import (
@@ -129,7 +130,9 @@ def table(scores: list[PressRollScore]) -> str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="eval_press_roll", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("eval_press_roll"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--methods", default="default,paper", help="estimator configurations")
     parser.add_argument("--sensor", default="gelsight_mini")
     parser.add_argument("--seed", type=int, default=0, help="seed of the rendered gel")

@@ -46,6 +46,7 @@ from controller.cli.support import (
 )
 from controller.tactile import estimator_for_sensor
 from core.config import ConfigError
+from core.subcommands import job_prog
 from evaluation.common.machine_info import describe_machine, one_thread_env
 from evaluation.experiments import slip_eval, slip_false_alarms
 from evaluation.experiments.calibration_runs import (
@@ -115,7 +116,7 @@ def _second_stage_job(job: tuple):
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="evaluate", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog=job_prog("evaluate"), description=__doc__.splitlines()[0])
     parser.add_argument("--docs", type=Path, default=Path("docs"))
     parser.add_argument("--work", type=Path, default=Path("out/evaluate"))
     parser.add_argument("--frames-per-axis", type=integer(1, MAX_FRAMES_PER_AXIS), default=400)
@@ -287,8 +288,8 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         "test the estimators against a known truth and show trends; they are not a measurement",
         "of a real sensor.",
         "",
-        "Checks outside this run, on real gel images: docs/REALGEL_CHECK.md (an independent",
-        "elastic model warping the real captures) and docs/REAL_RECORDINGS.md (recordings rendered",
+        "Checks outside this run, on real gel images: docs/BENCHMARKS.md (an independent",
+        "elastic model warping the real captures) and docs/BENCHMARKS.md (recordings rendered",
         "on the real captures, estimated by `tactile estimate`: finite, quiet, signs).",
         "",
         "## 1. The calibration experiment",
@@ -351,7 +352,7 @@ def _document(results, points, sweeps, slip, elapsed, stage1_s, args) -> str:
         f"accuracy target on data they did not make: held-out tilt R^2 >= {REALGEL_TARGET_R2} on",
         "every sequence of the independent real-gel check (the real captures warped by an",
         "elastic half-space, 0.4 px of tilt motion, with and without pushing, seed 2;",
-        "docs/REALGEL_CHECK.md), run in this same evaluation. Crosses on the chart miss it.",
+        "docs/BENCHMARKS.md), run in this same evaluation. Crosses on the chart miss it.",
         "The controller also acts on the slip detector, which reads the same field, so the",
         "eligible configurations are also scored on the slip sequences of section 4 (the",
         "lower of the incipient and gross recalls, all grips); a configuration is on the",

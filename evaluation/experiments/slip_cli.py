@@ -29,6 +29,7 @@ from controller.cli.support import (
 from controller.tactile.settings import sensor_estimator
 from core.config import ConfigError
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers.sim.gel.profile import SHAPES
 from evaluation.common.machine_info import cpu_model
 from evaluation.experiments.slip_eval import GRIPS_N, OBJECTS, SENSOR, evaluate
@@ -36,7 +37,9 @@ from evaluation.experiments.slip_tables import slip_tables
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="eval_slip", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("eval_slip"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "--method", default=None, help="estimator configuration (default: the Mini's own)"
     )

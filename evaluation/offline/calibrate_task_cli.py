@@ -24,11 +24,14 @@ from controller.cli.support import add_override_argument, integer, run_tool
 from controller.run.insertion_trial import MAX_SEED
 from controller.run.task import load_task
 from controller.tactile.calibration import Calibration
+from core.subcommands import job_prog
 from evaluation.offline.scene_calibration import fit_scene_calibration, record_in_scene
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="calibrate_task", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("calibrate_task"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument(
         "--seed",

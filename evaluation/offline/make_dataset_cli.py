@@ -28,6 +28,7 @@ from controller.cli.support import (
     run_tool,
 )
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers.sim.gel.profile import SHAPES
 from evaluation.common.rendering import make_renderer
 from evaluation.common.sim_setup import gel_model, jig_config
@@ -35,7 +36,9 @@ from evaluation.offline.jig_dataset import MAX_FRAMES_PER_AXIS, paper_experiment
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="make_dataset", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("make_dataset"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("out", type=Path, help="dataset folder to write (must not exist)")
     parser.add_argument(
         "--sensor", default="gelsight_mini", help="sensor profile (its gel: SENSOR_gel.yaml)"

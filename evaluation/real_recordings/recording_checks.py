@@ -1,4 +1,4 @@
-"""The checks of an estimate on a recording against its true program (issue 12, section 6).
+"""The checks of an estimate on a recording against its true program.
 
 A recording (evaluation/real_recordings/recording_video.py) is estimated by
 ``tactile estimate``'s own code (controller/cli/estimate.py ``estimate_file``,

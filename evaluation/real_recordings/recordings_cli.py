@@ -1,4 +1,4 @@
-"""Render real-texture recordings and check estimators on them (issue 12, section 6).
+"""Render real-texture recordings and check estimators on them.
 
     python -m evaluation check_real_recordings [--estimators default,dis_half,paper]
         [--captures all] [--work out/real_recordings] [--seed 0] [--table FILE]
@@ -21,6 +21,7 @@ from controller.cli.outputs import atomic_text, check_output_file
 from controller.cli.support import ToolError, run_tool
 from controller.tactile import estimator_for_sensor
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers.sim.render.real_texture import real_gel_names
 from evaluation.real_recordings.recording_checks import (
     QUIET_MAX,
@@ -46,7 +47,7 @@ def _names(text: str, option: str, known: tuple[str, ...] | None = None) -> list
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog=PROG, description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(prog=job_prog(PROG), description=__doc__.splitlines()[0])
     parser.add_argument(
         "--estimators",
         default=DEFAULT_ESTIMATORS,

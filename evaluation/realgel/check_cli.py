@@ -32,6 +32,7 @@ from pathlib import Path
 
 from controller.tactile.settings import estimator_config
 from core.config import ConfigError
+from core.subcommands import job_prog
 from evaluation.common.machine_info import cpu_model, git_revision
 from evaluation.realgel.check import Entry, run_check, sequence_specs
 from evaluation.realgel.check_tables import axis_table, rows_table, summary_table
@@ -53,7 +54,9 @@ def _numbers(parser: argparse.ArgumentParser, option: str, text: str) -> list[fl
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="realgel_check", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("realgel_check"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "--estimators",
         default=DEFAULT_ESTIMATORS,

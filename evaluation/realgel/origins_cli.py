@@ -14,6 +14,7 @@ import sys
 
 from controller.tactile.settings import dipole_grid_mismatch, estimator_config, field_grid
 from core.config import ConfigError
+from core.subcommands import job_prog
 from evaluation.common.machine_info import git_revision
 from evaluation.realgel.check import sequence_specs
 from evaluation.realgel.check_cli import _numbers
@@ -33,7 +34,9 @@ def _grids(parser: argparse.ArgumentParser, text: str) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="realgel_origins", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("realgel_origins"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--estimators", default="default,paper")
     parser.add_argument("--dipole-grids", default="config")
     parser.add_argument("--amplitudes", default="0.4")

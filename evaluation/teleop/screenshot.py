@@ -9,7 +9,7 @@ The view's snapshots are rebuilt from the episode in the loop's order (each
 frame at ``T`` (s on the episode's clock; a time past its end is refused) is replayed,
 and that frame is drawn
 (``controller.view.view_drawing.draw``) off screen and written atomically. The README's
-picture of the sim demo is made this way (docs/TELEOP.md has the command).
+picture of the sim demo is made this way (docs/USER_GUIDE.md has the command).
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ from controller.view.snapshot import ViewSnapshot
 from core.atomic_files import atomic_file
 from core.config import CONFIG_ROOT, resolve_config_path
 from core.sensor_profile import sensor_profile
+from core.subcommands import job_prog
 from drivers import registry
 
 
@@ -42,7 +43,9 @@ STREAMS = ("/tactile/image", "/tactile/field", "/tactile/wrench", "/loop/tick", 
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="teleop_screenshot", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("teleop_screenshot"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("episode", type=Path)
     parser.add_argument("--at", type=number(0.0, 1e6, "s"), required=True)
     parser.add_argument("--out", type=Path, required=True, help="the PNG to write")

@@ -1,6 +1,6 @@
 """``python -m evaluation teleop_sign_figure``: the drawing of the alignment demo's two
 manoeuvres and the signs of the tilt torques they give (docs/figures/teleop_signs.png,
-docs/TELEOP.md).
+docs/USER_GUIDE.md).
 
     teleop_sign_figure.py --out docs/figures/teleop_signs.png
 """
@@ -11,6 +11,8 @@ import argparse
 from pathlib import Path
 
 import matplotlib
+
+from core.subcommands import job_prog
 
 matplotlib.use("Agg")
 import matplotlib.patches as patches  # noqa: E402
@@ -28,7 +30,9 @@ FORCE = "#c0392b"
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="teleop_sign_figure", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("teleop_sign_figure"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--out", type=Path, required=True, help="the PNG to write")
     args = parser.parse_args(argv)
     return run_tool("teleop_sign_figure", lambda: _run(args.out))

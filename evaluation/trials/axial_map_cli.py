@@ -23,6 +23,7 @@ from controller.cli.support import ToolError, run_tool
 from controller.insertion.force_reading import AXIAL_TERMS
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import TouchSpiralConfig
+from core.subcommands import job_prog
 from evaluation.trials.axial_map import fit_weights, joined, record_samples, rms_error_n
 
 
@@ -39,7 +40,9 @@ def _weights(text: str) -> tuple[float, ...]:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="fit_axial_map", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("fit_axial_map"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--fit", nargs="+", type=Path, required=True, help="records to fit on")
     parser.add_argument("--check", nargs="+", type=Path, required=True, help="records to check on")
     parser.add_argument(

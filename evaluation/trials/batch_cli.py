@@ -50,6 +50,7 @@ from controller.cli.support import (
     one_line,
     run_tool,
 )
+from core.subcommands import job_prog
 from evaluation.trials.batch import (
     SUMMARY_NAME,
     Batch,
@@ -184,7 +185,7 @@ def describe(summary: dict[str, Any]) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="run_trials", description="Run a batch of simulated insertion trials."
+        prog=job_prog("run_trials"), description="Run a batch of simulated insertion trials."
     )
     add_run_arguments(parser)
     parser.add_argument("--controller", choices=list(TRIAL_CONTROLLERS), default="dipole")

@@ -42,6 +42,7 @@ from typing import Any
 from controller.cli.outputs import write_text
 from controller.cli.support import ToolError, distinct, number_list, run_tool
 from core.config import ConfigError, parse_override
+from core.subcommands import job_prog
 from evaluation.trials.batch import Batch, run_batches
 from evaluation.trials.batch_cli import (
     EXIT_CODES,
@@ -291,7 +292,7 @@ def _speed_key(text: str) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="compare_trials",
+        prog=job_prog("compare_trials"),
         description="Compare controllers across insertion speed settings on the same seeds.",
     )
     add_run_arguments(parser)

@@ -42,6 +42,7 @@ import numpy as np
 
 from controller.cli.support import ToolError, integer, run_tool
 from controller.run.task import load_task
+from core.subcommands import job_prog
 from core.task_geometry import HolePose
 from drivers.sim.scenes.insertion.draws import SceneDraw, draw_scene
 from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_batch
@@ -143,7 +144,9 @@ def report(out: Path, bins: int) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="draw_failures", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("draw_failures"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("out", type=Path, help="a run_trials or compare_trials output folder")
     parser.add_argument("--bins", type=integer(1, 20), default=4, help="bins per quantity")
     return parser

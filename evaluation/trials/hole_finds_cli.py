@@ -17,6 +17,7 @@ from functools import partial
 
 from controller.cli.support import add_override_argument, integer, run_tool
 from controller.run.task import load_task
+from core.subcommands import job_prog
 from evaluation.common.machine_info import one_thread_env
 from evaluation.common.worker_processes import kill_pool, ordered_map, worker_pool
 from evaluation.trials.batch_cli import MAX_WORKERS, seeds_type
@@ -24,7 +25,9 @@ from evaluation.trials.hole_finds import HoleFind, summary_lines, trial_hole_fin
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="hole_finds", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("hole_finds"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("--task", required=True, help="usb_c, usb_a or a task YAML path")
     parser.add_argument("--seeds", type=seeds_type, required=True, help="A:B (B excluded)")
     parser.add_argument("--workers", type=integer(1, MAX_WORKERS), default=1)

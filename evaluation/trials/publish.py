@@ -33,6 +33,7 @@ from controller.cli.outputs import (
     write_text,
 )
 from controller.cli.support import ToolError, run_tool
+from core.subcommands import job_prog
 from evaluation.trials.compare import TABLE
 
 PAGE = "TRIALS.md"
@@ -179,7 +180,9 @@ def refreshed_report(report: str, page: str) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="publish_trials", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("publish_trials"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument("out", type=Path, help="the folder compare_trials wrote per task")
     parser.add_argument("--docs", type=Path, default=Path("docs"))
     args = parser.parse_args(argv)

@@ -1,4 +1,4 @@
-"""The product's insertion targets (issue 24), judged from a comparison's batch summaries.
+"""The product's insertion targets, judged from a comparison's batch summaries.
 
 Each target names what it asks, what the trials measured, and a verdict (``met``,
 ``missed`` with by how much, or ``not run`` when a controller it needs is not in the grid).

@@ -26,6 +26,7 @@ from pathlib import Path
 from statistics import median
 
 from controller.cli.support import ToolError, number, run_tool
+from core.subcommands import job_prog
 from evaluation.trials.records import RECORDS
 
 TRIAL_NAME = "trial.json"
@@ -179,7 +180,9 @@ def report(out: Path, least_s: float) -> str:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="where_time_goes", description=__doc__.splitlines()[0])
+    parser = argparse.ArgumentParser(
+        prog=job_prog("where_time_goes"), description=__doc__.splitlines()[0]
+    )
     parser.add_argument(
         "out", type=Path, help="a run_trials --records output folder, or a run_trial --out one"
     )

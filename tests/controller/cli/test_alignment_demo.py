@@ -31,7 +31,7 @@ def test_each_manoeuvre_gives_the_documented_tilt_torque_sign(demo):
     ) == 4
     checks = measured_signs(demo, script)
     assert all(c.ok for c in checks), [(c.manoeuvre, c.change) for c in checks]
-    assert {c.unit for c in checks} == {"N*m"}  # calibrated, as docs/TELEOP.md's table
+    assert {c.unit for c in checks} == {"N*m"}  # calibrated, as docs/USER_GUIDE.md's table
     translation = [abs(c.change) for c in checks if c.manoeuvre.action == "vy"]
     assert min(translation) > 1e-2  # far above the changes too small to carry a sign
 

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from controller.cli import command
+from core import subcommands
 from evaluation import tools
 from tests.script_runs import answers_help
 
@@ -71,7 +72,8 @@ def test_a_job_gets_the_rest_of_the_command_line():
     argv = ["trial", "--task", "usb_c", "--seed", "-1", "--out", "o"]
     done = run("-m", "controller.cli.command", *argv)
     assert done.returncode == 2 and "Traceback" not in done.stderr  # the tool's parser's
-    assert done.stderr.splitlines()[-1].startswith("run_trial: error: argument --seed")
+    assert done.stderr.splitlines()[-1].startswith("tactile trial: error: argument --seed")
+    assert done.stderr.startswith("usage: tactile trial ")
 
 
 def test_the_research_tools_answer_help():
@@ -122,3 +124,27 @@ def test_the_trial_command_offers_the_trial_tools_controllers():
 @pytest.mark.parametrize("job", JOBS, ids=lambda job: job.name)
 def test_every_job_answers_help(job, capsys):
     assert answers_help(job.module, capsys)
+
+
+def _usage(main, name: str, monkeypatch, capsys) -> str:
+    """The first line of ``main([name, "--help"])``'s output, run as the command runs it."""
+    monkeypatch.setattr(sys, "argv", list(sys.argv))  # dispatch sets them for the job
+    monkeypatch.setattr(subcommands, "_running", None)
+    with pytest.raises(SystemExit) as stop:
+        main([name, "--help"])
+    assert stop.value.code == 0
+    return capsys.readouterr().out.splitlines()[0]
+
+
+@pytest.mark.parametrize("job", JOBS, ids=lambda job: job.name)
+def test_every_job_s_usage_names_the_command_and_the_job(job, monkeypatch, capsys):
+    assert _usage(command.main, job.name, monkeypatch, capsys).startswith(
+        f"usage: tactile {job.name} "
+    )
+
+
+@pytest.mark.parametrize("tool", TOOLS, ids=lambda tool: tool.name)
+def test_every_research_tool_s_usage_names_python_m_evaluation(tool, monkeypatch, capsys):
+    assert _usage(tools.main, tool.name, monkeypatch, capsys).startswith(
+        f"usage: python -m evaluation {tool.name}"
+    )

@@ -578,7 +578,7 @@ def _recording_folders(tmp_path: Path, push: float) -> tuple[object, dict[str, P
 def test_without_open_frames_the_tool_takes_the_contact_from_the_whole_recording(
     tmp_path, capsys, push
 ):
-    """Issue 23: zeroed on a grasp (no --open), the tool finds the contact's support in the
+    """Zeroed on a grasp (no --open), the tool finds the contact's support in the
     whole recording and estimates it again about it, says so in one line and records the
     choice beside the CSV. A weak tilt alone never establishes a contact, and the no-contact
     gate would zero most of it: that recording is estimated without the gate, and since its

@@ -288,7 +288,7 @@ def test_a_varied_contact_tilts_by_one_angle_about_either_axis():
 
 
 def test_without_the_open_gel_a_weak_tilt_is_not_lost_to_the_noise_gate(monkeypatch):
-    """Issue 23: on a wide contact (a plug's face, same tilt angle about both axes) the tilt
+    """On a wide contact (a plug's face, same tilt angle about both axes) the tilt
     about x moves the gel little. Zeroed on the grasp without the open gel, a gate that forgets
     the contact at every frame zeroes most of that tilt's frames (R^2 below `paper`'s); once
     the gate stays open after a contact is established, the default is at least as good as
@@ -327,7 +327,7 @@ def test_cli_reports_the_default_with_and_without_the_open_gel_per_axis(tmp_path
 
 
 def test_without_the_open_gel_a_swinging_grip_does_not_leak_into_the_tilt(monkeypatch):
-    """Issue 23: a tilt about x while the grip pressure swings by 41% (tuning seed 100 of the
+    """A tilt about x while the grip pressure swings by 41% (tuning seed 100 of the
     varied contacts, 40 frames), zeroed on the grasp without the open gel. About the contact's
     support found in the whole recording (the offline tool's choice) the default is within
     0.02 of `paper` or better; the 4 x 4 fallback it replaces leaks the push and is not."""
@@ -346,7 +346,7 @@ def test_without_the_open_gel_a_swinging_grip_does_not_leak_into_the_tilt(monkey
 
 
 def test_without_the_open_gel_a_tilt_at_the_noise_is_taken_on_the_whole_grid(monkeypatch):
-    """Issue 23: a tilt alone across a contact's narrow side so weak that the recording's
+    """A tilt alone across a contact's narrow side so weak that the recording's
     change is not clearly above the camera noise (tuning seed 200 of the varied contacts,
     DIGIT b, 80 frames). A support found there weighs the cells where the reference happened
     to be noisiest and falls short of `paper`; the offline tool's choice takes the tilt on the

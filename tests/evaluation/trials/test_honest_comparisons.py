@@ -1,4 +1,4 @@
-"""The comparison's controllers and scoring (issue 24): the oracle's units and noise, the
+"""The comparison's controllers and scoring: the oracle's units and noise, the
 ablations' channels, the blind baseline on an easy setting, and the plug's contact force
 against the connector's limit."""
 

@@ -1,4 +1,4 @@
-"""The simulated insertion scene (issue 13 section 3; docs/SIMULATION.md, "The insertion
+"""The simulated insertion scene (docs/SIMULATION.md, "The insertion
 scene"): MuJoCo rigid contacts between a grasped USB plug and a board with a receptacle,
 the commanded TCP as a mocap body behind a compliant wrist, the plug in a stiff gel spring
 whose wrench drives the gel model and the rendered tactile frames.
