@@ -39,7 +39,10 @@ class SpiralConfig(Config):
     the least drop of the tip below its height at the press that counts as in;
     ``jam_skip_m``: after a jam the pattern goes on this much further along; ``tare_s``: the
     sensor's zero is averaged over this at the hover; ``sweep_speed_m_s``: along the path;
-    ``descend_speed_m_s``: down to the touch; ``yaw_step_rad``, ``yaw_range_rad``: the
+    ``descend_speed_m_s``: down to the touch; ``fall_in_m``: the TCP this far below where it
+    puts the tip on the nominal board while descending to the touch, with no touch yet, means
+    the plug went into the opening (more than the board's height tolerance and the wrist's
+    compression under the touch force); ``yaw_step_rad``, ``yaw_range_rad``: the
     passes' yaw offsets (``yaw_offsets``); ``turn_tol_rad``: a pass's yaw counts as reached
     within this; ``hover_m``: tip height above the board between passes;
     ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
@@ -76,6 +79,7 @@ class SpiralConfig(Config):
     tare_s: float = number(0.0, 5.0, default=0.2)
     sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)
     descend_speed_m_s: float = number(1e-4, 0.1, default=0.005)
+    fall_in_m: float = number(0.0005, 0.05, default=0.004)
     yaw_step_rad: float = number(1e-4, 0.5, default=0.02)
     yaw_range_rad: float = number(0.0, 0.5, default=0.0524)
     turn_tol_rad: float = number(1e-5, 0.1, default=0.002)

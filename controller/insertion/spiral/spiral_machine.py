@@ -91,6 +91,7 @@ SPIRAL = Definition(
         Edge(Phase.GRASP, Phase.APPROACH, "grasped"),
         Edge(Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
         Edge(Phase.SEARCH, Phase.INSERT, "caught"),
+        Edge(Phase.SEARCH, Phase.INSERT, "fell_in"),
         Edge(Phase.INSERT, Phase.SEARCH, "jammed"),
         Edge(Phase.INSERT, Phase.RELEASE, "bottomed"),
         Edge(Phase.SEARCH, Phase.RELEASE, "pattern_done"),
@@ -356,6 +357,11 @@ class SpiralMachine:
         u, v = self._pattern.offset(s_m)
         planar = Rotation.from_euler("z", self.hole.yaw_rad).apply([u, v, 0.0])
         return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
+
+    def board_tcp_z_m(self) -> float:
+        """The TCP's height (B, m) that puts the tip on the nominal board at the pattern's
+        present point, the plug upright at the pass's yaw."""
+        return float(self._tcp_target(self.tip_target(self.memory.s_m, 0.0))[2])
 
     def _tcp_target(self, tip: np.ndarray) -> np.ndarray:
         return tip - self._upright().apply([0.0, 0.0, self.plug.length_m])

@@ -6,7 +6,9 @@ then its outer part at every yaw. Each pass:
   readings is the sensor's zero (the F/T sensor drifts; the tactile reading has none while
   the estimator re-zeroes);
 * **touch**: down at ``descend_speed_m_s`` until the tared upward force reaches
-  ``touch_force_n``;
+  ``touch_force_n``; the TCP ``fall_in_m`` below where the tip would meet the nominal board
+  first means the plug went into the opening on the way down (INSERT, ``fell_in``, the
+  nominal board's height taken as the press's);
 * **sweep**: the pattern at ``sweep_speed_m_s`` while the admittance holds the press; the
   press's height (the TCP's when the force first settles within ``settle_band`` of the
   press) is the reference. A force under ``catch_ratio`` x the press pauses the pattern
@@ -98,6 +100,11 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         if force >= cfg.touch_force_n:
             state.next(SearchStage.SWEEP, obs.t_s)
             return m.pressed(obs, force)
+        board_z = m.board_tcp_z_m()
+        if obs.arm.tcp.xyz_m[2] < board_z - cfg.fall_in_m:
+            run.press_z_m = board_z
+            m.go(obs, Phase.INSERT, "fell_in")
+            return m.hold()
         return m.descend(obs, cfg.descend_speed_m_s)
     if state.stage in (SearchStage.SWEEP, SearchStage.PROBE):
         return _sweep_or_probe(m, obs, state, force)

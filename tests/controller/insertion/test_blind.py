@@ -116,6 +116,19 @@ def test_over_the_opening_it_catches_pushes_to_the_floor_and_releases():
     )
 
 
+def test_a_plug_that_goes_into_the_opening_on_the_way_down_is_pushed_home_not_swept():
+    world = ToyWorld(hole_offset_m=(0.0, 0.0))  # the opening under the pattern's start
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "fell_in", "bottomed", "released", "retracted",
+    ]  # fmt: skip
+    rules = {c.rule for c in world.commands}
+    assert "search.sweep" not in rules and "insert.push" in rules
+    # no touch before: the TCP went fall_in_m below the nominal board's touch height
+    assert min(world_tip_heights(world)) < world.hole.z_m - SMALL.fall_in_m
+
+
 def world_tip_heights(world: ToyWorld) -> list[float]:
     """The tip's heights the toy went through (from the commanded twists, replayed)."""
     heights, z = [], world.hole.z_m + 0.04
