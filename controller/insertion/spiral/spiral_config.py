@@ -21,7 +21,10 @@ class SpiralConfig(Config):
     ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
     ``inner_half_width_m``: with the spiral, the passes first sweep it out to this half-width
     at every yaw, then on to ``half_width_m`` at every yaw (0: the whole spiral at one yaw
-    after another);
+    after another); ``interleave``: with the spiral, every other pass of a stretch turns it by
+    half a turn about the opening's centre, so that its rings fall halfway between the last
+    pass's (a target that one pass misses by up to half the pitch, the next passes within a
+    quarter of it);
     ``touch_force_n``: the board is met; ``press_force_n``: held while sweeping;
     ``force_gain_m_s_n``: the admittance, z speed per N of force error; ``force_window``: the
     force is the mean of this many readings; ``wrist_z_stiffness_n_m``: the compliant
@@ -60,6 +63,7 @@ class SpiralConfig(Config):
     pitch_m: float = number(1e-5, 0.01, default=0.0004)
     half_width_m: float = number(0.0, 0.05, default=0.003)
     inner_half_width_m: float = number(0.0, 0.05, default=0.0)
+    interleave: bool = False
     touch_force_n: float = number(0.05, 50.0, default=1.0)
     press_force_n: float = number(0.05, 50.0, default=2.0)
     force_gain_m_s_n: float = number(1e-5, 0.05, default=0.005)

@@ -352,10 +352,11 @@ class SpiralMachine:
         return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
-        """The tip's target in B (m) at path length ``s_m`` of the pattern, ``height_m``
-        above the nominal board."""
+        """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
+        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board."""
         u, v = self._pattern.offset(s_m)
-        planar = Rotation.from_euler("z", self.hole.yaw_rad).apply([u, v, 0.0])
+        turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
+        planar = Rotation.from_euler("z", turn).apply([u, v, 0.0])
         return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
 
     def board_tcp_z_m(self) -> float:

@@ -22,6 +22,7 @@ then its outer part at every yaw. Each pass:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import TYPE_CHECKING
@@ -39,25 +40,31 @@ if TYPE_CHECKING:
 
 @dataclass(frozen=True)
 class SearchPass:
-    """One pass of SEARCH: the tool's yaw offset from the nominal opening's (rad) and the
-    stretch of the pattern's path it sweeps, from ``start_m`` to ``end_m`` (path length, m)."""
+    """One pass of SEARCH: the tool's yaw offset from the nominal opening's (rad), the
+    stretch of the pattern's path it sweeps, from ``start_m`` to ``end_m`` (path length, m),
+    and the pattern's turn about the opening's centre (``pattern_turn_rad``, rad, about B z)."""
 
     yaw_offset_rad: float
     start_m: float
     end_m: float
+    pattern_turn_rad: float = 0.0
 
 
 def plan_passes(config: SpiralConfig) -> tuple[SearchPass, ...]:
     """SEARCH's passes in order: the whole pattern at each of ``yaw_offsets`` in turn, or,
     with ``inner_half_width_m``, the spiral out to it at each yaw, then the rest at each yaw
     (a tip near the opening's centre is then found at every yaw before the far ring is
-    swept at any)."""
+    swept at any); with ``interleave``, every other pass of a stretch turned by half a turn."""
     whole = SearchPattern(config.pattern, config.pitch_m, config.half_width_m).length_m
-    if config.inner_half_width_m <= 0.0:
-        return tuple(SearchPass(yaw, 0.0, whole) for yaw in config.yaw_offsets)
-    inner = SearchPattern("spiral", config.pitch_m, config.inner_half_width_m).length_m
-    return tuple(SearchPass(yaw, 0.0, inner) for yaw in config.yaw_offsets) + tuple(
-        SearchPass(yaw, inner, whole) for yaw in config.yaw_offsets
+    stretches = [(0.0, whole)]
+    if config.inner_half_width_m > 0.0:
+        inner = SearchPattern("spiral", config.pitch_m, config.inner_half_width_m).length_m
+        stretches = [(0.0, inner), (inner, whole)]
+    turns = (0.0, math.pi) if config.interleave and config.pattern == "spiral" else (0.0,)
+    return tuple(
+        SearchPass(yaw, start, end, turns[k % len(turns)])
+        for start, end in stretches
+        for k, yaw in enumerate(config.yaw_offsets)
     )
 
 

@@ -72,6 +72,25 @@ def test_an_inner_half_width_sweeps_the_inner_spiral_at_every_yaw_before_the_res
     assert reach.max() >= SMALL.half_width_m  # then out to the edge
 
 
+def test_interleaved_passes_turn_every_other_spiral_by_half_a_turn():
+    both = replace(SMALL, inner_half_width_m=0.001, interleave=True)
+    assert [p.pattern_turn_rad for p in plan_passes(both)] == [0.0, np.pi, 0.0] * 2
+    assert {p.pattern_turn_rad for p in plan_passes(SMALL)} == {0.0}
+    world = ToyWorld(**NO_OPENING)
+    machine = SpiralMachine(replace(SMALL, interleave=True), world.plug, world.hole)
+    swept = run(world, machine)
+    hole = np.array([world.hole.x_m, world.hole.y_m])
+    # the second pass's rings lie between the first's: at a swept radius, the first pass's
+    # tip and the second's are on opposite sides of the opening's centre
+    by_yaw = {yaw: np.array([tip[:2] - hole for tip, y, _ in swept if y == yaw]) for yaw in
+              SMALL.yaw_offsets}  # fmt: skip
+    first, second = by_yaw[SMALL.yaw_offsets[0]], by_yaw[SMALL.yaw_offsets[1]]
+    k = len(first) // 2
+    nearest = second[np.argmin(np.linalg.norm(second + first[k], axis=1))]
+    assert np.linalg.norm(nearest + first[k]) < 1.2e-4  # the point turned by half a turn
+    assert np.linalg.norm(nearest - first[k]) > 1e-3
+
+
 @pytest.mark.parametrize(
     "change", [dict(inner_half_width_m=0.002), dict(inner_half_width_m=0.001, pattern="raster")]
 )
