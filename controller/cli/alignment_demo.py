@@ -14,8 +14,9 @@ simulated hole; after the grasp (about 2 s) the operator drives the arm with the
   ``--fast`` runs a scripted demo as fast as the simulation goes (the view, if open, shows
   what it can and drops the rest).
 * ``--backend real``: the configured devices, the same code.
-* ``--autonomy``: the insertion machine from the trials' start; the pad overrides it at any
-  moment and ``hand_back`` resumes autonomy from a phase fitting the contact state.
+* ``--autonomy``: the find-align-insert machine (controller ``align``, on the tilt torques
+  the operator watches) from the trials' start; the pad overrides it at any moment and
+  ``hand_back`` resumes autonomy from a phase fitting the contact state.
 * The deadman is required for takeover and motion (a safety rule, not a setting); the e-stop latches
   until released and acknowledged; the commands pass the task's limits; an unplugged pad
   while in control trips the watchdog (a safe stop within the tick).
@@ -70,6 +71,10 @@ DEFAULT_SCRIPT = CONFIG_ROOT / "teleop" / "alignment_demo.yaml"
 START_DEPTH_M = 0.002
 """How far the plug's tip starts below the board surface (partly inserted)."""
 TELEOP_CONTROLLER = "teleop"
+AUTONOMY_CONTROLLER = "align"
+"""The machine ``--autonomy`` runs: the demo's cues (the tilt torques) closed in a loop, whose
+hand-back resumes from the contact state (APPROACH, SEARCH, ALIGN) and whose timeout the
+demo's ``--duration`` sets (``machine.timeouts.total_s``)."""
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -79,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--task", default="usb_c", help="usb_c (default), usb_a or a task YAML")
     parser.add_argument("--backend", choices=("sim", "real"), default="sim")
     parser.add_argument("--script", type=Path, help="a gamepad script for the simulated pad")
-    parser.add_argument("--autonomy", action="store_true", help="run the insertion machine")
+    parser.add_argument("--autonomy", action="store_true", help="run the align machine")
     parser.add_argument("--no-view", dest="view", action="store_false", help="no window")
     parser.add_argument("--foxglove", action="store_true", help="serve the streams live")
     parser.add_argument("--foxglove-host", default="127.0.0.1")
@@ -142,7 +147,7 @@ def run_demo(task: Task, args: argparse.Namespace, script: Any) -> int:
     """Run the demo (see the module doc); the exit code."""
     machines: list[Any] = []
     table = controller_table(machines)
-    controller = "dipole" if args.autonomy else TELEOP_CONTROLLER
+    controller = AUTONOMY_CONTROLLER if args.autonomy else TELEOP_CONTROLLER
     listeners: list[Any] = []
     view = None
     quit_asked: list[bool] = []

@@ -1,7 +1,7 @@
 """``tactile trial``: one insertion trial, simulated (default) or on the robot.
 
     tactile trial --task usb_c|usb_a|PATH.yaml [--backend sim|real] [--seed N] --out DIR
-                  [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
+                  [--controller dipole|fingervision|zero_torque|torque_only|align|blind|oracle]
                   [--realtime] [--set KEY=VALUE ...] [--episode-images jpeg|png]
 
 It prints the phase timeline and the outcome, and writes into DIR the trial's episode

@@ -2,8 +2,11 @@
 feeds it. This table is the one place controller names are defined; the tools offer its
 keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
 
-* ``dipole``: the insertion machine on the estimator as it is (dipole tilt, NHHD in-plane
-  torque): the product;
+* ``dipole``: the product: the press-spiral machine by touch (``SpiralMachine`` with the
+  task's ``touch_spiral:`` settings; controller/insertion/spiral/) on the estimator as it is
+  (dipole tilt, NHHD in-plane torque): the plug's axial force read from the estimate
+  (``TactileAxialForce``), its torques for INSERT's optional torque servo; it reads only the
+  estimate and the arm's and the gripper's status, never the arm's F/T sensor;
 * ``fingervision``: the same machine on the FingerVision baseline's torques
   (``fv_tau_*``, ``fingervision_torques``), calibrated by their own per-axis fit in the
   task's calibration and in the machine's sign convention;
@@ -11,9 +14,13 @@ keys (evaluation adds the simulation-only ``oracle`` for its comparisons).
   the forces kept (``zero_torques``): what the machine does without the torques;
 * ``torque_only`` (ablation): the same machine with the shear and the normal force forced
   to zero, the torques kept (``torques_only``);
-* ``blind``: the strongest search without touch (``SpiralMachine``: a force-threshold
-  spiral with yaw steps on the arm's own status, its F/T sensor's force and its pose); the
-  estimator still runs, and its estimates are recorded, never used.
+* ``align``: the find-align-insert machine (``InsertionMachine``, the task's ``machine:``
+  settings) on the estimator as it is: the paper's teleoperated demo's cues (the tilt
+  torques), closed in a loop;
+* ``blind``: the strongest search without touch (``SpiralMachine`` with the task's
+  ``blind:`` settings: a force-threshold spiral with yaw steps on the arm's own status, its
+  F/T sensor's force and its pose); the estimator still runs, and its estimates are
+  recorded, never used.
 """
 
 from __future__ import annotations
@@ -66,14 +73,18 @@ class Controller:
 
 
 def _insertion_machine(config: TaskConfig) -> Machine:
+    """The find-align-insert machine (``align``)."""
     return InsertionMachine(config.machine, config.plug, config.hole)
 
 
 def _blind_machine(config: TaskConfig) -> Machine:
+    """The press spiral on the arm's F/T sensor (``blind``)."""
     return SpiralMachine(config.blind, config.plug, config.hole)
 
 
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
+    """The press spiral by touch (the product's machine): the axial force read from the
+    estimate, its torques turned into T for the torque servo when ``push_servo.on``."""
     spiral = config.touch_spiral
     s2t = s2t_matrix(config.machine.signals.torque_axes)
     reading = TactileAxialForce(spiral.axial_weights, spiral.force_window, s2t)
@@ -97,10 +108,10 @@ def _transformed(
 
 
 CONTROLLERS: Mapping[str, Controller] = {
-    "dipole": Controller(_insertion_machine, _the_estimator),
-    "fingervision": Controller(_insertion_machine, _transformed(fingervision_torques)),
-    "zero_torque": Controller(_insertion_machine, _transformed(zero_torques)),
-    "torque_only": Controller(_insertion_machine, _transformed(torques_only)),
+    "dipole": Controller(_touch_spiral_machine, _the_estimator),
+    "fingervision": Controller(_touch_spiral_machine, _transformed(fingervision_torques)),
+    "zero_torque": Controller(_touch_spiral_machine, _transformed(zero_torques)),
+    "torque_only": Controller(_touch_spiral_machine, _transformed(torques_only)),
+    "align": Controller(_insertion_machine, _the_estimator),
     "blind": Controller(_blind_machine, _the_estimator, arm_force=True),
-    "touch_spiral": Controller(_touch_spiral_machine, _the_estimator),
 }

@@ -2,7 +2,7 @@
 speed-up, a refactor) leaves every trial's outcome as it was.
 
     python -m evaluation trial_fingerprints --task usb_c|usb_a|PATH.yaml --seeds A:B
-        [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle]
+        [--controller dipole|fingervision|zero_torque|torque_only|align|blind|oracle]
         [--set KEY=VALUE ...] [--out FILE.csv] [--against OTHER.csv]
     python -m evaluation trial_fingerprints --compare BEFORE.csv AFTER.csv
 

@@ -11,7 +11,7 @@ tip's largest lateral deflection, the outcome counts, and the lateral stiffness 
 (tilt stiffness / lever^2, lever: pivot to tip).
 
     python -m evaluation search_torques [--task usb_c] [--seeds 0:5]
-        [--stiffness 0.5,5,15,45] [--controller dipole]
+        [--stiffness 0.5,5,15,45] [--controller align]
 """
 
 from __future__ import annotations
@@ -93,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
         default=(0.5, 5.0, 15.0, 45.0),
         help="tilt stiffnesses, N*m/rad, comma-separated",
     )
-    parser.add_argument("--controller", default="dipole")
+    parser.add_argument("--controller", default="align")
     args = parser.parse_args(argv)
 
     def body() -> int:

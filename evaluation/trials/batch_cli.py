@@ -1,7 +1,7 @@
 """A batch of simulated insertion trials on consecutive seeds, locally or on Ray.
 
     tactile trials --task usb_c --seeds 0:200 --out out/trials/usb_c
-        [--controller dipole|fingervision|zero_torque|torque_only|blind|oracle] [--workers N]
+        [--controller dipole|fingervision|zero_torque|torque_only|align|blind|oracle] [--workers N]
         [--executor local|ray] [--ray-address ADDR] [--set KEY=VALUE ...] [--records] [--episodes]
         [--resume]
 

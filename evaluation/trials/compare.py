@@ -1,7 +1,7 @@
 """Controllers compared side by side on the same seeds, across insertion speed settings.
 
     tactile compare --task usb_c --seeds 0:200 --out out/compare/usb_c
-        [--controllers dipole,fingervision,zero_torque,torque_only,blind,oracle]
+        [--controllers dipole,fingervision,zero_torque,torque_only,align,blind,oracle]
         [--speeds 0.002,0.004,0.008]
         [--speed-key machine.insert.speed_m_s] [--workers N] [--executor local|ray]
         [--ray-address ADDR] [--set KEY=VALUE ...] [--resume]

@@ -60,11 +60,11 @@ def resting_height_m(task: Task) -> float:
 
 
 def trial_hole_finds(task: Task, seed: int) -> tuple[bool, list[HoleFind]]:
-    """Run one simulated trial of ``task`` with the dipole controller; its success and each
+    """Run one simulated trial of ``task`` with the align controller; its success and each
     of its hole finds. A signal that stopped the trial stops the caller too
     (``raise_if_interrupted``)."""
     with tempfile.TemporaryDirectory() as folder:
-        outcome = run(task, "dipole", seed, out_dir=Path(folder) / "trial")
+        outcome = run(task, "align", seed, out_dir=Path(folder) / "trial")
         raise_if_interrupted(outcome)
         truth = dict(np.load(Path(folder) / "trial" / "truth.npz"))
         with (Path(folder) / "trial" / "ticks.jsonl").open() as lines:

@@ -1,5 +1,6 @@
 """``python -m evaluation hole_finds``: where the tip really was at each hole find, and how
-the press that followed ended (evaluation/trials/hole_finds.py), over simulated trials.
+the press that followed ended (evaluation/trials/hole_finds.py), over simulated trials of the
+``align`` controller (the find-align-insert machine, whose SEARCH declares hole finds).
 
     hole_finds.py --task usb_c|usb_a|PATH.yaml --seeds A:B [--workers N] [--set KEY=VALUE ...]
 

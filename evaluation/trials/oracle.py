@@ -1,21 +1,22 @@
 """The ``oracle`` controller, for comparisons in simulation only (never the product): the
-insertion machine driven by the simulator's TRUE gel wrench, as the sensor would report it
-if the estimator were exact.
+product's machine (``CONTROLLERS["dipole"].machine``: the press spiral by touch) driven by
+the simulator's TRUE gel wrench, as the sensor would report it if the estimator were exact.
 
 ``TrueWrench`` replaces tau_x, tau_y, tau_z, shear_x, shear_y and normal of each estimate by
 the true wrench the sensing gel exerts on the plug, in S, at the estimate's frame time (the
 wrench the frame was rendered from), relative to the true wrench when the reference was
-taken (the estimate's zero), in the calibrated units the machine's thresholds use (N*m, N)
--- plus Gaussian noise of each axis's calibrated noise at rest, as measured in the task's
-scene calibration (``AxisFit.rest_std``, configs/calibrations/). It then goes through the
-same path as the estimate: the same frames and times, the same signals (baseline, noise
-units, filter) and the same machine. The estimator still runs on the frames for the flags
-(zeroing, contact, slip).
+taken (the estimate's zero), in the calibrated units the machine reads (N*m, N) -- plus
+Gaussian noise of each axis's calibrated noise at rest, as measured in the task's scene
+calibration (``AxisFit.rest_std``, configs/calibrations/). It then goes through the same
+path as the estimate: the same frames and times, the same reading of the plug's axial
+force (the task's ``touch_spiral.axial_weights``) and the same machine. The estimator still
+runs on the frames for the flags (zeroing, contact, slip).
 
 What it is: the machine with a perfectly linear, perfectly scaled, sensor-noise-limited
-wrench. What it is not: an upper bound by construction. The machine's rules were written and
-tuned on the estimate; a better signal can still trip them differently, so whether the
-oracle does at least as well as the estimate is a measurement (docs/TRIALS.md), not a given.
+wrench. What it is not: an upper bound by construction. The machine's settings (the axial
+map's weights among them) were fitted and tuned on the estimate; a better signal can still
+trip them differently, so whether the oracle does at least as well as the estimate is a
+measurement (docs/TRIALS.md), not a given.
 
 ``TRIAL_CONTROLLERS`` is the product's table (``controller.run.CONTROLLERS``) with this entry
 added.

@@ -18,7 +18,9 @@ PRODUCT = "dipole"
 SUCCESS_TARGET = 0.98  # dipole's success rate per task
 MEDIAN_TIME_TARGET_S = 15.0  # dipole's median time to insert
 SLOWER_FACTOR = 1.3  # "a median time to insert at least 30% longer"
-# controllers the product must beat, and the ablations that must fall short of it
+# what must fall short of the product (its machine without the torques, on FingerVision's
+# torques, and the same spiral without touch), and what is reported beside it (its machine
+# without the forces); ``align``, the machine it replaced, is compared when run, not judged
 MUST_FALL_SHORT = ("zero_torque", "fingervision", "blind")
 REPORTED_BESIDE = ("torque_only",)
 REFERENCE = "oracle"

@@ -52,7 +52,7 @@ def test_a_run_whose_record_cannot_be_written_stops_safely(tmp_path):
     out = tmp_path / "trial"
     ran = subprocess.run(
         [sys.executable, "-c", code, "--task", "usb_c", "--seed", "0", "--out", str(out),
-         "--set", "machine.timeouts.total_s=6.0"],
+         "--set", "touch_spiral.timeout_s=6.0"],
         capture_output=True, text=True, cwd=ROOT, timeout=300,
     )  # fmt: skip
     assert "Traceback" not in ran.stderr, ran.stderr

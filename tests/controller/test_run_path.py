@@ -14,7 +14,7 @@ from controller.run.runner import controller_entry
 from core.config import CONFIG_ROOT, ConfigError
 
 ROOT = Path(__file__).resolve().parents[2]
-SHORT = ("machine.timeouts.total_s=3.0",)  # the grasp only
+SHORT = ("touch_spiral.timeout_s=3.0",)  # the grasp and the start of the approach only
 
 BLOCKED_REAL_RUN = """
 import importlib.abc, sys
@@ -42,7 +42,8 @@ print("simulator modules:", loaded)
 def test_a_real_run_never_loads_the_simulator_or_mujoco(tmp_path):
     """With imports of ``drivers.sim`` and ``mujoco`` blocked, a real run gets as far as
     connecting the arm (nothing listens at the address) and fails there, with a device
-    error naming the address, not an import error."""
+    error naming the address, not an import error (nor a refusal of the arm's file, which has
+    no F/T sensor: the product does not read one)."""
     arm = tmp_path / "arm.yaml"
     text = (CONFIG_ROOT / "robot" / "xarm6.yaml").read_text()
     arm.write_text(text.replace("ip: 192.168.1.185", "ip: 127.0.0.1"))
@@ -65,8 +66,9 @@ def test_the_blocker_would_catch_a_simulator_import(tmp_path):
 
 def test_the_controller_table_names_every_controller_once():
     assert list(CONTROLLERS) == [
-        "dipole", "fingervision", "zero_torque", "torque_only", "blind", "touch_spiral",
+        "dipole", "fingervision", "zero_torque", "torque_only", "align", "blind",
     ]  # fmt: skip
+    assert [n for n, c in CONTROLLERS.items() if c.arm_force] == ["blind"]  # the product: no F/T
     with pytest.raises(ConfigError, match="controller 'oracle': expected one of dipole, "):
         controller_entry("oracle", "sim", CONTROLLERS)
     truth_reader = Controller(CONTROLLERS["dipole"].machine, lambda est, world: est, True)

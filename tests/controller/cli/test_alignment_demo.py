@@ -164,7 +164,7 @@ def test_with_autonomy_the_pad_overrides_and_hand_back_resumes_from_the_contact_
         ("teleop", "approach", "hand_back"),  # lifted clear of the board: no contact
         ("approach", "search", "surface_contact"),  # autonomy carries on
     ]
-    assert episode.info["controller"] == "dipole"
+    assert episode.info["controller"] == "align"
 
 
 @pytest.mark.parametrize("backend", ["sim", "real"])

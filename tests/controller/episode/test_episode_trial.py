@@ -62,7 +62,7 @@ def test_every_stream_round_trips(trial):
     commands = [m.value for m in ep.messages("/control/command")]
     assert [c["limited"] for c in commands] == [t["limited"] for t in ticks]
     assert [c["rule"] for c in commands] == [t["rule"] for t in ticks]
-    assert "search.drag" in {c["rule"] for c in commands}
+    assert "search.sweep" in {c["rule"] for c in commands}
     twists = [
         c["twist_linear_m_s"] + c["twist_angular_rad_s"] for c in commands if c["twist_linear_m_s"]
     ]

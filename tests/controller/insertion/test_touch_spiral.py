@@ -131,12 +131,14 @@ def test_without_rewind_a_probe_holds_the_swept_length():
         pytest.fail("no probe")
 
 
-def test_the_controller_reads_the_tasks_touch_spiral_section():
+def test_the_product_and_its_ablations_read_the_tasks_touch_spiral_section():
     config = load_task("usb_c", ["touch_spiral.force_window=4"]).config
-    machine = CONTROLLERS["touch_spiral"].machine(config)
-    assert isinstance(machine, SpiralMachine)
-    assert machine.config is config.touch_spiral
-    assert not CONTROLLERS["touch_spiral"].arm_force  # no F/T sensor
+    for name in ("dipole", "fingervision", "zero_torque", "torque_only"):
+        machine = CONTROLLERS[name].machine(config)
+        assert isinstance(machine, SpiralMachine)
+        assert machine.config is config.touch_spiral
+        assert isinstance(machine.reading, TactileAxialForce)
+        assert not CONTROLLERS[name].arm_force  # no F/T sensor
 
 
 def observation(t_s: float, shear_y: float) -> Observation:

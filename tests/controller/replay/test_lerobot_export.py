@@ -269,7 +269,7 @@ def test_episodes_at_another_loop_rate_are_one_line_naming_the_file(episode_path
     from evaluation.trials.trial import run
 
     slow = tmp_path / "slow"
-    task = load_task("usb_c", ["loop.rate_hz=50", "machine.timeouts.total_s=3"])
+    task = load_task("usb_c", ["loop.rate_hz=50", "touch_spiral.timeout_s=3"])
     run(task, "dipole", 0, out_dir=slow, episode=EpisodeOptions(image_format="jpeg"))
     out = tmp_path / "dataset"
     assert main(["export", str(episode_path), str(slow / EPISODE_FILE), "--lerobot", str(out)]) == 2

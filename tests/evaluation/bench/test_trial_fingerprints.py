@@ -14,7 +14,7 @@ from controller.run.result import TrialResult
 from evaluation.bench import trial_fingerprints
 from evaluation.bench.trial_fingerprints import COLUMNS, compare, main, outcome_digest, read_table
 
-SHORT = ["--set", "machine.timeouts.total_s=6.0"]  # grasp and the start of the approach only
+SHORT = ["--set", "touch_spiral.timeout_s=6.0"]  # the grasp, the approach, the search's start
 
 RESULT = TrialResult(
     task="usb_c",
@@ -30,8 +30,8 @@ RESULT = TrialResult(
     wall_time_s=2.0,
 )
 TRANSITIONS = (
-    Transition(2.25, Phase.GRASP, Phase.APPROACH, "grasped_and_zeroed"),
-    Transition(6.1, Phase.APPROACH, Phase.SEARCH, "surface_contact"),
+    Transition(1.7, Phase.GRASP, Phase.APPROACH, "grasped"),
+    Transition(3.24, Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
 )
 
 
@@ -41,7 +41,7 @@ def test_the_outcome_digest_ignores_wall_time_only():
     assert outcome_digest(dataclasses.replace(RESULT, duration_s=9.0 + 1e-12), TRANSITIONS) != (
         digest
     )
-    later = (TRANSITIONS[0], dataclasses.replace(TRANSITIONS[1], t_s=6.11))
+    later = (TRANSITIONS[0], dataclasses.replace(TRANSITIONS[1], t_s=3.25))
     assert outcome_digest(RESULT, later) != digest
     ruled = (TRANSITIONS[0], dataclasses.replace(TRANSITIONS[1], rule="probe"))
     assert outcome_digest(RESULT, ruled) != digest

@@ -34,7 +34,7 @@ FORCE_LIMIT_N = 20.0
 
 def fake_trial(spec: TrialSpec) -> TrialResult:
     """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed;
-    ``dipole`` estimates the plug in the hand 0.001 rad and 0.1 mm off per seed."""
+    ``align`` estimates the plug in the hand (its FEEL) 0.001 rad and 0.1 mm off per seed."""
     if spec.seed == 5:
         raise RuntimeError("boom\nsecond line")
     success = spec.seed % 4 != 3
@@ -56,7 +56,7 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
         max_wrist_force_n=10.0 + spec.seed,
         force_limit_n=FORCE_LIMIT_N,
         wall_time_s=0.25,
-        **(_fake_pose(spec.seed) if spec.controller == "dipole" else {}),
+        **(_fake_pose(spec.seed) if spec.controller == "align" else {}),
     )
 
 
@@ -109,8 +109,8 @@ def test_spec_refuses_an_unknown_controller():
     with pytest.raises(
         SpecError,
         match=(
-            "expected one of dipole, fingervision, zero_torque, torque_only, blind, "
-            "touch_spiral, oracle"
+            "expected one of dipole, fingervision, zero_torque, torque_only, align, "
+            "blind, oracle"
         ),
     ):
         TrialSpec("usb_c", "magic", 0)
@@ -547,7 +547,7 @@ def test_a_record_is_never_written_over(tmp_path):
 def test_a_real_batch_keeps_each_trials_record_with_its_chart(tmp_path):
     out = tmp_path / "out"
     code = batch_main(["--task", "usb_c", "--seeds", "4:5", "--records", "--out", str(out),
-                       "--set", "machine.timeouts.total_s=6.0"])  # fmt: skip
+                       "--set", "touch_spiral.timeout_s=6.0"])  # fmt: skip
     assert code == 0
     assert [p.name for p in (out / "records").iterdir()] == ["dipole-4"]
     record = out / "records" / "dipole-4"
@@ -559,7 +559,7 @@ def test_a_real_batch_keeps_each_trials_record_with_its_chart(tmp_path):
 def test_a_batch_with_episodes_keeps_each_trials_episode_in_its_record(tmp_path):
     out = tmp_path / "out"
     code = batch_main(["--task", "usb_c", "--seeds", "4:5", "--episodes", "--out", str(out),
-                       "--set", "machine.timeouts.total_s=3.0"])  # fmt: skip
+                       "--set", "touch_spiral.timeout_s=3.0"])  # fmt: skip
     assert code == 0
     episode = read_episode(out / "records" / "dipole-4" / "episode.mcap")
     assert episode.complete and episode.info["seed"] == "4"
@@ -597,7 +597,7 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
             "--seeds",
             "0:6",
             "--controllers",
-            "dipole,blind,oracle",
+            "dipole,align,blind,oracle",
             "--speeds",
             "0.01,0.02",
             "--out",
@@ -611,22 +611,23 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
         assert (out / name).stat().st_size > 1000
     table = (out / "comparison.md").read_text()
     results, targets = table.split("### Targets at", 1)
-    assert results.count("\n| ") == 1 + 6  # header and one row per cell
+    assert results.count("\n| ") == 1 + 8  # header and one row per cell
     # the product's targets judged at each speed, a controller not in the grid not judged
     assert targets.count("### Targets at") == 1  # the second speed's
     assert "machine.insert.speed_m_s=0.01\n" in targets and "=0.02\n" in targets
     assert "| `zero_torque` falls short of `dipole` | – | not run |" in targets
     assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
-    # the in-hand estimate: a table row and a histogram per dipole cell, none for the others
+    # the in-hand estimate: a table row and a histogram per align cell, none for the others
     assert sorted(p.name for p in out.glob("grasp_errors_*.png")) == [
-        "grasp_errors_dipole_0.01.png", "grasp_errors_dipole_0.02.png"
+        "grasp_errors_align_0.01.png", "grasp_errors_align_0.02.png"
     ]
-    assert table.count("| dipole | 0.01 | 5/6 |") == 1  # the raising seed 5 has none
+    assert table.count("| align | 0.01 | 5/6 |") == 1  # the raising seed 5 has none
+    assert "| dipole | 0.01 | 5/6 |" not in table
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6
     every = json.loads((out / "comparison.json").read_text())
-    assert len(every) == 6
+    assert len(every) == 8
     # the fake trial is slower at the lower speed: the histogram's data differ by speed
     slow = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
     assert slow["median_time_s"] > summary["median_time_s"]

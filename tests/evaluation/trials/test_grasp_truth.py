@@ -42,7 +42,7 @@ def test_a_table_without_the_pose_columns_reads_them_as_unknown():
 
 
 def _with_pose(seed: int, est: float, true: float, tip_est: float, tip_true: float):
-    base = TrialResult("usb_c", "dipole", seed, True, "inserted", None, 9.0, 12.0, 1.0, 20.0, 5.0)
+    base = TrialResult("usb_c", "align", seed, True, "inserted", None, 9.0, 12.0, 1.0, 20.0, 5.0)
     return dataclasses.replace(
         base,
         grasp_tilt_est_rad=est,

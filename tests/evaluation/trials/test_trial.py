@@ -24,7 +24,7 @@ from evaluation.trials.spec import TrialSpec
 
 ROOT = Path(__file__).resolve().parents[3]
 
-SHORT = ("machine.timeouts.total_s=6.0",)  # grasp and the start of the approach only
+SHORT = ("touch_spiral.timeout_s=6.0",)  # the grasp, the approach and the search's start
 
 
 def test_both_task_files_load_whole():
@@ -112,7 +112,7 @@ def test_a_short_trial_writes_its_record(tmp_path):
     transitions = (out / "transitions.jsonl").read_text().splitlines()
     assert json.loads(transitions[0])["from"] == "grasp"
     summary = json.loads((out / "trial.json").read_text())
-    assert summary["seed"] == 2 and summary["config"]["machine"]["timeouts"]["total_s"] == 6.0
+    assert summary["seed"] == 2 and summary["config"]["touch_spiral"]["timeout_s"] == 6.0
     truth = np.load(out / "truth.npz")
     assert np.isfinite(truth["depth_m"]).all() and (out / "summary.png").stat().st_size > 10000
     code = main(["--task", "usb_c", "--out", str(out)])  # never over an earlier record

@@ -104,7 +104,7 @@ def test_an_operator_takes_over_and_hands_back_through_the_gamepad(easy_task):
     back = next(t for t in outcome.transitions if t.reason == "hand_back")
     assert takeover.source is Phase.GRASP and 1.5 <= takeover.t_s <= 1.5 + 2 * PERIOD_S
     assert 3.5 <= back.t_s <= 3.5 + 2 * PERIOD_S
-    assert back.target is Phase.GRASP  # no tactile baseline yet: grasp again
+    assert back.target is Phase.GRASP  # the plug not yet released: grasp again
     assert outcome.result.success, reasons
     truth = outcome.truth
     during = (truth["t_s"] > 1.6) & (truth["t_s"] < 2.5)

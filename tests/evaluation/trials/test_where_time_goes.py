@@ -14,7 +14,7 @@ def _record(folder, seed, status, phases, tti=None, reason=None, transitions=())
     """A record whose ticks run through ``phases`` [(phase, rule, seconds), ...] from t=1 s."""
     folder.mkdir(parents=True)
     trial = {
-        "controller": "dipole",
+        "controller": "align",
         "seed": seed,
         "result": {"status": status, "time_to_insert_s": tti, "failure_reason": reason},
         "loop": {"first_tick_s": 1.0},
@@ -40,10 +40,10 @@ def test_the_seconds_per_rule_are_the_ticks_up_to_the_time_to_insert(tmp_path, c
     records = tmp_path / "batch" / "records"
     # 2 s searching, 1 s aligning, then 1 s inserting of which only 0.5 s count (tti 3.5 s)
     steps = [("search", "search.drag", 2.0), ("align", "align.turn", 1.0)]
-    _record(records / "dipole-0", 0, "inserted", [*steps, ("insert", "insert.push", 1.0)], 3.5)
+    _record(records / "align-0", 0, "inserted", [*steps, ("insert", "insert.push", 1.0)], 3.5)
     # 4 s searching, 1 s aligning, 0.02 s of a rare rule (under --least), tti 5.02 s
     steps = [("search", "search.drag", 4.0), ("align", "align.turn", 1.0)]
-    _record(records / "dipole-1", 1, "inserted", [*steps, ("align", "align.rare", 0.02)], 5.02)
+    _record(records / "align-1", 1, "inserted", [*steps, ("align", "align.rare", 0.02)], 5.02)
     assert main([str(tmp_path / "batch")]) == 0
     text = capsys.readouterr().out
     assert "2 inserted, mean time to insert 4.26 s" in text
@@ -60,10 +60,10 @@ def test_failures_are_counted_by_the_phase_they_ended_in_and_whether_the_hole_wa
     records = tmp_path / "records"
     never = [("grasp", "approach", "grasped_and_zeroed"), ("search", "failed", "timeout")]
     found = [("search", "align", "hole_found"), ("align", "failed", "timeout")]
-    _record(records / "dipole-0", 0, "failed", [], reason="timeout", transitions=never)
-    _record(records / "dipole-1", 1, "failed", [], reason="timeout", transitions=never)
-    _record(records / "dipole-2", 2, "failed", [], reason="timeout", transitions=found)
-    (records / ".dipole-3.partial").mkdir()  # an unfinished trial's record: left out
+    _record(records / "align-0", 0, "failed", [], reason="timeout", transitions=never)
+    _record(records / "align-1", 1, "failed", [], reason="timeout", transitions=never)
+    _record(records / "align-2", 2, "failed", [], reason="timeout", transitions=found)
+    (records / ".align-3.partial").mkdir()  # an unfinished trial's record: left out
     assert main([str(tmp_path)]) == 0
     text = capsys.readouterr().out
     assert "3 failed" in text
