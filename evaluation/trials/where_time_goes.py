@@ -11,7 +11,8 @@ trial's record (``run_trial --out``). Each record's ``trial.json`` and ``ticks.j
   to insert. A tick lasts until the next one (the last, one loop period). Rules under
   ``--least`` seconds a trial are summed into their phase's ``other``.
 * **The failures**, per controller: how many ended in each (phase, reason), the phase being
-  the one the FAILED transition left, and how many of those never found the hole.
+  the one the FAILED transition left, and how many of those never found the hole (no
+  transition under one of ``FOUND``: the align machine's find, the spiral's catch or fall).
 """
 
 from __future__ import annotations
@@ -31,6 +32,10 @@ from evaluation.trials.records import RECORDS
 
 TRIAL_NAME = "trial.json"
 TICKS_NAME = "ticks.jsonl"
+
+#: the guards under which a machine has found the opening: the align machine's, the press
+#: spiral's catch and its plug gone in on the way down
+FOUND = ("hole_found", "caught", "fell_in")
 
 
 @dataclass
@@ -118,7 +123,7 @@ def collect(folders: Iterable[Path]) -> dict[str, RuleTimes]:
                 last = transitions[-1] if transitions else {"from": "?"}
                 ending = (str(last["from"]), str(result["failure_reason"]))
                 times.endings[ending] += 1
-                if not any(t["reason"] == "hole_found" for t in transitions):
+                if not any(t["reason"] in FOUND for t in transitions):
                     times.unfound[ending] += 1
         except (KeyError, TypeError, ValueError, IndexError) as exc:
             raise ToolError(

@@ -71,6 +71,21 @@ def test_failures_are_counted_by_the_phase_they_ended_in_and_whether_the_hole_wa
     assert _row(text, "align", "timeout", "1", "0")
 
 
+def test_the_spirals_catch_and_fall_count_as_found(tmp_path, capsys):
+    records = tmp_path / "records"
+    never = [("grasp", "approach", "grasped"), ("search", "failed", "timeout")]
+    caught = [("search", "insert", "caught"), ("insert", "search", "jammed"),
+              ("search", "failed", "timeout")]  # fmt: skip
+    fell = [("search", "insert", "fell_in"), ("insert", "failed", "timeout")]
+    _record(records / "dipole-0", 0, "failed", [], reason="timeout", transitions=never)
+    _record(records / "dipole-1", 1, "failed", [], reason="timeout", transitions=caught)
+    _record(records / "dipole-2", 2, "failed", [], reason="timeout", transitions=fell)
+    assert main([str(tmp_path)]) == 0
+    text = capsys.readouterr().out
+    assert _row(text, "search", "timeout", "2", "1")
+    assert _row(text, "insert", "timeout", "1", "0")
+
+
 def test_one_trials_record_is_read_alone(tmp_path, capsys):
     _record(tmp_path / "t", 7, "inserted", [("search", "search.drag", 1.0)], 1.0)
     assert main([str(tmp_path / "t")]) == 0
