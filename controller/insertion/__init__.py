@@ -1,6 +1,7 @@
-"""The insertion state machine: Observation in, Command out, no I/O (see interface.py).
+"""The insertion state machines: Observation in, Command out, no I/O (see interface.py).
 
-``InsertionMachine(config, plug, hole)`` is the machine; its ``machine:`` section, with the
+``InsertionMachine(config, plug, hole)`` is the find-align-insert machine (the ``align``
+controller); the product's press spiral is in ``spiral/``. Its ``machine:`` section, with the
 task's ``plug:`` and ``hole:``, is read by the task file's schema (controller/run/task.py).
 """
 

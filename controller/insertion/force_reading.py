@@ -1,5 +1,6 @@
 """Where a press-spiral machine (controller/insertion/spiral/) reads the upward force on the
-tool: the arm's F/T sensor at the flange, or the tactile estimate's axial force.
+tool: the tactile estimate's axial force (the product, ``dipole``, and its variants) or the
+arm's F/T sensor at the flange (the ``blind`` baseline).
 
 Both give the force in N, positive when the board pushes the plug up into the hand (z in B
 for the upright tool), untared (the machine tares it at the hover), with the time the
@@ -88,10 +89,10 @@ class TactileAxialForce:
     per unit of each of ``AXIAL_TERMS``) times the estimate's terms, the median of the last
     ``window`` frames (a single frame's outlier never reads as the load's drop), described
     at their median capture time. Zeroing frames give nothing. The weights are the task's
-    ``touch_spiral.axial_weights``: fitted against the plug's true axial force by
-    ``python -m evaluation fit_axial_map``, or the force channel along T z over the sensing finger's
-    share of the load. ``s2t``: the rotation R_S2T (3 x 3) that gives the newest frame's
-    torques in T (``torque_t``)."""
+    ``touch_spiral.axial_weights`` (the settings of ``dipole`` and its variants): fitted
+    against the plug's true axial force by ``python -m evaluation fit_axial_map``, or the
+    force channel along T z over the sensing finger's share of the load. ``s2t``: the
+    rotation R_S2T (3 x 3) that gives the newest frame's torques in T (``torque_t``)."""
 
     zeroes_tactile = True
 

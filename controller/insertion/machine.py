@@ -1,15 +1,17 @@
-"""The insertion state machine: ``step(observation) -> Command``, pure and non-blocking.
+"""The find-align-insert state machine (the ``align`` controller; the product's machine is the
+press spiral, controller/insertion/spiral/): ``step(observation) -> Command``, pure and
+non-blocking.
 
 The phases, their rules and the transition table are documented in docs/ARCHITECTURE.md
-("Insertion state machine"); the table itself is data (``definition.py``), checked when the
-machine is built, and every transition the machine takes, and every sub-stage it is in, must
-be in it. Each phase is a module of ``phases/`` (its sub-stages, its state, its ``step``);
-this module dispatches to them and owns the transitions and the checks common to them. Each
-tick, in this order: a device fault ends the run; the e-stop button latches ESTOP; an
-operator in control takes over (TELEOP); the timeouts, the hard limits and the slip policy
-are checked; then the current phase's ``step`` computes the command and may move on. Every
-command names the rule (``Command.rule``) and the sub-stage (``Command.stage``) that
-decided it.
+("Insertion state machine", ``align``); the table itself is data (``definition.py``),
+checked when the machine is built, and every transition the machine takes, and every
+sub-stage it is in, must be in it. Each phase is a module of ``phases/`` (its sub-stages,
+its state, its ``step``); this module dispatches to them and owns the transitions and the
+checks common to them. Each tick, in this order: a device fault ends the run; the e-stop
+button latches ESTOP; an operator in control takes over (TELEOP); the timeouts, the hard
+limits and the slip policy are checked; then the current phase's ``step`` computes the
+command and may move on. Every command names the rule (``Command.rule``) and the sub-stage
+(``Command.stage``) that decided it.
 """
 
 from __future__ import annotations

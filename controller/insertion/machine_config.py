@@ -1,5 +1,6 @@
-"""The insertion machine's configuration: the task file's ``machine:``, ``plug:`` and ``hole:``
-sections (configs/tasks/usb_c.yaml, usb_a.yaml).
+"""The find-align-insert machine's (``align``) configuration: the task file's ``machine:``,
+``plug:`` and ``hole:`` sections (configs/tasks/usb_c.yaml, usb_a.yaml). Every controller
+reads ``signals.torque_axes`` (S on T) and the ``plug:`` and ``hole:`` sections.
 
 Units are SI and in the key names. Tactile thresholds come in two kinds:
 

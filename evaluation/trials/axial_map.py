@@ -1,5 +1,6 @@
-"""The touch spiral's axial-force map (``touch_spiral.axial_weights``), fitted on recorded
-trials against the simulator's truth (``python -m evaluation fit_axial_map``).
+"""The product's axial-force map (the press spiral by touch, ``dipole``; the task's
+``touch_spiral.axial_weights``), fitted on recorded trials against the simulator's truth
+(``python -m evaluation fit_axial_map``).
 
 Each trial record (``run_trials.py --records``: ticks.jsonl and truth.npz) gives one
 sample per new tactile frame while the machine searches or pushes (SEARCH, INSERT): the

@@ -1,5 +1,5 @@
-"""``python -m evaluation fit_axial_map``: the touch spiral's axial-force map, fitted on recorded
-trials (evaluation/trials/axial_map.py).
+"""``python -m evaluation fit_axial_map``: the product's axial-force map (the press spiral by
+touch, ``dipole``), fitted on recorded trials (evaluation/trials/axial_map.py).
 
     fit_axial_map.py --fit RECORD [RECORD ...] --check RECORD [RECORD ...]
                      [--against W1,...,W9]

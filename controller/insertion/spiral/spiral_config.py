@@ -1,7 +1,8 @@
-"""The press-spiral machine's settings: the task file's ``blind:`` section (the machine on the
-arm's F/T sensor) and its ``touch_spiral:`` section (the same machine on the tactile
-estimate's axial force). Lengths in m, speeds in m/s, angles in rad, forces in N (the tared
-upward force on the tool, z in B), times in s.
+"""The press-spiral machine's settings: the task file's ``touch_spiral:`` section (the
+product's machine, ``dipole`` and its variants, on the tactile estimate's axial force) and
+its ``blind:`` section (the same machine on the arm's F/T sensor, the ``blind`` baseline).
+Lengths in m, speeds in m/s, angles in rad, forces in N (the tared upward force on the tool,
+z in B), times in s.
 """
 
 from __future__ import annotations
@@ -129,9 +130,10 @@ AxialWeights = tuple[float, float, float, float, float, float, float, float, flo
 
 @config_dataclass
 class TouchSpiralConfig(SpiralConfig):
-    """The task file's ``touch_spiral:`` section: the blind baseline's search with the force
-    read by touch (``force_reading.TactileAxialForce``), every key as ``blind:``'s, forces
-    on the whole plug; ``axial_weights``: N on the plug per unit of each of the estimate's
+    """The task file's ``touch_spiral:`` section, the product's (``dipole`` and its
+    variants): the blind baseline's search with the force read by touch
+    (``force_reading.TactileAxialForce``), every key as ``blind:``'s, forces on the whole
+    plug; ``axial_weights``: N on the plug per unit of each of the estimate's
     ``force_reading.AXIAL_TERMS`` (nine: tau_x, tau_y, tau_z in N*m, shear_x, shear_y,
     normal in N, the three torques' magnitudes). The default reads the force channel along
     T z (S's shear_y) over the sensing finger's share of the load (two alike fingers).

@@ -1,6 +1,8 @@
-"""The press-spiral machine: the strongest search an integrator would build without touch
-(``blind``, on the arm's F/T sensor) and the same search by touch (``touch_spiral``, on the
-tactile estimate's axial force: controller/insertion/force_reading.py).
+"""The press-spiral machine: the product's machine by touch (``dipole``, and ``fingervision``,
+``zero_torque``, ``torque_only`` and ``oracle`` on other wrench sources; settings: the task's
+``touch_spiral:`` section), on the tactile estimate's axial force
+(controller/insertion/force_reading.py), and the same search on the arm's F/T sensor, the
+strongest search an integrator would build without touch (``blind``; settings ``blind:``).
 
 It grasps, moves the plug upright above the nominal opening and, for each of SEARCH's
 passes (a yaw and a stretch of the pattern: ``spiral_search.plan_passes``), tares the force
