@@ -43,7 +43,8 @@ class TrialResult:
     The plug's pose in the hand (controller/insertion/grasp_estimate.py; NaN where unknown):
     ``grasp_tilt_est_rad`` the machine's estimate of its tilt in the width plane (about T y)
     and ``grasp_tilt_true_rad`` the scene's; ``grasp_tilt_thickness_true_rad`` the true tilt
-    in the thickness plane (about T x; not estimated); ``tip_x_est_m`` the estimated tip's
+    in the thickness plane (about T x), ``grasp_tilt_thickness_est_rad`` the press spiral's
+    estimate of it (its FEEL's flat angle; nan without one); ``tip_x_est_m`` the estimated tip's
     offset along T x from the nominal, and ``tip_x_true_m``, ``tip_y_true_m`` the true tip's
     along T x and T y (m).
     """
@@ -68,6 +69,7 @@ class TrialResult:
     grasp_tilt_est_rad: float = float("nan")
     grasp_tilt_true_rad: float = float("nan")
     grasp_tilt_thickness_true_rad: float = float("nan")
+    grasp_tilt_thickness_est_rad: float = float("nan")
     tip_x_est_m: float = float("nan")
     tip_x_true_m: float = float("nan")
     tip_y_true_m: float = float("nan")
@@ -113,6 +115,7 @@ _POSE_FIELDS = (
     "grasp_tilt_est_rad",
     "grasp_tilt_true_rad",
     "grasp_tilt_thickness_true_rad",
+    "grasp_tilt_thickness_est_rad",
     "tip_x_est_m",
     "tip_x_true_m",
     "tip_y_true_m",

@@ -196,8 +196,9 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
 
 
 def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
-    """The plug's pose in the hand: the machine's estimate (FEEL's, where its machine has
-    one) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
+    """The plug's pose in the hand: the machine's estimates (FEEL's, where its machine has
+    one: the align machine's width-plane tilt and tip, the press spiral's thickness-plane
+    tilt) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
     # imported here: the scene's draws belong to the simulator, which a real run never loads
     from drivers.sim.scenes.insertion.draws import draw_scene
     from evaluation.trials.grasp_truth import grasp_truth
@@ -206,10 +207,12 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     truth = grasp_truth(draw_scene(task.config.hole, task.scene, seed).grasp, length)
     estimate = getattr(ran.machine, "grasp", None)
     tilt = estimate.tilt_rad if estimate is not None else math.nan
+    thickness = getattr(ran.machine, "tilt_x_estimate_rad", None)
     return {
         "grasp_tilt_est_rad": tilt,
         "grasp_tilt_true_rad": truth.tilt_width_rad,
         "grasp_tilt_thickness_true_rad": truth.tilt_thickness_rad,
+        "grasp_tilt_thickness_est_rad": math.nan if thickness is None else thickness,
         "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
         "tip_x_true_m": float(truth.tip_t_m[0]),
         "tip_y_true_m": float(truth.tip_t_m[1]),

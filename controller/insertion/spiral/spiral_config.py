@@ -11,6 +11,7 @@ import math
 from typing import Literal
 
 from controller.insertion.machine_config import GripperSettings
+from controller.insertion.spiral.spiral_feel import RockSettings
 from controller.insertion.spiral.torque_servo import TorqueServoSettings
 from core.config import Config, config_dataclass, number
 
@@ -138,7 +139,10 @@ class TouchSpiralConfig(SpiralConfig):
     normal in N, the three torques' magnitudes). The default reads the force channel along
     T z (S's shear_y) over the sensing finger's share of the load (two alike fingers).
     ``force_window`` counts tactile frames here, and the force is their median.
-    ``push_servo``: INSERT's yield to the torques while pushing (``torque_servo``)."""
+    ``push_servo``: INSERT's yield to the torques while pushing (``torque_servo``);
+    ``rock``: FEEL, the plug's tilt in the hand about T x found by rocking it at the first
+    touch (``spiral_feel``)."""
 
     axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
     push_servo: TorqueServoSettings = TorqueServoSettings()
+    rock: RockSettings = RockSettings()

@@ -49,6 +49,9 @@ from controller.insertion.spiral import (
     spiral_approach as approach,
 )
 from controller.insertion.spiral import (
+    spiral_feel as feel,
+)
+from controller.insertion.spiral import (
     spiral_grasp as grasp,
 )
 from controller.insertion.spiral import (
@@ -75,9 +78,11 @@ NO_FORCE = "no_force"  # the FAILED transition's rule when the arm reports no fo
 
 F = FailureReason
 _WORKING = (
-    Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.INSERT, Phase.RELEASE, Phase.RETRACT,
+    Phase.GRASP, Phase.APPROACH, Phase.SEARCH, Phase.FEEL, Phase.INSERT, Phase.RELEASE,
+    Phase.RETRACT,
 )  # fmt: skip
-_HOLDING = (Phase.APPROACH, Phase.SEARCH, Phase.INSERT)  # the plug in hand, near the board
+# the plug in hand, near the board
+_HOLDING = (Phase.APPROACH, Phase.SEARCH, Phase.FEEL, Phase.INSERT)
 _RESUMED = (Phase.GRASP, Phase.RETRACT)  # where autonomy resumes (overrides.resume)
 
 
@@ -94,6 +99,9 @@ SPIRAL = Definition(
         Edge(Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
         Edge(Phase.SEARCH, Phase.INSERT, "caught"),
         Edge(Phase.SEARCH, Phase.INSERT, "fell_in"),
+        Edge(Phase.SEARCH, Phase.FEEL, "touched"),
+        Edge(Phase.FEEL, Phase.SEARCH, "felt"),
+        Edge(Phase.FEEL, Phase.SEARCH, "no_flat_face"),
         Edge(Phase.INSERT, Phase.SEARCH, "jammed"),
         Edge(Phase.INSERT, Phase.RELEASE, "bottomed"),
         Edge(Phase.SEARCH, Phase.RELEASE, "pattern_done"),
@@ -114,6 +122,7 @@ SPIRAL = Definition(
         Phase.GRASP: tuple(grasp.GraspStage),
         Phase.APPROACH: tuple(approach.ApproachStage),
         Phase.SEARCH: tuple(search.SearchStage),
+        Phase.FEEL: tuple(feel.FeelStage),
         Phase.INSERT: tuple(insert.InsertStage),
         Phase.RELEASE: tuple(release.ReleaseStage),
         Phase.RETRACT: tuple(release.RetractStage),
@@ -163,6 +172,7 @@ _ENTER: dict[Phase, Callable[[Observation], Any]] = {
     Phase.GRASP: grasp.enter,
     Phase.APPROACH: approach.enter,
     Phase.SEARCH: search.enter,
+    Phase.FEEL: feel.enter,
     Phase.INSERT: insert.enter,
     Phase.RELEASE: release.enter_release,
     Phase.RETRACT: release.enter_retract,
@@ -175,6 +185,7 @@ _STEP: dict[Phase, Callable[[SpiralMachine, Observation], Command]] = {
     Phase.GRASP: grasp.step,
     Phase.APPROACH: approach.step,
     Phase.SEARCH: search.step,
+    Phase.FEEL: feel.step,
     Phase.INSERT: insert.step,
     Phase.RELEASE: release.release,
     Phase.RETRACT: release.retract,
@@ -195,10 +206,15 @@ class SpiralMachine:
         hole: HolePose,
         reading: ForceReading | None = None,
         torque_servo: TorqueServo | None = None,
+        rock: feel.RockSettings | None = None,
     ) -> None:
         check_definition(SPIRAL)
         self.config, self.plug, self.hole = config, plug, hole
         self.torque_servo = torque_servo
+        self.rock = rock if rock is not None and rock.enabled else None
+        self.tilt_x_rad = 0.0  # the TCP's commanded turn about T x from upright (FEEL), rad
+        self.tilt_x_estimate_rad: float | None = None  # FEEL's flat angle, rad
+        self.felt = False  # FEEL has run
         self.reading = reading if reading is not None else ArmForce(config.force_window)
         self.memory = SearchMemory()
         self.force_n = 0.0  # the reading's last force (N) and the time it describes (s)
@@ -298,6 +314,8 @@ class SpiralMachine:
         if self._decided is None:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
+        if self._phase is Phase.FEEL and target is not Phase.SEARCH:  # cut short: no rock
+            self.tilt_x_rad = self.tilt_x_estimate_rad or 0.0
         self._phase, self._state = target, _ENTER[target](obs)
         self.released = self.released or target is Phase.RELEASE
 
@@ -350,8 +368,17 @@ class SpiralMachine:
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
+        return self._untilted() * Rotation.from_euler("x", self.tilt_x_rad)
+
+    def _untilted(self) -> Rotation:
+        """Upright at the pass's yaw without FEEL's turn (T2B)."""
         yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
         return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
+
+    def rock_angle_rad(self, obs: Observation) -> float:
+        """The TCP's turn about T x from upright at the pass's yaw (rad)."""
+        relative = self._untilted().inv() * rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        return float(relative.as_rotvec()[0])
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the

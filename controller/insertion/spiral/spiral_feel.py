@@ -1,0 +1,164 @@
+"""FEEL of the press-spiral machine on touch: the plug's tilt in the hand about T x (its
+thickness plane), found by rocking it on the board at the run's first touch.
+
+Why: a plug turned in the fingers about its width axis meets a slot barely wider than it
+(USB-C: 2.6 mm for 2.4 mm) at that tilt, and no spiral position lets it in; turned upright
+it goes in. Pressed on the board, the tip's face stands on one of its two long edges, and
+the tilt torque about T x is the press times that edge's lever; where the face lies flat the
+contact jumps to the other edge and the torque jumps by about the press times the plug's
+thickness. So FEEL rocks the TCP about the tip, about T x, while the admittance holds the
+press: up to ``rock_max_rad`` one way (**rock**), then the other way (**rock_back**), taking
+each new frame's torque about T x with the TCP's rock angle at the frame's capture time.
+The flat angle of a sweep is where the torque's step (the median of ``window`` frames after
+less the median of ``window`` before) is largest; the estimate is the two sweeps' mean (the
+signals' lag shifts them equally in opposite directions), kept when both steps reach
+``min_step_nm`` and the two angles agree within ``agree_rad``. The machine then holds the
+TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
+its thickness plane, and SEARCH goes on with the press settled anew (``felt``; without an
+estimate, ``no_flat_face``, upright as before).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from controller.insertion.interface import Command, Observation, Phase
+from controller.insertion.phases.stage import Staged
+from controller.insertion.spiral.spiral_search import SearchStage, SearchState
+from core.config import Config, config_dataclass, number
+
+if TYPE_CHECKING:
+    from controller.insertion.spiral.spiral_machine import SpiralMachine
+
+
+@config_dataclass
+class RockSettings(Config):
+    """The task's ``touch_spiral.rock:`` (see the module doc). ``enabled``;
+    ``rock_speed_rad_s``: the TCP's turn about T x; ``rock_max_rad``: as far each way from
+    upright; ``window``: frames each side of a step; ``min_step_nm``: the smallest torque step
+    (N*m) that counts as the face turning flat; ``agree_rad``: the two sweeps' flat angles
+    agree within this."""
+
+    enabled: bool = False
+    rock_speed_rad_s: float = number(0.01, 1.0, default=0.15)
+    rock_max_rad: float = number(0.01, 0.3, default=0.12)
+    window: int = number(1, 20, default=3)
+    min_step_nm: float = number(0.0, 0.1, default=0.0008)
+    agree_rad: float = number(0.001, 0.2, default=0.03)
+
+
+class FeelStage(Enum):
+    """FEEL's sub-stages, in order."""
+
+    ROCK = "rock"  # toward +rock_max_rad about T x
+    ROCK_BACK = "rock_back"  # toward -rock_max_rad
+    TURN = "turn"  # to the estimate (or upright) at ``rotate_speed_rad_s``, the press held
+
+
+@dataclass
+class FeelState(Staged[FeelStage]):
+    """FEEL so far: ``angles`` the TCP's rock angle (rad) at each tick (time s, angle);
+    ``sweeps`` each sweep's (angle rad, torque about T x N*m) per new frame; ``frame_t_s``
+    the last frame's capture time taken."""
+
+    angles: list[tuple[float, float]] = field(default_factory=list)
+    sweeps: list[list[tuple[float, float]]] = field(default_factory=lambda: [[], []])
+    frame_t_s: float = -math.inf
+
+
+def enter(obs: Observation) -> FeelState:
+    return FeelState(FeelStage.ROCK, obs.t_s)
+
+
+def step(m: SpiralMachine, obs: Observation) -> Command:
+    """See the module doc."""
+    settings, state = m.rock, m.state(FeelState)
+    assert settings is not None
+    force = m.tared_force(obs)
+    angle = m.rock_angle_rad(obs)
+    state.angles = [*state.angles[-99:], (obs.t_s, angle)]
+    if state.stage is not FeelStage.TURN:
+        _take_frame(m, obs, state)
+    if state.stage is FeelStage.ROCK:
+        m.fire("rock")
+        if _ramp(m, settings.rock_max_rad, settings.rock_speed_rad_s) and angle >= (
+            settings.rock_max_rad - m.config.turn_tol_rad
+        ):
+            state.stage = FeelStage.ROCK_BACK
+        return m.pressed(obs, force)
+    if state.stage is FeelStage.ROCK_BACK:
+        m.fire("rock_back")
+        if _ramp(m, -settings.rock_max_rad, settings.rock_speed_rad_s) and angle <= (
+            -settings.rock_max_rad + m.config.turn_tol_rad
+        ):
+            m.tilt_x_estimate_rad = flat_angle(state.sweeps, settings)
+            state.stage = FeelStage.TURN
+        return m.pressed(obs, force)
+    m.fire("turn")
+    target = m.tilt_x_estimate_rad if m.tilt_x_estimate_rad is not None else 0.0
+    if _ramp(m, target, m.config.rotate_speed_rad_s) and m.turned(obs):
+        m.memory.press_z_m = None  # the press settles anew at the new tilt
+        m.go(obs, Phase.SEARCH, "felt" if m.tilt_x_estimate_rad is not None else "no_flat_face")
+        m.state(SearchState).stage = SearchStage.SWEEP
+        return m.pressed(obs, force)
+    return m.pressed(obs, force)
+
+
+def _ramp(m: SpiralMachine, target_rad: float, speed_rad_s: float) -> bool:
+    """The commanded tilt about T x one tick nearer ``target_rad``; True once there."""
+    delta = target_rad - m.tilt_x_rad
+    limit = speed_rad_s * m.tick_s
+    m.tilt_x_rad += max(-limit, min(limit, delta))
+    return abs(target_rad - m.tilt_x_rad) <= 1e-9
+
+
+def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState) -> None:
+    """A new frame's torque about T x with the rock angle at its capture time, into the
+    present sweep."""
+    torque_t = m.reading.torque_t()
+    if obs.wrench is None or torque_t is None or obs.wrench.t_s <= state.frame_t_s:
+        return
+    state.frame_t_s = obs.wrench.t_s
+    sweep = 0 if state.stage is FeelStage.ROCK else 1
+    state.sweeps[sweep].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
+
+
+def angle_at(angles: list[tuple[float, float]], t_s: float) -> float:
+    """The rock angle (rad) at ``t_s``, interpolated in the ticks' (time, angle); the
+    nearest end's outside them."""
+    times = [t for t, _ in angles]
+    return float(np.interp(t_s, times, [a for _, a in angles]))
+
+
+def sweep_step(
+    samples: list[tuple[float, float]], window: int
+) -> tuple[float, float] | None:
+    """The largest torque step of a sweep (``samples``: (angle rad, torque N*m) in the
+    sweep's order): (the angle between the two frames either side of it, the step's size
+    N*m, the median of ``window`` frames after less before); None with too few frames."""
+    if len(samples) < 2 * window:
+        return None
+    torques = np.array([t for _, t in samples])
+    best: tuple[float, float] | None = None
+    for i in range(window, len(samples) - window + 1):
+        step = float(np.median(torques[i : i + window]) - np.median(torques[i - window : i]))
+        if best is None or abs(step) > abs(best[1]):
+            best = (0.5 * (samples[i - 1][0] + samples[i][0]), step)
+    return best
+
+
+def flat_angle(sweeps: list[list[tuple[float, float]]], settings: RockSettings) -> float | None:
+    """The tilt about T x (rad) at which the tip's face lies flat: the two sweeps' steps'
+    mean angle, or None (a step too small, or the sweeps disagree)."""
+    steps = [sweep_step(samples, settings.window) for samples in sweeps]
+    if any(s is None or abs(s[1]) < settings.min_step_nm for s in steps):
+        return None
+    (a, _), (b, _) = steps  # type: ignore[misc]
+    if abs(a - b) > settings.agree_rad:
+        return None
+    return 0.5 * (a + b)
