@@ -9,8 +9,8 @@ contact jumps to the other edge and the torque jumps by about the press times th
 thickness. So FEEL rocks the TCP about the tip, about T x, while the admittance holds the
 press: up to ``rock_max_rad`` one way (**rock**), then the other way (**rock_back**), taking
 each new frame's torque about T x with the TCP's rock angle at the frame's capture time.
-The flat angle of a sweep is where the torque's step (the median of ``window`` frames after
-less the median of ``window`` before) is largest; the estimate is the two sweeps' mean (the
+The flat angle of a sweep is where the torque's step (the mean of ``window`` frames after
+less the mean of ``window`` before) is largest; the estimate is the two sweeps' mean (the
 signals' lag shifts them equally in opposite directions), kept when both steps reach
 ``min_step_nm`` and the two angles agree within ``agree_rad``. The machine then holds the
 TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
@@ -140,13 +140,13 @@ def sweep_step(
 ) -> tuple[float, float] | None:
     """The largest torque step of a sweep (``samples``: (angle rad, torque N*m) in the
     sweep's order): (the angle between the two frames either side of it, the step's size
-    N*m, the median of ``window`` frames after less before); None with too few frames."""
+    N*m, the mean of ``window`` frames after less before); None with too few frames."""
     if len(samples) < 2 * window:
         return None
     torques = np.array([t for _, t in samples])
     best: tuple[float, float] | None = None
     for i in range(window, len(samples) - window + 1):
-        step = float(np.median(torques[i : i + window]) - np.median(torques[i - window : i]))
+        step = float(np.mean(torques[i : i + window]) - np.mean(torques[i - window : i]))
         if best is None or abs(step) > abs(best[1]):
             best = (0.5 * (samples[i - 1][0] + samples[i][0]), step)
     return best

@@ -13,6 +13,7 @@ from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
+from controller.insertion.spiral.spiral_feel import RockSettings, flat_angle, sweep_step
 from controller.insertion.spiral.spiral_search import SearchStage
 from controller.insertion.spiral.torque_servo import TorqueServo, TorqueServoSettings
 from controller.run.controllers import CONTROLLERS
@@ -198,3 +199,53 @@ def test_the_probe_credits_the_wrists_extension_only_when_asked(source, credited
     # above the press both count the wrist's compression against the drop
     high = SPIRAL.press_force_n + 1.0
     assert machine.catch_drop_m(obs, high) == pytest.approx(0.0002 - 1.0 / 1000.0)
+
+
+ROCK = RockSettings(enabled=True)
+TILTED = dict(thickness_tilt_rad=0.07, thickness_tol_rad=0.02)  # 4 deg: the slot takes 1.1
+
+
+def rocking(world: ToyWorld, rock: RockSettings | None = ROCK) -> SpiralMachine:
+    reading = TactileAxialForce(SPIRAL.axial_weights, SPIRAL.force_window, world.s2t)
+    return SpiralMachine(SPIRAL, world.plug, world.hole, reading, rock=rock)
+
+
+def test_feel_finds_the_thickness_tilt_and_the_plug_upright_goes_in():
+    world = touch_world(**TILTED)
+    machine = rocking(world)
+    run(world, machine)
+    assert reasons(machine) == [
+        "grasped", "above_the_opening", "touched", "felt", "caught", "bottomed", "released",
+        "retracted",
+    ]  # fmt: skip
+    assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
+    rules = {c.rule for c in world.commands}
+    assert {"feel.rock", "feel.rock_back", "feel.turn"} <= rules
+
+
+def test_without_feel_the_tilted_plug_is_never_caught():
+    world = touch_world(**TILTED)
+    machine = rocking(world, rock=None)
+    run(world, machine)
+    assert "caught" not in reasons(machine) and "touched" not in reasons(machine)
+    assert machine.tilt_x_estimate_rad is None
+
+
+def test_without_a_step_in_the_torque_feel_keeps_the_plug_as_it_was():
+    world = touch_world(thickness_tilt_rad=0.07, thickness_edge_m=0.0)  # no lever: no step
+    machine = rocking(world)
+    run(world, machine)
+    assert reasons(machine)[2:4] == ["touched", "no_flat_face"]
+    assert machine.tilt_x_estimate_rad is None and machine.tilt_x_rad == 0.0
+
+
+def test_the_flat_angle_is_the_two_sweeps_steps_mean_and_needs_both():
+    up = [(a * 0.01, 0.001 if a < 5 else 0.004) for a in range(10)]  # steps at 0.045 rad
+    down = [(0.09 - a * 0.01, 0.004 if a < 6 else 0.001) for a in range(10)]  # at 0.035
+    assert sweep_step(up, 3) == pytest.approx((0.045, 0.003))
+    assert flat_angle([up, down], ROCK) == pytest.approx(0.04)
+    flat = [(a * 0.01, 0.001) for a in range(10)]
+    assert flat_angle([up, flat], ROCK) is None  # one sweep without a step
+    far = [(a - 0.1, t) for a, t in down]
+    assert flat_angle([up, far], ROCK) is None  # the sweeps disagree
+    assert sweep_step(up[:5], 3) is None  # too few frames

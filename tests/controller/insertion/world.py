@@ -85,6 +85,14 @@ class ToyWorld:
     # that of the edge's slope, zero where the face lies flat
     grasp_tilt_rad: float = 0.0
     edge_torque: float = 0.02
+    # the plug turned in the hand by this about T x (its tip toward +T y); on the board, the
+    # tilt torque (about T x) of the tip face's thickness edge pressed at one end (N*m per N
+    # of the axial force: the lever of half the thickness), its sign that of the edge's
+    # slope; and the slot takes the plug only within ``thickness_tol_rad`` of upright in
+    # that plane (None: at any tilt)
+    thickness_tilt_rad: float = 0.0
+    thickness_edge_m: float = 0.0012
+    thickness_tol_rad: float | None = None
     noise: float = 0.0003
     # the arm's F/T reading (ArmStatus.external_force_n, N in B), for the blind baseline: the
     # board (or the opening's floor under the tip) pushing up k_arm_n_m per m of the tip's
@@ -134,8 +142,25 @@ class ToyWorld:
 
     @property
     def tip(self) -> np.ndarray:
-        a, length = self.grasp_tilt_rad, self.plug.length_m
-        return self.p + self.rotation.apply([length * math.sin(a), 0.0, length * math.cos(a)])
+        return self.p + self.plug.length_m * self.rotation.apply(self._axis_t())
+
+    def _axis_t(self) -> np.ndarray:
+        """The plug's axis toward its tip, in T."""
+        a, b = self.grasp_tilt_rad, self.thickness_tilt_rad
+        return np.array([math.sin(a) * math.cos(b), math.sin(b), math.cos(a) * math.cos(b)])
+
+    def _thickness_slope(self) -> float:
+        """How much the tip face's thickness edge rises toward its +y end (B z per unit)."""
+        b = self.thickness_tilt_rad
+        return float(self.rotation.apply([0.0, math.cos(b), -math.sin(b)])[2])
+
+    def _upright_in_thickness(self) -> bool:
+        """The plug within ``thickness_tol_rad`` of straight down in its thickness plane."""
+        if self.thickness_tol_rad is None:
+            return True
+        return abs(math.asin(float(np.clip(self._thickness_slope(), -1, 1)))) <= (
+            self.thickness_tol_rad
+        )
 
     def _edge_slope(self) -> float:
         """How much the tip face's width edge rises toward its +x end (B z per unit)."""
@@ -184,9 +209,11 @@ class ToyWorld:
         )
 
     def _push_n(self) -> float:
-        """The board (or the opening's floor under the tip) pushing up, N."""
+        """The board (or the opening's floor under the tip, if the slot takes the plug)
+        pushing up, N."""
         tip, surface = self.tip, self.hole.z_m - self.floor_drop_m
         over_opening = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        over_opening = over_opening and self._upright_in_thickness()
         support = surface - self.depth_limit_m if over_opening else surface
         return self.k_arm_n_m * max(0.0, support - tip[2]) if self.board else 0.0
 
@@ -208,6 +235,7 @@ class ToyWorld:
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        in_region = in_region and self._upright_in_thickness()
         upright = float(np.dot(z_t, [0.0, 0.0, -1.0])) > math.cos(math.radians(2.0))
         if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (tip[2] < surface):
             self.on_rim = True  # the upright plug stands on the rim: the board holds it
@@ -243,6 +271,10 @@ class ToyWorld:
                 torque_b += self.friction * axial * drag_axis
                 flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
                 torque_b += self.edge_torque * flat * self.rotation.apply([0.0, 1.0, 0.0])
+                if self.thickness_tilt_rad:  # the thickness edge's lever jumps where flat
+                    side = math.tanh(self._thickness_slope() / 0.003)
+                    lever = self.thickness_edge_m * side * math.tanh(axial / 0.01)
+                    torque_b += lever * self._push_n() * self.rotation.apply([1.0, 0.0, 0.0])
         if self.axial_share is not None:
             force_t[2] = self.axial_share * self._push_n()
         if self.on_rim:
