@@ -5,7 +5,7 @@ error, not a run that quietly fails: ``check_task_limits`` raises a one-line Con
 naming the file and the key.
 
 * **The machine's tilt limit must be able to trip.** The state machine fails a run whose
-  tool tilts more than ``machine.limits.max_tilt_rad``, but the loop's limiter
+  tool tilts more than ``machine.limits.tilt_limit_rad``, but the loop's limiter
   (``limits.max_tilt_rad``) and the arm's envelope (the robot file's
   ``envelope.max_tilt_rad``) keep the tool within their own cones; a machine limit at or
   above the tighter of the two could never trip.
@@ -27,8 +27,9 @@ naming the file and the key.
   exception: the arm's ``z_min_m`` is the hard floor that the blind baseline pushes down to,
   and the task's own floor may lie below it so that the loop does not report the driver's
   floor as its limit holding the machine back (the driver keeps the arm's floor whatever
-  the task says). The same holds one level up: the teleop speeds (``teleop:``) may not
-  exceed the task's limits.
+  the task says). The same holds one level up: the teleop's full-stick speeds
+  (``teleop.stick_speed_m_s``, ``teleop.stick_angular_speed_rad_s``) may not exceed the
+  task's limits.
 * **The boxes must hold the search.** The hole's nominal x and y, widened by the search's
   half width (``search_half_width_m``: the farthest the task's controllers search from the
   nominal hole), must lie inside both workspace boxes, or the machine would search and
@@ -69,10 +70,10 @@ def check_task_limits(
         ("limits.max_tilt_rad", limits, "the loop's limiter"),
         (f"envelope.max_tilt_rad of {arm_file}", arm_envelope, "the arm's envelope"),
     ):
-        if not machine_limits.max_tilt_rad < envelope.max_tilt_rad:
+        if not machine_limits.tilt_limit_rad < envelope.max_tilt_rad:
             raise ConfigError(
-                f"{source}: key 'machine.limits.max_tilt_rad': expected less than {name} "
-                f"({envelope.max_tilt_rad}), got {machine_limits.max_tilt_rad}: {where} keeps "
+                f"{source}: key 'machine.limits.tilt_limit_rad': expected less than {name} "
+                f"({envelope.max_tilt_rad}), got {machine_limits.tilt_limit_rad}: {where} keeps "
                 f"the tool within {envelope.max_tilt_rad} rad, so this limit could never trip"
             )
     lowest_m = inserted_tcp_z_m(plug, hole, tip_depth_m) - PRESS_MARGIN_M
@@ -124,14 +125,15 @@ def _check_no_looser(
 
 
 def _check_teleop_within(source: str, teleop: TeleopConfig, limits: Envelope) -> None:
-    for key, limit in (
-        ("max_linear_speed_m_s", limits.max_linear_speed_m_s),
-        ("max_angular_speed_rad_s", limits.max_angular_speed_rad_s),
+    for key, limit_key in (
+        ("stick_speed_m_s", "max_linear_speed_m_s"),
+        ("stick_angular_speed_rad_s", "max_angular_speed_rad_s"),
     ):
-        if getattr(teleop, key) > limit:
+        speed, limit = getattr(teleop, key), getattr(limits, limit_key)
+        if speed > limit:
             raise ConfigError(
-                f"{source}: key 'teleop.{key}': expected at most limits.{key} ({limit}), got "
-                f"{getattr(teleop, key)}: a setting may tighten a safety limit, never loosen it"
+                f"{source}: key 'teleop.{key}': expected at most limits.{limit_key} ({limit}), "
+                f"got {speed}: a setting may tighten a safety limit, never loosen it"
             )
 
 

@@ -15,8 +15,8 @@ Rules (``TeleopArbiter.update``, once per control tick):
   through) while the ``deadman`` button is held gives the operator control at once
   (``in_control``). The twist is zero while the deadman is released. The deadman is a safety
   rule, not a setting: no file or override can switch it off (``TeleopConfig.safety_rules``).
-* **Twist**: linear actions times ``max_linear_speed_m_s``, angular ones times
-  ``max_angular_speed_rad_s``; each vector's norm is then capped at that speed, so a diagonal
+* **Twist**: linear actions times ``stick_speed_m_s``, angular ones times
+  ``stick_angular_speed_rad_s``; each vector's norm is then capped at that speed, so a diagonal
   is no faster than an axis. Zero unless in control.
 * **Hand-back** (rising edge of ``hand_back``): releases control. Axes still deflected at
   that moment do not take over again until every axis has come back to neutral, so holding a
@@ -49,8 +49,10 @@ EDGE_BUTTONS = ("hand_back", "estop_ack", "gripper_open", "gripper_close")
 class TeleopConfig(Config):
     """The task YAML's ``teleop:`` section.
 
-    ``max_linear_speed_m_s``: TCP speed at full stick deflection (m/s, in B).
-    ``max_angular_speed_rad_s``: TCP angular speed at full deflection (rad/s, in B).
+    ``stick_speed_m_s``: TCP speed at full stick deflection (m/s, in B), the operator's
+    top speed (at most ``limits.max_linear_speed_m_s``: controller/limit_checks.py).
+    ``stick_angular_speed_rad_s``: TCP angular speed at full deflection (rad/s, in B), at
+    most ``limits.max_angular_speed_rad_s``.
     ``takeover_threshold``: action magnitude (after the pad's dead zone, 0..1) above which an
     axis takes over; 0 means any input the dead zone lets through.
     Takeover and motion always need the ``deadman`` button held (module doc).
@@ -60,8 +62,8 @@ class TeleopConfig(Config):
         "require_deadman": "takeover and motion always need the deadman held",
     }
 
-    max_linear_speed_m_s: float = number(0.0, MAX_LINEAR_SPEED_M_S, default=0.02)
-    max_angular_speed_rad_s: float = number(0.0, MAX_ANGULAR_SPEED_RAD_S, default=0.2)
+    stick_speed_m_s: float = number(0.0, MAX_LINEAR_SPEED_M_S, default=0.02)
+    stick_angular_speed_rad_s: float = number(0.0, MAX_ANGULAR_SPEED_RAD_S, default=0.2)
     takeover_threshold: float = number(0.0, 0.9, default=0.0)
 
 
@@ -110,10 +112,10 @@ class TeleopArbiter:
         twist = Twist()
         if self._in_control and deadman and state.connected:
             twist = Twist(
-                _capped(linear * self.config.max_linear_speed_m_s,
-                        self.config.max_linear_speed_m_s),
-                _capped(angular * self.config.max_angular_speed_rad_s,
-                        self.config.max_angular_speed_rad_s),
+                _capped(linear * self.config.stick_speed_m_s,
+                        self.config.stick_speed_m_s),
+                _capped(angular * self.config.stick_angular_speed_rad_s,
+                        self.config.stick_angular_speed_rad_s),
             )  # fmt: skip
         return TeleopInput(
             connected=state.connected,

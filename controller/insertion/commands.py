@@ -20,10 +20,13 @@ def hold() -> Command:
 
 
 def twist_command(config: MachineConfig, v: np.ndarray, w: np.ndarray) -> Command:
-    """The TCP twist (``v`` m/s, ``w`` rad/s, in B), each part bounded by ``limits``."""
+    """The TCP twist (``v`` m/s, ``w`` rad/s, in B), each part bounded by ``limits``'
+    command caps."""
     limits = config.limits
     return Command(
-        twist=bounded_twist(v, w, limits.max_linear_speed_m_s, limits.max_angular_speed_rad_s)
+        twist=bounded_twist(
+            v, w, limits.max_command_speed_m_s, limits.max_command_angular_speed_rad_s
+        )
     )
 
 

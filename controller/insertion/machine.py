@@ -307,7 +307,7 @@ class InsertionMachine:
     def _limit_exceeded(self, obs: Observation) -> bool:
         limits = self.config.limits
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
-        if tilt_of_rotation(rotation) > limits.max_tilt_rad:
+        if tilt_of_rotation(rotation) > limits.tilt_limit_rad:
             return True
         if self._phase is Phase.APPROACH:
             overtravel = self.hole.z_m - self.config.approach.overtravel_m

@@ -252,7 +252,7 @@ class AlignSettings(Config):
     the plug yawed, the opening's long walls twist it back.
 
     *Turn*: turn the TCP toward straight down about the heel at ``upright_gain_1_s`` x the
-    tilt (capped by ``max_angular_speed_rad_s``), holding the heel against the wall: its
+    tilt (capped by ``max_turn_speed_rad_s``), holding the heel against the wall: its
     horizontal speed is ``seek_speed_m_s`` x (1 - rise / ``wall_sigma``) within +-1. Ends
     when the tilt of T z from straight down is within ``tilt_tol_rad`` (the arm's upright,
     which is the plug's only for a nominal grasp). If the tip face's lowest edge is then
@@ -287,8 +287,9 @@ class AlignSettings(Config):
     units) with the axial load at least ``aligned_load_ratio`` x SEARCH's, for ``frames``
     successive estimates, or the plug down to ``insert.depth_m`` (it slid in while turning). The
     servo (and INSERT's share of it) never tilts the TCP beyond ``servo_tilt_max_rad`` from
-    straight down (the in-grasp tilt, the board's and a margin): past it, only its
-    uprighting part is kept."""
+    straight down (the in-grasp tilt, the board's and a margin; below
+    ``limits.tilt_limit_rad``): past it, only its uprighting part is kept. The turn's and
+    the servo's rate (rad/s) is capped by ``max_turn_speed_rad_s``."""
 
     heel_yaw_gain: float = number(0.0, 10.0, default=0.02)
     gain_tau_x: float = number(0.0, 10.0, default=0.02)
@@ -299,7 +300,7 @@ class AlignSettings(Config):
     tol_tau_z_sigma: float = number(0.1, 1e4, default=4.0)
     upright_gain_1_s: float = number(0.0, 20.0, default=3.0)
     tilt_tol_rad: float = number(1e-4, 0.2, default=1 * _DEG)
-    max_angular_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
+    max_turn_speed_rad_s: float = number(1e-3, 1.0, default=0.2)
     frames: int = number(1, 100, default=3)
     seek_speed_m_s: float = number(1e-5, 0.02, default=0.001)
     seek_max_m: float = number(1e-5, 0.01, default=0.0025)
@@ -397,19 +398,21 @@ class SlipSettings(Config):
 
 @config_dataclass
 class Limits(Config):
-    """Hard limits: exceeded -> FAILED (limit exceeded). Tactile limits in calibrated units on
-    the baseline-subtracted estimate: ``tilt_torque_limit`` (|tau_x|, |tau_y|, N*m),
-    ``inplane_torque_limit`` (|tau_z|, N*m), ``force_limit`` (axial force, N). ``max_tilt_rad``: the
-    TCP's tilt from straight down (below the loop's and the arm's tilt limits, or it could
-    never trip: controller/limit_checks.py). Every command's twist is bounded by
-    ``max_linear_speed_m_s`` and ``max_angular_speed_rad_s`` (norms)."""
+    """The machine's own limits. Exceeded -> FAILED (limit exceeded): the tactile limits, in
+    calibrated units on the baseline-subtracted estimate, ``tilt_torque_limit`` (|tau_x|,
+    |tau_y|, N*m), ``inplane_torque_limit`` (|tau_z|, N*m), ``force_limit`` (axial force,
+    N); ``tilt_limit_rad``, the TCP's tilt from straight down (rad; below the loop's and the
+    arm's ``max_tilt_rad``, or it could never trip: controller/limit_checks.py). Every
+    command the machine makes (the operator's under TELEOP too) has its twist's norms capped
+    at ``max_command_speed_m_s`` (m/s) and ``max_command_angular_speed_rad_s`` (rad/s); the
+    loop's safety limits (``limits:``) bound it again."""
 
     tilt_torque_limit: float = number(1e-6, 1e4, default=0.2166)
     inplane_torque_limit: float = number(1e-6, 1e6, default=0.05702)
     force_limit: float = number(1e-6, 1e4, default=5.33)
-    max_tilt_rad: float = number(1 * _DEG, 60 * _DEG, default=0.30)
-    max_linear_speed_m_s: float = number(1e-4, 0.5, default=0.05)
-    max_angular_speed_rad_s: float = number(1e-3, 3.0, default=0.6)
+    tilt_limit_rad: float = number(1 * _DEG, 60 * _DEG, default=0.30)
+    max_command_speed_m_s: float = number(1e-4, 0.5, default=0.05)
+    max_command_angular_speed_rad_s: float = number(1e-3, 3.0, default=0.6)
 
 
 @config_dataclass
@@ -449,10 +452,15 @@ class MachineConfig(Config):
     timeouts: Timeouts = field(default_factory=Timeouts)
 
     def __post_init__(self) -> None:
-        if abs(self.approach.tilt_rad) >= self.limits.max_tilt_rad:
+        if abs(self.approach.tilt_rad) >= self.limits.tilt_limit_rad:
             raise ValueError(
-                f"key 'approach.tilt_rad': expected less than limits.max_tilt_rad "
-                f"({self.limits.max_tilt_rad}) in magnitude, got {self.approach.tilt_rad}"
+                f"key 'approach.tilt_rad': expected less than limits.tilt_limit_rad "
+                f"({self.limits.tilt_limit_rad}) in magnitude, got {self.approach.tilt_rad}"
+            )
+        if self.align.servo_tilt_max_rad >= self.limits.tilt_limit_rad:
+            raise ValueError(
+                f"key 'align.servo_tilt_max_rad': expected less than limits.tilt_limit_rad "
+                f"({self.limits.tilt_limit_rad}), got {self.align.servo_tilt_max_rad}"
             )
         if self.insert.force_budget > self.limits.force_limit:
             raise ValueError(

@@ -113,8 +113,8 @@ class TeleopOnlyMachine:
             return Command(twist=Twist(), rezero_tactile=True)
         limits = self.config.limits
         return operator_command(
-            teleop, self.config.gripper, limits.max_linear_speed_m_s,
-            limits.max_angular_speed_rad_s,
+            teleop, self.config.gripper, limits.max_command_speed_m_s,
+            limits.max_command_angular_speed_rad_s,
         )  # fmt: skip
 
     def request_rezero(self) -> None:

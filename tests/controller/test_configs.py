@@ -38,8 +38,8 @@ limits:
   max_normal: null
   over_budget: lift_only
 teleop:
-  max_linear_speed_m_s: 0.02
-  max_angular_speed_rad_s: 0.2
+  stick_speed_m_s: 0.02
+  stick_angular_speed_rad_s: 0.2
   takeover_threshold: 0.0
 """
 

@@ -37,9 +37,9 @@ def test_the_shipped_tasks_pass_the_checks():
 
 
 def test_a_machine_tilt_limit_the_limiter_never_lets_happen_is_refused():
-    message = refusal("usb_c", ["machine.limits.max_tilt_rad=0.4"])
+    message = refusal("usb_c", ["machine.limits.tilt_limit_rad=0.4"])
     assert message == (
-        f"{task_path('usb_c')}: key 'machine.limits.max_tilt_rad': expected less than "
+        f"{task_path('usb_c')}: key 'machine.limits.tilt_limit_rad': expected less than "
         "limits.max_tilt_rad (0.35), got 0.4: the loop's limiter keeps the tool within 0.35 "
         "rad, so this limit could never trip"
     )
@@ -49,7 +49,7 @@ def test_a_machine_tilt_limit_beyond_the_arm_envelope_is_refused(tmp_path):
     robot = robot_with(tmp_path, "  max_tilt_rad: 0.35 ", "  max_tilt_rad: 0.30 ")
     message = refusal("usb_c", [f"devices.arm={robot}"])
     assert message.startswith(
-        f"{task_path('usb_c')}: key 'machine.limits.max_tilt_rad': expected less than "
+        f"{task_path('usb_c')}: key 'machine.limits.tilt_limit_rad': expected less than "
         f"envelope.max_tilt_rad of {robot} (0.3), got 0.3: the arm's envelope keeps"
     )
 
@@ -116,7 +116,7 @@ def test_a_task_tilt_beyond_the_arm_envelope_is_refused_by_one_of_the_checks():
     assert "max_tilt_rad" in message
 
 
-@pytest.mark.parametrize("key", ["max_linear_speed_m_s=0.06", "max_angular_speed_rad_s=0.6"])
+@pytest.mark.parametrize("key", ["stick_speed_m_s=0.06", "stick_angular_speed_rad_s=0.6"])
 def test_teleop_faster_than_the_task_limits_is_refused(key):
     message = refusal("usb_c", [f"teleop.{key}"])
     assert f"key 'teleop.{key.split('=')[0]}': expected at most limits." in message
@@ -124,7 +124,7 @@ def test_teleop_faster_than_the_task_limits_is_refused(key):
 
 
 def test_a_task_may_tighten_the_limits():
-    load_task("usb_c", ["limits.max_linear_speed_m_s=0.03", "teleop.max_linear_speed_m_s=0.01"])
+    load_task("usb_c", ["limits.max_linear_speed_m_s=0.03", "teleop.stick_speed_m_s=0.01"])
 
 
 @pytest.mark.parametrize(

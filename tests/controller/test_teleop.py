@@ -16,7 +16,7 @@ from core.devices import GamepadState
 from drivers import registry
 from drivers.sim.twins.gamepad import PadEvent
 
-CONFIG = TeleopConfig(max_linear_speed_m_s=0.02, max_angular_speed_rad_s=0.2)
+CONFIG = TeleopConfig(stick_speed_m_s=0.02, stick_angular_speed_rad_s=0.2)
 TICK = 0.01
 
 

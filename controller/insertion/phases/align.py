@@ -161,7 +161,7 @@ def _turn(
     v_edge[2] = machine.config.approach.pose_gain_1_s * (state.point[2] - edge[2])
     yaw_rate = heel_yaw_rate(machine.signals, settings, rotation)
     w = clamp_norm(settings.upright_gain_1_s * angle * axis + yaw_rate,
-                   settings.max_angular_speed_rad_s)
+                   settings.max_turn_speed_rad_s)
     v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
     return twist_command(machine.config, v_tcp, w)
 
@@ -271,5 +271,5 @@ def _servo(machine: InsertionMachine, state: AlignState, obs: Observation, new: 
         return hold()
     within = torques_within_tolerance(signals, settings)
     machine.fire("within_tolerance" if within else "torque_servo")
-    w = clamp_norm(align_rate(signals, settings, rotation, 1.0), settings.max_angular_speed_rad_s)
+    w = clamp_norm(align_rate(signals, settings, rotation, 1.0), settings.max_turn_speed_rad_s)
     return _press_down(machine, obs, w)

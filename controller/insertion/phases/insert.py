@@ -126,7 +126,7 @@ def _compliance(machine: InsertionMachine, rotation: Rotation) -> np.ndarray:
     align = machine.config.align
     return clamp_norm(
         align_rate(machine.signals, align, rotation, machine.config.insert.compliance_scale),
-        align.max_angular_speed_rad_s,
+        align.max_turn_speed_rad_s,
     )
 
 

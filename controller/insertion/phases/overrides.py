@@ -75,8 +75,8 @@ def teleop(machine: InsertionMachine, obs: Observation) -> Command:
     machine.fire("operator")
     limits = machine.config.limits
     return operator_command(
-        obs.teleop, machine.config.gripper, limits.max_linear_speed_m_s,
-        limits.max_angular_speed_rad_s,
+        obs.teleop, machine.config.gripper, limits.max_command_speed_m_s,
+        limits.max_command_angular_speed_rad_s,
     )  # fmt: skip
 
 

@@ -52,13 +52,13 @@ class SpiralConfig(Config):
     within this; ``hover_m``: tip height above the board between passes;
     ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
     x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
-    ``timeout_s``: the whole run's autonomous time; ``force_limit_n``: the tared force above
-    which the run stops (FAILED, ``limit_exceeded``); ``max_tilt_rad``: the TCP's tilt from
-    straight down above which it stops too; ``rewind``: a probe first takes the pattern back
-    to where it was at the time the force's reading describes (the force's delay, swept past
-    the opening), once per stretch of the pattern; ``open_frames``: with a tactile reading, the
-    new frames the grasp waits for while the estimator takes the open gel (more than it
-    takes)."""
+    ``timeout_s``: the whole run's autonomous time; ``tared_force_limit_n``: the tared
+    force (N) above which the run stops (FAILED, ``limit_exceeded``); ``tilt_limit_rad``:
+    the TCP's tilt from straight down (rad) above which it stops too; ``rewind``: a probe
+    first takes the pattern back to where it was at the time the force's reading describes
+    (the force's delay, swept past the opening), once per stretch of the pattern;
+    ``open_frames``: with a tactile reading, the new frames the grasp waits for while the
+    estimator takes the open gel (more than it takes)."""
 
     gripper: GripperSettings
     pattern: Literal["spiral", "raster"] = "spiral"
@@ -96,16 +96,21 @@ class SpiralConfig(Config):
     pose_tol_m: float = number(1e-6, 0.01, default=0.0002)
     retract_m: float = number(0.0, 0.2, default=0.03)
     timeout_s: float = number(1.0, 3600.0, default=120.0)
-    force_limit_n: float = number(0.1, 200.0, default=20.0)
-    max_tilt_rad: float = number(0.0, 0.5, default=0.2)
+    tared_force_limit_n: float = number(0.1, 200.0, default=20.0)
+    tilt_limit_rad: float = number(0.0, 0.5, default=0.2)
     rewind: bool = False
     open_frames: int = number(1, 100, default=6)
 
     def __post_init__(self) -> None:
-        forces = (self.touch_force_n, self.press_force_n, self.stop_force_n, self.force_limit_n)
+        forces = (
+            self.touch_force_n,
+            self.press_force_n,
+            self.stop_force_n,
+            self.tared_force_limit_n,
+        )
         if not forces[0] < forces[1] < forces[2] < forces[3]:
             raise ValueError(
-                "keys 'touch_force_n', 'press_force_n', 'stop_force_n', 'force_limit_n': "
+                "keys 'touch_force_n', 'press_force_n', 'stop_force_n', 'tared_force_limit_n': "
                 f"expected increasing forces, got {', '.join(map(str, forces))}"
             )
         inner = self.inner_half_width_m

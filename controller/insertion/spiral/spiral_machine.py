@@ -19,8 +19,8 @@ autonomy resumes); an arm without a force reading ends it (``device_fault``, its
 the arm file's ``ft_sensor`` is off), as does the budget ``timeout_s`` of autonomous time
 (``timeout``); with the plug in hand (APPROACH, SEARCH, INSERT), the gripper no longer
 holding (``slip``; not the estimate's slip flags: their false alarms while the plug sweeps
-the board pressed would end runs that insert), and the tared force over ``force_limit_n``
-or the TCP tilted more than ``max_tilt_rad`` (``limit_exceeded``); then the phase's step.
+the board pressed would end runs that insert), and the tared force over ``tared_force_limit_n``
+or the TCP tilted more than ``tilt_limit_rad`` (``limit_exceeded``); then the phase's step.
 The table and every phase's sub-stages are data (``SPIRAL``), checked when the machine is
 built; every command names the rule (``Command.rule``, ``phase.rule``) and the sub-stage
 (``Command.stage``) that decided it.
@@ -287,11 +287,12 @@ class SpiralMachine:
         return _STEP[self._phase](self, obs)
 
     def _limit_exceeded(self, obs: Observation) -> bool:
-        """The tared force over ``force_limit_n`` (once a tare is taken), or the TCP tilted
-        more than ``max_tilt_rad`` from straight down."""
+        """The tared force over ``tared_force_limit_n`` (once a tare is taken), or the TCP tilted
+        more than ``tilt_limit_rad`` from straight down."""
         tilt = tilt_of_rotation(rotation_from_rpy(obs.arm.tcp.rpy_rad))
-        tared = self.memory.tared and self.force_n - self.memory.bias_n > self.config.force_limit_n
-        return bool(tilt > self.config.max_tilt_rad or tared)
+        tared_n = self.force_n - self.memory.bias_n
+        tared = self.memory.tared and tared_n > self.config.tared_force_limit_n
+        return bool(tilt > self.config.tilt_limit_rad or tared)
 
     # -- what the phases act through -------------------------------------------------------
 

@@ -77,7 +77,7 @@ def test_the_example_loads_and_matches_the_code_defaults():
         (
             "machine.approach.tilt_rad",
             0.6,
-            "key 'machine.approach.tilt_rad': expected less than limits.max_tilt_rad",
+            "key 'machine.approach.tilt_rad': expected less than limits.tilt_limit_rad",
         ),
         ("machine.search.pitch_m", True, "key 'machine.search.pitch_m': expected a number"),
     ],

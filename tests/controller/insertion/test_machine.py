@@ -88,8 +88,9 @@ def test_commands_are_bounded_twists_and_hold_still_while_grasping():
     for command in world.commands:
         assert command.pose is None and command.twist is not None
         limits = cfg.limits
-        assert np.linalg.norm(command.twist.linear_m_s) <= limits.max_linear_speed_m_s + 1e-12
-        assert np.linalg.norm(command.twist.angular_rad_s) <= limits.max_angular_speed_rad_s + 1e-12
+        linear, angular = command.twist.linear_m_s, command.twist.angular_rad_s
+        assert np.linalg.norm(linear) <= limits.max_command_speed_m_s + 1e-12
+        assert np.linalg.norm(angular) <= limits.max_command_angular_speed_rad_s + 1e-12
     grasp_ticks = int(machine.transitions[0].t_s / 0.01)
     assert all(c.twist == type(c.twist)() for c in world.commands[:grasp_ticks])
 

@@ -35,7 +35,7 @@ def test_takeover_is_immediate_and_passes_the_operator_twist_bounded():
     command = take_over(world, machine, Twist((1.0, 0.0, 0.0), (0.0, 0.0, 0.3)))
     assert path(machine)[-1] == ("SEARCH", "TELEOP", "operator_takeover")
     limits = MachineConfig().limits
-    assert command.twist.linear_m_s == pytest.approx((limits.max_linear_speed_m_s, 0.0, 0.0))
+    assert command.twist.linear_m_s == pytest.approx((limits.max_command_speed_m_s, 0.0, 0.0))
     assert command.twist.angular_rad_s == pytest.approx((0.0, 0.0, 0.3))
 
 

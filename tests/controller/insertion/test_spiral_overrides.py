@@ -106,9 +106,9 @@ def test_a_plug_dropped_in_the_search_is_a_slip():
 
 
 @pytest.mark.parametrize(("force_n", "tilt_rad", "exceeded"), [
-    (SMALL.force_limit_n - 0.1, 0.0, False),
-    (SMALL.force_limit_n + 0.1, 0.0, True),
-    (0.0, SMALL.max_tilt_rad + 0.01, True),
+    (SMALL.tared_force_limit_n - 0.1, 0.0, False),
+    (SMALL.tared_force_limit_n + 0.1, 0.0, True),
+    (0.0, SMALL.tilt_limit_rad + 0.01, True),
 ])  # fmt: skip
 def test_the_tared_force_or_the_tilt_past_its_limit_stops_the_run(force_n, tilt_rad, exceeded):
     world = ToyWorld()

@@ -20,7 +20,7 @@ from core.config import ConfigError
 from tests.controller.insertion.world import ToyWorld, estimate
 
 UPRIGHT = Rotation.from_euler("x", math.pi)  # T z straight down (T2B)
-SERVO = TorqueServo(TorqueServoSettings((20.0, 20.0, 10.0), max_rate_rad_s=0.2, max_tilt_rad=0.1))
+SERVO = TorqueServo(TorqueServoSettings((20.0, 20.0, 10.0), max_rate_rad_s=0.2, max_turn_rad=0.1))
 
 
 def test_it_turns_against_the_gels_torque_about_each_axis_of_t():
