@@ -39,6 +39,9 @@ SHARED_NAMES: Mapping[str, str] = {
     "pose_tol_m": _MACHINES,  # a pose target counts as reached within this
     "stall_s": _MACHINES,  # a push no lower for this long has stalled
     "tilt_limit_rad": _MACHINES,  # the TCP's tilt from straight down that fails the run
+    "rock_speed_rad_s": _MACHINES,  # FEEL's turn while rocking the pressed plug
+    "rock_max_rad": _MACHINES,  # ... as far each way
+    "enabled": "the section's own step switched on (the align machine's FEEL, the spiral's)",
     "speed_m_s": _PHASE,  # search, insert, backoff: the phase's motion
     "settle_s": _PHASE,  # gripper, feel, search, release: the phase's wait to settle
     "press_depth_m": _PHASE,  # feel, search: the tip held this far below the contact height
