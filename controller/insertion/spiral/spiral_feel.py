@@ -1,5 +1,6 @@
 """FEEL of the press-spiral machine on touch: the plug's tilt in the hand about T x (its
-thickness plane), found by rocking it on the board at the run's first touch.
+thickness plane), found by rocking it on the board at the touch of SEARCH's pass
+``at_pass`` (0: the first; later, a plug that goes in at the first pass loses no time).
 
 Why: a plug turned in the fingers about its width axis meets a slot barely wider than it
 (USB-C: 2.6 mm for 2.4 mm) at that tilt, and no spiral position lets it in; turned upright
@@ -7,12 +8,14 @@ it goes in. Pressed on the board, the tip's face stands on one of its two long e
 the tilt torque about T x is the press times that edge's lever; where the face lies flat the
 contact jumps to the other edge and the torque jumps by about the press times the plug's
 thickness. So FEEL rocks the TCP about the tip, about T x, while the admittance holds the
-press: up to ``rock_max_rad`` one way (**rock**), then the other way (**rock_back**), taking
-each new frame's torque about T x with the TCP's rock angle at the frame's capture time.
-The flat angle of a sweep is where the torque's step (the mean of ``window`` frames after
-less the mean of ``window`` before) is largest; the estimate is the two sweeps' mean (the
-signals' lag shifts them equally in opposite directions), kept when both steps reach
-``min_step_nm`` and the two angles agree within ``agree_rad``. The machine then holds the
+press: up to ``rock_max_rad`` one way (**rock**), then the other way (**rock_back**), and,
+when the first leg found no step (the flat angle lies the other side of upright), the first
+way again (**rock_again**), taking each new frame's torque about T x with the TCP's rock
+angle at the frame's capture time. The flat angle of a leg is where the torque's step (the
+mean of ``window`` frames after less the mean of ``window`` before) is largest; the
+estimate is the mean of two legs' in opposite directions (the signals' lag shifts them
+equally the two ways), kept when both steps reach ``min_step_nm`` and the two angles agree
+within ``agree_rad``. The machine then holds the
 TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
 its thickness plane, and SEARCH goes on with the press settled anew (``felt``; without an
 estimate, ``no_flat_face``, upright as before).
@@ -38,13 +41,15 @@ if TYPE_CHECKING:
 
 @config_dataclass
 class RockSettings(Config):
-    """The task's ``touch_spiral.rock:`` (see the module doc). ``enabled``;
+    """The task's ``touch_spiral.rock:`` (see the module doc). ``enabled``; ``at_pass``: the
+    SEARCH pass (0: the first) at whose touch FEEL runs;
     ``rock_speed_rad_s``: the TCP's turn about T x; ``rock_max_rad``: as far each way from
     upright; ``window``: frames each side of a step; ``min_step_nm``: the smallest torque step
     (N*m) that counts as the face turning flat; ``agree_rad``: the two sweeps' flat angles
     agree within this."""
 
     enabled: bool = False
+    at_pass: int = number(0, 100, default=0)
     rock_speed_rad_s: float = number(0.01, 1.0, default=0.15)
     rock_max_rad: float = number(0.01, 0.3, default=0.12)
     window: int = number(1, 20, default=3)
@@ -57,17 +62,18 @@ class FeelStage(Enum):
 
     ROCK = "rock"  # toward +rock_max_rad about T x
     ROCK_BACK = "rock_back"  # toward -rock_max_rad
+    ROCK_AGAIN = "rock_again"  # toward +rock_max_rad again, when the first leg had no step
     TURN = "turn"  # to the estimate (or upright) at ``rotate_speed_rad_s``, the press held
 
 
 @dataclass
 class FeelState(Staged[FeelStage]):
     """FEEL so far: ``angles`` the TCP's rock angle (rad) at each tick (time s, angle);
-    ``sweeps`` each sweep's (angle rad, torque about T x N*m) per new frame; ``frame_t_s``
+    ``sweeps`` each leg's (angle rad, torque about T x N*m) per new frame; ``frame_t_s``
     the last frame's capture time taken."""
 
     angles: list[tuple[float, float]] = field(default_factory=list)
-    sweeps: list[list[tuple[float, float]]] = field(default_factory=lambda: [[], []])
+    sweeps: list[list[tuple[float, float]]] = field(default_factory=lambda: [[], [], []])
     frame_t_s: float = -math.inf
 
 
@@ -96,7 +102,16 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         if _ramp(m, -settings.rock_max_rad, settings.rock_speed_rad_s) and angle <= (
             -settings.rock_max_rad + m.config.turn_tol_rad
         ):
-            m.tilt_x_estimate_rad = flat_angle(state.sweeps, settings)
+            m.tilt_x_estimate_rad = flat_angle(state.sweeps[:2], settings)
+            found = m.tilt_x_estimate_rad is not None
+            state.stage = FeelStage.TURN if found else FeelStage.ROCK_AGAIN
+        return m.pressed(obs, force)
+    if state.stage is FeelStage.ROCK_AGAIN:
+        m.fire("rock_again")
+        if _ramp(m, settings.rock_max_rad, settings.rock_speed_rad_s) and angle >= (
+            settings.rock_max_rad - m.config.turn_tol_rad
+        ):
+            m.tilt_x_estimate_rad = flat_angle(state.sweeps[1:], settings)
             state.stage = FeelStage.TURN
         return m.pressed(obs, force)
     m.fire("turn")
@@ -124,7 +139,7 @@ def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState) -> None:
     if obs.wrench is None or torque_t is None or obs.wrench.t_s <= state.frame_t_s:
         return
     state.frame_t_s = obs.wrench.t_s
-    sweep = 0 if state.stage is FeelStage.ROCK else 1
+    sweep = {FeelStage.ROCK: 0, FeelStage.ROCK_BACK: 1, FeelStage.ROCK_AGAIN: 2}[state.stage]
     state.sweeps[sweep].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
 
 
@@ -153,8 +168,9 @@ def sweep_step(
 
 
 def flat_angle(sweeps: list[list[tuple[float, float]]], settings: RockSettings) -> float | None:
-    """The tilt about T x (rad) at which the tip's face lies flat: the two sweeps' steps'
-    mean angle, or None (a step too small, or the sweeps disagree)."""
+    """The tilt about T x (rad) at which the tip's face lies flat: the mean angle of two
+    legs' steps (``sweeps``: the legs, in opposite directions), or None (a step too small,
+    or the legs disagree)."""
     steps = [sweep_step(samples, settings.window) for samples in sweeps]
     if any(s is None or abs(s[1]) < settings.min_step_nm for s in steps):
         return None

@@ -8,9 +8,9 @@ then its outer part at every yaw. Each pass:
 * **touch**: down at ``descend_speed_m_s`` until the tared upward force reaches
   ``touch_force_n``; the TCP ``fall_in_m`` below where the tip would meet the nominal board
   first means the plug went into the opening on the way down (INSERT, ``fell_in``, the
-  nominal board's height taken as the press's); the run's first touch, with ``rock`` on,
-  first finds the plug's tilt in the hand (FEEL, ``touched``: spiral_feel.py), and the sweep
-  goes on from FEEL;
+  nominal board's height taken as the press's); with ``rock`` on, the touch of pass
+  ``rock.at_pass`` first finds the plug's tilt in the hand (FEEL, ``touched``:
+  spiral_feel.py), and the sweep goes on from FEEL;
 * **sweep**: the pattern at ``sweep_speed_m_s`` while the admittance holds the press; the
   press's height (the TCP's when the force first settles within ``settle_band`` of the
   press) is the reference. A force under ``catch_ratio`` x the press pauses the pattern
@@ -107,7 +107,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     if state.stage is SearchStage.TOUCH:
         m.fire("touch")
         if force >= cfg.touch_force_n:
-            if m.rock is not None and not m.felt:  # the first touch: the plug's tilt
+            if m.rock is not None and not m.felt and run.pass_index >= m.rock.at_pass:
                 m.felt = True
                 m.go(obs, Phase.FEEL, "touched")
                 return m.hold()

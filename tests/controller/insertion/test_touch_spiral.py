@@ -249,3 +249,22 @@ def test_the_flat_angle_is_the_two_sweeps_steps_mean_and_needs_both():
     far = [(a - 0.1, t) for a, t in down]
     assert flat_angle([up, far], ROCK) is None  # the sweeps disagree
     assert sweep_step(up[:5], 3) is None  # too few frames
+
+
+def test_a_flat_angle_the_other_side_of_upright_is_found_on_a_third_leg():
+    world = touch_world(thickness_tilt_rad=-0.07, thickness_tol_rad=0.02)
+    machine = rocking(world)
+    run(world, machine)
+    assert "felt" in reasons(machine) and "bottomed" in reasons(machine)
+    assert machine.tilt_x_estimate_rad == pytest.approx(-0.07, abs=0.01)
+    assert "feel.rock_again" in {c.rule for c in world.commands}
+
+
+def test_feel_waits_for_its_pass():
+    world = touch_world(**TILTED)
+    machine = rocking(world, rock=replace(ROCK, at_pass=1))
+    run(world, machine)
+    first_feel = next(i for i, c in enumerate(world.commands) if c.rule.startswith("feel."))
+    first_sweep = next(i for i, c in enumerate(world.commands) if c.rule == "search.sweep")
+    assert first_sweep < first_feel
+    assert "felt" in reasons(machine) and "bottomed" in reasons(machine)
