@@ -452,16 +452,14 @@ class MachineConfig(Config):
     timeouts: Timeouts = field(default_factory=Timeouts)
 
     def __post_init__(self) -> None:
-        if abs(self.approach.tilt_rad) >= self.limits.tilt_limit_rad:
-            raise ValueError(
-                f"key 'approach.tilt_rad': expected less than limits.tilt_limit_rad "
-                f"({self.limits.tilt_limit_rad}) in magnitude, got {self.approach.tilt_rad}"
-            )
-        if self.align.servo_tilt_max_rad >= self.limits.tilt_limit_rad:
-            raise ValueError(
-                f"key 'align.servo_tilt_max_rad': expected less than limits.tilt_limit_rad "
-                f"({self.limits.tilt_limit_rad}), got {self.align.servo_tilt_max_rad}"
-            )
+        tilts = (("approach.tilt_rad", self.approach.tilt_rad),
+                 ("align.servo_tilt_max_rad", self.align.servo_tilt_max_rad))  # fmt: skip
+        for key, tilt in tilts:  # under the trip, or it could never trip
+            if abs(tilt) >= self.limits.tilt_limit_rad:
+                raise ValueError(
+                    f"key '{key}': expected less than limits.tilt_limit_rad "
+                    f"({self.limits.tilt_limit_rad}) in magnitude, got {tilt}"
+                )
         if self.insert.force_budget > self.limits.force_limit:
             raise ValueError(
                 f"key 'insert.force_budget': expected at most limits.force_limit "
