@@ -24,6 +24,8 @@ estimate, ``no_flat_face``, upright as before).
 from __future__ import annotations
 
 import math
+from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 from enum import Enum
 from typing import TYPE_CHECKING
@@ -68,11 +70,12 @@ class FeelStage(Enum):
 
 @dataclass
 class FeelState(Staged[FeelStage]):
-    """FEEL so far: ``angles`` the TCP's rock angle (rad) at each tick (time s, angle);
+    """FEEL so far: ``angles`` the TCP's rock angle (rad) at the last 100 ticks (time s,
+    angle);
     ``sweeps`` each leg's (angle rad, torque about T x N*m) per new frame; ``frame_t_s``
     the last frame's capture time taken."""
 
-    angles: list[tuple[float, float]] = field(default_factory=list)
+    angles: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=100))
     sweeps: list[list[tuple[float, float]]] = field(default_factory=lambda: [[], [], []])
     frame_t_s: float = -math.inf
 
@@ -87,7 +90,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     assert settings is not None
     force = m.tared_force(obs)
     angle = m.rock_angle_rad(obs)
-    state.angles = [*state.angles[-99:], (obs.t_s, angle)]
+    state.angles.append((obs.t_s, angle))
     if state.stage is not FeelStage.TURN:
         _take_frame(m, obs, state)
     if state.stage is FeelStage.ROCK:
@@ -143,11 +146,11 @@ def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState) -> None:
     state.sweeps[sweep].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
 
 
-def angle_at(angles: list[tuple[float, float]], t_s: float) -> float:
+def angle_at(angles: Iterable[tuple[float, float]], t_s: float) -> float:
     """The rock angle (rad) at ``t_s``, interpolated in the ticks' (time, angle); the
     nearest end's outside them."""
-    times = [t for t, _ in angles]
-    return float(np.interp(t_s, times, [a for _, a in angles]))
+    times, values = zip(*angles, strict=True)
+    return float(np.interp(t_s, times, values))
 
 
 def sweep_step(
@@ -171,10 +174,12 @@ def flat_angle(sweeps: list[list[tuple[float, float]]], settings: RockSettings) 
     """The tilt about T x (rad) at which the tip's face lies flat: the mean angle of two
     legs' steps (``sweeps``: the legs, in opposite directions), or None (a step too small,
     or the legs disagree)."""
-    steps = [sweep_step(samples, settings.window) for samples in sweeps]
-    if any(s is None or abs(s[1]) < settings.min_step_nm for s in steps):
+    angles = []
+    for samples in sweeps:
+        step = sweep_step(samples, settings.window)
+        if step is None or abs(step[1]) < settings.min_step_nm:
+            return None
+        angles.append(step[0])
+    if max(angles) - min(angles) > settings.agree_rad:
         return None
-    (a, _), (b, _) = steps  # type: ignore[misc]
-    if abs(a - b) > settings.agree_rad:
-        return None
-    return 0.5 * (a + b)
+    return float(np.mean(angles))
