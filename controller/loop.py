@@ -58,11 +58,13 @@ import numpy as np
 from controller.insertion.interface import (
     Command,
     GripperTarget,
+    InHandEstimate,
     Machine,
     Observation,
     Phase,
     TeleopInput,
     Transition,
+    in_hand_estimates,
 )
 from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
 from controller.tactile.wrench import WrenchEstimate
@@ -154,7 +156,9 @@ class TickRecord:
     """What the observer gets each tick. ``command``: the command as sent (after the limits;
     None when nothing was sent, on a fault tick); ``limited``: the limits that changed it;
     ``phase``: the machine's phase after its step; ``fault``: the watchdog's trip message;
-    ``transitions``: the machine's phase changes made since the previous record, in order."""
+    ``transitions``: the machine's phase changes made since the previous record, in order;
+    ``in_hand_estimates``: the machine's estimates of the plug in the hand made since the
+    previous record, in order (``controller.insertion.interface.in_hand_estimates``)."""
 
     observation: Observation
     command: Command | None
@@ -163,6 +167,7 @@ class TickRecord:
     timing: TickTiming
     fault: str | None = None
     transitions: tuple[Transition, ...] = ()
+    in_hand_estimates: tuple[InHandEstimate, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -282,6 +287,7 @@ class ControlLoop:
         self._overruns = 0
         self._skipped = 0
         self._transitions_seen = 0
+        self._estimates_seen = 0
 
     # -- running -------------------------------------------------------------------------
 
@@ -470,8 +476,12 @@ class ControlLoop:
         timing = TickTiming(k, deadline, start, end, overran)
         made = self.machine.transitions[self._transitions_seen :]
         self._transitions_seen += len(made)
+        estimated = in_hand_estimates(self.machine)[self._estimates_seen :]
+        self._estimates_seen += len(estimated)
         self.observer(
-            TickRecord(observation, command, limited, self.machine.phase, timing, fault, made)
+            TickRecord(
+                observation, command, limited, self.machine.phase, timing, fault, made, estimated
+            )
         )
 
     def _stop_once(self) -> None:

@@ -58,6 +58,25 @@ def recorded_trial(run_root) -> Path:
     return made_once(run_root, "recorded_trial", _record_trial)
 
 
+FELT_OVERRIDES = ("touch_spiral.rock.at_pass=0",)  # FEEL at the first touch
+
+
+def _record_felt_trial(folder: Path) -> None:
+    task = load_task(RECORDED_TASK, FELT_OVERRIDES)
+    outcome = run(task, RECORDED_CONTROLLER, RECORDED_SEED, out_dir=folder,
+                  episode=EpisodeOptions())  # fmt: skip
+    assert outcome.result.success and "felt" in {t.reason for t in outcome.transitions}
+    (folder / EPISODE_FILE).chmod(0o444)
+
+
+@pytest.fixture(scope="session")
+def felt_trial(run_root) -> Path:
+    """The record folder of the recorded trial's seed with FEEL rocking at the first touch
+    (``FELT_OVERRIDES``): its episode holds the machine's in-hand estimates
+    (``/machine/grasp_estimate``), JPEG frames; made read-only, about 10 s to record."""
+    return made_once(run_root, "felt_trial", _record_felt_trial)
+
+
 @pytest.fixture(scope="session")
 def easy_task(run_root) -> Callable[[str], Task]:
     """``easy_task(name)``: task ``name`` on the easy scene (tests/easy_scene.py) with the

@@ -1,5 +1,5 @@
 """What feeds an episode during a run: ``TickLogger``, the control loop's observer (each
-tick's command, statuses, teleop, timing, TCP pose and phase changes), and
+tick's command, statuses, teleop, timing, TCP pose, phase changes and in-hand estimates), and
 ``RecordingSource``, a tap on the wrench source (each frame as the estimator received it,
 the field, the estimate, and the calls that change the estimator's reference).
 
@@ -19,7 +19,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.episode import foxglove_types, topics
 from controller.episode.writer import EpisodeWriter, json_bytes
-from controller.insertion.interface import TeleopInput
+from controller.insertion.interface import InHandEstimate, TeleopInput
 from controller.insertion.machine_config import s2t_matrix
 from controller.loop import TickRecord
 from controller.tactile.estimator import TactileEstimator
@@ -160,6 +160,19 @@ def transition_json(transition: Any) -> bytes:
     )
 
 
+def grasp_estimate_json(estimate: InHandEstimate) -> bytes:
+    return json_bytes(
+        {
+            "t_s": estimate.t_s,
+            "plane": estimate.plane,
+            "tilt_rad": estimate.tilt_rad,
+            "tip_offset_m": estimate.tip_offset_m,
+            "method": estimate.method,
+            "kept": bool(estimate.kept),
+        }
+    )
+
+
 LATCH_PERIOD_S = 1.0
 """A latched topic (``/gripper/status``, ``/teleop/input``) is written when its value changes,
 and otherwise again at the first tick this long after the last one written, s of loop time
@@ -218,6 +231,8 @@ class TickLogger:
             log(topics.TF_STATIC, t, self._static_tf, (t, self.mount))
         for transition in tick.transitions:
             log(topics.TRANSITION, transition.t_s, transition_json, transition)
+        for estimate in tick.in_hand_estimates:
+            log(topics.GRASP_ESTIMATE, estimate.t_s, grasp_estimate_json, estimate)
         if tick.transitions:
             self.writer.flush_soon()
 

@@ -203,6 +203,18 @@ TRANSITION = Topic(
     "guard: e.g. 'hole_found', or a FailureReason's value) and ``rule`` (which of the "
     "guard's rules fired, e.g. 'torque_catch', 'load_drop'; '' when it has one).",
 )
+GRASP_ESTIMATE = Topic(
+    "/machine/grasp_estimate",
+    "tactile_insertion.GraspEstimate",
+    "json",
+    "T",
+    "each estimate of the plug in the hand the machine makes (FEEL's; none in a run without)",
+    "``t_s`` (when it was made), ``plane`` ('thickness': the tilt about T x, the tip moved "
+    "along T y; 'width': about T y, along T x), ``tilt_rad`` (the TCP turn that sets the plug "
+    "upright in that plane), ``tip_offset_m`` (the tip's offset from the nominal it implies, "
+    "m), ``method`` ('rock': the pressed tip rocked until its face lies flat) and ``kept`` "
+    "(it passed its checks: the machine acts on it; controller.insertion.InHandEstimate).",
+)
 LOOP_TICK = Topic(
     "/loop/tick",
     "tactile_insertion.LoopTick",
@@ -277,6 +289,7 @@ TOPICS: Mapping[str, Topic] = {
         GRIPPER_STATUS,
         TELEOP,
         TRANSITION,
+        GRASP_ESTIMATE,
         LOOP_TICK,
         TCP_TF,
         TF_STATIC,
@@ -375,6 +388,17 @@ JSON_SCHEMAS: Mapping[str, dict] = {
     TRANSITION.schema: _json_schema(
         {"t_s": _NUM, "from": _STR, "to": _STR, "reason": _STR, "rule": _STR},
         ("t_s", "from", "to", "reason"),
+    ),
+    GRASP_ESTIMATE.schema: _json_schema(
+        {
+            "t_s": _NUM,
+            "plane": _enum("thickness", "width"),
+            "tilt_rad": _NUM,
+            "tip_offset_m": _NUM,
+            "method": _STR,
+            "kept": _BOOL,
+        },
+        ("t_s", "plane", "method", "kept"),
     ),
     LOOP_TICK.schema: _json_schema(
         {

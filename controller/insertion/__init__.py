@@ -10,6 +10,7 @@ from controller.insertion.interface import (
     Command,
     FailureReason,
     GripperTarget,
+    InHandEstimate,
     Machine,
     Observation,
     Phase,
@@ -22,6 +23,6 @@ from core.task_geometry import HolePose, PlugGeometry
 
 __all__ = [
     "INSERTION", "Command", "Definition", "DefinitionError", "Edge", "FailureReason",
-    "GripperTarget", "HolePose", "InsertionMachine", "Machine", "MachineConfig",
+    "GripperTarget", "HolePose", "InHandEstimate", "InsertionMachine", "Machine", "MachineConfig",
     "Observation", "Phase", "PlugGeometry", "TeleopInput", "Transition",
 ]  # fmt: skip

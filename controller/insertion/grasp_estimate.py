@@ -8,9 +8,12 @@ until the in-plane torque changes sign: there the tip's face lies flat on the bo
 that TCP rotation ``flat`` (T2B), the face's width edge, T x turned by ``tilt_rad`` about
 T y, is horizontal, which gives ``tilt_rad`` (``from_flat_rotation``).
 
-The thickness-plane tilt (about T x) and the plug's offset along its width are not found:
-the torque about the plug's grasp point does not depend on the offset, and the thickness
-face's lever (half of 2.4 mm) is below the tilt torque's noise at a light press.
+This FEEL (the ``align`` machine's) does not find the thickness-plane tilt (about T x) nor
+the plug's offset along its width: the torque about the plug's grasp point does not depend
+on the offset, and the thickness face's lever (half of 2.4 mm) is below the tilt torque's
+noise at a light press. The press spiral's FEEL finds the thickness-plane tilt by rocking
+(controller/insertion/spiral/spiral_feel.py); ``thickness_tip_offset_m`` gives the tip's
+offset along T y it implies.
 """
 
 from __future__ import annotations
@@ -48,3 +51,17 @@ class GraspEstimate:
         """Where the tip is, less where the nominal grasp puts it, in B (m), for the TCP
         turned by ``rotation`` (T2B)."""
         return rotation.apply(self.tip_t - np.array([0.0, 0.0, self.length_m]))
+
+
+def thickness_tip_offset_m(tilt_rad: float, length_m: float) -> float:
+    """The tip's offset from the nominal along T y (m) implied by a tilt ``tilt_rad`` (rad)
+    of the plug in the hand about T x (its thickness plane), ``length_m`` (m) from the TCP
+    to the tip: ``length_m * sin(tilt_rad)``.
+
+    The tilt is the TCP turn about T x that sets the plug upright (the press spiral's FEEL
+    estimate, ``SpiralMachine.tilt_x_estimate_rad``), which is the plug's axis p in T at
+    atan2(p_y, p_z) (positive with the tip toward +T y; the scene's truth is measured alike,
+    evaluation/trials/grasp_truth.py). The nominal tip is ``length_m`` along T z; turned by
+    the tilt it lies at ``length_m * (0, sin a, cos a)`` in T (the grasp's offset, which the
+    rock does not see, taken as zero)."""
+    return length_m * math.sin(tilt_rad)

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import Protocol
+from typing import Literal, Protocol
 
 from controller.tactile.wrench import WrenchEstimate
 from core.devices import ArmStatus, GripperStatus, Pose, Twist
@@ -134,8 +134,35 @@ class Transition:
     rule: str = ""
 
 
+GraspPlane = Literal["thickness", "width"]
+"""The plane of an in-hand tilt: ``thickness`` about T x (the tip moves along T y), ``width``
+about T y (the tip moves along T x)."""
+
+
+@dataclass(frozen=True)
+class InHandEstimate:
+    """An estimate of the plug's pose in the hand a machine made at ``t_s`` (s, the loop's
+    clock): its tilt ``tilt_rad`` in ``plane`` (rad, the TCP turn that sets the plug upright
+    in that plane: about T x for ``thickness``, about T y for ``width``), the tip's offset
+    ``tip_offset_m`` from the nominal it implies (m, along T y for ``thickness``, along T x
+    for ``width``), ``method`` how it was found (``rock``: rocking the pressed tip until its
+    face lies flat) and ``kept`` whether it passed its checks (a kept estimate is the one the
+    machine acts on; one that failed them is published all the same)."""
+
+    t_s: float
+    plane: GraspPlane
+    tilt_rad: float
+    tip_offset_m: float
+    method: str
+    kept: bool
+
+
 class Machine(Protocol):
-    """What the loop drives: a pure, non-blocking state machine."""
+    """What the loop drives: a pure, non-blocking state machine.
+
+    A machine that finds the plug's pose in the hand also has ``in_hand_estimates`` (a tuple
+    of ``InHandEstimate``, in the order made, as ``transitions``); it is optional (read by
+    ``in_hand_estimates``): a machine without it makes none."""
 
     @property
     def phase(self) -> Phase: ...
@@ -144,3 +171,8 @@ class Machine(Protocol):
     def transitions(self) -> tuple[Transition, ...]: ...
 
     def step(self, observation: Observation) -> Command: ...
+
+
+def in_hand_estimates(machine: Machine) -> tuple[InHandEstimate, ...]:
+    """``machine``'s in-hand estimates so far (none for a machine without the attribute)."""
+    return tuple(getattr(machine, "in_hand_estimates", ()))

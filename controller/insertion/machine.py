@@ -35,7 +35,14 @@ from controller.insertion.definition import (
     check_definition,
 )
 from controller.insertion.grasp_estimate import GraspEstimate
-from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
+from controller.insertion.interface import (
+    Command,
+    FailureReason,
+    InHandEstimate,
+    Observation,
+    Phase,
+    Transition,
+)
 from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import approach_rotation, rotation_error, tip_position
 from controller.insertion.phases import (
@@ -164,6 +171,7 @@ class InsertionMachine:
         self._feel_rot = approach_rotation(hole.yaw_rad, 0.0, config.approach.tilt_axis)
         self._phase = definition.initial
         self._transitions: list[Transition] = []
+        self._in_hand: list[InHandEstimate] = []  # FEEL's estimates (phases/feel.py)
         self._state_or_none: PhaseState | None = None  # None until the first step
         self._entered_t_s = 0.0  # when the present phase began (s)
         self._last_t_s: float | None = None
@@ -185,6 +193,15 @@ class InsertionMachine:
     @property
     def transitions(self) -> tuple[Transition, ...]:
         return tuple(self._transitions)
+
+    @property
+    def in_hand_estimates(self) -> tuple[InHandEstimate, ...]:
+        """FEEL's estimates of the plug's tilt in the width plane, in the order made."""
+        return tuple(self._in_hand)
+
+    def publish_in_hand(self, estimate: InHandEstimate) -> None:
+        """Add ``estimate`` to ``in_hand_estimates`` (it commands nothing)."""
+        self._in_hand.append(estimate)
 
     @property
     def retries(self) -> int:

@@ -35,6 +35,7 @@ from controller.insertion.definition import (
 from controller.insertion.interface import (
     Command,
     FailureReason,
+    InHandEstimate,
     Observation,
     Phase,
     TeleopInput,
@@ -86,6 +87,11 @@ class TeleopOnlyMachine:
     @property
     def transitions(self) -> tuple[Transition, ...]:
         return tuple(self._transitions)
+
+    @property
+    def in_hand_estimates(self) -> tuple[InHandEstimate, ...]:
+        """None: the operator inserts; nothing is felt."""
+        return ()
 
     def step(self, observation: Observation) -> Command:
         obs = observation

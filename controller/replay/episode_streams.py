@@ -25,6 +25,7 @@ from controller.episode.topics import (
     ARM_STATUS,
     COMMAND,
     DROPS,
+    GRASP_ESTIMATE,
     GRIPPER_STATUS,
     LOOP_TICK,
     SIM_TF,
@@ -41,6 +42,7 @@ HOLE_FRAME = "H"
 """The true hole's child frame on ``/sim/tf``."""
 
 _Result = TypeVar("_Result")
+_Value = TypeVar("_Value")
 
 
 def _fields_checked(what: str) -> Callable[[Callable[..., _Result]], Callable[..., _Result]]:
@@ -72,6 +74,14 @@ def _number(value: object) -> float:
 
 def _vector(value: object, width: int) -> list[float]:
     return [np.nan] * width if value is None else [_number(v) for v in value]  # type: ignore[attr-defined]
+
+
+def _typed(value: object, kind: type[_Value], name: str) -> _Value:
+    """``value`` if it is a ``kind``; TypeError naming the field ``name`` otherwise (an
+    absent field reads as None)."""
+    if not isinstance(value, kind):
+        raise TypeError(f"field {name!r}: expected {kind.__name__}, got {value!r}")
+    return value
 
 
 @dataclass(frozen=True)
@@ -236,6 +246,38 @@ def transitions(episode: Episode) -> list[Transition]:
     return [
         Transition(v["t_s"], v["from"], v["to"], v["reason"], v.get("rule", ""))
         for v in (m.value for m in episode.messages(TRANSITION.name))
+    ]
+
+
+@dataclass(frozen=True)
+class GraspEstimate:
+    """One ``/machine/grasp_estimate`` message: the plug's tilt in the hand in ``plane``
+    ('thickness' about T x, 'width' about T y; rad) estimated at ``t_s``, the tip's offset
+    it implies (m, along T y or T x; NaN where the file has none), how (``method``) and
+    whether the machine kept it."""
+
+    t_s: float
+    plane: str
+    tilt_rad: float
+    tip_offset_m: float
+    method: str
+    kept: bool
+
+
+@_fields_checked("/machine/grasp_estimate")
+def grasp_estimates(episode: Episode) -> list[GraspEstimate]:
+    """The machine's estimates of the plug in the hand, in the order made (none in a file
+    from before the topic, or of a run whose machine made none)."""
+    return [
+        GraspEstimate(
+            float(v["t_s"]),
+            _typed(v["plane"], str, "plane"),
+            _number(v.get("tilt_rad")),
+            _number(v.get("tip_offset_m")),
+            _typed(v["method"], str, "method"),
+            _typed(v["kept"], bool, "kept"),
+        )
+        for v in (m.value for m in episode.messages(GRASP_ESTIMATE.name))
     ]
 
 

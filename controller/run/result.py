@@ -45,8 +45,10 @@ class TrialResult:
     and ``grasp_tilt_true_rad`` the scene's; ``grasp_tilt_thickness_true_rad`` the true tilt
     in the thickness plane (about T x), ``grasp_tilt_thickness_est_rad`` the press spiral's
     estimate of it (its FEEL's flat angle; nan without one); ``tip_x_est_m`` the estimated tip's
-    offset along T x from the nominal, and ``tip_x_true_m``, ``tip_y_true_m`` the true tip's
-    along T x and T y (m).
+    offset along T x from the nominal (the width-plane estimate's), ``tip_y_est_m`` along T y
+    (the thickness-plane estimate's, ``SpiralMachine.tip_y_estimate_m``: the plug's length
+    times the sine of the tilt; nan without one), and ``tip_x_true_m``, ``tip_y_true_m`` the
+    true tip's along T x and T y (m).
     """
 
     task: str
@@ -72,6 +74,7 @@ class TrialResult:
     grasp_tilt_thickness_est_rad: float = float("nan")
     tip_x_est_m: float = float("nan")
     tip_x_true_m: float = float("nan")
+    tip_y_est_m: float = float("nan")
     tip_y_true_m: float = float("nan")
 
     def __post_init__(self) -> None:
@@ -118,5 +121,6 @@ _POSE_FIELDS = (
     "grasp_tilt_thickness_est_rad",
     "tip_x_est_m",
     "tip_x_true_m",
+    "tip_y_est_m",
     "tip_y_true_m",
 )

@@ -5,7 +5,8 @@
   a single speed, one point per controller side by side;
 * ``success_time_chart``: the share of trials inserted within a time, against that time,
   one step curve per controller (success against time to insert);
-* ``grasp_error_chart``: histograms of FEEL's errors on the plug in the hand (tilt, tip).
+* ``grasp_error_chart``: histograms of FEEL's signed errors on the plug in the hand, one per
+  estimated quantity (tilts, tip offsets).
 """
 
 from __future__ import annotations
@@ -130,17 +131,23 @@ def success_time_chart(
 
 
 def grasp_error_chart(
-    tilt_errors_deg: Sequence[float], tip_errors_mm: Sequence[float], path: Path, title: str
+    errors: Mapping[str, Sequence[float]], path: Path, title: str, trials: int | None = None
 ) -> None:
-    """Histograms of FEEL's absolute errors (evaluation/trials/grasp_scores.py): the
-    width-plane tilt (deg) and the tip's offset along T x (mm), one trial each."""
-    fig = Figure(figsize=(9.0, 3.6), layout="constrained")
-    left, right = fig.subplots(1, 2)
-    left.hist(tilt_errors_deg, bins=20, color="#4477aa")
-    left.set_xlabel("|tilt error| in the width plane, deg")
-    left.set_ylabel("trials")
-    right.hist(tip_errors_mm, bins=20, color="#aa7744")
-    right.set_xlabel("|tip offset error| along T x, mm")
-    fig.suptitle(textwrap.fill(f"{title} ({len(tilt_errors_deg)} estimates)", TITLE_WIDTH),
-                 fontsize=10)
+    """Histograms of FEEL's signed errors, estimate - truth (evaluation/trials/grasp_scores.py):
+    one per estimated quantity (``errors``: its axis label, unit included, to the errors of
+    the trials that estimate it), side by side, zero marked; ``trials``: how many trials the
+    errors are of, for the title."""
+    panels = [(label, values) for label, values in errors.items() if len(values)]
+    fig = Figure(figsize=(4.5 * max(len(panels), 1), 3.6), layout="constrained")
+    axes = fig.subplots(1, max(len(panels), 1), squeeze=False)[0]
+    colors = ("#4477aa", "#aa7744", "#66aa55", "#aa4466")
+    for i, (ax, (label, values)) in enumerate(zip(axes, panels, strict=False)):
+        ax.hist(values, bins=20, color=colors[i % len(colors)])
+        ax.axvline(0.0, color="black", linewidth=0.8)
+        ax.set_xlabel(f"{label}: estimate - truth")
+        if i == 0:
+            ax.set_ylabel("trials")
+    n = max((len(values) for _, values in panels), default=0)
+    of = f" of {trials} trials" if trials is not None else ""
+    fig.suptitle(textwrap.fill(f"{title} ({n} estimates{of})", TITLE_WIDTH), fontsize=10)
     _save(fig, path)

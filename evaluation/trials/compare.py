@@ -15,7 +15,8 @@ overrides) on the same seeds; all the trials share one executor. OUT gets:
 * ``time_to_insert_<speed>.png``: success against time to insert (the share of trials
   inserted within t, against t) per controller, one chart per speed setting;
 * ``grasp_errors_<controller>_<speed>.png``: the histograms of the in-hand estimate's
-  errors (FEEL, evaluation/trials/grasp_scores.py), for each cell whose controller has one;
+  signed errors, one per quantity estimated (FEEL, evaluation/trials/grasp_scores.py), for
+  each cell whose controller has one;
 * ``comparison.md``: the table, the product's targets judged at each speed
   (evaluation/trials/targets.py) and the charts, as a section for docs/EVALUATION.md;
   ``comparison.json``: every cell's summary.
@@ -60,7 +61,7 @@ from evaluation.trials.charts import (
     speed_success_chart,
     success_time_chart,
 )
-from evaluation.trials.grasp_scores import tilt_errors_deg, tip_errors_mm
+from evaluation.trials.grasp_scores import TABLE_HEADER, chart_errors, table_cells
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import SeedSpecs, format_seeds
 from evaluation.trials.targets import targets_markdown
@@ -101,27 +102,20 @@ def _grasp_markdown(cells: Mapping[Cell, Batch]) -> list[str]:
         g = batch.summary.get("grasp_estimate")
         if g is None:
             continue
-        tilt, tip = g["tilt_error_deg"], g["tip_x_error_mm"]
-        thick, tip_y = g["thickness_tilt_deg_not_estimated"], g["tip_y_mm_not_estimated"]
-        rows.append(
-            f"| {controller_label(cell.controller)} | {cell.speed:g} | {g['estimated']}/{g['of']} "
-            f"| {tilt['median']:.2f} | {tilt['p95']:.2f} | {tip['median']:.2f} | "
-            f"{tip['p95']:.2f} | {thick['median']:.2f} | {tip_y['median']:.2f} |"
-        )
+        label = f"| {controller_label(cell.controller)} | {cell.speed:g} | "
+        rows += [label + " | ".join(row) + " |" for row in table_cells(g)]
         charts += [f"![in-hand estimate errors, {cell.controller}]({grasp_chart_name(cell)})", ""]
     if not rows:
         return []
     return [
         "",
-        "The plug in the hand, found by touch (FEEL) against the scene's truth: absolute "
-        "errors of the width-plane tilt (deg) and of the tip's offset along T x (mm); the "
-        "thickness-plane tilt and the tip's offset along T y are not estimated (their true "
-        "size, for scale).",
+        "The plug in the hand, found by touch (FEEL) against the scene's truth: the absolute "
+        "errors of each quantity estimated (trials with an estimate of it, of all); a quantity "
+        "not estimated gives its true size in parentheses, for scale. The histograms show the "
+        "signed errors (estimate - truth).",
         "",
-        "| controller | speed | estimated | tilt median ° | tilt p95 ° | tip x median mm "
-        "| tip x p95 mm | thickness tilt median ° (not estimated) "
-        "| tip y median mm (not estimated) |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        "| controller | speed | " + " | ".join(TABLE_HEADER) + " |",
+        "|---|---:|---|---:|---:|---:|---:|",
         *rows,
         "",
         *charts,
@@ -250,13 +244,13 @@ def write_comparison(
             f"{task}: success against time to insert at {speed_key}={speed:g}, seeds {seeds}",
         )
     for cell, batch in cells.items():
-        tilt = tilt_errors_deg(batch.results)
-        if tilt:
+        errors = chart_errors(batch.results)
+        if errors:
             grasp_error_chart(
-                tilt,
-                tip_errors_mm(batch.results),
+                errors,
                 out / grasp_chart_name(cell),
                 f"{task}: the plug in the hand by touch, {cell.controller}, seeds {seeds}",
+                len(batch.results),
             )
     write_text(out / TABLE, comparison_markdown(task, seeds, speed_key, cells, command) + "\n")
     every = [

@@ -1,16 +1,27 @@
 """FEEL's estimate of the plug in the hand, scored against the scene's truth per trial
-(``TrialResult``'s pose fields, evaluation/trials/grasp_truth.py): the summary's block and
-the errors charts.py histograms.
+(``TrialResult``'s pose fields, evaluation/trials/grasp_truth.py): the summary's block, the
+errors charts.py histograms and the ``grasp_scores`` tool's table.
 
-Errors are absolute: the width-plane tilt in degrees, the tip's offset along T x in mm.
-The thickness-plane tilt and the tip's offset along T y are not estimated (FEEL leaves them
-nominal), so their error is the truth itself, given beside for scale.
+Four quantities (``QUANTITIES``), each scored on the trials that have an estimate of it:
+
+* ``thickness_tilt_deg``: the tilt about T x (the thickness plane), where
+  ``grasp_tilt_thickness_est_rad`` is finite (the press spiral's FEEL: ``dipole`` and the
+  other controllers of its machine);
+* ``tip_y_mm``: the tip's offset along T y that tilt implies (``tip_y_est_m``);
+* ``width_tilt_deg``: the tilt about T y (the width plane), where ``grasp_tilt_est_rad`` is
+  finite (the ``align`` machine's FEEL);
+* ``tip_x_mm``: the tip's offset along T x that tilt implies (``tip_x_est_m``).
+
+A quantity no trial estimates is "not estimated": its true size is given for scale. The
+summary's statistics are of the absolute error (estimate - truth); the histograms show the
+signed error.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -18,49 +29,129 @@ import numpy as np
 from controller.run.result import TrialResult
 
 
-def _stats(values: Sequence[float], scale: float) -> dict[str, float] | None:
+@dataclass(frozen=True)
+class Quantity:
+    """One scored quantity: ``key`` (the summary's), ``label`` (charts and tables), ``unit``,
+    the ``TrialResult`` fields of its ``estimate`` and ``truth`` and the ``scale`` from theirs
+    (rad, m) to ``unit``; a trial counts where ``estimate`` and ``gate`` (the plane's tilt
+    estimate) are finite."""
+
+    key: str
+    label: str
+    unit: str
+    estimate: str
+    truth: str
+    scale: float
+    gate: str
+
+
+QUANTITIES = (
+    Quantity("thickness_tilt_deg", "tilt about T x (thickness plane)", "deg",
+             "grasp_tilt_thickness_est_rad", "grasp_tilt_thickness_true_rad", math.degrees(1.0),
+             "grasp_tilt_thickness_est_rad"),
+    Quantity("tip_y_mm", "tip offset along T y", "mm", "tip_y_est_m", "tip_y_true_m", 1e3,
+             "grasp_tilt_thickness_est_rad"),
+    Quantity("width_tilt_deg", "tilt about T y (width plane)", "deg", "grasp_tilt_est_rad",
+             "grasp_tilt_true_rad", math.degrees(1.0), "grasp_tilt_est_rad"),
+    Quantity("tip_x_mm", "tip offset along T x", "mm", "tip_x_est_m", "tip_x_true_m", 1e3,
+             "grasp_tilt_est_rad"),
+)  # fmt: skip
+"""The scored quantities, the thickness plane's first."""
+
+_BY_KEY = {q.key: q for q in QUANTITIES}
+
+
+def quantity(key: str) -> Quantity:
+    """The quantity named ``key`` (KeyError if none)."""
+    return _BY_KEY[key]
+
+
+def _finite(result: TrialResult, name: str) -> bool:
+    return math.isfinite(getattr(result, name))
+
+
+def _estimated(results: Iterable[TrialResult], q: Quantity) -> list[TrialResult]:
+    return [r for r in results if _finite(r, q.gate) and _finite(r, q.estimate)]
+
+
+def signed_errors(results: Iterable[TrialResult], q: Quantity) -> list[float]:
+    """(estimate - truth) of ``q`` in its unit, one per trial with an estimate of it."""
+    return [
+        q.scale * (getattr(r, q.estimate) - getattr(r, q.truth)) for r in _estimated(results, q)
+    ]
+
+
+def estimated(results: Sequence[TrialResult]) -> list[Quantity]:
+    """The quantities some trial of ``results`` has an estimate of, in ``QUANTITIES``'s
+    order."""
+    return [q for q in QUANTITIES if _estimated(results, q)]
+
+
+def _stats(values: Sequence[float]) -> dict[str, float] | None:
+    """n, median, 95th percentile and largest of ``|values|``; None without any."""
     if not values:
         return None
-    v = np.abs(np.asarray(values, float)) * scale
+    v = np.abs(np.asarray(values, float))
     return {
+        "n": len(v),
         "median": float(np.median(v)),
         "p95": float(np.percentile(v, 95)),
         "max": float(v.max()),
     }
 
 
-def _estimated(results: Iterable[TrialResult]) -> list[TrialResult]:
-    return [r for r in results if math.isfinite(r.grasp_tilt_est_rad)]
-
-
-def tilt_errors_deg(results: Iterable[TrialResult]) -> list[float]:
-    """|estimated - true| width-plane tilt (deg) of each trial with an estimate."""
-    return [
-        math.degrees(abs(r.grasp_tilt_est_rad - r.grasp_tilt_true_rad)) for r in _estimated(results)
-    ]
-
-
-def tip_errors_mm(results: Iterable[TrialResult]) -> list[float]:
-    """|estimated - true| tip offset along T x (mm) of each trial with an estimate."""
-    return [1e3 * abs(r.tip_x_est_m - r.tip_x_true_m) for r in _estimated(results)]
-
-
 def grasp_estimate_summary(results: Sequence[TrialResult]) -> dict[str, Any] | None:
-    """The summary's ``grasp_estimate`` block: how many trials have an estimate, and the
-    errors' median, 95th percentile and largest (tilt in deg, tip in mm), with the
-    unestimated thickness-plane tilt and tip offset along T y for scale; None when no trial
-    has one (a controller without FEEL)."""
-    estimated = _estimated(results)
-    if not estimated:
+    """The summary's ``grasp_estimate`` block: ``estimated`` (the trials with an estimate
+    in either plane) ``of`` all; ``errors``: for each estimated quantity (``QUANTITIES``'
+    keys), the absolute error's ``n``, ``median``, ``p95`` and ``max`` (deg, mm); and
+    ``not_estimated``: for each quantity no trial estimates, the same of its true size
+    (over the trials with a truth), for scale. None when no trial has an estimate (a
+    controller without FEEL, or FEEL never ran)."""
+    scored = estimated(results)
+    if not scored:
         return None
-    with_truth = [r for r in results if math.isfinite(r.grasp_tilt_true_rad)]
+    gates = {q.gate for q in scored}
+    with_estimate = [r for r in results if any(_finite(r, g) for g in gates)]
+    not_estimated = {}
+    for q in QUANTITIES:
+        if q not in scored:
+            truth = [q.scale * getattr(r, q.truth) for r in results if _finite(r, q.truth)]
+            not_estimated[q.key] = _stats(truth)
     return {
-        "estimated": len(estimated),
+        "estimated": len(with_estimate),
         "of": len(results),
-        "tilt_error_deg": _stats(tilt_errors_deg(estimated), 1.0),
-        "tip_x_error_mm": _stats(tip_errors_mm(estimated), 1.0),
-        "thickness_tilt_deg_not_estimated": _stats(
-            [r.grasp_tilt_thickness_true_rad for r in with_truth], math.degrees(1.0)
-        ),
-        "tip_y_mm_not_estimated": _stats([r.tip_y_true_m for r in with_truth], 1e3),
+        "errors": {q.key: _stats(signed_errors(results, q)) for q in scored},
+        "not_estimated": not_estimated,
     }
+
+
+def chart_errors(results: Sequence[TrialResult]) -> dict[str, list[float]]:
+    """The signed errors of each estimated quantity, by its axis label (unit included): what
+    ``charts.grasp_error_chart`` draws."""
+    return {f"{q.label}, {q.unit}": signed_errors(results, q) for q in estimated(results)}
+
+
+TABLE_HEADER = (
+    "quantity", "estimated", "median \\|error\\|", "p95 \\|error\\|", "max \\|error\\|"
+)  # fmt: skip
+"""The columns of ``table_cells``'s rows (markdown: the bars escaped)."""
+
+
+def table_cells(block: dict[str, Any]) -> list[list[str]]:
+    """A summary block's rows for a markdown table (``TABLE_HEADER``): each estimated
+    quantity's absolute errors (n of all trials), then each one not estimated, its true
+    size in parentheses (for scale)."""
+    rows = []
+    for key, stats in block["errors"].items():
+        q = quantity(key)
+        rows.append([
+            f"{q.label}, {q.unit}", f"{stats['n']}/{block['of']}",
+            f"{stats['median']:.2f}", f"{stats['p95']:.2f}", f"{stats['max']:.2f}",
+        ])  # fmt: skip
+    for key, stats in block["not_estimated"].items():
+        q = quantity(key)
+        size = ["–"] * 3 if stats is None else [
+            f"({stats['median']:.2f})", f"({stats['p95']:.2f})", f"({stats['max']:.2f})"
+        ]  # fmt: skip
+        rows.append([f"{q.label}, {q.unit}", "not estimated", *size])
+    return rows

@@ -47,7 +47,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
     is the simulated time over the wall time of the trials that ran to an outcome (error
     trials have no simulated time); ``grasp_estimate`` (only when some trial has one): FEEL's
-    errors on the plug in the hand (evaluation/trials/grasp_scores.py).
+    errors on the plug in the hand, per quantity estimated in either plane, and the true
+    size of those not estimated (evaluation/trials/grasp_scores.py).
     """
     ordered = sorted(results, key=lambda r: (r.controller, r.seed))
     n = len(ordered)

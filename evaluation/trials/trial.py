@@ -198,7 +198,7 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
 def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     """The plug's pose in the hand: the machine's estimates (FEEL's, where its machine has
     one: the align machine's width-plane tilt and tip, the press spiral's thickness-plane
-    tilt) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
+    tilt and tip) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
     # imported here: the scene's draws belong to the simulator, which a real run never loads
     from drivers.sim.scenes.insertion.draws import draw_scene
     from evaluation.trials.grasp_truth import grasp_truth
@@ -208,6 +208,7 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     estimate = getattr(ran.machine, "grasp", None)
     tilt = estimate.tilt_rad if estimate is not None else math.nan
     thickness = getattr(ran.machine, "tilt_x_estimate_rad", None)
+    tip_y = getattr(ran.machine, "tip_y_estimate_m", None)
     return {
         "grasp_tilt_est_rad": tilt,
         "grasp_tilt_true_rad": truth.tilt_width_rad,
@@ -215,5 +216,6 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
         "grasp_tilt_thickness_est_rad": math.nan if thickness is None else thickness,
         "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
         "tip_x_true_m": float(truth.tip_t_m[0]),
+        "tip_y_est_m": math.nan if tip_y is None else tip_y,
         "tip_y_true_m": float(truth.tip_t_m[1]),
     }

@@ -12,7 +12,7 @@ import threading
 import numpy as np
 import pytest
 
-from controller.insertion.interface import Command, GripperTarget, Phase
+from controller.insertion.interface import Command, GripperTarget, InHandEstimate, Phase
 from controller.loop import ControlLoop, LoopConfig, LoopStats
 from controller.safety import LimitsConfig, Watchdog
 from controller.tactile import estimator_for_sensor
@@ -52,6 +52,34 @@ def make_loop(machine, devices, clock, *, estimator=None, observer=None, arm=Non
         LoopConfig(**config),
         observer=observer,
     )
+
+
+class EstimatingMachine(ScriptedMachine):
+    """Makes an in-hand estimate at its 3rd and 5th steps (two at the 5th)."""
+
+    def __init__(self) -> None:
+        super().__init__(done_after=8)
+        self.in_hand_estimates: tuple[InHandEstimate, ...] = ()
+
+    def step(self, observation):
+        if self.steps in (2, 4):
+            made = InHandEstimate(observation.t_s, "thickness", 0.01, 2e-4, "rock", False)
+            more = (dataclasses.replace(made, kept=True),) if self.steps == 4 else ()
+            self.in_hand_estimates += (made, *more)
+        return super().step(observation)
+
+
+def test_each_tick_record_carries_the_in_hand_estimates_made_since_the_last(devices, clock):
+    records = []
+    machine = EstimatingMachine()
+    make_loop(machine, devices, clock, observer=records.append).run()
+    carried = [[e.kept for e in r.in_hand_estimates] for r in records]
+    assert carried == [[], [], [False], [], [False, True], [], [], []]
+    assert [e for r in records for e in r.in_hand_estimates] == list(machine.in_hand_estimates)
+    # a machine without the attribute makes none
+    records.clear()
+    make_loop(ScriptedMachine(done_after=3), devices, clock, observer=records.append).run()
+    assert [r.in_hand_estimates for r in records] == [(), (), ()]
 
 
 def test_ticks_start_on_deadlines_k_periods_from_the_start(devices, clock):

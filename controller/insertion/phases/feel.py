@@ -4,7 +4,8 @@ FEEL presses it there, rocks the TCP about the horizontal axis across the openin
 until the in-plane torque (about T y) changes sign, where the tip's face lies flat, rocks
 back until it changes sign again, and takes the mean of the two angles (the signals' lag
 shifts them equally in opposite directions). From it, the plug's tilt in the hand and
-where its tip really is (``InsertionMachine.grasp``). Then the tip is lifted and APPROACH
+where its tip really is (``InsertionMachine.grasp``, published in its
+``in_hand_estimates``: the width plane, always kept). Then the tip is lifted and APPROACH
 brings it over the opening.
 
 Each new estimate's angle is the TCP's at the frame's capture time (the estimate's
@@ -24,7 +25,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion.commands import tip_command
 from controller.insertion.grasp_estimate import GraspEstimate
-from controller.insertion.interface import Command, Observation, Phase
+from controller.insertion.interface import Command, InHandEstimate, Observation, Phase
 from controller.insertion.machine_config import MachineConfig
 from controller.insertion.motion import tip_position
 from controller.insertion.phases.stage import Staged
@@ -151,6 +152,9 @@ def _judge(
         return
     flat = Rotation.from_rotvec(state.axis * float(np.mean(state.flips))) * state.reference
     machine.grasp = GraspEstimate.from_flat_rotation(flat, machine.plug.length_m)
+    machine.publish_in_hand(InHandEstimate(
+        obs.t_s, "width", machine.grasp.tilt_rad, float(machine.grasp.tip_t[0]), "rock", True
+    ))  # fmt: skip
     state.next(FeelStage.LIFT, obs.t_s)
 
 

@@ -18,7 +18,9 @@ equally the two ways), kept when both steps reach ``min_step_nm`` and the two an
 within ``agree_rad``. The machine then holds the
 TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
 its thickness plane, and SEARCH goes on with the press settled anew (``felt``; without an
-estimate, ``no_flat_face``, upright as before).
+estimate, ``no_flat_face``, upright as before). Each pair of legs' flat angle, kept or not,
+is published with the tip's offset along T y it implies (``SpiralMachine.in_hand_estimates``,
+``grasp_estimate.thickness_tip_offset_m``); the kept one gives ``tip_y_estimate_m``.
 """
 
 from __future__ import annotations
@@ -32,7 +34,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.insertion.interface import Command, Observation, Phase
+from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.insertion.interface import Command, InHandEstimate, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from controller.insertion.spiral.spiral_search import SearchStage, SearchState
 from core.config import Config, config_dataclass, number
@@ -105,7 +108,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         if _ramp(m, -settings.rock_max_rad, settings.rock_speed_rad_s) and angle <= (
             -settings.rock_max_rad + m.config.turn_tol_rad
         ):
-            m.tilt_x_estimate_rad = flat_angle(state.sweeps[:2], settings)
+            m.tilt_x_estimate_rad = _estimate(m, obs, state.sweeps[:2], settings)
             found = m.tilt_x_estimate_rad is not None
             state.stage = FeelStage.TURN if found else FeelStage.ROCK_AGAIN
         return m.pressed(obs, force)
@@ -114,7 +117,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         if _ramp(m, settings.rock_max_rad, settings.rock_speed_rad_s) and angle >= (
             settings.rock_max_rad - m.config.turn_tol_rad
         ):
-            m.tilt_x_estimate_rad = flat_angle(state.sweeps[1:], settings)
+            m.tilt_x_estimate_rad = _estimate(m, obs, state.sweeps[1:], settings)
             state.stage = FeelStage.TURN
         return m.pressed(obs, force)
     m.fire("turn")
@@ -170,16 +173,45 @@ def sweep_step(
     return best
 
 
-def flat_angle(sweeps: list[list[tuple[float, float]]], settings: RockSettings) -> float | None:
-    """The tilt about T x (rad) at which the tip's face lies flat: the mean angle of two
-    legs' steps (``sweeps``: the legs, in opposite directions), or None (a step too small,
-    or the legs disagree)."""
-    angles = []
+def flat_candidate(
+    sweeps: list[list[tuple[float, float]]], settings: RockSettings
+) -> tuple[float, bool] | None:
+    """The tilt about T x (rad) at which the tip's face lies flat as two legs give it (the
+    mean angle of their steps; ``sweeps``: the legs, in opposite directions) and whether it
+    passes the checks (both steps at least ``min_step_nm``, the angles within
+    ``agree_rad``); None when a leg has too few frames for a step."""
+    angles, kept = [], True
     for samples in sweeps:
         step = sweep_step(samples, settings.window)
-        if step is None or abs(step[1]) < settings.min_step_nm:
+        if step is None:
             return None
+        kept = kept and not abs(step[1]) < settings.min_step_nm
         angles.append(step[0])
-    if max(angles) - min(angles) > settings.agree_rad:
+    kept = kept and not max(angles) - min(angles) > settings.agree_rad
+    return float(np.mean(angles)), kept
+
+
+def flat_angle(sweeps: list[list[tuple[float, float]]], settings: RockSettings) -> float | None:
+    """The tilt about T x (rad) at which the tip's face lies flat (``flat_candidate``), or
+    None (a leg without a step, a step too small, or the legs disagree)."""
+    candidate = flat_candidate(sweeps, settings)
+    return candidate[0] if candidate is not None and candidate[1] else None
+
+
+def _estimate(
+    m: SpiralMachine,
+    obs: Observation,
+    sweeps: list[list[tuple[float, float]]],
+    settings: RockSettings,
+) -> float | None:
+    """The legs' flat angle if it passes its checks (``flat_angle``), else None; any
+    candidate, kept or not, is published as the machine's in-hand estimate (the thickness
+    plane, ``SpiralMachine.in_hand_estimates``)."""
+    candidate = flat_candidate(sweeps, settings)
+    if candidate is None:
         return None
-    return float(np.mean(angles))
+    tilt, kept = candidate
+    m.publish_in_hand(InHandEstimate(
+        obs.t_s, "thickness", tilt, thickness_tip_offset_m(tilt, m.plug.length_m), "rock", kept
+    ))  # fmt: skip
+    return tilt if kept else None

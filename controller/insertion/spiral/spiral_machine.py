@@ -41,7 +41,15 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
-from controller.insertion.interface import Command, FailureReason, Observation, Phase, Transition
+from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.insertion.interface import (
+    Command,
+    FailureReason,
+    InHandEstimate,
+    Observation,
+    Phase,
+    Transition,
+)
 from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error, tip_position
 from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
 from controller.insertion.search_path import SearchPattern
@@ -225,6 +233,7 @@ class SpiralMachine:
         self._phase = Phase.GRASP
         self._state: Any = None  # the present phase's state (its module's dataclass)
         self._transitions: list[Transition] = []
+        self._in_hand: list[InHandEstimate] = []  # FEEL's estimates, kept or not
         self._start_t_s: float | None = None
         self._last_t_s = 0.0
         self._override_s = 0.0  # time spent in TELEOP and ESTOP, s
@@ -245,6 +254,26 @@ class SpiralMachine:
     @property
     def transitions(self) -> tuple[Transition, ...]:
         return tuple(self._transitions)
+
+    @property
+    def in_hand_estimates(self) -> tuple[InHandEstimate, ...]:
+        """FEEL's estimates of the plug's tilt in the thickness plane, kept or not, in the
+        order made (spiral_feel.py)."""
+        return tuple(self._in_hand)
+
+    def publish_in_hand(self, estimate: InHandEstimate) -> None:
+        """Add ``estimate`` to ``in_hand_estimates`` (it commands nothing)."""
+        self._in_hand.append(estimate)
+
+    @property
+    def tip_y_estimate_m(self) -> float | None:
+        """The tip's offset from the nominal along T y (m) implied by FEEL's tilt estimate
+        about T x (``tilt_x_estimate_rad``; ``grasp_estimate.thickness_tip_offset_m``), None
+        without one. It is recorded (the trial's ``tip_y_est_m``), not acted on: no command
+        uses it."""
+        if self.tilt_x_estimate_rad is None:
+            return None
+        return thickness_tip_offset_m(self.tilt_x_estimate_rad, self.plug.length_m)
 
     def step(self, obs: Observation) -> Command:
         """One tick: the command for ``obs``, naming the rule and the sub-stage that decided

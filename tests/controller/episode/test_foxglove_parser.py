@@ -96,6 +96,18 @@ def test_foxglove_parses_every_channel_and_plots_numbers(checker, recorded_trial
     assert "/teleop/input.in_control_by" in plotted
 
 
+def test_foxglove_parses_the_in_hand_estimates_channel(checker, felt_trial, tmp_path):
+    """A trial whose machine estimated the plug in the hand: its ``/machine/grasp_estimate``
+    channel parses and every message decodes, as the others."""
+    episode = felt_trial / EPISODE_FILE
+    schemas = tmp_path / "schemas.json"
+    schemas.write_text(json.dumps(JSON_SCHEMAS))
+    code, report = _check(checker, episode, LAYOUT, schemas)
+    assert code == 0 and report["problems"] == [], report["problems"]
+    assert report["channels"] == read_episode(episode).counts
+    assert report["channels"]["/machine/grasp_estimate"] >= 1
+
+
 def test_the_parser_rejects_what_foxglove_drops(checker, tmp_path):
     """The check is live: the schema forms the old episodes had are refused, as in the app."""
     bad = {

@@ -36,6 +36,10 @@ def test_feel_finds_the_tilt_in_the_hand_and_the_search_follows_the_true_tip(til
     assert machine.grasp is not None
     assert machine.grasp.tilt_rad == pytest.approx(tilt, abs=0.005)
     assert error_m < 0.15e-3
+    (published,) = machine.in_hand_estimates  # the width plane's, as the machine keeps it
+    assert (published.plane, published.method, published.kept) == ("width", "rock", True)
+    assert published.tilt_rad == machine.grasp.tilt_rad
+    assert published.tip_offset_m == machine.grasp.tip_t[0]
     assert path(machine)[1:4] == [
         ("APPROACH", "FEEL", "first_contact"),
         ("FEEL", "APPROACH", "grasp_felt"),
@@ -51,6 +55,7 @@ def test_without_the_torque_the_tilt_is_not_found_and_the_search_misses_the_true
     while machine.phase is not Phase.SEARCH and world.t_s < 30.0:
         rules.append(world.step(machine).rule)
     assert machine.grasp is None  # the nominal grasp kept
+    assert machine.in_hand_estimates == ()
     assert rules.count("feel.reverse") == 1  # the other way, once
     assert rules.count("feel.no_flat_face") == 1
     error_m = _tip_error_in_search_m(world, machine)

@@ -37,6 +37,7 @@ def test_grasp_then_the_operator_drives_and_the_pad_is_ignored_during_the_grasp(
     assert world.rezero_count == 1 and path(machine) == [("GRASP", "TELEOP", "grasped_and_zeroed")]
     command = world.step(machine)
     assert command.twist.linear_m_s == (0.0, 0.01, 0.0)
+    assert machine.in_hand_estimates == ()  # the operator inserts: nothing felt
 
 
 def test_estop_latches_until_released_and_acknowledged():

@@ -5,6 +5,7 @@ catch; a probe rewinds the pattern to where the tip was when the frame was captu
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import pytest
@@ -13,7 +14,12 @@ from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
-from controller.insertion.spiral.spiral_feel import RockSettings, flat_angle, sweep_step
+from controller.insertion.spiral.spiral_feel import (
+    RockSettings,
+    flat_angle,
+    flat_candidate,
+    sweep_step,
+)
 from controller.insertion.spiral.spiral_search import SearchStage
 from controller.insertion.spiral.torque_servo import TorqueServo, TorqueServoSettings
 from controller.run.controllers import CONTROLLERS
@@ -223,6 +229,25 @@ def test_feel_finds_the_thickness_tilt_and_the_plug_upright_goes_in():
     assert {"feel.rock", "feel.rock_back", "feel.turn"} <= rules
 
 
+def test_feel_publishes_its_estimate_and_the_tip_offset_it_implies():
+    world = touch_world(**TILTED)
+    machine = rocking(world)
+    run(world, machine)
+    (estimate,) = machine.in_hand_estimates
+    tilt = machine.tilt_x_estimate_rad
+    assert tilt is not None
+    assert (estimate.plane, estimate.method, estimate.kept) == ("thickness", "rock", True)
+    assert estimate.tilt_rad == tilt
+    # the tip turned by the tilt about T x: the plug's length times its sine, along T y
+    length = world.plug.length_m
+    assert estimate.tip_offset_m == pytest.approx(length * math.sin(tilt), rel=1e-12)
+    assert machine.tip_y_estimate_m == estimate.tip_offset_m
+    assert machine.tip_y_estimate_m == pytest.approx(length * math.sin(0.07), abs=length * 0.01)
+    # made in FEEL, when its rock back ended (before the turn)
+    touched, felt = (t.t_s for t in machine.transitions if t.reason in ("touched", "felt"))
+    assert touched < estimate.t_s < felt
+
+
 def test_without_feel_the_tilted_plug_is_never_caught():
     world = touch_world(**TILTED)
     machine = rocking(world, rock=None)
@@ -237,6 +262,9 @@ def test_without_a_step_in_the_torque_feel_keeps_the_plug_as_it_was():
     run(world, machine)
     assert reasons(machine)[2:4] == ["touched", "no_flat_face"]
     assert machine.tilt_x_estimate_rad is None and machine.tilt_x_rad == 0.0
+    # the two pairs of legs' angles are published, neither kept; no tip offset recorded
+    assert [e.kept for e in machine.in_hand_estimates] == [False, False]
+    assert machine.tip_y_estimate_m is None
 
 
 def test_the_flat_angle_is_the_two_sweeps_steps_mean_and_needs_both():
@@ -249,6 +277,11 @@ def test_the_flat_angle_is_the_two_sweeps_steps_mean_and_needs_both():
     far = [(a - 0.1, t) for a, t in down]
     assert flat_angle([up, far], ROCK) is None  # the sweeps disagree
     assert sweep_step(up[:5], 3) is None  # too few frames
+    # the candidate, kept or not: the same mean, the checks' verdict beside it
+    assert flat_candidate([up, down], ROCK) == (flat_angle([up, down], ROCK), True)
+    assert flat_candidate([up, far], ROCK) == pytest.approx((0.04 - 0.05, False))
+    assert flat_candidate([up, flat], ROCK)[1] is False
+    assert flat_candidate([up, down[:5]], ROCK) is None
 
 
 def test_a_flat_angle_the_other_side_of_upright_is_found_on_a_third_leg():
@@ -258,6 +291,9 @@ def test_a_flat_angle_the_other_side_of_upright_is_found_on_a_third_leg():
     assert "felt" in reasons(machine) and "bottomed" in reasons(machine)
     assert machine.tilt_x_estimate_rad == pytest.approx(-0.07, abs=0.01)
     assert "feel.rock_again" in {c.rule for c in world.commands}
+    # the first two legs' angle published but not kept, then the kept one
+    assert [e.kept for e in machine.in_hand_estimates] == [False, True]
+    assert machine.in_hand_estimates[-1].tilt_rad == machine.tilt_x_estimate_rad
 
 
 def test_feel_waits_for_its_pass():

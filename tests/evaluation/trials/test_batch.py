@@ -34,7 +34,8 @@ FORCE_LIMIT_N = 20.0
 
 def fake_trial(spec: TrialSpec) -> TrialResult:
     """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed;
-    ``align`` estimates the plug in the hand (its FEEL) 0.001 rad and 0.1 mm off per seed."""
+    ``align`` estimates the plug in the hand (its FEEL, the width plane) 0.001 rad and 0.1 mm
+    off per seed, ``dipole`` the thickness plane (-0.001 rad, -0.1 mm; none on seed 2)."""
     if spec.seed == 5:
         raise RuntimeError("boom\nsecond line")
     success = spec.seed % 4 != 3
@@ -56,7 +57,7 @@ def fake_trial(spec: TrialSpec) -> TrialResult:
         max_wrist_force_n=10.0 + spec.seed,
         force_limit_n=FORCE_LIMIT_N,
         wall_time_s=0.25,
-        **(_fake_pose(spec.seed) if spec.controller == "align" else {}),
+        **_FAKE_POSES.get(spec.controller, lambda seed: {})(spec.seed),
     )
 
 
@@ -69,6 +70,21 @@ def _fake_pose(seed: int) -> dict[str, float]:
         "grasp_tilt_thickness_true_rad": 0.01,
         "tip_y_true_m": 0.0,
     }
+
+
+def _fake_thickness_pose(seed: int) -> dict[str, float]:
+    """The press spiral's estimate: the thickness plane only, none on seed 2."""
+    return {
+        "grasp_tilt_thickness_est_rad": math.nan if seed == 2 else 0.01 - 0.001 * seed,
+        "grasp_tilt_thickness_true_rad": 0.01,
+        "tip_y_est_m": math.nan if seed == 2 else -1e-4 * seed,
+        "tip_y_true_m": 0.0,
+        "grasp_tilt_true_rad": 0.02,
+        "tip_x_true_m": 0.0,
+    }
+
+
+_FAKE_POSES = {"align": _fake_pose, "dipole": _fake_thickness_pose}
 
 
 def slow_trial(spec: TrialSpec) -> TrialResult:
@@ -617,12 +633,26 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     assert "machine.insert.speed_m_s=0.01\n" in targets and "=0.02\n" in targets
     assert "| `zero_torque` falls short of `dipole` | – | not run |" in targets
     assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
-    # the in-hand estimate: a table row and a histogram per align cell, none for the others
+    # the in-hand estimate: table rows and a histogram per align and dipole cell (each scored
+    # in its own plane, the other plane not estimated), none for the others
     assert sorted(p.name for p in out.glob("grasp_errors_*.png")) == [
-        "grasp_errors_align_0.01.png", "grasp_errors_align_0.02.png"
+        "grasp_errors_align_0.01.png", "grasp_errors_align_0.02.png",
+        "grasp_errors_dipole_0.01.png", "grasp_errors_dipole_0.02.png",
     ]
-    assert table.count("| align | 0.01 | 5/6 |") == 1  # the raising seed 5 has none
-    assert "| dipole | 0.01 | 5/6 |" not in table
+    # the raising seed 5 has no estimate; dipole's seed 2 none either
+    width, thickness = "tilt about T y (width plane), deg", "tilt about T x (thickness plane), deg"
+    assert table.count(f"| align | 0.01 | {width} | 5/6 |") == 1
+    assert table.count("| align | 0.01 | tip offset along T x, mm | 5/6 |") == 1
+    assert table.count(f"| align | 0.01 | {thickness} | not estimated |") == 1
+    assert table.count(f"| dipole | 0.01 | {thickness} | 4/6 |") == 1
+    assert table.count("| dipole | 0.01 | tip offset along T y, mm | 4/6 |") == 1
+    assert table.count(f"| dipole | 0.01 | {width} | not estimated |") == 1
+    assert "| blind |" not in table.split("The plug in the hand")[1]
+    dipole = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
+    errors = dipole["grasp_estimate"]["errors"]
+    assert set(errors) == {"thickness_tilt_deg", "tip_y_mm"}
+    assert errors["tip_y_mm"] == {"n": 4, "median": pytest.approx(0.2), "p95": pytest.approx(
+        0.385), "max": pytest.approx(0.4)}  # seeds 0, 1, 3, 4: 0, 0.1, 0.3, 0.4 mm
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6

@@ -8,6 +8,7 @@ import pytest
 
 from controller.run.result import TrialResult
 from drivers.sim.scenes.insertion.draws import GraspPose
+from evaluation.trials.grasp_scores import chart_errors, quantity, signed_errors, table_cells
 from evaluation.trials.grasp_truth import grasp_truth
 from evaluation.trials.summary import summarize
 
@@ -62,12 +63,67 @@ def test_the_summary_scores_the_estimates_in_degrees_and_millimetres():
     ]
     block = summarize(results)["grasp_estimate"]
     assert (block["estimated"], block["of"]) == (2, 3)
-    assert block["tilt_error_deg"]["median"] == pytest.approx(math.degrees(0.015))
-    assert block["tilt_error_deg"]["max"] == pytest.approx(math.degrees(0.02))
-    assert block["tip_x_error_mm"]["median"] == pytest.approx(0.4)
-    assert block["thickness_tilt_deg_not_estimated"]["median"] == pytest.approx(
+    assert set(block["errors"]) == {"width_tilt_deg", "tip_x_mm"}
+    tilt = block["errors"]["width_tilt_deg"]
+    assert tilt["n"] == 2 and tilt["median"] == pytest.approx(math.degrees(0.015))
+    assert tilt["max"] == pytest.approx(math.degrees(0.02))
+    assert block["errors"]["tip_x_mm"]["median"] == pytest.approx(0.4)
+    # the thickness plane is not estimated here: its true size, for scale
+    assert set(block["not_estimated"]) == {"thickness_tilt_deg", "tip_y_mm"}
+    assert block["not_estimated"]["thickness_tilt_deg"]["median"] == pytest.approx(
         math.degrees(0.01)
     )
+    assert block["not_estimated"]["tip_y_mm"]["n"] == 3
+
+
+def _with_thickness(seed: int, est: float, true: float, tip_est: float, tip_true: float):
+    base = TrialResult("usb_c", "dipole", seed, True, "inserted", None, 9.0, 12.0, 1.0, 20.0, 5.0)
+    return dataclasses.replace(
+        base,
+        grasp_tilt_true_rad=0.02,
+        grasp_tilt_thickness_est_rad=est,
+        grasp_tilt_thickness_true_rad=true,
+        tip_y_est_m=tip_est,
+        tip_y_true_m=tip_true,
+        tip_x_true_m=-0.0003,
+    )
+
+
+def test_the_thickness_plane_is_scored_where_it_is_estimated_and_errors_are_signed():
+    results = [
+        _with_thickness(0, 0.03, 0.02, 0.0006, 0.0004),  # +0.573 deg, +0.2 mm
+        _with_thickness(1, 0.00, 0.04, 0.0, 0.0008),  # -2.29 deg, -0.8 mm
+        _with_thickness(2, math.nan, 0.05, math.nan, 0.001),  # FEEL did not run
+        _with_thickness(3, 0.01, 0.01, math.nan, 0.0),  # an older table: no tip estimate
+    ]
+    block = summarize(results)["grasp_estimate"]
+    assert (block["estimated"], block["of"]) == (3, 4)
+    assert set(block["errors"]) == {"thickness_tilt_deg", "tip_y_mm"}
+    tilt = block["errors"]["thickness_tilt_deg"]
+    assert tilt["n"] == 3 and tilt["max"] == pytest.approx(math.degrees(0.04))
+    assert tilt["median"] == pytest.approx(math.degrees(0.01))
+    assert block["errors"]["tip_y_mm"]["n"] == 2
+    assert block["errors"]["tip_y_mm"]["max"] == pytest.approx(0.8)
+    assert set(block["not_estimated"]) == {"width_tilt_deg", "tip_x_mm"}
+    assert block["not_estimated"]["tip_x_mm"]["median"] == pytest.approx(0.3)
+    signed = signed_errors(results, quantity("thickness_tilt_deg"))
+    assert signed == pytest.approx([math.degrees(0.01), -math.degrees(0.04), 0.0])
+    assert chart_errors(results)["tip offset along T y, mm"] == pytest.approx([0.2, -0.8])
+    rows = table_cells(block)
+    assert rows[0][:2] == ["tilt about T x (thickness plane), deg", "3/4"]
+    assert rows[1][:2] == ["tip offset along T y, mm", "2/4"]
+    assert rows[2][:2] == ["tilt about T y (width plane), deg", "not estimated"]
+    assert rows[2][2] == f"({math.degrees(0.02):.2f})"
+
+
+def test_both_planes_are_scored_when_both_are_estimated():
+    both = dataclasses.replace(
+        _with_thickness(0, 0.01, 0.0, 0.0002, 0.0),
+        grasp_tilt_est_rad=0.03, tip_x_est_m=0.0001, tip_x_true_m=0.0,
+    )  # fmt: skip
+    block = summarize([both])["grasp_estimate"]
+    assert list(block["errors"]) == ["thickness_tilt_deg", "tip_y_mm", "width_tilt_deg", "tip_x_mm"]
+    assert block["not_estimated"] == {} and block["estimated"] == 1
 
 
 def test_a_controller_without_an_estimate_has_no_block():

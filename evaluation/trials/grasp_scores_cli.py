@@ -1,0 +1,218 @@
+"""FEEL's in-hand estimate scored on finished batches (``python -m evaluation grasp_scores``).
+
+    python -m evaluation grasp_scores DIR [DIR ...] --out OUT_DIR
+
+Each DIR is a batch folder (``tactile trials --out``: its ``trials.csv``; ``batch.json``, if
+there, names the seeds); no trial runs. The scores are evaluation/trials/grasp_scores.py's,
+as a batch's ``summary.json`` and ``tactile compare`` give them: for each quantity some
+trial estimates (the tilt about T x and the tip's offset along T y, the press spiral's; the
+tilt about T y and the tip along T x, the ``align`` machine's), the absolute error's median,
+95th percentile and largest over the trials with an estimate of it; a quantity no trial
+estimates is "not estimated" (its true size, for scale). OUT_DIR gets:
+
+* ``grasp_scores.md``: the table, one row per batch and quantity, and the charts;
+* ``grasp_errors_<DIR's name>.png``: per batch with an estimate, a histogram of the signed
+  error (estimate - truth) of each quantity it estimates;
+* ``grasp_scores.json``: each batch's block (the summary's ``grasp_estimate``; null without
+  an estimate).
+
+A ``trials.csv`` written before a pose column existed reads it as unknown. One from before
+``tip_y_est_m`` gets it from the thickness-plane tilt as the machine computes it
+(``controller.insertion.grasp_estimate.thickness_tip_offset_m``, the plug's length from the
+batch's task and overrides), and the table says so. The inputs are only read. Bad input (a
+DIR without a ``trials.csv``, a table of another kind, an output inside an input): one line,
+exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import dataclasses
+import json
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from controller.cli.outputs import check_output_folder, write_text
+from controller.cli.support import ToolError, one_line, run_tool
+from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.run.result import TrialResult
+from controller.run.task import load_task
+from core.subcommands import job_prog
+from evaluation.trials.batch import CSV_NAME, PLAN_NAME
+from evaluation.trials.charts import grasp_error_chart
+from evaluation.trials.grasp_scores import (
+    TABLE_HEADER,
+    chart_errors,
+    grasp_estimate_summary,
+    table_cells,
+)
+
+PROG = "grasp_scores"
+TABLE = "grasp_scores.md"
+BLOCKS = "grasp_scores.json"
+DERIVED = "tip_y_est_m"  # the column an older table lacks and this tool derives
+_POSE = {f.name for f in dataclasses.fields(TrialResult) if f.name.startswith(("grasp_", "tip_"))}
+_NEEDED = tuple(f.name for f in dataclasses.fields(TrialResult) if f.name not in _POSE)
+
+
+@dataclass(frozen=True)
+class Scored:
+    """One batch: its folder, ``name`` (the folder's), ``title`` (task, controller, seeds),
+    its results and whether ``tip_y_est_m`` was derived (an older table)."""
+
+    folder: Path
+    name: str
+    title: str
+    results: list[TrialResult]
+    derived_length_m: float | None
+
+
+def read_results(folder: Path) -> tuple[list[TrialResult], set[str]]:
+    """The results of ``folder``'s ``trials.csv`` and its columns; ToolError naming the file
+    if it is missing, not a trials table, or has a bad row."""
+    path = folder / CSV_NAME
+    if not path.is_file():
+        raise ToolError(f"'{folder}' holds no {CSV_NAME}; expected a batch's folder")
+    try:
+        with path.open(newline="") as handle:
+            reader = csv.DictReader(handle)
+            columns = set(reader.fieldnames or ())
+            missing = [c for c in _NEEDED if c not in columns]
+            if missing:
+                raise ToolError(f"'{path}': not a trials.csv (no column {', '.join(missing)})")
+            rows = list(reader)
+    except (UnicodeDecodeError, csv.Error) as exc:
+        raise ToolError(f"'{path}': not a CSV file ({one_line(exc)})") from None
+    results = []
+    for number, row in enumerate(rows, start=1):
+        try:
+            results.append(TrialResult.from_row(row))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ToolError(f"'{path}': row {number} is bad ({one_line(exc)})") from None
+    if not results:
+        raise ToolError(f"'{path}': no finished trial in it")
+    return results, columns
+
+
+def _plan(folder: Path) -> dict[str, Any]:
+    try:
+        plan = json.loads((folder / PLAN_NAME).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return {}
+    return plan if isinstance(plan, dict) else {}
+
+
+def _with_tip_y(results: list[TrialResult], task: str, overrides: list[str]) -> tuple[
+    list[TrialResult], float
+]:
+    """``results`` with ``tip_y_est_m`` from the thickness-plane tilt (where estimated) for a
+    plug of the task's length; the length."""
+    length = load_task(task, tuple(overrides), with_calibration=False).config.plug.length_m
+    derived = [
+        dataclasses.replace(r, tip_y_est_m=thickness_tip_offset_m(t, length))
+        if math.isfinite(t := r.grasp_tilt_thickness_est_rad)
+        else r
+        for r in results
+    ]
+    return derived, length
+
+
+def score(folder: Path) -> Scored:
+    """``folder``'s batch read (ToolError if it cannot be)."""
+    if not folder.is_dir():
+        raise ToolError(f"'{folder}' is not a folder; expected a batch's folder")
+    results, columns = read_results(folder)
+    plan = _plan(folder)
+    tasks = {r.task for r in results}
+    task = plan.get("task") if isinstance(plan.get("task"), str) else min(tasks)
+    controllers = ", ".join(sorted({r.controller for r in results}))
+    seeds = plan.get("seeds") or f"{min(r.seed for r in results)}..{max(r.seed for r in results)}"
+    length = None
+    if DERIVED not in columns:
+        overrides = [str(o) for o in plan.get("overrides", ()) or ()]
+        results, length = _with_tip_y(results, str(task), overrides)
+    title = f"{', '.join(sorted(tasks))}, {controllers}, seeds {seeds}"
+    return Scored(folder, folder.resolve().name, title, results, length)
+
+
+def chart_name(batch: Scored) -> str:
+    return f"grasp_errors_{batch.name}.png"
+
+
+def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
+    """The table of every batch's scores, the notes and the charts."""
+    lines = [
+        "## The plug in the hand by touch (FEEL) against the scene's truth",
+        "",
+        "Absolute errors of each quantity estimated (trials with an estimate of it, of all); a "
+        "quantity not estimated gives its true size in parentheses, for scale. The histograms "
+        "show the signed errors (estimate - truth).",
+        "",
+        "| batch | " + " | ".join(TABLE_HEADER) + " |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
+    notes, charts = [], []
+    for batch, block in zip(batches, blocks, strict=True):
+        label = f"{batch.title} (`{batch.name}`)"
+        if block is None:
+            lines.append(f"| {label} | every quantity | no estimate of {len(batch.results)} | "
+                         "– | – | – |")  # fmt: skip
+            continue
+        lines += [f"| {label} | " + " | ".join(row) + " |" for row in table_cells(block)]
+        charts += [f"![in-hand estimate errors, {batch.name}]({chart_name(batch)})", ""]
+        if batch.derived_length_m is not None and "tip_y_mm" in block["errors"]:
+            notes.append(
+                f"- `{batch.name}`: its trials.csv has no `{DERIVED}` (written before it "
+                "existed); the tip's offset along T y is derived from "
+                "`grasp_tilt_thickness_est_rad` as the machine computes it, L sin(tilt) with "
+                f"L = {1e3 * batch.derived_length_m:g} mm (the task's plug length)."
+            )
+    return "\n".join([*lines, "", *notes, *([""] if notes else []), *charts]).rstrip() + "\n"
+
+
+def write(batches: list[Scored], out: Path) -> list[dict[str, Any] | None]:
+    """The table, the charts and the blocks of ``batches`` into ``out``; the blocks."""
+    blocks = [grasp_estimate_summary(b.results) for b in batches]
+    out.mkdir(parents=True, exist_ok=True)
+    for batch, block in zip(batches, blocks, strict=True):
+        if block is not None:
+            grasp_error_chart(
+                chart_errors(batch.results),
+                out / chart_name(batch),
+                f"the plug in the hand by touch: {batch.title}",
+                len(batch.results),
+            )
+    every = {b.name: {"folder": str(b.folder), "grasp_estimate": blk}
+             for b, blk in zip(batches, blocks, strict=True)}  # fmt: skip
+    write_text(out / BLOCKS, json.dumps(every, indent=2) + "\n")
+    write_text(out / TABLE, markdown(batches, blocks))
+    return blocks
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog=job_prog(PROG), description=__doc__.splitlines()[0])
+    parser.add_argument("dirs", type=Path, nargs="+", metavar="DIR",
+                        help="a batch folder (its trials.csv)")  # fmt: skip
+    parser.add_argument("--out", type=Path, required=True,
+                        help="the folder for the table, the charts and the blocks")  # fmt: skip
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+
+    def body() -> int:
+        check_output_folder(args.out, args.dirs, "--out")
+        batches = [score(folder) for folder in args.dirs]
+        names = [b.name for b in batches]
+        if len(set(names)) != len(names):
+            twice = sorted({n for n in names if names.count(n) > 1})
+            raise ToolError(f"two batch folders are named {', '.join(twice)}; rename one")
+        write(batches, args.out)
+        print((args.out / TABLE).read_text(), end="")
+        return 0
+
+    return run_tool(PROG, body)

@@ -1,0 +1,46 @@
+"""``/machine/grasp_estimate``: the machine's in-hand estimates (FEEL's) in the episode, as
+the machine made them, read back by ``episode_streams.grasp_estimates``, and absent from a
+run whose machine made none."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from controller.episode import read_episode
+from controller.episode.session import EPISODE_FILE
+from controller.episode.topics import GRASP_ESTIMATE, JSON_SCHEMAS
+from controller.replay.episode_streams import grasp_estimates, transitions
+
+
+def test_feels_estimates_round_trip_with_the_trials_record(felt_trial):
+    episode = read_episode(felt_trial / EPISODE_FILE)
+    result = json.loads((felt_trial / "trial.json").read_text())["result"]
+    estimates = grasp_estimates(episode)
+    assert estimates and episode.counts[GRASP_ESTIMATE.name] == len(estimates)
+    assert {(e.plane, e.method) for e in estimates} == {("thickness", "rock")}
+    # the last is the kept one: the trial's tilt estimate and the tip offset it implies
+    kept = [e for e in estimates if e.kept]
+    assert kept == estimates[-1:]
+    assert kept[0].tilt_rad == result["grasp_tilt_thickness_est_rad"]
+    assert kept[0].tip_offset_m == result["tip_y_est_m"]
+    # made in FEEL: between the touch and the felt transition
+    changes = {t.reason: t.t_s for t in transitions(episode)}
+    assert all(changes["touched"] < e.t_s < changes["felt"] for e in estimates)
+    # the messages as written: the schema's fields, nothing null, valid against the schema
+    schema = JSON_SCHEMAS[GRASP_ESTIMATE.schema]
+    types = {"number": (int, float), "string": (str,), "boolean": (bool,)}
+    for message in episode.messages(GRASP_ESTIMATE.name):
+        assert set(message.value) == set(schema["properties"])
+        for name, value in message.value.items():
+            field = schema["properties"][name]
+            assert isinstance(value, types[field["type"]]), (name, value)
+            assert value in field.get("enum", [value])
+        assert message.t_s == pytest.approx(message.value["t_s"], abs=1e-9)  # log time: ns
+
+
+def test_a_run_without_an_estimate_has_none(recorded_trial):
+    episode = read_episode(recorded_trial / EPISODE_FILE)
+    assert GRASP_ESTIMATE.name not in episode.counts  # the first pass caught: FEEL never ran
+    assert grasp_estimates(episode) == []
