@@ -94,7 +94,7 @@ class TrialResult:
         values: dict[str, Any] = {}
         for f in fields(cls):
             name = f.name
-            if name not in row and name in _POSE_FIELDS:  # a table from before they existed
+            if name not in row and name in POSE_FIELDS:  # a table from before they existed
                 continue
             text = row[name]
             if name == "failure_reason":
@@ -114,7 +114,7 @@ class TrialResult:
 
 _TEXT_FIELDS = ("task", "controller", "status")
 _INT_FIELDS = ("seed", "insertion_force_violations")
-_POSE_FIELDS = (
+POSE_FIELDS = (
     "grasp_tilt_est_rad",
     "grasp_tilt_true_rad",
     "grasp_tilt_thickness_true_rad",

@@ -46,7 +46,7 @@ from tqdm import tqdm
 
 from controller.cli.outputs import atomic_file, check_output_folder, write_text
 from controller.cli.support import Terminated, ToolError, one_line
-from controller.run.result import TrialResult
+from controller.run.result import POSE_FIELDS, TrialResult
 from evaluation.trials.executors import Executor
 from evaluation.trials.records import (
     RECORDS,
@@ -156,11 +156,13 @@ def _plan(batch: Batch) -> dict[str, Any]:
     return _json_safe({**decided, "requested": len(batch.specs)})
 
 
-def _rows(path: Path) -> list[dict[str, str]]:
+def _rows(path: Path, older: bool = False) -> list[dict[str, str]]:
     """The complete rows of a ``trials.csv`` (none when it is missing or empty: a batch
     stopped before its first row). Every row is written whole with its line end, so a last
     line without one, or a last row short of fields, is the row of a kill in mid-write and
-    is dropped; a short row elsewhere is a damaged file (ToolError)."""
+    is dropped; a short row elsewhere is a damaged file (ToolError). Its columns must be
+    this version's; with ``older``, a table from before some of the record's pose columns
+    existed (``POSE_FIELDS``: they read as unknown) is taken too."""
     if not path.is_file():
         return []
     with open(path, newline="") as handle:
@@ -168,7 +170,8 @@ def _rows(path: Path) -> list[dict[str, str]]:
     if not text:
         return []
     reader = csv.DictReader(io.StringIO(text[: text.rfind("\n") + 1]))
-    if tuple(reader.fieldnames or ()) != CSV_COLUMNS:
+    columns = tuple(reader.fieldnames or ())
+    if columns != CSV_COLUMNS and not (older and _older_columns(columns)):
         raise ToolError(f"'{path}': not a trials.csv of this version (its columns differ)")
     rows = list(reader)
     whole = [None not in row and None not in row.values() for row in rows]
@@ -178,6 +181,28 @@ def _rows(path: Path) -> list[dict[str, str]]:
     if not all(whole):
         raise ToolError(f"'{path}': row {whole.index(False) + 1} is damaged (fields missing)")
     return rows
+
+
+def _older_columns(columns: tuple[str, ...]) -> bool:
+    """``columns`` are this version's in its order, less some of ``POSE_FIELDS``."""
+    kept = tuple(c for c in CSV_COLUMNS if c in columns)
+    return kept == columns and set(CSV_COLUMNS) - set(columns) <= set(POSE_FIELDS)
+
+
+def read_table(path: Path) -> list[TrialResult]:
+    """The results of the finished rows of the ``trials.csv`` at ``path``, this version's or
+    older (``_rows``); ToolError naming the file if it is not one or has a bad row."""
+    try:
+        rows = _rows(path, older=True)
+    except UnicodeDecodeError:
+        raise ToolError(f"'{path}': not UTF-8 text; expected a trials.csv") from None
+    results = []
+    for number, row in enumerate(rows, start=1):
+        try:
+            results.append(TrialResult.from_row(row))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ToolError(f"'{path}': row {number} is bad ({one_line(exc)})") from None
+    return results
 
 
 def read_batch(folder: Path) -> tuple[dict[str, Any], list[TrialResult]]:
@@ -193,18 +218,7 @@ def read_batch(folder: Path) -> tuple[dict[str, Any], list[TrialResult]]:
         raise ToolError(f"'{plan_path}': not a batch plan ({one_line(exc)})") from None
     if not isinstance(plan, dict) or not isinstance(plan.get("task"), str):
         raise ToolError(f"'{plan_path}': not a batch plan (no task named)")
-    csv_path = folder / CSV_NAME
-    try:
-        rows = _rows(csv_path)
-    except UnicodeDecodeError:
-        raise ToolError(f"'{csv_path}': not UTF-8 text; expected a trials.csv") from None
-    results = []
-    for number, row in enumerate(rows, start=1):
-        try:
-            results.append(TrialResult.from_row(row))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ToolError(f"'{csv_path}': row {number} is bad ({one_line(exc)})") from None
-    return plan, results
+    return plan, read_table(folder / CSV_NAME)
 
 
 def _finished(batch: Batch) -> list[tuple[TrialResult, TrialSpec]]:

@@ -36,12 +36,12 @@ from pathlib import Path
 from typing import Any
 
 from controller.cli.outputs import check_output_folder, write_text
-from controller.cli.support import ToolError, one_line, run_tool
+from controller.cli.support import ToolError, run_tool
 from controller.insertion.grasp_estimate import thickness_tip_offset_m
 from controller.run.result import TrialResult
 from controller.run.task import load_task
 from core.subcommands import job_prog
-from evaluation.trials.batch import CSV_NAME, PLAN_NAME
+from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_table
 from evaluation.trials.charts import grasp_error_chart
 from evaluation.trials.grasp_scores import (
     TABLE_HEADER,
@@ -54,8 +54,6 @@ PROG = "grasp_scores"
 TABLE = "grasp_scores.md"
 BLOCKS = "grasp_scores.json"
 DERIVED = "tip_y_est_m"  # the column an older table lacks and this tool derives
-_POSE = {f.name for f in dataclasses.fields(TrialResult) if f.name.startswith(("grasp_", "tip_"))}
-_NEEDED = tuple(f.name for f in dataclasses.fields(TrialResult) if f.name not in _POSE)
 
 
 @dataclass(frozen=True)
@@ -70,31 +68,19 @@ class Scored:
     derived_length_m: float | None
 
 
-def read_results(folder: Path) -> tuple[list[TrialResult], set[str]]:
-    """The results of ``folder``'s ``trials.csv`` and its columns; ToolError naming the file
-    if it is missing, not a trials table, or has a bad row."""
+def read_results(folder: Path) -> tuple[list[TrialResult], bool]:
+    """The results of ``folder``'s ``trials.csv`` (``evaluation.trials.batch.read_table``)
+    and whether it has the ``tip_y_est_m`` column; ToolError naming the file if it is
+    missing, not a trials table, or has a bad row or none."""
     path = folder / CSV_NAME
     if not path.is_file():
         raise ToolError(f"'{folder}' holds no {CSV_NAME}; expected a batch's folder")
-    try:
-        with path.open(newline="") as handle:
-            reader = csv.DictReader(handle)
-            columns = set(reader.fieldnames or ())
-            missing = [c for c in _NEEDED if c not in columns]
-            if missing:
-                raise ToolError(f"'{path}': not a trials.csv (no column {', '.join(missing)})")
-            rows = list(reader)
-    except (UnicodeDecodeError, csv.Error) as exc:
-        raise ToolError(f"'{path}': not a CSV file ({one_line(exc)})") from None
-    results = []
-    for number, row in enumerate(rows, start=1):
-        try:
-            results.append(TrialResult.from_row(row))
-        except (KeyError, TypeError, ValueError) as exc:
-            raise ToolError(f"'{path}': row {number} is bad ({one_line(exc)})") from None
+    results = read_table(path)
     if not results:
         raise ToolError(f"'{path}': no finished trial in it")
-    return results, columns
+    with path.open(newline="") as handle:
+        has_tip_y = DERIVED in next(csv.reader(handle), [])
+    return results, has_tip_y
 
 
 def _plan(folder: Path) -> dict[str, Any]:
@@ -124,14 +110,14 @@ def score(folder: Path) -> Scored:
     """``folder``'s batch read (ToolError if it cannot be)."""
     if not folder.is_dir():
         raise ToolError(f"'{folder}' is not a folder; expected a batch's folder")
-    results, columns = read_results(folder)
+    results, has_tip_y = read_results(folder)
     plan = _plan(folder)
     tasks = {r.task for r in results}
     task = plan.get("task") if isinstance(plan.get("task"), str) else min(tasks)
     controllers = ", ".join(sorted({r.controller for r in results}))
     seeds = plan.get("seeds") or f"{min(r.seed for r in results)}..{max(r.seed for r in results)}"
     length = None
-    if DERIVED not in columns:
+    if not has_tip_y:
         overrides = [str(o) for o in plan.get("overrides", ()) or ()]
         results, length = _with_tip_y(results, str(task), overrides)
     title = f"{', '.join(sorted(tasks))}, {controllers}, seeds {seeds}"

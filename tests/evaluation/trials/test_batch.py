@@ -18,7 +18,14 @@ from controller.cli.support import ToolError
 from controller.episode import read_episode
 from controller.run.result import TrialResult
 from core.config import CONFIG_ROOT, ConfigError
-from evaluation.trials.batch import CSV_COLUMNS, CSV_NAME, SUMMARY_NAME, Batch, run_batches
+from evaluation.trials.batch import (
+    CSV_COLUMNS,
+    CSV_NAME,
+    SUMMARY_NAME,
+    Batch,
+    read_batch,
+    run_batches,
+)
 from evaluation.trials.batch_cli import TRIAL_FUNCTION
 from evaluation.trials.batch_cli import main as batch_main
 from evaluation.trials.charts import inserted_within, speed_success_chart, success_time_chart
@@ -767,3 +774,27 @@ def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
     assert "interrupted by SIGTERM after 1 of 3 trials" in err
     summary = json.loads((out / SUMMARY_NAME).read_text())
     assert summary["complete"] is False and summary["n"] == 1 and summary["requested"] == 3
+
+
+def test_a_table_from_before_a_pose_column_is_read_but_not_resumed(tmp_path, capsys):
+    out = tmp_path / "batch"
+    args = ["--task", "usb_c", "--seeds", "0:3", "--controller", "blind", "--out", str(out)]
+    assert batch_main([*args, "--trial-function", FAKE]) == 0
+    rows = _read_csv(out / CSV_NAME)
+    older = [c for c in CSV_COLUMNS if c != "tip_y_est_m"]
+    with open(out / CSV_NAME, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=older, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    plan, results = read_batch(out)
+    assert [r.seed for r in results] == [0, 1, 2]
+    assert all(math.isnan(r.tip_y_est_m) for r in results)
+    assert batch_main([*args, "--trial-function", FAKE, "--resume"]) == 2
+    assert "its columns differ" in capsys.readouterr().err
+    shuffled = [older[1], older[0], *older[2:]]  # not this version's order: not a table of it
+    with open(out / CSV_NAME, "w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=shuffled, extrasaction="ignore")
+        writer.writeheader()
+        writer.writerows(rows)
+    with pytest.raises(ToolError, match="its columns differ"):
+        read_batch(out)

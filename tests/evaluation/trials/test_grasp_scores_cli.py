@@ -95,7 +95,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     (tmp_path / "other").mkdir()
     (tmp_path / "other" / "trials.csv").write_text("a,b\n1,2\n")
     assert main([str(tmp_path / "other"), "--out", str(tmp_path / "o")]) == 2
-    assert "not a trials.csv (no column task" in capsys.readouterr().err
+    assert "not a trials.csv of this version" in capsys.readouterr().err
     assert main([str(batch), "--out", str(batch / "scores")]) == 2  # never inside an input
     err = capsys.readouterr().err
     assert err.startswith("grasp_scores: error:") and err.count("\n") == 1
