@@ -17,10 +17,14 @@ estimate is the mean of two legs' in opposite directions (the signals' lag shift
 equally the two ways), kept when both steps reach ``min_step_nm`` and the two angles agree
 within ``agree_rad``. The machine then holds the
 TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
-its thickness plane, and SEARCH goes on with the press settled anew (``felt``; without an
-estimate, ``no_flat_face``, upright as before). Each pair of legs' flat angle, kept or not,
-is published with the tip's offset along T y it implies (``SpiralMachine.in_hand_estimates``,
-``grasp_estimate.thickness_tip_offset_m``); the kept one gives ``tip_y_estimate_m``.
+its thickness plane, and from FEEL's end takes the tip where the estimate puts it
+(``SpiralMachine.tip_t``: straight below the TCP once the plug is upright, not along T z), so
+that SEARCH's pattern is centred on the tip itself; SEARCH goes on with the press settled anew
+(``felt``: the TCP's first move, pressed, takes the tip to the pattern's point; without an
+estimate, ``no_flat_face``, upright and the nominal grasp as before). Each pair of legs' flat
+angle, kept or not, is published with the tip's offset along T y it implies
+(``SpiralMachine.in_hand_estimates``, ``grasp_estimate.thickness_tip_offset_m``); the kept one
+gives ``tip_y_estimate_m``.
 """
 
 from __future__ import annotations

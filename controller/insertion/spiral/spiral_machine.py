@@ -50,7 +50,7 @@ from controller.insertion.interface import (
     Phase,
     Transition,
 )
-from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error, tip_position
+from controller.insertion.motion import bounded_twist, pivot_twist, rotation_error
 from controller.insertion.phases.overrides import EstopStage, TeleopStage, TerminalStage
 from controller.insertion.search_path import SearchPattern
 from controller.insertion.spiral import (
@@ -222,6 +222,9 @@ class SpiralMachine:
         self.rock = rock if rock is not None and rock.enabled else None
         self.tilt_x_rad = 0.0  # the TCP's commanded turn about T x from upright (FEEL), rad
         self.tilt_x_estimate_rad: float | None = None  # FEEL's flat angle, rad
+        # the plug's tilt in the hand about T x (its tip toward +T y) that the tip's place
+        # is taken at: FEEL's estimate once FEEL is over, the nominal grasp's 0 before, rad
+        self.grasp_tilt_x_rad = 0.0
         self.felt = False  # FEEL has run
         self.reading = reading if reading is not None else ArmForce(config.force_window)
         self.memory = SearchMemory()
@@ -269,8 +272,8 @@ class SpiralMachine:
     def tip_y_estimate_m(self) -> float | None:
         """The tip's offset from the nominal along T y (m) implied by FEEL's tilt estimate
         about T x (``tilt_x_estimate_rad``; ``grasp_estimate.thickness_tip_offset_m``), None
-        without one. It is recorded (the trial's ``tip_y_est_m``), not acted on: no command
-        uses it."""
+        without one: the trial's ``tip_y_est_m``. The machine places the tip by the same estimate
+        from FEEL's end (``tip_t``)."""
         if self.tilt_x_estimate_rad is None:
             return None
         return thickness_tip_offset_m(self.tilt_x_estimate_rad, self.plug.length_m)
@@ -344,8 +347,10 @@ class SpiralMachine:
         if self._decided is None:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
-        if self._phase is Phase.FEEL and target is not Phase.SEARCH:  # cut short: no rock
-            self.tilt_x_rad = self.tilt_x_estimate_rad or 0.0
+        if self._phase is Phase.FEEL:  # the tip's place, by the estimate from here on
+            self.grasp_tilt_x_rad = self.tilt_x_estimate_rad or 0.0
+            if target is not Phase.SEARCH:  # cut short: no rock
+                self.tilt_x_rad = self.grasp_tilt_x_rad
         self._phase, self._state = target, _ENTER[target](obs)
         self.released = self.released or target is Phase.RELEASE
 
@@ -423,8 +428,22 @@ class SpiralMachine:
         present point, the plug upright at the pass's yaw."""
         return float(self._tcp_target(self.tip_target(self.memory.s_m, 0.0))[2])
 
+    def tip_t(self) -> np.ndarray:
+        """The plug's tip in T (m): ``length_m`` along the plug's axis, T z turned about T x by
+        the grasp's tilt (``grasp_tilt_x_rad``: its tip toward +T y), T z for the nominal
+        grasp. Every place the machine puts or reads the tip takes it from here."""
+        axis = Rotation.from_euler("x", -self.grasp_tilt_x_rad).apply([0.0, 0.0, 1.0])
+        return self.plug.length_m * axis
+
+    def tip_b(self, obs: Observation) -> np.ndarray:
+        """The plug's tip in B (m) with the TCP at ``obs``'s pose."""
+        rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        return np.asarray(obs.arm.tcp.xyz_m, dtype=float) + rotation.apply(self.tip_t())
+
     def _tcp_target(self, tip: np.ndarray) -> np.ndarray:
-        return tip - self._upright().apply([0.0, 0.0, self.plug.length_m])
+        """The TCP's place (B, m) that puts the tip at ``tip``, the TCP at the pass's
+        orientation (``_upright``) and the tip where ``tip_t`` has it."""
+        return tip - self._upright().apply(self.tip_t())
 
     def reach(self, obs: Observation, tip: np.ndarray) -> bool:
         """The TCP is within ``pose_tol_m`` of where it puts the tip at ``tip`` (B, m)."""
@@ -472,8 +491,8 @@ class SpiralMachine:
         return self._command(obs, v)
 
     def tip_xy(self, obs: Observation) -> np.ndarray:
-        """The plug's tip's x, y in B (m), for the nominal grasp."""
-        return tip_position(obs.arm.tcp, self.plug.length_m)[:2]
+        """The plug's tip's x, y in B (m) (``tip_b``)."""
+        return self.tip_b(obs)[:2]
 
     def servoed_push(
         self, obs: Observation, speed_m_s: float, tip_xy: np.ndarray, torque_t: np.ndarray
@@ -484,7 +503,7 @@ class SpiralMachine:
         cfg = self.config
         rotation = rotation_from_rpy(obs.arm.tcp.rpy_rad)
         p_tcp = np.asarray(obs.arm.tcp.xyz_m, dtype=float)
-        p_tip = tip_position(obs.arm.tcp, self.plug.length_m)
+        p_tip = self.tip_b(obs)
         v_tip = np.zeros(3)
         v_tip[:2] = cfg.pose_gain_1_s * (tip_xy - p_tip[:2])
         v_tip[2] = -speed_m_s

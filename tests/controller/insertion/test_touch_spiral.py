@@ -8,11 +8,14 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from controller.insertion.force_reading import ArmForce, TactileAxialForce
 from controller.insertion.interface import Observation, Phase
 from controller.insertion.machine_config import GripperSettings
+from controller.insertion.motion import tip_position
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
 from controller.insertion.spiral.spiral_feel import (
     RockSettings,
@@ -304,3 +307,34 @@ def test_feel_waits_for_its_pass():
     first_sweep = next(i for i, c in enumerate(world.commands) if c.rule == "search.sweep")
     assert first_sweep < first_feel
     assert "felt" in reasons(machine) and "bottomed" in reasons(machine)
+
+
+def test_the_tip_is_taken_along_the_plug_turned_by_the_grasps_tilt():
+    world = touch_world(thickness_tilt_rad=0.07)
+    machine = rocking(world)
+    world.rotation = world.rotation * Rotation.from_euler("xz", [0.05, 0.3])  # any pose
+    obs = world.observe()
+    nominal = machine.tip_b(obs)  # before FEEL: the tip along T z
+    assert nominal == pytest.approx(tip_position(obs.arm.tcp, world.plug.length_m))
+    machine.grasp_tilt_x_rad = world.thickness_tilt_rad  # FEEL's estimate, exact
+    assert machine.tip_b(obs) == pytest.approx(world.tip, abs=1e-9)
+    assert machine.tip_xy(obs) == pytest.approx(world.tip[:2], abs=1e-9)
+    shift = world.plug.length_m * math.sin(0.07)
+    assert np.linalg.norm(nominal - world.tip) == pytest.approx(shift, rel=0.05)
+
+
+def test_after_feel_the_pattern_is_centred_on_the_tip_itself():
+    world = touch_world(**TILTED)
+    machine = rocking(world)
+    world.run_until(machine, Phase.FEEL)
+    assert machine.grasp_tilt_x_rad == 0.0  # the rock turns about the nominal tip
+    world.run_until(machine, Phase.SEARCH)
+    estimate_rad = machine.tilt_x_estimate_rad
+    assert estimate_rad is not None and machine.grasp_tilt_x_rad == estimate_rad
+    for _ in range(30):  # the TCP's move to the tip's own place, pressed
+        world.step(machine)
+    shift_m = world.plug.length_m * math.sin(world.thickness_tilt_rad)  # the nominal's miss
+    while machine.phase is Phase.SEARCH:
+        target = machine.tip_target(machine.memory.s_m, 0.0)[:2]
+        assert np.linalg.norm(world.tip[:2] - target) < 0.3 * shift_m
+        world.step(machine)
