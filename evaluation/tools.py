@@ -61,6 +61,8 @@ GROUPS = (
                 "the true gel torques during the search against the wrist's stiffness"),
             Job("sensor_levels", "evaluation.scene.sensor_levels",
                 "the insertion scene's camera effects against the real captures"),
+            Job("success_chart", "evaluation.trials.success_chart_cli",
+                "success against time to insert, charted from batch folders"),
             Job("where_time_goes", "evaluation.trials.where_time_goes",
                 "where trials spend their time, rule by rule"),
         ),
