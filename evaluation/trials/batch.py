@@ -205,6 +205,18 @@ def read_table(path: Path) -> list[TrialResult]:
     return results
 
 
+def read_trials(folder: Path) -> list[TrialResult]:
+    """The finished trials of the batch folder ``folder`` (its ``trials.csv``, this version's
+    or older: ``read_table``); ToolError naming it if it has no table or no finished trial."""
+    path = folder / CSV_NAME
+    if not path.is_file():
+        raise ToolError(f"'{folder}' holds no {CSV_NAME}; expected a batch's folder")
+    results = read_table(path)
+    if not results:
+        raise ToolError(f"'{path}': no finished trial in it")
+    return results
+
+
 def read_batch(folder: Path) -> tuple[dict[str, Any], list[TrialResult]]:
     """A batch folder's plan (``batch.json``) and the results of its finished rows, for the
     tools that read a batch after it ran; ToolError naming the file if either is missing or

@@ -41,7 +41,7 @@ from controller.insertion.grasp_estimate import thickness_tip_offset_m
 from controller.run.result import TrialResult
 from controller.run.task import load_task
 from core.subcommands import job_prog
-from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_table
+from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_trials
 from evaluation.trials.charts import grasp_error_chart
 from evaluation.trials.grasp_scores import (
     TABLE_HEADER,
@@ -72,13 +72,8 @@ def read_results(folder: Path) -> tuple[list[TrialResult], bool]:
     """The results of ``folder``'s ``trials.csv`` (``evaluation.trials.batch.read_table``)
     and whether it has the ``tip_y_est_m`` column; ToolError naming the file if it is
     missing, not a trials table, or has a bad row or none."""
-    path = folder / CSV_NAME
-    if not path.is_file():
-        raise ToolError(f"'{folder}' holds no {CSV_NAME}; expected a batch's folder")
-    results = read_table(path)
-    if not results:
-        raise ToolError(f"'{path}': no finished trial in it")
-    with path.open(newline="") as handle:
+    results = read_trials(folder)
+    with (folder / CSV_NAME).open(newline="") as handle:
         has_tip_y = DERIVED in next(csv.reader(handle), [])
     return results, has_tip_y
 

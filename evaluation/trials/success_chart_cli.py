@@ -5,7 +5,7 @@
         [--seeds A:B] [--title TEXT]
 
 Each DIR is a batch folder (``tactile trials --out``: its ``trials.csv``, read as
-``evaluation.trials.batch.read_table`` reads it); LABEL names its curve (default: the
+``evaluation.trials.batch.read_trials`` reads it); LABEL names its curve (default: the
 batch's controller). ``--seeds A:B`` keeps the trials of those seeds, and each batch must
 hold every one of them, so the curves compare the same seeds; without it, every batch must
 hold the same seeds. The chart is ``evaluation.trials.charts.success_time_chart``: for each
@@ -24,7 +24,7 @@ from controller.cli.outputs import check_output_file
 from controller.cli.support import ToolError, run_tool
 from controller.run.result import TrialResult
 from core.subcommands import job_prog
-from evaluation.trials.batch import CSV_NAME, read_table
+from evaluation.trials.batch import CSV_NAME, read_trials
 from evaluation.trials.batch_cli import seeds_type
 from evaluation.trials.charts import success_time_chart
 from evaluation.trials.spec import format_seeds
@@ -49,17 +49,12 @@ def curve_argument(text: str) -> tuple[Path, str | None]:
 def read_curve(folder: Path, label: str | None, seeds: range | None) -> Curve:
     """``folder``'s batch as a curve of ``seeds`` (all its trials without); ToolError naming
     the folder if it holds no table or lacks a seed."""
-    path = folder / CSV_NAME
-    if not path.is_file():
-        raise ToolError(f"'{folder}' holds no {CSV_NAME}; expected a batch's folder")
-    results = read_table(path)
-    if not results:
-        raise ToolError(f"'{path}': no finished trial in it")
+    results = read_trials(folder)
     if seeds is not None:
         results = [r for r in results if r.seed in seeds]
         missing = sorted(set(seeds) - {r.seed for r in results})
         if missing:
-            raise ToolError(f"'{path}': no trial of seed {missing[0]} (--seeds "
+            raise ToolError(f"'{folder / CSV_NAME}': no trial of seed {missing[0]} (--seeds "
                             f"{format_seeds(seeds)}: every batch needs every seed)")  # fmt: skip
     name = label or ", ".join(sorted({r.controller for r in results}))
     return Curve(name, results)
