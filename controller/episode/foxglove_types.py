@@ -4,6 +4,7 @@ function runs on the episode writer's thread."""
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
@@ -88,18 +89,31 @@ def image_bytes(
 
 def grid_bytes(capture_t_s: float, field: VectorField, offset_ns: int = 0) -> bytes:
     """A ``foxglove.Grid`` of ``field`` (u, v in mm and the divergence) in frame S: cells of
-    the field's spacing (m), the corner at the first cell's outer corner."""
+    the field's spacing (m), the corner at the first cell's outer corner.
+
+    Encoded in three parts, which protobuf reads as one message: the timestamp (the first
+    field), the grid's layout (``grid_layout``: the same for every frame of a run) and the
+    cells (the last field); the same bytes as the whole ``Grid`` encoded at once."""
     dx_mm, dy_mm = field.spacing_mm
-    cells = np.stack([field.u_mm, field.v_mm, field.divergence()], axis=-1).astype("<f4")
-    cols = field.shape[1]
-    corner = Vector3(
-        x=(float(field.x_mm[0]) - dx_mm / 2) * 1e-3,
-        y=(float(field.y_mm[0]) - dy_mm / 2) * 1e-3,
-        z=0.0,
-    )
+    rows, cols = field.shape
+    cells = np.empty((rows, cols, len(GRID_FIELDS)), "<f4")
+    cells[..., 0] = field.u_mm
+    cells[..., 1] = field.v_mm
+    cells[..., 2] = field.divergence()
+    layout = grid_layout(cols, float(field.x_mm[0]), float(field.y_mm[0]), dx_mm, dy_mm)
+    stamp = Grid(timestamp=timestamp(capture_t_s, offset_ns)).encode()
+    return stamp + layout + Grid(data=cells.tobytes()).encode()
+
+
+@functools.lru_cache(maxsize=8)
+def grid_layout(cols: int, x0_mm: float, y0_mm: float, dx_mm: float, dy_mm: float) -> bytes:
+    """The encoded ``foxglove.Grid`` fields that depend on the grid only: frame S, the pose
+    of the corner (the first cell, centre ``x0_mm``, ``y0_mm``, less half a cell), ``cols``
+    columns of ``dx_mm`` x ``dy_mm`` cells (m in the message) and the cells' float32
+    fields (``GRID_FIELDS``)."""
+    corner = Vector3(x=(x0_mm - dx_mm / 2) * 1e-3, y=(y0_mm - dy_mm / 2) * 1e-3, z=0.0)
     float32 = PackedElementFieldNumericType.Float32
     return Grid(
-        timestamp=timestamp(capture_t_s, offset_ns),
         frame_id="S",
         pose=Pose(position=corner, orientation=Quaternion(x=0.0, y=0.0, z=0.0, w=1.0)),
         column_count=cols,
@@ -110,7 +124,6 @@ def grid_bytes(capture_t_s: float, field: VectorField, offset_ns: int = 0) -> by
             PackedElementField(name=name, offset=4 * i, type=float32)
             for i, name in enumerate(GRID_FIELDS)
         ],
-        data=cells.tobytes(),
     ).encode()
 
 
