@@ -64,6 +64,7 @@ class RockSettings(Config):
     window: int = number(1, 20, default=3)
     min_step_nm: float = number(0.0, 0.1, default=0.0008)
     agree_rad: float = number(0.001, 0.2, default=0.03)
+    site_m: float = number(0.0, 0.05, default=0.0)
 
 
 class FeelStage(Enum):
@@ -73,6 +74,10 @@ class FeelStage(Enum):
     ROCK_BACK = "rock_back"  # toward -rock_max_rad
     ROCK_AGAIN = "rock_again"  # toward +rock_max_rad again, when the first leg had no step
     TURN = "turn"  # to the estimate (or upright) at ``rotate_speed_rad_s``, the press held
+    LIFT = "lift"  # at the site (``site_m``): up to the hover before SEARCH goes on
+
+
+_LEGS = (FeelStage.ROCK, FeelStage.ROCK_BACK, FeelStage.ROCK_AGAIN)  # each a sweep
 
 
 @dataclass
@@ -98,7 +103,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     force = m.tared_force(obs)
     angle = m.rock_angle_rad(obs)
     state.angles.append((obs.t_s, angle))
-    if state.stage is not FeelStage.TURN:
+    if state.stage in _LEGS:
         _take_frame(m, obs, state)
     if state.stage is FeelStage.ROCK:
         m.fire("rock")
@@ -124,14 +129,29 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             m.tilt_x_estimate_rad = _estimate(m, obs, state.sweeps[1:], settings)
             state.stage = FeelStage.TURN
         return m.pressed(obs, force)
+    if state.stage is FeelStage.LIFT:
+        m.fire("lift")
+        hover = m.tip_target(m.memory.s_m, m.config.hover_m)
+        if m.reach(obs, hover):
+            return _back_to_search(m, obs, SearchStage.TURN)  # to the pass's start
+        return m.servo(obs, hover)
     m.fire("turn")
     target = m.tilt_x_estimate_rad if m.tilt_x_estimate_rad is not None else 0.0
     if _ramp(m, target, m.config.rotate_speed_rad_s) and m.turned(obs):
         m.memory.press_z_m = None  # the press settles anew at the new tilt
-        m.go(obs, Phase.SEARCH, "felt" if m.tilt_x_estimate_rad is not None else "no_flat_face")
-        m.state(SearchState).stage = SearchStage.SWEEP
-        return m.pressed(obs, force)
+        if settings.site_m > 0.0:
+            state.stage = FeelStage.LIFT
+            return m.hold()
+        _back_to_search(m, obs, SearchStage.SWEEP)
     return m.pressed(obs, force)
+
+
+def _back_to_search(m: SpiralMachine, obs: Observation, stage: SearchStage) -> Command:
+    """FEEL over: SEARCH goes on at ``stage`` (``felt``, or ``no_flat_face`` without an
+    estimate)."""
+    m.go(obs, Phase.SEARCH, "felt" if m.tilt_x_estimate_rad is not None else "no_flat_face")
+    m.state(SearchState).stage = stage
+    return m.hold()
 
 
 def _ramp(m: SpiralMachine, target_rad: float, speed_rad_s: float) -> bool:
@@ -149,8 +169,7 @@ def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState) -> None:
     if obs.wrench is None or torque_t is None or obs.wrench.t_s <= state.frame_t_s:
         return
     state.frame_t_s = obs.wrench.t_s
-    sweep = {FeelStage.ROCK: 0, FeelStage.ROCK_BACK: 1, FeelStage.ROCK_AGAIN: 2}[state.stage]
-    state.sweeps[sweep].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
+    state.sweeps[_LEGS.index(state.stage)].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
 
 
 def angle_at(angles: Iterable[tuple[float, float]], t_s: float) -> float:

@@ -415,11 +415,26 @@ class SpiralMachine:
         relative = self._untilted().inv() * rotation_from_rpy(obs.arm.tcp.rpy_rad)
         return float(relative.as_rotvec()[0])
 
+    @property
+    def at_feel_site(self) -> bool:
+        """The tip goes to FEEL's site (``rock.site_m``) instead of the pattern: FEEL is due at
+        this pass's touch and has not begun, or is running."""
+        rock = self.rock
+        if rock is None or rock.site_m <= 0.0:
+            return False
+        if self._phase is Phase.FEEL:
+            return True
+        return not self.felt and self.memory.pass_index >= rock.at_pass
+
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
-        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board."""
+        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board; at FEEL's
+        site (``at_feel_site``) ``rock.site_m`` from the nominal opening along its y instead."""
         u, v = self._pattern.offset(s_m)
         turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
+        if self.at_feel_site:
+            assert self.rock is not None
+            u, v, turn = 0.0, self.rock.site_m, self.hole.yaw_rad
         planar = Rotation.from_euler("z", turn).apply([u, v, 0.0])
         return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
 
