@@ -21,7 +21,12 @@ its thickness plane, and from FEEL's end takes the tip where the estimate puts i
 (``SpiralMachine.tip_t``: straight below the TCP once the plug is upright, not along T z), so
 that SEARCH's pattern is centred on the tip itself; SEARCH goes on with the press settled anew
 (``felt``: the TCP's first move, pressed, takes the tip to the pattern's point; without an
-estimate, ``no_flat_face``, upright and the nominal grasp as before). Each pair of legs' flat
+estimate, ``no_flat_face``, upright and the nominal grasp as before). With ``site_m``, the
+touch and the rock are that far from the nominal opening along its y, where the whole face
+stands on the board (at the pattern's start the face may lie across the opening's rim,
+and the rim's edges make steps of their own), and FEEL ends with a **lift** to the hover
+there; SEARCH then goes to its pass's start and touches again. The face lies flat on the
+board, so the angle is the plug's tilt from the board's normal: the receptacle's axis. Each pair of legs' flat
 angle, kept or not, is published with the tip's offset along T y it implies
 (``SpiralMachine.in_hand_estimates``, ``grasp_estimate.thickness_tip_offset_m``); the kept one
 gives ``tip_y_estimate_m``.

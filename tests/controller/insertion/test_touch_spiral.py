@@ -338,3 +338,27 @@ def test_after_feel_the_pattern_is_centred_on_the_tip_itself():
         target = machine.tip_target(machine.memory.s_m, 0.0)[:2]
         assert np.linalg.norm(world.tip[:2] - target) < 0.3 * shift_m
         world.step(machine)
+
+
+def test_feel_at_its_site_rocks_on_the_board_clear_of_the_opening_then_searches():
+    world = touch_world(**TILTED)
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01))
+    opening = np.append(world.hole_xy, world.hole.z_m)
+    world.run_until(machine, Phase.FEEL)
+    site = machine.tip_target(0.0, 0.0)  # FEEL's site: 10 mm along the opening's y
+    assert site[:2] - [world.hole.x_m, world.hole.y_m] == pytest.approx([0.0, 0.01])
+    tips = []
+    while machine.phase is Phase.FEEL:
+        world.step(machine)
+        tips.append(world.tip.copy())
+    pressed = [tip for tip in tips if tip[2] <= world.hole.z_m + 0.0005]
+    assert pressed and all(np.linalg.norm(tip[:2] - opening[:2]) > 0.008 for tip in pressed)
+    assert all(np.linalg.norm(tip[:2] - site[:2]) < 0.001 for tip in pressed)
+    # FEEL ends in the air above its site; SEARCH starts its pass again from its start
+    assert tips[-1][2] >= world.hole.z_m + 0.5 * SPIRAL.hover_m
+    assert not machine.at_feel_site
+    run(world, machine)
+    assert reasons(machine)[2:5] == ["touched", "felt", "caught"]
+    assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
+    assert "feel.lift" in {c.rule for c in world.commands}
+    assert "bottomed" in reasons(machine)
