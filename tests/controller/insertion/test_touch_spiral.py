@@ -264,7 +264,7 @@ def test_without_a_step_in_the_torque_feel_keeps_the_plug_as_it_was():
     machine = rocking(world)
     run(world, machine)
     assert reasons(machine)[2:4] == ["touched", "no_flat_face"]
-    assert machine.tilt_x_estimate_rad is None and machine.tilt_x_rad == 0.0
+    assert machine.tilt_x_estimate_rad is None and machine.tcp_turn_rad == [0.0, 0.0]
     # the two pairs of legs' angles are published, neither kept; no tip offset recorded
     assert [e.kept for e in machine.in_hand_estimates] == [False, False]
     assert machine.tip_y_estimate_m is None
@@ -316,7 +316,7 @@ def test_the_tip_is_taken_along_the_plug_turned_by_the_grasps_tilt():
     obs = world.observe()
     nominal = machine.tip_b(obs)  # before FEEL: the tip along T z
     assert nominal == pytest.approx(tip_position(obs.arm.tcp, world.plug.length_m))
-    machine.grasp_tilt_x_rad = world.thickness_tilt_rad  # FEEL's estimate, exact
+    machine.grasp_turn_rad[0] = world.thickness_tilt_rad  # FEEL's estimate, exact
     assert machine.tip_b(obs) == pytest.approx(world.tip, abs=1e-9)
     assert machine.tip_xy(obs) == pytest.approx(world.tip[:2], abs=1e-9)
     shift = world.plug.length_m * math.sin(0.07)
@@ -327,10 +327,10 @@ def test_after_feel_the_pattern_is_centred_on_the_tip_itself():
     world = touch_world(**TILTED)
     machine = rocking(world)
     world.run_until(machine, Phase.FEEL)
-    assert machine.grasp_tilt_x_rad == 0.0  # the rock turns about the nominal tip
+    assert machine.grasp_turn_rad == [0.0, 0.0]  # the rock turns about the nominal tip
     world.run_until(machine, Phase.SEARCH)
     estimate_rad = machine.tilt_x_estimate_rad
-    assert estimate_rad is not None and machine.grasp_tilt_x_rad == estimate_rad
+    assert estimate_rad is not None and machine.grasp_turn_rad[0] == estimate_rad
     for _ in range(30):  # the TCP's move to the tip's own place, pressed
         world.step(machine)
     shift_m = world.plug.length_m * math.sin(world.thickness_tilt_rad)  # the nominal's miss
