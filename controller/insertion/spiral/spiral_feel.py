@@ -1,6 +1,7 @@
 """FEEL of the press-spiral machine on touch: the plug's tilt in the hand about T x (its
-thickness plane), found by rocking it on the board at the touch of SEARCH's pass
-``at_pass`` (0: the first; later, a plug that goes in at the first pass loses no time).
+thickness plane) and, with ``width``, about T y (its width plane), found by rocking it on the
+board at the touch of SEARCH's pass ``at_pass`` (0: the first; later, a plug that goes in at
+the first pass loses no time).
 
 Why: a plug turned in the fingers about its width axis meets a slot barely wider than it
 (USB-C: 2.6 mm for 2.4 mm) at that tilt, and no spiral position lets it in; turned upright
@@ -15,10 +16,18 @@ angle at the frame's capture time. The flat angle of a leg is where the torque's
 mean of ``window`` frames after less the mean of ``window`` before) is largest; the
 estimate is the mean of two legs' in opposite directions (the signals' lag shifts them
 equally the two ways), kept when both steps reach ``min_step_nm`` and the two angles agree
-within ``agree_rad``. The machine then holds the
-TCP turned by it for the rest of the run (``SpiralMachine.tcp_turn_rad``), the plug upright in
-its thickness plane, and from FEEL's end takes the tip where the estimate puts it
-(``SpiralMachine.tip_t``: straight below the TCP once the plug is upright, not along T z), so
+within ``agree_rad``; the TCP then **turn**s by it. With ``width``, the same three legs
+about T y follow (**width_rock**, ...: the face's short edges, the torque about T y, which is
+the gel's in-plane torque), the plug already upright in its thickness plane, and the TCP
+turns back upright about T y (**width_turn**). That estimate places the tip only: the tilt
+in the width plane moves the tip along T x by up to 1.7 mm (5 degrees, 20 mm), which added to
+the opening's offset put it beyond the spiral's reach; the plug is not turned upright in
+that plane, where the wrist's compliance sets it in the opening (an 8 mm lever; turned by
+the estimate, 7 of 35 tuning seeds that went in no longer did, docs/BENCHMARKS.md).
+
+The machine then holds the TCP turned by the thickness plane's estimate for the rest of
+the run (``SpiralMachine.tcp_turn_rad``), and from FEEL's end takes the tip where the
+estimates put it (``SpiralMachine.tip_t``: straight below the TCP once the plug is upright), so
 that SEARCH's pattern is centred on the tip itself; SEARCH goes on with the press settled anew
 (``felt``: the TCP's first move, pressed, takes the tip to the pattern's point; without an
 estimate, ``no_flat_face``, upright and the nominal grasp as before). With ``site_m``, the
@@ -26,10 +35,11 @@ touch and the rock are that far from the nominal opening along its y, where the 
 stands on the board (at the pattern's start the face may lie across the opening's rim,
 and the rim's edges make steps of their own), and FEEL ends with a **lift** to the hover
 there; SEARCH then goes to its pass's start and touches again. The face lies flat on the
-board, so the angle is the plug's tilt from the board's normal: the receptacle's axis. Each pair of legs' flat
-angle, kept or not, is published with the tip's offset along T y it implies
-(``SpiralMachine.in_hand_estimates``, ``grasp_estimate.thickness_tip_offset_m``); the kept one
-gives ``tip_y_estimate_m``.
+board, so the angle is the plug's tilt from the board's normal: the receptacle's axis. Each
+pair of legs' flat angle, kept or not, is published with the tip's offset it implies, the
+plug's length times the sine of the tilt (``SpiralMachine.in_hand_estimates``); the kept
+ones give the trial's ``tip_y_est_m`` and ``tip_x_est_m``. The rock does not see the plug's
+offset across its width in the grasp (up to 1 mm in the scene).
 """
 
 from __future__ import annotations
@@ -44,7 +54,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from controller.insertion.grasp_estimate import thickness_tip_offset_m
-from controller.insertion.interface import Command, InHandEstimate, Observation, Phase
+from controller.insertion.interface import Command, GraspPlane, InHandEstimate, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from controller.insertion.spiral.spiral_search import SearchStage, SearchState
 from core.config import Config, config_dataclass, number
@@ -98,7 +108,7 @@ class RockPlane:
     axis: int
     legs: tuple[FeelStage, FeelStage, FeelStage]
     turn: FeelStage
-    name: str
+    name: GraspPlane
 
 
 THICKNESS = RockPlane(
@@ -142,7 +152,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
         return m.servo(obs, hover)
     plane = _PLANE[state.stage]
     if state.stage is plane.turn:
-        target = m.rock_estimate(plane.axis)
+        target = m.rock_estimate(0) if plane is THICKNESS else None  # upright about T y
         if _ramp(m, plane.axis, 0.0 if target is None else target, m.config.rotate_speed_rad_s) \
                 and m.turned(obs):  # fmt: skip
             if plane is THICKNESS and settings.width:

@@ -220,7 +220,8 @@ class SpiralMachine:
         self.config, self.plug, self.hole = config, plug, hole
         self.torque_servo = torque_servo
         self.rock = rock if rock is not None and rock.enabled else None
-        # the TCP's commanded turn about T x and T y from upright (FEEL), rad
+        # the TCP's commanded turn about T x and T y from upright (FEEL; about T y only
+        # while FEEL rocks), rad
         self.tcp_turn_rad = [0.0, 0.0]
         # FEEL's flat angles: the TCP's turns about T x and T y that set the plug upright, rad
         self.turn_estimate_rad: list[float | None] = [None, None]
@@ -379,8 +380,8 @@ class SpiralMachine:
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
         if self._phase is Phase.FEEL:  # the tip's place, by the estimate from here on
             self.grasp_turn_rad = [turn or 0.0 for turn in self.turn_estimate_rad]
-            if target is not Phase.SEARCH:  # cut short: no rock
-                self.tcp_turn_rad = list(self.grasp_turn_rad)
+            if target is not Phase.SEARCH:  # cut short: no rock; upright about T y
+                self.tcp_turn_rad = [self.grasp_turn_rad[0], 0.0]
         self._phase, self._state = target, _ENTER[target](obs)
         self.released = self.released or target is Phase.RELEASE
 

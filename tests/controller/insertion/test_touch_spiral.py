@@ -362,3 +362,40 @@ def test_feel_at_its_site_rocks_on_the_board_clear_of_the_opening_then_searches(
     assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
     assert "feel.lift" in {c.rule for c in world.commands}
     assert "bottomed" in reasons(machine)
+
+
+def test_feel_in_the_width_plane_finds_the_tilt_about_t_y_and_places_the_tip_by_both():
+    world = touch_world(grasp_tilt_rad=0.05, **TILTED)  # the tip toward +T x and +T y
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01, width=True))
+    world.run_until(machine, Phase.SEARCH, max_s=10.0)
+    world.run_until(machine, Phase.FEEL)
+    while machine.phase is Phase.FEEL:
+        world.step(machine)
+    # the TCP's flat turn about T y is -0.05: the first leg (toward +) misses it, the third finds it
+    assert [(e.plane, e.kept) for e in machine.in_hand_estimates] == [
+        ("thickness", True), ("width", False), ("width", True)
+    ]  # fmt: skip
+    assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
+    assert machine.grasp is not None and machine.grasp.tilt_rad == pytest.approx(0.05, abs=0.01)
+    width = machine.in_hand_estimates[-1]
+    assert width.tilt_rad == machine.grasp.tilt_rad
+    assert width.tip_offset_m == pytest.approx(world.plug.length_m * math.sin(width.tilt_rad))
+    # the tip placed by both tilts; the TCP turned upright in the thickness plane only
+    assert machine.tip_b(world.observe()) == pytest.approx(world.tip, abs=0.0003)
+    assert machine.tcp_turn_rad == [machine.tilt_x_estimate_rad, 0.0]
+    # the plug's axis from the TCP's untilted pose: upright about T x, still tilted about T y
+    axis = machine._untilted().inv().apply(world.rotation.apply(world._axis_t()))
+    assert axis == pytest.approx([math.sin(0.05), 0.0, math.cos(0.05)], abs=0.01)
+    rules = {c.rule for c in world.commands}
+    assert {"feel.width_rock", "feel.width_rock_back", "feel.width_rock_again"} <= rules
+    run(world, machine)
+    assert "bottomed" in reasons(machine)
+
+
+def test_without_the_width_rock_the_width_plane_is_not_estimated():
+    world = touch_world(grasp_tilt_rad=0.05, **TILTED)
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01))
+    run(world, machine)
+    assert machine.grasp is None and machine.tcp_turn_rad[1] == 0.0
+    assert [e.plane for e in machine.in_hand_estimates] == ["thickness"]
+    assert not {c.rule for c in world.commands} & {"feel.width_rock", "feel.width_turn"}
