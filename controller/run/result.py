@@ -43,7 +43,9 @@ class TrialResult:
     The plug's pose in the hand (controller/insertion/grasp_estimate.py; NaN where unknown):
     ``grasp_tilt_est_rad`` the machine's estimate of its tilt in the width plane (about T y)
     and ``grasp_tilt_true_rad`` the scene's; ``grasp_tilt_thickness_true_rad`` the true tilt
-    in the thickness plane (about T x), ``grasp_tilt_thickness_est_rad`` the press spiral's
+    in the thickness plane (about T x), ``thickness_tilt_to_receptacle_true_rad`` the same
+    from the receptacle's axis (the board's normal; the board tilts), which FEEL's flat angle
+    measures, ``grasp_tilt_thickness_est_rad`` the press spiral's
     estimate of it (its FEEL's flat angle; nan without one); ``tip_x_est_m`` the estimated tip's
     offset along T x from the nominal (the width-plane estimate's), ``tip_y_est_m`` along T y
     (the thickness-plane estimate's, ``SpiralMachine.tip_y_estimate_m``: the plug's length
@@ -72,6 +74,7 @@ class TrialResult:
     grasp_tilt_true_rad: float = float("nan")
     grasp_tilt_thickness_true_rad: float = float("nan")
     grasp_tilt_thickness_est_rad: float = float("nan")
+    thickness_tilt_to_receptacle_true_rad: float = float("nan")
     tip_x_est_m: float = float("nan")
     tip_x_true_m: float = float("nan")
     tip_y_est_m: float = float("nan")
@@ -119,6 +122,7 @@ POSE_FIELDS = (
     "grasp_tilt_true_rad",
     "grasp_tilt_thickness_true_rad",
     "grasp_tilt_thickness_est_rad",
+    "thickness_tilt_to_receptacle_true_rad",
     "tip_x_est_m",
     "tip_x_true_m",
     "tip_y_est_m",

@@ -2,11 +2,14 @@
 (``TrialResult``'s pose fields, evaluation/trials/grasp_truth.py): the summary's block, the
 errors charts.py histograms and the ``grasp_scores`` tool's table.
 
-Four quantities (``QUANTITIES``), each scored on the trials that have an estimate of it:
+Five quantities (``QUANTITIES``), each scored on the trials that have an estimate of it:
 
 * ``thickness_tilt_deg``: the tilt about T x (the thickness plane), where
   ``grasp_tilt_thickness_est_rad`` is finite (the press spiral's FEEL: ``dipole`` and the
   other controllers of its machine);
+* ``thickness_tilt_receptacle_deg``: the same estimate against the plug's tilt from the
+  receptacle's axis (``thickness_tilt_to_receptacle_true_rad``), which FEEL's flat face on the
+  board measures: the board's tilt (up to 1 degree) is not an error of the rock;
 * ``tip_y_mm``: the tip's offset along T y that tilt implies (``tip_y_est_m``);
 * ``width_tilt_deg``: the tilt about T y (the width plane), where ``grasp_tilt_est_rad`` is
   finite (the ``align`` machine's FEEL);
@@ -33,8 +36,8 @@ from controller.run.result import TrialResult
 class Quantity:
     """One scored quantity: ``key`` (the summary's), ``label`` (charts and tables), ``unit``,
     the ``TrialResult`` fields of its ``estimate`` and ``truth`` and the ``scale`` from theirs
-    (rad, m) to ``unit``; a trial counts where ``estimate`` and ``gate`` (the plane's tilt
-    estimate) are finite."""
+    (rad, m) to ``unit``; a trial counts where ``estimate``, ``gate`` (the plane's tilt
+    estimate) and ``truth`` are finite (a table from before a truth column has none)."""
 
     key: str
     label: str
@@ -49,6 +52,9 @@ QUANTITIES = (
     Quantity("thickness_tilt_deg", "tilt about T x (thickness plane)", "deg",
              "grasp_tilt_thickness_est_rad", "grasp_tilt_thickness_true_rad", math.degrees(1.0),
              "grasp_tilt_thickness_est_rad"),
+    Quantity("thickness_tilt_receptacle_deg", "tilt about T x from the receptacle's axis", "deg",
+             "grasp_tilt_thickness_est_rad", "thickness_tilt_to_receptacle_true_rad",
+             math.degrees(1.0), "grasp_tilt_thickness_est_rad"),
     Quantity("tip_y_mm", "tip offset along T y", "mm", "tip_y_est_m", "tip_y_true_m", 1e3,
              "grasp_tilt_thickness_est_rad"),
     Quantity("width_tilt_deg", "tilt about T y (width plane)", "deg", "grasp_tilt_est_rad",
@@ -71,7 +77,7 @@ def _finite(result: TrialResult, name: str) -> bool:
 
 
 def _estimated(results: Iterable[TrialResult], q: Quantity) -> list[TrialResult]:
-    return [r for r in results if _finite(r, q.gate) and _finite(r, q.estimate)]
+    return [r for r in results if all(_finite(r, f) for f in (q.gate, q.estimate, q.truth))]
 
 
 def signed_errors(results: Iterable[TrialResult], q: Quantity) -> list[float]:
@@ -105,7 +111,7 @@ def grasp_estimate_summary(results: Sequence[TrialResult]) -> dict[str, Any] | N
     in either plane) ``of`` all; ``errors``: for each estimated quantity (``QUANTITIES``'
     keys), the absolute error's ``n``, ``median``, ``p95`` and ``max`` (deg, mm); and
     ``not_estimated``: for each quantity no trial estimates, the same of its true size
-    (over the trials with a truth), for scale. None when no trial has an estimate (a
+    (over the trials with a truth; none without), for scale. None when no trial has an estimate (a
     controller without FEEL, or FEEL never ran)."""
     scored = estimated(results)
     if not scored:
@@ -114,8 +120,8 @@ def grasp_estimate_summary(results: Sequence[TrialResult]) -> dict[str, Any] | N
     with_estimate = [r for r in results if any(_finite(r, g) for g in gates)]
     not_estimated = {}
     for q in QUANTITIES:
-        if q not in scored:
-            truth = [q.scale * getattr(r, q.truth) for r in results if _finite(r, q.truth)]
+        truth = [q.scale * getattr(r, q.truth) for r in results if _finite(r, q.truth)]
+        if q not in scored and truth:
             not_estimated[q.key] = _stats(truth)
     return {
         "estimated": len(with_estimate),

@@ -6,6 +6,11 @@ the plug's axis along y_S toward the tip); the machine's tool frame T has S's x,
 T's x, z and -y (the task's ``signals.torque_axes``). In T the plug's axis p and its tip are
 p = M R_S y_S and tip = M (across, along, 0) + L p; the width-plane tilt (the one FEEL
 finds) is atan2(p_x, p_z), the thickness-plane tilt atan2(p_y, p_z).
+
+FEEL by rocking finds where the tip's face lies flat on the board, so it measures the plug's
+tilt from the board's normal, the receptacle's axis (the board tilts by up to a degree,
+``board_tilt_rad``): ``receptacle_tilt_thickness_rad`` is that axis's tilt in T's thickness
+plane with the tool upright at the hole's yaw (T x along H x, T y and T z along -H y and -H z).
 """
 
 from __future__ import annotations
@@ -14,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from drivers.sim.scenes.insertion.draws import GraspPose
 
@@ -41,3 +47,12 @@ def grasp_truth(grasp: GraspPose, length_m: float) -> GraspTruth:
         math.atan2(float(axis_t[1]), float(axis_t[2])),
         tip_t,
     )
+
+
+def receptacle_tilt_thickness_rad(board_tilt_rad: tuple[float, float]) -> float:
+    """The receptacle's axis (into the board, -the board's normal) in T's thickness plane
+    (about T x, rad, the sign of ``GraspTruth.tilt_thickness_rad``) for a board tilted by
+    ``board_tilt_rad`` about H's x and then its y (rad), the tool upright at the hole's yaw."""
+    into_h = Rotation.from_euler("xy", board_tilt_rad).apply([0.0, 0.0, -1.0])
+    into_t = np.array([into_h[0], -into_h[1], -into_h[2]])
+    return math.atan2(float(into_t[1]), float(into_t[2]))

@@ -201,10 +201,12 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     tilt and tip) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
     # imported here: the scene's draws belong to the simulator, which a real run never loads
     from drivers.sim.scenes.insertion.draws import draw_scene
-    from evaluation.trials.grasp_truth import grasp_truth
+    from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilt_thickness_rad
 
     length = task.config.plug.length_m
-    truth = grasp_truth(draw_scene(task.config.hole, task.scene, seed).grasp, length)
+    draw = draw_scene(task.config.hole, task.scene, seed)
+    truth = grasp_truth(draw.grasp, length)
+    receptacle = receptacle_tilt_thickness_rad(draw.board_tilt_rad)
     estimate = getattr(ran.machine, "grasp", None)
     tilt = estimate.tilt_rad if estimate is not None else math.nan
     thickness = getattr(ran.machine, "tilt_x_estimate_rad", None)
@@ -213,6 +215,7 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
         "grasp_tilt_est_rad": tilt,
         "grasp_tilt_true_rad": truth.tilt_width_rad,
         "grasp_tilt_thickness_true_rad": truth.tilt_thickness_rad,
+        "thickness_tilt_to_receptacle_true_rad": truth.tilt_thickness_rad - receptacle,
         "grasp_tilt_thickness_est_rad": math.nan if thickness is None else thickness,
         "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
         "tip_x_true_m": float(truth.tip_t_m[0]),

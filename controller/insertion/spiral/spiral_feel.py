@@ -1,6 +1,7 @@
 """FEEL of the press-spiral machine on touch: the plug's tilt in the hand about T x (its
-thickness plane), found by rocking it on the board at the touch of SEARCH's pass
-``at_pass`` (0: the first; later, a plug that goes in at the first pass loses no time).
+thickness plane) and, with ``width``, about T y (its width plane), found by rocking it on the
+board at the touch of SEARCH's pass ``at_pass`` (0: the first; later, a plug that goes in at
+the first pass loses no time).
 
 Why: a plug turned in the fingers about its width axis meets a slot barely wider than it
 (USB-C: 2.6 mm for 2.4 mm) at that tilt, and no spiral position lets it in; turned upright
@@ -15,16 +16,30 @@ angle at the frame's capture time. The flat angle of a leg is where the torque's
 mean of ``window`` frames after less the mean of ``window`` before) is largest; the
 estimate is the mean of two legs' in opposite directions (the signals' lag shifts them
 equally the two ways), kept when both steps reach ``min_step_nm`` and the two angles agree
-within ``agree_rad``. The machine then holds the
-TCP turned by it for the rest of the run (``SpiralMachine.tilt_x_rad``), the plug upright in
-its thickness plane, and from FEEL's end takes the tip where the estimate puts it
-(``SpiralMachine.tip_t``: straight below the TCP once the plug is upright, not along T z), so
+within ``agree_rad``; the TCP then **turn**s by it. With ``width``, the same three legs
+about T y follow (**width_rock**, ...: the face's short edges, the torque about T y, which is
+the gel's in-plane torque), the plug already upright in its thickness plane, and the TCP
+turns back upright about T y (**width_turn**). That estimate places the tip only: the tilt
+in the width plane moves the tip along T x by up to 1.7 mm (5 degrees, 20 mm), which added to
+the opening's offset put it beyond the spiral's reach; the plug is not turned upright in
+that plane, where the wrist's compliance sets it in the opening (an 8 mm lever; turned by
+the estimate, 7 of 35 tuning seeds that went in no longer did, docs/BENCHMARKS.md).
+
+The machine then holds the TCP turned by the thickness plane's estimate for the rest of
+the run (``SpiralMachine.tcp_turn_rad``), and from FEEL's end takes the tip where the
+estimates put it (``SpiralMachine.tip_t``: straight below the TCP once the plug is upright), so
 that SEARCH's pattern is centred on the tip itself; SEARCH goes on with the press settled anew
 (``felt``: the TCP's first move, pressed, takes the tip to the pattern's point; without an
-estimate, ``no_flat_face``, upright and the nominal grasp as before). Each pair of legs' flat
-angle, kept or not, is published with the tip's offset along T y it implies
-(``SpiralMachine.in_hand_estimates``, ``grasp_estimate.thickness_tip_offset_m``); the kept one
-gives ``tip_y_estimate_m``.
+estimate, ``no_flat_face``, upright and the nominal grasp as before). With ``site_m``, the
+touch and the rock are that far from the nominal opening along its y, where the whole face
+stands on the board (at the pattern's start the face may lie across the opening's rim,
+and the rim's edges make steps of their own), and FEEL ends with a **lift** to the hover
+there; SEARCH then goes to its pass's start and touches again. The face lies flat on the
+board, so the angle is the plug's tilt from the board's normal: the receptacle's axis. Each
+pair of legs' flat angle, kept or not, is published with the tip's offset it implies, the
+plug's length times the sine of the tilt (``SpiralMachine.in_hand_estimates``); the kept
+ones give the trial's ``tip_y_est_m`` and ``tip_x_est_m``. The rock does not see the plug's
+offset across its width in the grasp (up to 1 mm in the scene).
 """
 
 from __future__ import annotations
@@ -39,7 +54,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from controller.insertion.grasp_estimate import thickness_tip_offset_m
-from controller.insertion.interface import Command, InHandEstimate, Observation, Phase
+from controller.insertion.interface import Command, GraspPlane, InHandEstimate, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from controller.insertion.spiral.spiral_search import SearchStage, SearchState
 from core.config import Config, config_dataclass, number
@@ -55,7 +70,9 @@ class RockSettings(Config):
     ``rock_speed_rad_s``: the TCP's turn about T x; ``rock_max_rad``: as far each way from
     upright; ``window``: frames each side of a step; ``min_step_nm``: the smallest torque step
     (N*m) that counts as the face turning flat; ``agree_rad``: the two sweeps' flat angles
-    agree within this."""
+    agree within this; ``site_m``: FEEL's touch this far (m) from the nominal opening along
+    the opening's y, on the board clear of it (0: at the pass's own touch); ``width``: rock
+    about T y too, for the tilt in the width plane."""
 
     enabled: bool = False
     at_pass: int = number(0, 100, default=0)
@@ -64,6 +81,8 @@ class RockSettings(Config):
     window: int = number(1, 20, default=3)
     min_step_nm: float = number(0.0, 0.1, default=0.0008)
     agree_rad: float = number(0.001, 0.2, default=0.03)
+    site_m: float = number(0.0, 0.05, default=0.0)
+    width: bool = False
 
 
 class FeelStage(Enum):
@@ -73,17 +92,45 @@ class FeelStage(Enum):
     ROCK_BACK = "rock_back"  # toward -rock_max_rad
     ROCK_AGAIN = "rock_again"  # toward +rock_max_rad again, when the first leg had no step
     TURN = "turn"  # to the estimate (or upright) at ``rotate_speed_rad_s``, the press held
+    WIDTH_ROCK = "width_rock"  # with ``width``: the same about T y
+    WIDTH_ROCK_BACK = "width_rock_back"
+    WIDTH_ROCK_AGAIN = "width_rock_again"
+    WIDTH_TURN = "width_turn"
+    LIFT = "lift"  # at the site (``site_m``): up to the hover before SEARCH goes on
+
+
+@dataclass(frozen=True)
+class RockPlane:
+    """One plane FEEL rocks in: the TCP turned about T's ``axis`` (0: x, the thickness
+    plane; 1: y, the width plane), its three legs and its turn (sub-stages), and its name in
+    ``InHandEstimate.plane``."""
+
+    axis: int
+    legs: tuple[FeelStage, FeelStage, FeelStage]
+    turn: FeelStage
+    name: GraspPlane
+
+
+THICKNESS = RockPlane(
+    0, (FeelStage.ROCK, FeelStage.ROCK_BACK, FeelStage.ROCK_AGAIN), FeelStage.TURN, "thickness"
+)
+WIDTH = RockPlane(
+    1,
+    (FeelStage.WIDTH_ROCK, FeelStage.WIDTH_ROCK_BACK, FeelStage.WIDTH_ROCK_AGAIN),
+    FeelStage.WIDTH_TURN,
+    "width",
+)
+_PLANE = {stage: plane for plane in (THICKNESS, WIDTH) for stage in (*plane.legs, plane.turn)}
 
 
 @dataclass
 class FeelState(Staged[FeelStage]):
-    """FEEL so far: ``angles`` the TCP's rock angle (rad) at the last 100 ticks (time s,
-    angle);
-    ``sweeps`` each leg's (angle rad, torque about T x N*m) per new frame; ``frame_t_s``
-    the last frame's capture time taken."""
+    """FEEL so far: ``angles`` the TCP's rock angles about T x and T y (rad) at the last
+    100 ticks (time s, about x, about y); ``sweeps`` each leg's (angle rad, torque about the
+    plane's axis N*m) per new frame; ``frame_t_s`` the last frame's capture time taken."""
 
-    angles: deque[tuple[float, float]] = field(default_factory=lambda: deque(maxlen=100))
-    sweeps: list[list[tuple[float, float]]] = field(default_factory=lambda: [[], [], []])
+    angles: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=100))
+    sweeps: dict[FeelStage, list[tuple[float, float]]] = field(default_factory=dict)
     frame_t_s: float = -math.inf
 
 
@@ -96,61 +143,71 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     settings, state = m.rock, m.state(FeelState)
     assert settings is not None
     force = m.tared_force(obs)
-    angle = m.rock_angle_rad(obs)
-    state.angles.append((obs.t_s, angle))
-    if state.stage is not FeelStage.TURN:
-        _take_frame(m, obs, state)
-    if state.stage is FeelStage.ROCK:
-        m.fire("rock")
-        if _ramp(m, settings.rock_max_rad, settings.rock_speed_rad_s) and angle >= (
-            settings.rock_max_rad - m.config.turn_tol_rad
-        ):
-            state.stage = FeelStage.ROCK_BACK
+    state.angles.append((obs.t_s, m.rock_angle_rad(obs, 0), m.rock_angle_rad(obs, 1)))
+    m.fire(state.stage.value)
+    if state.stage is FeelStage.LIFT:
+        hover = m.tip_target(m.memory.s_m, m.config.hover_m)
+        if m.reach(obs, hover):
+            return _back_to_search(m, obs, SearchStage.TURN)  # to the pass's start
+        return m.servo(obs, hover)
+    plane = _PLANE[state.stage]
+    if state.stage is plane.turn:
+        target = m.rock_estimate(0) if plane is THICKNESS else None  # upright about T y
+        if _ramp(m, plane.axis, 0.0 if target is None else target, m.config.rotate_speed_rad_s) \
+                and m.turned(obs):  # fmt: skip
+            if plane is THICKNESS and settings.width:
+                state.stage = FeelStage.WIDTH_ROCK
+                return m.pressed(obs, force)
+            m.memory.press_z_m = None  # the press settles anew at the new tilt
+            if settings.site_m > 0.0:
+                state.stage = FeelStage.LIFT
+                return m.hold()
+            _back_to_search(m, obs, SearchStage.SWEEP)
         return m.pressed(obs, force)
-    if state.stage is FeelStage.ROCK_BACK:
-        m.fire("rock_back")
-        if _ramp(m, -settings.rock_max_rad, settings.rock_speed_rad_s) and angle <= (
-            -settings.rock_max_rad + m.config.turn_tol_rad
-        ):
-            m.tilt_x_estimate_rad = _estimate(m, obs, state.sweeps[:2], settings)
-            found = m.tilt_x_estimate_rad is not None
-            state.stage = FeelStage.TURN if found else FeelStage.ROCK_AGAIN
-        return m.pressed(obs, force)
-    if state.stage is FeelStage.ROCK_AGAIN:
-        m.fire("rock_again")
-        if _ramp(m, settings.rock_max_rad, settings.rock_speed_rad_s) and angle >= (
-            settings.rock_max_rad - m.config.turn_tol_rad
-        ):
-            m.tilt_x_estimate_rad = _estimate(m, obs, state.sweeps[1:], settings)
-            state.stage = FeelStage.TURN
-        return m.pressed(obs, force)
-    m.fire("turn")
-    target = m.tilt_x_estimate_rad if m.tilt_x_estimate_rad is not None else 0.0
-    if _ramp(m, target, m.config.rotate_speed_rad_s) and m.turned(obs):
-        m.memory.press_z_m = None  # the press settles anew at the new tilt
-        m.go(obs, Phase.SEARCH, "felt" if m.tilt_x_estimate_rad is not None else "no_flat_face")
-        m.state(SearchState).stage = SearchStage.SWEEP
-        return m.pressed(obs, force)
+    _take_frame(m, obs, state, plane)
+    leg = plane.legs.index(state.stage)
+    goal = -settings.rock_max_rad if leg == 1 else settings.rock_max_rad
+    angle = state.angles[-1][1 + plane.axis]
+    ramped = _ramp(m, plane.axis, goal, settings.rock_speed_rad_s)
+    if ramped and abs(angle - goal) <= m.config.turn_tol_rad:
+        if leg == 0:
+            state.stage = plane.legs[1]
+        else:
+            legs = [state.sweeps.get(stage, []) for stage in plane.legs[leg - 1 : leg + 1]]
+            m.set_rock_estimate(plane.axis, _estimate(m, obs, legs, settings, plane))
+            found = m.rock_estimate(plane.axis) is not None
+            state.stage = plane.turn if found or leg == 2 else plane.legs[2]
     return m.pressed(obs, force)
 
 
-def _ramp(m: SpiralMachine, target_rad: float, speed_rad_s: float) -> bool:
-    """The commanded tilt about T x one tick nearer ``target_rad``; True once there."""
-    delta = target_rad - m.tilt_x_rad
+def _back_to_search(m: SpiralMachine, obs: Observation, stage: SearchStage) -> Command:
+    """FEEL over: SEARCH goes on at ``stage`` (``felt``, or ``no_flat_face`` without an
+    estimate in either plane)."""
+    felt = m.rock_estimate(0) is not None or m.rock_estimate(1) is not None
+    m.go(obs, Phase.SEARCH, "felt" if felt else "no_flat_face")
+    m.state(SearchState).stage = stage
+    return m.hold()
+
+
+def _ramp(m: SpiralMachine, axis: int, target_rad: float, speed_rad_s: float) -> bool:
+    """The commanded turn about T's ``axis`` one tick nearer ``target_rad``; True once
+    there."""
+    current = m.tcp_turn_rad[axis]
     limit = speed_rad_s * m.tick_s
-    m.tilt_x_rad += max(-limit, min(limit, delta))
-    return abs(target_rad - m.tilt_x_rad) <= 1e-9
+    m.tcp_turn_rad[axis] = current + max(-limit, min(limit, target_rad - current))
+    return abs(target_rad - m.tcp_turn_rad[axis]) <= 1e-9
 
 
-def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState) -> None:
-    """A new frame's torque about T x with the rock angle at its capture time, into the
-    present sweep."""
+def _take_frame(m: SpiralMachine, obs: Observation, state: FeelState, plane: RockPlane) -> None:
+    """A new frame's torque about the plane's axis with the rock angle at its capture time,
+    into the present leg's sweep."""
     torque_t = m.reading.torque_t()
     if obs.wrench is None or torque_t is None or obs.wrench.t_s <= state.frame_t_s:
         return
     state.frame_t_s = obs.wrench.t_s
-    sweep = {FeelStage.ROCK: 0, FeelStage.ROCK_BACK: 1, FeelStage.ROCK_AGAIN: 2}[state.stage]
-    state.sweeps[sweep].append((angle_at(state.angles, obs.wrench.t_s), float(torque_t[0])))
+    angle = angle_at(((t, a[plane.axis]) for t, *a in state.angles), obs.wrench.t_s)
+    sweep = state.sweeps.setdefault(state.stage, [])
+    sweep.append((angle, float(torque_t[plane.axis])))
 
 
 def angle_at(angles: Iterable[tuple[float, float]], t_s: float) -> float:
@@ -207,15 +264,18 @@ def _estimate(
     obs: Observation,
     sweeps: list[list[tuple[float, float]]],
     settings: RockSettings,
+    plane: RockPlane,
 ) -> float | None:
-    """The legs' flat angle if it passes its checks (``flat_angle``), else None; any
-    candidate, kept or not, is published as the machine's in-hand estimate (the thickness
-    plane, ``SpiralMachine.in_hand_estimates``)."""
+    """The legs' flat angle (the TCP's turn about the plane's axis) if it passes its checks
+    (``flat_angle``), else None; any candidate, kept or not, is published as the machine's
+    in-hand estimate (``SpiralMachine.in_hand_estimates``: the plug's tilt in the plane and
+    the tip's offset it implies, ``SpiralMachine.grasp_tilt_of_turn``)."""
     candidate = flat_candidate(sweeps, settings)
     if candidate is None:
         return None
-    tilt, kept = candidate
+    turn, kept = candidate
+    tilt = m.grasp_tilt_of_turn(plane.axis, turn)
     m.publish_in_hand(InHandEstimate(
-        obs.t_s, "thickness", tilt, thickness_tip_offset_m(tilt, m.plug.length_m), "rock", kept
+        obs.t_s, plane.name, tilt, thickness_tip_offset_m(tilt, m.plug.length_m), "rock", kept
     ))  # fmt: skip
-    return tilt if kept else None
+    return turn if kept else None

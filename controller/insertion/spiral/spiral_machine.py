@@ -41,7 +41,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
-from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.insertion.grasp_estimate import GraspEstimate, thickness_tip_offset_m
 from controller.insertion.interface import (
     Command,
     FailureReason,
@@ -220,11 +220,14 @@ class SpiralMachine:
         self.config, self.plug, self.hole = config, plug, hole
         self.torque_servo = torque_servo
         self.rock = rock if rock is not None and rock.enabled else None
-        self.tilt_x_rad = 0.0  # the TCP's commanded turn about T x from upright (FEEL), rad
-        self.tilt_x_estimate_rad: float | None = None  # FEEL's flat angle, rad
-        # the plug's tilt in the hand about T x (its tip toward +T y) that the tip's place
-        # is taken at: FEEL's estimate once FEEL is over, the nominal grasp's 0 before, rad
-        self.grasp_tilt_x_rad = 0.0
+        # the TCP's commanded turn about T x and T y from upright (FEEL; about T y only
+        # while FEEL rocks), rad
+        self.tcp_turn_rad = [0.0, 0.0]
+        # FEEL's flat angles: the TCP's turns about T x and T y that set the plug upright, rad
+        self.turn_estimate_rad: list[float | None] = [None, None]
+        # the turns that the tip's place is taken at (``tip_t``): FEEL's estimates once FEEL
+        # is over, the nominal grasp's 0 before, rad
+        self.grasp_turn_rad = [0.0, 0.0]
         self.felt = False  # FEEL has run
         self.reading = reading if reading is not None else ArmForce(config.force_window)
         self.memory = SearchMemory()
@@ -267,6 +270,34 @@ class SpiralMachine:
     def publish_in_hand(self, estimate: InHandEstimate) -> None:
         """Add ``estimate`` to ``in_hand_estimates`` (it commands nothing)."""
         self._in_hand.append(estimate)
+
+    @property
+    def tilt_x_estimate_rad(self) -> float | None:
+        """FEEL's tilt of the plug about T x (the thickness plane; the TCP's turn that sets it
+        upright, rad), None without one: the trial's ``grasp_tilt_thickness_est_rad``."""
+        return self.turn_estimate_rad[0]
+
+    @property
+    def grasp(self) -> GraspEstimate | None:
+        """FEEL's width-plane estimate (the tilt about T y, the tip toward +T x positive),
+        None without one: the trial's ``grasp_tilt_est_rad`` and ``tip_x_est_m``."""
+        turn = self.turn_estimate_rad[1]
+        return None if turn is None else GraspEstimate(-turn, self.plug.length_m)
+
+    def rock_estimate(self, axis: int) -> float | None:
+        """FEEL's flat angle about T's ``axis`` (0: x, 1: y; rad), None without one."""
+        return self.turn_estimate_rad[axis]
+
+    def set_rock_estimate(self, axis: int, turn_rad: float | None) -> None:
+        """Keep FEEL's flat angle about T's ``axis`` (rad; None: none found)."""
+        self.turn_estimate_rad[axis] = turn_rad
+
+    @staticmethod
+    def grasp_tilt_of_turn(axis: int, turn_rad: float) -> float:
+        """The plug's tilt in the hand (rad; about T x with its tip toward +T y, about T y
+        toward +T x: evaluation/trials/grasp_truth.py) that the TCP's turn ``turn_rad`` about
+        T's ``axis`` sets upright: the turn itself about T x, its opposite about T y."""
+        return turn_rad if axis == 0 else -turn_rad
 
     @property
     def tip_y_estimate_m(self) -> float | None:
@@ -348,9 +379,9 @@ class SpiralMachine:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
         if self._phase is Phase.FEEL:  # the tip's place, by the estimate from here on
-            self.grasp_tilt_x_rad = self.tilt_x_estimate_rad or 0.0
-            if target is not Phase.SEARCH:  # cut short: no rock
-                self.tilt_x_rad = self.grasp_tilt_x_rad
+            self.grasp_turn_rad = [turn or 0.0 for turn in self.turn_estimate_rad]
+            if target is not Phase.SEARCH:  # cut short: no rock; upright about T y
+                self.tcp_turn_rad = [self.grasp_turn_rad[0], 0.0]
         self._phase, self._state = target, _ENTER[target](obs)
         self.released = self.released or target is Phase.RELEASE
 
@@ -403,23 +434,45 @@ class SpiralMachine:
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
-        return self._untilted() * Rotation.from_euler("x", self.tilt_x_rad)
+        upright = self._untilted() * Rotation.from_euler("x", self.tcp_turn_rad[0])
+        if self.tcp_turn_rad[1]:
+            upright = upright * Rotation.from_euler("y", self.tcp_turn_rad[1])
+        return upright
 
     def _untilted(self) -> Rotation:
         """Upright at the pass's yaw without FEEL's turn (T2B)."""
         yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
         return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
 
-    def rock_angle_rad(self, obs: Observation) -> float:
-        """The TCP's turn about T x from upright at the pass's yaw (rad)."""
-        relative = self._untilted().inv() * rotation_from_rpy(obs.arm.tcp.rpy_rad)
-        return float(relative.as_rotvec()[0])
+    def rock_angle_rad(self, obs: Observation, axis: int = 0) -> float:
+        """The TCP's turn about T x from upright at the pass's yaw (``axis`` 0, rad), or about
+        T y from there turned by the commanded turn about T x (``axis`` 1)."""
+        reference = self._untilted()
+        if axis == 1:
+            reference = reference * Rotation.from_euler("x", self.tcp_turn_rad[0])
+        relative = reference.inv() * rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        return float(relative.as_rotvec()[axis])
+
+    @property
+    def at_feel_site(self) -> bool:
+        """The tip goes to FEEL's site (``rock.site_m``) instead of the pattern: FEEL is due at
+        this pass's touch and has not begun, or is running."""
+        rock = self.rock
+        if rock is None or rock.site_m <= 0.0:
+            return False
+        if self._phase is Phase.FEEL:
+            return True
+        return not self.felt and self.memory.pass_index >= rock.at_pass
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
-        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board."""
+        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board; at FEEL's
+        site (``at_feel_site``) ``rock.site_m`` from the nominal opening along its y instead."""
         u, v = self._pattern.offset(s_m)
         turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
+        if self.at_feel_site:
+            assert self.rock is not None
+            u, v, turn = 0.0, self.rock.site_m, self.hole.yaw_rad
         planar = Rotation.from_euler("z", turn).apply([u, v, 0.0])
         return np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + height_m]) + planar
 
@@ -429,10 +482,13 @@ class SpiralMachine:
         return float(self._tcp_target(self.tip_target(self.memory.s_m, 0.0))[2])
 
     def tip_t(self) -> np.ndarray:
-        """The plug's tip in T (m): ``length_m`` along the plug's axis, T z turned about T x by
-        the grasp's tilt (``grasp_tilt_x_rad``: its tip toward +T y), T z for the nominal
-        grasp. Every place the machine puts or reads the tip takes it from here."""
-        axis = Rotation.from_euler("x", -self.grasp_tilt_x_rad).apply([0.0, 0.0, 1.0])
+        """The plug's tip in T (m): ``length_m`` along the plug's axis, T z turned back by
+        ``grasp_turn_rad`` (about T x, then T y: the axis that the TCP's turn by it sets
+        upright), T z for the nominal grasp. Every place the machine puts or reads the tip
+        takes it from here."""
+        axis = Rotation.from_euler("x", -self.grasp_turn_rad[0]).apply([0.0, 0.0, 1.0])
+        if self.grasp_turn_rad[1]:
+            axis = Rotation.from_euler("y", -self.grasp_turn_rad[1]).apply(axis)
         return self.plug.length_m * axis
 
     def tip_b(self, obs: Observation) -> np.ndarray:

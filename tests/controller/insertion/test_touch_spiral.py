@@ -264,7 +264,7 @@ def test_without_a_step_in_the_torque_feel_keeps_the_plug_as_it_was():
     machine = rocking(world)
     run(world, machine)
     assert reasons(machine)[2:4] == ["touched", "no_flat_face"]
-    assert machine.tilt_x_estimate_rad is None and machine.tilt_x_rad == 0.0
+    assert machine.tilt_x_estimate_rad is None and machine.tcp_turn_rad == [0.0, 0.0]
     # the two pairs of legs' angles are published, neither kept; no tip offset recorded
     assert [e.kept for e in machine.in_hand_estimates] == [False, False]
     assert machine.tip_y_estimate_m is None
@@ -316,7 +316,7 @@ def test_the_tip_is_taken_along_the_plug_turned_by_the_grasps_tilt():
     obs = world.observe()
     nominal = machine.tip_b(obs)  # before FEEL: the tip along T z
     assert nominal == pytest.approx(tip_position(obs.arm.tcp, world.plug.length_m))
-    machine.grasp_tilt_x_rad = world.thickness_tilt_rad  # FEEL's estimate, exact
+    machine.grasp_turn_rad[0] = world.thickness_tilt_rad  # FEEL's estimate, exact
     assert machine.tip_b(obs) == pytest.approx(world.tip, abs=1e-9)
     assert machine.tip_xy(obs) == pytest.approx(world.tip[:2], abs=1e-9)
     shift = world.plug.length_m * math.sin(0.07)
@@ -327,10 +327,10 @@ def test_after_feel_the_pattern_is_centred_on_the_tip_itself():
     world = touch_world(**TILTED)
     machine = rocking(world)
     world.run_until(machine, Phase.FEEL)
-    assert machine.grasp_tilt_x_rad == 0.0  # the rock turns about the nominal tip
+    assert machine.grasp_turn_rad == [0.0, 0.0]  # the rock turns about the nominal tip
     world.run_until(machine, Phase.SEARCH)
     estimate_rad = machine.tilt_x_estimate_rad
-    assert estimate_rad is not None and machine.grasp_tilt_x_rad == estimate_rad
+    assert estimate_rad is not None and machine.grasp_turn_rad[0] == estimate_rad
     for _ in range(30):  # the TCP's move to the tip's own place, pressed
         world.step(machine)
     shift_m = world.plug.length_m * math.sin(world.thickness_tilt_rad)  # the nominal's miss
@@ -338,3 +338,64 @@ def test_after_feel_the_pattern_is_centred_on_the_tip_itself():
         target = machine.tip_target(machine.memory.s_m, 0.0)[:2]
         assert np.linalg.norm(world.tip[:2] - target) < 0.3 * shift_m
         world.step(machine)
+
+
+def test_feel_at_its_site_rocks_on_the_board_clear_of_the_opening_then_searches():
+    world = touch_world(**TILTED)
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01))
+    opening = np.append(world.hole_xy, world.hole.z_m)
+    world.run_until(machine, Phase.FEEL)
+    site = machine.tip_target(0.0, 0.0)  # FEEL's site: 10 mm along the opening's y
+    assert site[:2] - [world.hole.x_m, world.hole.y_m] == pytest.approx([0.0, 0.01])
+    tips = []
+    while machine.phase is Phase.FEEL:
+        world.step(machine)
+        tips.append(world.tip.copy())
+    pressed = [tip for tip in tips if tip[2] <= world.hole.z_m + 0.0005]
+    assert pressed and all(np.linalg.norm(tip[:2] - opening[:2]) > 0.008 for tip in pressed)
+    assert all(np.linalg.norm(tip[:2] - site[:2]) < 0.001 for tip in pressed)
+    # FEEL ends in the air above its site; SEARCH starts its pass again from its start
+    assert tips[-1][2] >= world.hole.z_m + 0.5 * SPIRAL.hover_m
+    assert not machine.at_feel_site
+    run(world, machine)
+    assert reasons(machine)[2:5] == ["touched", "felt", "caught"]
+    assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
+    assert "feel.lift" in {c.rule for c in world.commands}
+    assert "bottomed" in reasons(machine)
+
+
+def test_feel_in_the_width_plane_finds_the_tilt_about_t_y_and_places_the_tip_by_both():
+    world = touch_world(grasp_tilt_rad=0.05, **TILTED)  # the tip toward +T x and +T y
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01, width=True))
+    world.run_until(machine, Phase.SEARCH, max_s=10.0)
+    world.run_until(machine, Phase.FEEL)
+    while machine.phase is Phase.FEEL:
+        world.step(machine)
+    # the TCP's flat turn about T y is -0.05: the first leg (toward +) misses it, the third finds it
+    assert [(e.plane, e.kept) for e in machine.in_hand_estimates] == [
+        ("thickness", True), ("width", False), ("width", True)
+    ]  # fmt: skip
+    assert machine.tilt_x_estimate_rad == pytest.approx(0.07, abs=0.01)
+    assert machine.grasp is not None and machine.grasp.tilt_rad == pytest.approx(0.05, abs=0.01)
+    width = machine.in_hand_estimates[-1]
+    assert width.tilt_rad == machine.grasp.tilt_rad
+    assert width.tip_offset_m == pytest.approx(world.plug.length_m * math.sin(width.tilt_rad))
+    # the tip placed by both tilts; the TCP turned upright in the thickness plane only
+    assert machine.tip_b(world.observe()) == pytest.approx(world.tip, abs=0.0003)
+    assert machine.tcp_turn_rad == [machine.tilt_x_estimate_rad, 0.0]
+    # the plug's axis from the TCP's untilted pose: upright about T x, still tilted about T y
+    axis = machine._untilted().inv().apply(world.rotation.apply(world._axis_t()))
+    assert axis == pytest.approx([math.sin(0.05), 0.0, math.cos(0.05)], abs=0.01)
+    rules = {c.rule for c in world.commands}
+    assert {"feel.width_rock", "feel.width_rock_back", "feel.width_rock_again"} <= rules
+    run(world, machine)
+    assert "bottomed" in reasons(machine)
+
+
+def test_without_the_width_rock_the_width_plane_is_not_estimated():
+    world = touch_world(grasp_tilt_rad=0.05, **TILTED)
+    machine = rocking(world, rock=replace(ROCK, site_m=0.01))
+    run(world, machine)
+    assert machine.grasp is None and machine.tcp_turn_rad[1] == 0.0
+    assert [e.plane for e in machine.in_hand_estimates] == ["thickness"]
+    assert not {c.rule for c in world.commands} & {"feel.width_rock", "feel.width_turn"}

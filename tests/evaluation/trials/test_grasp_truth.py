@@ -9,7 +9,7 @@ import pytest
 from controller.run.result import TrialResult
 from drivers.sim.scenes.insertion.draws import GraspPose
 from evaluation.trials.grasp_scores import chart_errors, quantity, signed_errors, table_cells
-from evaluation.trials.grasp_truth import grasp_truth
+from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilt_thickness_rad
 from evaluation.trials.summary import summarize
 
 
@@ -31,6 +31,14 @@ def test_a_turn_about_the_width_axis_tilts_the_thickness_plane_only():
 def test_the_offsets_move_the_tip_across_and_along():
     truth = grasp_truth(GraspPose(along_m=0.001, across_m=-0.0005), 0.02)
     assert truth.tip_t_m == pytest.approx([-0.0005, 0.0, 0.021])
+
+
+def test_the_receptacle_tilts_in_the_thickness_plane_with_the_board_about_its_x():
+    # the board turned by b about H x turns the receptacle's axis by -b about T x (T y = -H y)
+    assert receptacle_tilt_thickness_rad((0.01, 0.0)) == pytest.approx(-0.01)
+    # about H y: the width plane only
+    assert receptacle_tilt_thickness_rad((0.0, 0.02)) == pytest.approx(0.0, abs=1e-12)
+    assert receptacle_tilt_thickness_rad((0.0, 0.0)) == 0.0
 
 
 def test_a_table_without_the_pose_columns_reads_them_as_unknown():
