@@ -19,12 +19,15 @@ def test_feels_estimates_round_trip_with_the_trials_record(felt_trial):
     result = json.loads((felt_trial / "trial.json").read_text())["result"]
     estimates = grasp_estimates(episode)
     assert estimates and episode.counts[GRASP_ESTIMATE.name] == len(estimates)
-    assert {(e.plane, e.method) for e in estimates} == {("thickness", "rock")}
-    # the last is the kept one: the trial's tilt estimate and the tip offset it implies
-    kept = [e for e in estimates if e.kept]
-    assert kept == estimates[-1:]
-    assert kept[0].tilt_rad == result["grasp_tilt_thickness_est_rad"]
-    assert kept[0].tip_offset_m == result["tip_y_est_m"]
+    assert {(e.plane, e.method) for e in estimates} == {("thickness", "rock"), ("width", "rock")}
+    # each plane's last is its kept one: the trial's tilt estimate and the tip offset it implies
+    for plane, tilt, tip in (("thickness", "grasp_tilt_thickness_est_rad", "tip_y_est_m"),
+                             ("width", "grasp_tilt_est_rad", "tip_x_est_m")):
+        in_plane = [e for e in estimates if e.plane == plane]
+        kept = [e for e in in_plane if e.kept]
+        assert kept == in_plane[-1:]
+        assert kept[0].tilt_rad == result[tilt]
+        assert kept[0].tip_offset_m == pytest.approx(result[tip], abs=1e-15)
     # made in FEEL: between the touch and the felt transition
     changes = {t.reason: t.t_s for t in transitions(episode)}
     assert all(changes["touched"] < e.t_s < changes["felt"] for e in estimates)
