@@ -11,9 +11,9 @@ T y, is horizontal, which gives ``tilt_rad`` (``from_flat_rotation``).
 This FEEL (the ``align`` machine's) does not find the thickness-plane tilt (about T x) nor
 the plug's offset along its width: the torque about the plug's grasp point does not depend
 on the offset, and the thickness face's lever (half of 2.4 mm) is below the tilt torque's
-noise at a light press. The press spiral's FEEL finds the thickness-plane tilt by rocking
-(controller/insertion/spiral/spiral_feel.py); ``thickness_tip_offset_m`` gives the tip's
-offset along T y it implies.
+noise at a light press. The press spiral's FEEL finds the tilts in both planes by rocking
+(controller/insertion/spiral/spiral_feel.py); ``tilt_tip_offset_m`` gives the tip's
+offset each implies.
 """
 
 from __future__ import annotations
@@ -53,15 +53,16 @@ class GraspEstimate:
         return rotation.apply(self.tip_t - np.array([0.0, 0.0, self.length_m]))
 
 
-def thickness_tip_offset_m(tilt_rad: float, length_m: float) -> float:
-    """The tip's offset from the nominal along T y (m) implied by a tilt ``tilt_rad`` (rad)
-    of the plug in the hand about T x (its thickness plane), ``length_m`` (m) from the TCP
-    to the tip: ``length_m * sin(tilt_rad)``.
+def tilt_tip_offset_m(tilt_rad: float, length_m: float) -> float:
+    """The tip's offset from the nominal (m) implied by a tilt ``tilt_rad`` (rad) of the plug
+    in the hand, ``length_m`` (m) from the TCP to the tip: ``length_m * sin(tilt_rad)``, along
+    T y for a tilt about T x (its thickness plane), along T x for one about T y (its width
+    plane).
 
-    The tilt is the TCP turn about T x that sets the plug upright (the press spiral's FEEL
+    About T x the tilt is the TCP turn that sets the plug upright (the press spiral's FEEL
     estimate, ``SpiralMachine.tilt_x_estimate_rad``), which is the plug's axis p in T at
     atan2(p_y, p_z) (positive with the tip toward +T y; the scene's truth is measured alike,
-    evaluation/trials/grasp_truth.py). The nominal tip is ``length_m`` along T z; turned by
-    the tilt it lies at ``length_m * (0, sin a, cos a)`` in T (the grasp's offset, which the
-    rock does not see, taken as zero)."""
+    evaluation/trials/grasp_truth.py); about T y it is atan2(p_x, p_z). The nominal tip is
+    ``length_m`` along T z; turned by the tilt it lies at ``length_m * (0, sin a, cos a)`` in
+    T (the grasp's offset, which the rock does not see, taken as zero)."""
     return length_m * math.sin(tilt_rad)

@@ -18,7 +18,7 @@ estimates is "not estimated" (its true size, for scale). OUT_DIR gets:
 
 A ``trials.csv`` written before a pose column existed reads it as unknown. One from before
 ``tip_y_est_m`` gets it from the thickness-plane tilt as the machine computes it
-(``controller.insertion.grasp_estimate.thickness_tip_offset_m``, the plug's length from the
+(``controller.insertion.grasp_estimate.tilt_tip_offset_m``, the plug's length from the
 batch's task and overrides), and the table says so. The inputs are only read. Bad input (a
 DIR without a ``trials.csv``, a table of another kind, an output inside an input): one line,
 exit 2.
@@ -37,7 +37,7 @@ from typing import Any
 
 from controller.cli.outputs import check_output_folder, write_text
 from controller.cli.support import ToolError, run_tool
-from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.insertion.grasp_estimate import tilt_tip_offset_m
 from controller.run.result import TrialResult
 from controller.run.task import load_task
 from core.subcommands import job_prog
@@ -93,7 +93,7 @@ def _with_tip_y(results: list[TrialResult], task: str, overrides: list[str]) -> 
     plug of the task's length; the length."""
     length = load_task(task, tuple(overrides), with_calibration=False).config.plug.length_m
     derived = [
-        dataclasses.replace(r, tip_y_est_m=thickness_tip_offset_m(t, length))
+        dataclasses.replace(r, tip_y_est_m=tilt_tip_offset_m(t, length))
         if math.isfinite(t := r.grasp_tilt_thickness_est_rad)
         else r
         for r in results

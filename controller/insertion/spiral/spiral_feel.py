@@ -53,7 +53,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.insertion.grasp_estimate import thickness_tip_offset_m
+from controller.insertion.grasp_estimate import tilt_tip_offset_m
 from controller.insertion.interface import Command, GraspPlane, InHandEstimate, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from controller.insertion.spiral.spiral_search import SearchStage, SearchState
@@ -276,6 +276,6 @@ def _estimate(
     turn, kept = candidate
     tilt = m.grasp_tilt_of_turn(plane.axis, turn)
     m.publish_in_hand(InHandEstimate(
-        obs.t_s, plane.name, tilt, thickness_tip_offset_m(tilt, m.plug.length_m), "rock", kept
+        obs.t_s, plane.name, tilt, tilt_tip_offset_m(tilt, m.plug.length_m), "rock", kept
     ))  # fmt: skip
     return turn if kept else None

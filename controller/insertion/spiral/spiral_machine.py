@@ -41,7 +41,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
-from controller.insertion.grasp_estimate import GraspEstimate, thickness_tip_offset_m
+from controller.insertion.grasp_estimate import GraspEstimate, tilt_tip_offset_m
 from controller.insertion.interface import (
     Command,
     FailureReason,
@@ -302,12 +302,12 @@ class SpiralMachine:
     @property
     def tip_y_estimate_m(self) -> float | None:
         """The tip's offset from the nominal along T y (m) implied by FEEL's tilt estimate
-        about T x (``tilt_x_estimate_rad``; ``grasp_estimate.thickness_tip_offset_m``), None
+        about T x (``tilt_x_estimate_rad``; ``grasp_estimate.tilt_tip_offset_m``), None
         without one: the trial's ``tip_y_est_m``. The machine places the tip by the same estimate
         from FEEL's end (``tip_t``)."""
         if self.tilt_x_estimate_rad is None:
             return None
-        return thickness_tip_offset_m(self.tilt_x_estimate_rad, self.plug.length_m)
+        return tilt_tip_offset_m(self.tilt_x_estimate_rad, self.plug.length_m)
 
     def step(self, obs: Observation) -> Command:
         """One tick: the command for ``obs``, naming the rule and the sub-stage that decided
