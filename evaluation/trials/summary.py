@@ -33,22 +33,38 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def quantile_over_all(times_s: Iterable[float], n: int, q: float) -> float | None:
+    """The ``q`` quantile (0..1, linear interpolation as NumPy's default) of the time to
+    insert over ``n`` trials of which ``times_s`` are the successes' (s): a failure counts as
+    never, so None when the quantile reaches one (more than ``1 - q`` of the trials failed)."""
+    ordered = sorted(times_s)
+    if n == 0:
+        return None
+    position = q * (n - 1)
+    low, high = math.floor(position), math.ceil(position)
+    if high >= len(ordered):
+        return None
+    return ordered[low] + (ordered[high] - ordered[low]) * (position - low)
+
+
 def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
-    """The batch summary of ``results`` (see docs: keys and meanings), with the keyword
-    ``context`` (task, controller, seeds, overrides, executor, workers, ...) merged in first.
+    """The batch summary of ``results`` (see docs: keys and meanings), with the keyword ``context``
+    (task, controller, seeds, overrides, executor, workers, ...) merged in first.
 
     Times are simulated seconds from the controller's start to the depth
-    (``TrialResult.time_to_insert_s``), over the successful trials; ``max_wrist_force_n`` is over
-    every trial; a trial is over force when its ``max_wrist_force_n`` exceeds its own
+    (``TrialResult.time_to_insert_s``), over the successful trials (``median_time_s``,
+    ``p90_time_s``) and over every trial with a failure counted as never (``median_time_all_s``,
+    ``p90_time_all_s``: None where the quantile reaches a failure); ``max_wrist_force_n`` is
+    over every trial; a trial is over force when its ``max_wrist_force_n`` exceeds its own
     ``force_limit_n``; the plug's true contact force: ``max_contact_force_n`` (over every
-    trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles), the same
-    of the insertion force (``max_insertion_force_n``, ``p99_insertion_force_n``), its limit
+    trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles), the same of
+    the insertion force (``max_insertion_force_n``, ``p99_insertion_force_n``), its limit
     ``contact_force_limit_n``, ``insertion_force_violations`` (summed) and
-    ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime``
-    is the simulated time over the wall time of the trials that ran to an outcome (error
-    trials have no simulated time); ``grasp_estimate`` (only when some trial has one): FEEL's
-    errors on the plug in the hand, per quantity estimated in either plane, and the true
-    size of those not estimated (evaluation/trials/grasp_scores.py).
+    ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime`` is
+    the simulated time over the wall time of the trials that ran to an outcome (error trials
+    have no simulated time); ``grasp_estimate`` (only when some trial has one): FEEL's errors on
+    the plug in the hand, per quantity estimated in either plane, and the true size of those not
+    estimated (evaluation/trials/grasp_scores.py).
     """
     ordered = sorted(results, key=lambda r: (r.controller, r.seed))
     n = len(ordered)
@@ -69,6 +85,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         success_ci95=wilson_ci(successes, n),
         median_time_s=float(np.median(times)) if times else None,
         p90_time_s=float(np.percentile(times, 90)) if times else None,
+        median_time_all_s=quantile_over_all(times, n, 0.5),
+        p90_time_all_s=quantile_over_all(times, n, 0.9),
         max_wrist_force_n=max((r.max_wrist_force_n for r in ordered), default=None),
         force_limit_n=limits[0] if len(limits) == 1 else limits or None,
         over_force_trials=sum(r.max_wrist_force_n > r.force_limit_n for r in ordered),

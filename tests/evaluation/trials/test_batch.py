@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from controller.cli.support import ToolError
@@ -33,7 +34,7 @@ from evaluation.trials.compare import main as compare_main
 from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.records import keep_record, unfinished_record
 from evaluation.trials.spec import SeedSpecs, SpecError, TrialSpec, format_seeds, parse_seeds
-from evaluation.trials.summary import summarize, wilson_ci
+from evaluation.trials.summary import quantile_over_all, summarize, wilson_ci
 
 ROOT = Path(__file__).resolve().parents[3]
 FORCE_LIMIT_N = 20.0
@@ -194,6 +195,9 @@ def test_summary_values():
     assert summary["success_ci95"] == pytest.approx(_wilson_by_formula(3, 6))
     assert summary["median_time_s"] == 6.0
     assert summary["p90_time_s"] == pytest.approx(7.6)  # linear interpolation
+    # over all six, the failures never: half failed, so the median lies between the 8 s
+    # success and a failure, and so does the p90
+    assert summary["median_time_all_s"] is None and summary["p90_time_all_s"] is None
     assert summary["max_wrist_force_n"] == 25.0
     assert summary["over_force_trials"] == 2
     assert summary["failures"] == {"slip": 1, "timeout": 2}
@@ -228,7 +232,18 @@ def test_summary_is_independent_of_arrival_order():
 def test_summary_of_no_success_has_no_times():
     summary = summarize([_result(0, False, reason="timeout")])
     assert summary["median_time_s"] is None and summary["p90_time_s"] is None
+    assert summary["median_time_all_s"] is None and summary["p90_time_all_s"] is None
     assert summary["success_rate"] == 0.0
+
+
+def test_the_quantiles_over_every_trial_agree_with_numpy_where_no_failure_is_reached():
+    times = [3.0, 9.0, 4.0, 7.5, 5.0, 6.0, 8.0, 4.5, 5.5]
+    padded = sorted(times) + [np.inf]  # ten trials, one failure
+    assert quantile_over_all(times, 10, 0.5) == pytest.approx(np.percentile(padded, 50))
+    assert quantile_over_all(times, 10, 0.8) == pytest.approx(np.percentile(padded, 80))
+    assert quantile_over_all(times, 10, 0.9) is None  # between 9 s and the failure
+    assert quantile_over_all(times, 9, 0.9) == pytest.approx(np.percentile(times, 90))
+    assert quantile_over_all([], 0, 0.5) is None
 
 
 # -- batches -------------------------------------------------------------------------------
@@ -638,7 +653,7 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     # the product's targets judged at each speed, a controller not in the grid not judged
     assert targets.count("### Targets at") == 1  # the second speed's
     assert "machine.insert.speed_m_s=0.01\n" in targets and "=0.02\n" in targets
-    assert "| `zero_torque` falls short of `dipole` | – | not run |" in targets
+    assert "| `zero_torque` falls short of `dipole`, the intervals apart | – | not run |" in targets
     assert "oracle (true wrench + sensor noise)" in table and "![success against" in table
     # the in-hand estimate: table rows and a histogram per align and dipole cell (each scored
     # in its own plane, the other plane not estimated), none for the others
