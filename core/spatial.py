@@ -38,24 +38,20 @@ R = TypeVar("R")
 
 
 def remembers_recent(size: int) -> Callable[[Callable[..., R]], Callable[..., R]]:
-    """A pure function of floats, made to keep its last ``size`` results, keyed by the
-    arguments' exact bits (so -0.0 and 0.0 stay apart): a tick turns one pose or one pass's
-    yaw into a Rotation in many places, and scipy's Rotation is slow to make. Only for
-    results never changed in place (a Rotation, a float)."""
+    """A pure function of floats, made to keep its last ``size`` results (an LRU cache,
+    thread-safe), keyed by the arguments' exact bits (so -0.0 and 0.0 stay apart; the function
+    gets the same floats back): a tick turns one pose or one pass's yaw into a Rotation in many
+    places, and scipy's Rotation is slow to make. Only for results never changed in place (a
+    Rotation, a read-only array)."""
 
     def wrap(function: Callable[..., R]) -> Callable[..., R]:
-        recent: dict[tuple[str, ...], R] = {}
+        @functools.lru_cache(maxsize=size)
+        def by_bits(bits: tuple[str, ...]) -> R:
+            return function(*(float.fromhex(b) for b in bits))
 
         @functools.wraps(function)
         def call(*values: float) -> R:
-            key = tuple(float(value).hex() for value in values)
-            if key in recent:
-                return recent[key]
-            result = function(*values)
-            if len(recent) >= size:
-                del recent[next(iter(recent))]
-            recent[key] = result
-            return result
+            return by_bits(tuple(float(value).hex() for value in values))
 
         return call
 
