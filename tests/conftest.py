@@ -1,6 +1,7 @@
 """What the whole suite shares: artifacts made once per test run and shared by the
 pytest-xdist workers through a file lock in the run's common temporary folder (``made_once``):
-one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs."""
+one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs; and
+the order the tests start in (``LONGEST_FIRST``)."""
 
 from __future__ import annotations
 
