@@ -15,7 +15,10 @@ The tilt of the tool is the angle (rad, in [0, pi]) between z_T and the downward
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -31,9 +34,42 @@ DOWN_B = np.array([0.0, 0.0, -1.0])
 _RPY_AXES = "xyz"  # scipy's extrinsic (fixed-axis) x, then y, then z: R = Rz @ Ry @ Rx
 
 
+R = TypeVar("R")
+
+
+def remembers_recent(size: int) -> Callable[[Callable[..., R]], Callable[..., R]]:
+    """A pure function of floats, made to keep its last ``size`` results (an LRU cache,
+    thread-safe), keyed by the arguments' exact bits (so -0.0 and 0.0 stay apart; the function
+    gets the same floats back): a tick turns one pose or one pass's yaw into a Rotation in many
+    places, and scipy's Rotation is slow to make. Only for results never changed in place (a
+    Rotation, a read-only array)."""
+
+    def wrap(function: Callable[..., R]) -> Callable[..., R]:
+        @functools.lru_cache(maxsize=size)
+        def by_bits(bits: tuple[str, ...]) -> R:
+            return function(*(float.fromhex(b) for b in bits))
+
+        @functools.wraps(function)
+        def call(*values: float) -> R:
+            return by_bits(tuple(float(value).hex() for value in values))
+
+        return call
+
+    return wrap
+
+
+@remembers_recent(8)
+def _rotation_from_angles(roll: float, pitch: float, yaw: float) -> Rotation:
+    return Rotation.from_euler(_RPY_AXES, [roll, pitch, yaw])
+
+
 def rotation_from_rpy(rpy_rad: tuple[float, float, float] | np.ndarray) -> Rotation:
-    """R_T2B from ``Pose.rpy_rad`` (fixed-axis roll, pitch, yaw, rad)."""
-    return Rotation.from_euler(_RPY_AXES, rpy_rad)
+    """R_T2B from ``Pose.rpy_rad`` (fixed-axis roll, pitch, yaw, rad); an array of them gives
+    one Rotation of many."""
+    angles = np.asarray(rpy_rad, dtype=float)
+    if angles.shape != (3,):
+        return Rotation.from_euler(_RPY_AXES, angles)
+    return _rotation_from_angles(*angles)
 
 
 def rpy_from_rotation(

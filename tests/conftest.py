@@ -1,6 +1,7 @@
 """What the whole suite shares: artifacts made once per test run and shared by the
 pytest-xdist workers through a file lock in the run's common temporary folder (``made_once``):
-one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs."""
+one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs; and
+the order the tests start in (``LONGEST_FIRST``)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,42 @@ from evaluation.trials.trial import run
 from tests.easy_scene import easy_scene_task, write_easy_calibration
 
 RECORDED_TASK, RECORDED_CONTROLLER, RECORDED_SEED = "usb_c", "dipole", 0
+
+LONGEST_FIRST = (
+    "tests/evaluation/trials/test_batch.py::test_ray_gives_the_same_summary_as_local",
+    "tests/controller/episode/test_episodes_doc.py::test_the_shell_snippet_runs",
+    "tests/evaluation/trials/test_trial_safety.py",
+    "tests/evaluation/trials/test_hole_finds.py",
+    "tests/controller/episode/test_foxglove_parser.py",
+    "tests/evaluation/bench/test_insertion_scene.py",
+    "tests/evaluation/realgel/test_check.py",
+    "tests/evaluation/trials/test_batch_stop.py",
+    "tests/evaluation/trials/test_batch.py",
+    "tests/evaluation/trials/test_trial.py",
+    "tests/controller/cli/test_alignment_demo.py",
+    "tests/controller/replay/test_episode_chart.py",
+    "tests/evaluation/offline/test_dataset_calibrate.py",
+    "tests/evaluation/offline/test_scene_calibration.py",
+    "tests/controller/test_record.py",
+    "tests/controller/replay/test_lerobot_export.py",
+    "tests/evaluation/bench/test_scene_pairs.py",
+)
+"""Where the suite's longest tests are (whole simulated trials, batches of processes, Ray's
+start, the recorded episodes' tools), longest first: they start first, so that the workers
+(``--dist worksteal``, pyproject.toml) end together on short tests instead of one of them
+running a long test alone at the end. Only the order changes; a test not named here runs
+after them, in collection order."""
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """The tests under ``LONGEST_FIRST`` first, in its order; the rest as collected. The
+    same order on every worker (pytest-xdist checks that they collected alike)."""
+
+    def rank(item: pytest.Item) -> int:
+        starts = [i for i, prefix in enumerate(LONGEST_FIRST) if item.nodeid.startswith(prefix)]
+        return starts[0] if starts else len(LONGEST_FIRST)
+
+    items.sort(key=rank)
 
 
 @pytest.fixture(scope="session")

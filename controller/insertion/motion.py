@@ -11,14 +11,21 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from core.devices import Pose, Twist
-from core.spatial import clamp_norm, cross, rotation_from_rpy, vec3
+from core.spatial import clamp_norm, cross, remembers_recent, rotation_from_rpy, vec3
 from core.task_geometry import PlugGeometry
 
 
 def tip_position(pose: Pose, length_m: float) -> np.ndarray:
     """Position in B of the plug's tip, ``length_m`` along T z from the TCP."""
-    tip_offset_B = rotation_from_rpy(pose.rpy_rad).apply([0.0, 0.0, length_m])
-    return np.asarray(pose.xyz_m, dtype=float) + tip_offset_B
+    return np.asarray(pose.xyz_m, dtype=float) + _tip_offset_b(*pose.rpy_rad, length_m)
+
+
+@remembers_recent(8)
+def _tip_offset_b(roll: float, pitch: float, yaw: float, length_m: float) -> np.ndarray:
+    """The tip less the TCP in B (m) with T at ``roll, pitch, yaw``; read only."""
+    offset = rotation_from_rpy((roll, pitch, yaw)).apply([0.0, 0.0, length_m])
+    offset.flags.writeable = False
+    return offset
 
 
 def lowest_edge(pose: Pose, plug: PlugGeometry, rotation: Rotation) -> np.ndarray:

@@ -34,6 +34,16 @@ away_from_gimbal_lock = st.tuples(angles, st.floats(-1.5, 1.5), angles).map(rota
 vectors = st.tuples(*(st.floats(-10.0, 10.0),) * 3).map(np.array)
 
 
+def test_a_remembered_rotation_is_scipys_to_the_bit():
+    """rotation_from_rpy keeps its last few Rotations (core.spatial.remembers_recent): asked
+    again, or for angles that differ only in a zero's sign, it gives scipy's own to the bit."""
+    poses = [(0.1, -0.2, 0.3), (math.pi, -0.0, 0.0), (math.pi, 0.0, 0.0), (-0.0, 0.0, -0.0)]
+    for rpy in [*poses, *poses[::-1], *poses]:
+        expected = Rotation.from_euler("xyz", rpy).as_quat()
+        assert rotation_from_rpy(rpy).as_quat().tobytes() == expected.tobytes()
+        assert rotation_from_rpy(np.array(rpy)).as_quat().tobytes() == expected.tobytes()
+
+
 def test_rpy_is_fixed_axis_roll_then_pitch_then_yaw():
     roll, pitch, yaw = 0.3, -0.2, 1.1
     expected = (

@@ -111,6 +111,12 @@ def pygame_sdl_or_skip() -> ctypes.CDLL:
 
     from drivers.gamepad.pad import init_sdl
 
+    # A pygame.quit() earlier in this process (the view's tests) stops SDL's joystick
+    # subsystem under pygame's controller module, which stays started, so init_sdl() alone
+    # would not start it again (the driver never meets this: the view has its own process).
+    # The controller module is stopped first, so that init_sdl() starts SDL as a fresh
+    # process has it; in a fresh process stopping it does nothing.
+    sdl_controller.quit()
     init_sdl()
     lib = load_pygame_sdl()
     if sdl_controller.get_count():

@@ -77,7 +77,7 @@ from controller.insertion.spiral import (
 from controller.insertion.spiral.spiral_config import SpiralConfig
 from controller.insertion.spiral.torque_servo import TorqueServo
 from core.devices import Twist
-from core.spatial import clamp_norm, rotation_from_rpy, tilt_of_rotation
+from core.spatial import clamp_norm, remembers_recent, rotation_from_rpy, tilt_of_rotation
 from core.task_geometry import HolePose, PlugGeometry
 
 LEAD_S = 0.01  # the sweep's velocity is the target's over this time ahead, s
@@ -96,6 +96,32 @@ _RESUMED = (Phase.GRASP, Phase.RETRACT)  # where autonomy resumes (overrides.res
 
 def _edges(sources: tuple[Phase, ...], target: Phase, *guards: str) -> tuple[Edge, ...]:
     return tuple(Edge(source, target, guard) for source in sources for guard in guards)
+
+
+@remembers_recent(8)
+def _untilted_at(yaw_rad: float) -> Rotation:
+    """Upright at ``yaw_rad`` (T2B): z_T down, x_T at the yaw."""
+    return Rotation.from_euler("z", yaw_rad) * Rotation.from_euler("x", math.pi)
+
+
+@remembers_recent(8)
+def _upright_at(yaw_rad: float, turn_x_rad: float, turn_y_rad: float) -> Rotation:
+    """Upright at ``yaw_rad``, turned about T x, then T y, by FEEL's turn (T2B)."""
+    upright = _untilted_at(yaw_rad) * Rotation.from_euler("x", turn_x_rad)
+    if turn_y_rad:
+        upright = upright * Rotation.from_euler("y", turn_y_rad)
+    return upright
+
+
+@remembers_recent(8)
+def _plug_axis_t(turn_x_rad: float, turn_y_rad: float) -> np.ndarray:
+    """The plug's unit axis in T, T z turned back by the grasp's turn (about T x, then T y).
+    Read only: the caller scales it into a new array."""
+    axis = Rotation.from_euler("x", -turn_x_rad).apply([0.0, 0.0, 1.0])
+    if turn_y_rad:
+        axis = Rotation.from_euler("y", -turn_y_rad).apply(axis)
+    axis.flags.writeable = False
+    return axis
 
 
 SPIRAL = Definition(
@@ -434,15 +460,12 @@ class SpiralMachine:
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
-        upright = self._untilted() * Rotation.from_euler("x", self.tcp_turn_rad[0])
-        if self.tcp_turn_rad[1]:
-            upright = upright * Rotation.from_euler("y", self.tcp_turn_rad[1])
-        return upright
+        yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
+        return _upright_at(yaw, *self.tcp_turn_rad)
 
     def _untilted(self) -> Rotation:
         """Upright at the pass's yaw without FEEL's turn (T2B)."""
-        yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
-        return Rotation.from_euler("z", yaw) * Rotation.from_euler("x", math.pi)
+        return _untilted_at(self.hole.yaw_rad + self.search_pass.yaw_offset_rad)
 
     def rock_angle_rad(self, obs: Observation, axis: int = 0) -> float:
         """The TCP's turn about T x from upright at the pass's yaw (``axis`` 0, rad), or about
@@ -486,10 +509,7 @@ class SpiralMachine:
         ``grasp_turn_rad`` (about T x, then T y: the axis that the TCP's turn by it sets
         upright), T z for the nominal grasp. Every place the machine puts or reads the tip
         takes it from here."""
-        axis = Rotation.from_euler("x", -self.grasp_turn_rad[0]).apply([0.0, 0.0, 1.0])
-        if self.grasp_turn_rad[1]:
-            axis = Rotation.from_euler("y", -self.grasp_turn_rad[1]).apply(axis)
-        return self.plug.length_m * axis
+        return self.plug.length_m * _plug_axis_t(*self.grasp_turn_rad)
 
     def tip_b(self, obs: Observation) -> np.ndarray:
         """The plug's tip in B (m) with the TCP at ``obs``'s pose."""

@@ -13,6 +13,7 @@ The estimate is synthetic, in raw estimate units, with the machine's default S->
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -123,6 +124,8 @@ class ToyWorld:
         self.t_s = 0.0
         self.tick = 0
         self.rotation = rotation_from_rpy((math.pi, 0.0, 0.0))
+        self._turned_by: Rotation | None = None
+        self._turns: dict[tuple[str, ...], np.ndarray] = {}
         self.p = np.array([self.hole.x_m, self.hole.y_m, self.hole.z_m + 0.04 + self.plug.length_m])
         self.gripper_holding = False
         self.gripper_width = 0.02
@@ -140,9 +143,23 @@ class ToyWorld:
 
     # -- geometry ----------------------------------------------------------------------
 
+    def _turned(self, vector: Sequence[float]) -> np.ndarray:
+        """``self.rotation.apply(vector)``, remembered (read only) while the rotation is the
+        same object (``apply`` puts a new one in its place; scipy's ``apply`` is slow and a
+        tick turns the same few vectors many times), keyed by the vector's exact bits."""
+        if self._turned_by is not self.rotation:
+            self._turned_by, self._turns = self.rotation, {}
+        key = tuple(float(c).hex() for c in vector)
+        turned = self._turns.get(key)
+        if turned is None:
+            turned = self.rotation.apply(vector)
+            turned.flags.writeable = False
+            self._turns[key] = turned
+        return turned
+
     @property
     def tip(self) -> np.ndarray:
-        return self.p + self.plug.length_m * self.rotation.apply(self._axis_t())
+        return self.p + self.plug.length_m * self._turned(self._axis_t())
 
     def _axis_t(self) -> np.ndarray:
         """The plug's axis toward its tip, in T."""
@@ -152,7 +169,7 @@ class ToyWorld:
     def _thickness_slope(self) -> float:
         """How much the tip face's thickness edge rises toward its +y end (B z per unit)."""
         b = self.thickness_tilt_rad
-        return float(self.rotation.apply([0.0, math.cos(b), -math.sin(b)])[2])
+        return float(self._turned([0.0, math.cos(b), -math.sin(b)])[2])
 
     def _upright_in_thickness(self) -> bool:
         """The plug within ``thickness_tol_rad`` of straight down in its thickness plane."""
@@ -165,7 +182,7 @@ class ToyWorld:
     def _edge_slope(self) -> float:
         """How much the tip face's width edge rises toward its +x end (B z per unit)."""
         a = self.grasp_tilt_rad
-        return float(self.rotation.apply([math.cos(a), 0.0, -math.sin(a)])[2])
+        return float(self._turned([math.cos(a), 0.0, -math.sin(a)])[2])
 
     @property
     def hole_xy(self) -> np.ndarray:
@@ -231,7 +248,7 @@ class ToyWorld:
         normal = 0.0
         surface = self.hole.z_m - self.floor_drop_m
         tip = self.tip
-        z_t = self.rotation.apply([0.0, 0.0, 1.0])
+        z_t = self._turned([0.0, 0.0, 1.0])
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
         in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
@@ -259,7 +276,7 @@ class ToyWorld:
                 if self.jam_depth_m is not None and tip[2] < surface - self.jam_depth_m:
                     if self.jams > 0:
                         self.jammed_in_this_insert = True
-                        torque_b += self.jam_torque * self.rotation.apply([1.0, 0.0, 0.0])
+                        torque_b += self.jam_torque * self._turned([1.0, 0.0, 0.0])
                 if tip[2] < surface - self.depth_limit_m:
                     force_t[2] = self.k_board * (surface - self.depth_limit_m - tip[2])
                 elif tip[2] < surface - 0.001:
@@ -270,11 +287,11 @@ class ToyWorld:
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
                 flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
-                torque_b += self.edge_torque * flat * self.rotation.apply([0.0, 1.0, 0.0])
+                torque_b += self.edge_torque * flat * self._turned([0.0, 1.0, 0.0])
                 if self.thickness_tilt_rad:  # the thickness edge's lever jumps where flat
                     side = math.tanh(self._thickness_slope() / 0.003)
                     lever = self.thickness_edge_m * side * math.tanh(axial / 0.01)
-                    torque_b += lever * self._push_n() * self.rotation.apply([1.0, 0.0, 0.0])
+                    torque_b += lever * self._push_n() * self._turned([1.0, 0.0, 0.0])
         if self.axial_share is not None:
             force_t[2] = self.axial_share * self._push_n()
         if self.on_rim:
