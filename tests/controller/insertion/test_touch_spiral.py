@@ -399,3 +399,15 @@ def test_without_the_width_rock_the_width_plane_is_not_estimated():
     assert machine.grasp is None and machine.tcp_turn_rad[1] == 0.0
     assert [e.plane for e in machine.in_hand_estimates] == ["thickness"]
     assert not {c.rule for c in world.commands} & {"feel.width_rock", "feel.width_turn"}
+
+
+@pytest.mark.parametrize("task", ["usb_c", "usb_a"])
+def test_the_shipped_passes_yaw_out_to_the_openings_yaw_uncertainty(task):
+    """Every yaw the scene draws for the opening lies within half a step of a pass's yaw: a
+    floored step count once left the last passes at +-2 deg of a +-3 deg uncertainty."""
+    loaded = load_task(task, (), with_calibration=False)
+    spiral, edge = loaded.config.touch_spiral, loaded.scene.hole_uncertainty.yaw_rad
+    offsets = np.array(spiral.yaw_offsets)
+    drawn = np.linspace(-edge, edge, 601)
+    gap = np.abs(drawn[:, None] - offsets[None, :]).min(axis=1).max()
+    assert gap <= spiral.yaw_step_rad / 2 + 1e-4
