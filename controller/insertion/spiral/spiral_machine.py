@@ -460,12 +460,15 @@ class SpiralMachine:
 
     def _upright(self) -> Rotation:
         """The tool's orientation for this pass: upright, at the pass's yaw (T2B)."""
-        yaw = self.hole.yaw_rad + self.search_pass.yaw_offset_rad
-        return _upright_at(yaw, *self.tcp_turn_rad)
+        return _upright_at(self._pass_yaw_rad(), *self.tcp_turn_rad)
 
     def _untilted(self) -> Rotation:
         """Upright at the pass's yaw without FEEL's turn (T2B)."""
-        return _untilted_at(self.hole.yaw_rad + self.search_pass.yaw_offset_rad)
+        return _untilted_at(self._pass_yaw_rad())
+
+    def _pass_yaw_rad(self) -> float:
+        """The tool's yaw for this pass: the nominal opening's and the pass's offset (rad, B)."""
+        return self.hole.yaw_rad + self.search_pass.yaw_offset_rad
 
     def rock_angle_rad(self, obs: Observation, axis: int = 0) -> float:
         """The TCP's turn about T x from upright at the pass's yaw (``axis`` 0, rad), or about
