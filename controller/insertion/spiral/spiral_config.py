@@ -47,9 +47,11 @@ class SpiralConfig(Config):
     ``descend_speed_m_s``: down to the touch; ``fall_in_m``: the TCP this far below where it
     puts the tip on the nominal board while descending to the touch, with no touch yet, means
     the plug went into the opening (more than the board's height tolerance and the wrist's
-    compression under the touch force); ``yaw_step_rad``, ``yaw_range_rad``: the
-    passes' yaw offsets (``yaw_offsets``); ``turn_tol_rad``: a pass's yaw counts as reached
-    within this; ``hover_m``: tip height above the board between passes;
+    compression under the touch force) if the tared force is still under
+    ``fall_in_force_n`` (N; at ``touch_force_n``, any force short of the touch: a touch whose
+    reading lags behind the fall is no fall-in under a lower one); ``yaw_step_rad``,
+    ``yaw_range_rad``: the passes' yaw offsets (``yaw_offsets``); ``turn_tol_rad``: a pass's
+    yaw counts as reached within this; ``hover_m``: tip height above the board between passes;
     ``move_speed_m_s``, ``rotate_speed_rad_s``; ``pose_gain_1_s``: servo gain (speed = gain
     x error), ``pose_tol_m``: a target counts as reached within this; ``retract_m``;
     ``timeout_s``: the whole run's autonomous time; ``tared_force_limit_n``: the tared
@@ -86,6 +88,7 @@ class SpiralConfig(Config):
     sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)
     descend_speed_m_s: float = number(1e-4, 0.1, default=0.005)
     fall_in_m: float = number(0.0005, 0.05, default=0.004)
+    fall_in_force_n: float = number(0.0, 50.0, default=1.0)
     yaw_step_rad: float = number(1e-4, 0.5, default=0.02)
     yaw_range_rad: float = number(0.0, 0.5, default=0.0524)
     turn_tol_rad: float = number(1e-5, 0.1, default=0.002)
@@ -112,6 +115,11 @@ class SpiralConfig(Config):
             raise ValueError(
                 "keys 'touch_force_n', 'press_force_n', 'stop_force_n', 'tared_force_limit_n': "
                 f"expected increasing forces, got {', '.join(map(str, forces))}"
+            )
+        if self.fall_in_force_n > self.touch_force_n:
+            raise ValueError(
+                f"key 'fall_in_force_n': expected at most 'touch_force_n' ({self.touch_force_n}),"
+                f" got {self.fall_in_force_n}"
             )
         inner = self.inner_half_width_m
         if inner > 0.0 and (self.pattern != "spiral" or inner >= self.half_width_m):

@@ -7,10 +7,10 @@ then its outer part at every yaw. Each pass:
   the estimator re-zeroes);
 * **touch**: down at ``descend_speed_m_s`` until the tared upward force reaches
   ``touch_force_n``; the TCP ``fall_in_m`` below where the tip would meet the nominal board
-  first means the plug went into the opening on the way down (INSERT, ``fell_in``, the
-  nominal board's height taken as the press's); with ``rock`` on, the touch of pass
-  ``rock.at_pass`` first finds the plug's tilt in the hand (FEEL, ``touched``:
-  spiral_feel.py), and the sweep goes on from FEEL;
+  first, the force still under ``fall_in_force_n``, means the plug went into the opening on
+  the way down (INSERT, ``fell_in``, the nominal board's height taken as the press's); with
+  ``rock`` on, the touch of pass ``rock.at_pass`` first finds the plug's tilt in the hand
+  (FEEL, ``touched``: spiral_feel.py), and the sweep goes on from FEEL;
 * **sweep**: the pattern at ``sweep_speed_m_s`` while the admittance holds the press; the
   press's height (the TCP's when the force first settles within ``settle_band`` of the
   press) is the reference. A force under ``catch_ratio`` x the press pauses the pattern
@@ -114,7 +114,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             state.next(SearchStage.SWEEP, obs.t_s)
             return m.pressed(obs, force)
         board_z = m.board_tcp_z_m()
-        if obs.arm.tcp.xyz_m[2] < board_z - cfg.fall_in_m:
+        if obs.arm.tcp.xyz_m[2] < board_z - cfg.fall_in_m and force < cfg.fall_in_force_n:
             run.press_z_m = board_z
             m.go(obs, Phase.INSERT, "fell_in")
             return m.hold()
