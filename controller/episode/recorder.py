@@ -58,13 +58,19 @@ def command_json(tick: TickRecord) -> bytes:
     )
 
 
+def finite(values: tuple[float, ...]) -> tuple[float, ...] | None:
+    """``values``, or None when one is NaN or infinite (a simulated arm's joint angles): the
+    key ``json_bytes`` would leave out, left out before the encoding (no second pass)."""
+    return values if math.isfinite(sum(values)) else None
+
+
 def arm_json(arm: ArmStatus) -> bytes:
     return json_bytes(
         {
             "t_s": arm.t_s,
             "tcp_xyz_m": arm.tcp.xyz_m,
             "tcp_rpy_rad": arm.tcp.rpy_rad,
-            "joints_rad": arm.joints_rad,
+            "joints_rad": finite(arm.joints_rad),
             "mode": arm.mode.name.lower(),
             "state": arm.state.name.lower(),
             "error_code": arm.error_code,
