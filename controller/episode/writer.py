@@ -199,7 +199,7 @@ class EpisodeWriter:
         """A log time (ns, the wall clock) minus this is the loop's time (ns)."""
         self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
-        self._stream: IO[bytes] = self.path.open("xb")
+        self._stream: IO[bytes] = self.path.open("xb", buffering=0)  # the Rust writer buffers
         self._sink = _Sink(self._stream)
         self._context = Context()  # the channels and this file only: one per episode
         options = MCAPWriteOptions(  # the data section's CRC: damage outside the chunks shows
