@@ -211,7 +211,8 @@ def gripper_key(gripper: GripperStatus) -> tuple:
 class TickLogger:
     """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
     only when due, see ``Latch``; ``/tf_static`` with ``mount``, where the sensor sits on
-    the tool, when given), and asks for a flush at each phase change."""
+    the tool, when given), then wakes the writer if a flush is due, at once at each phase
+    change."""
 
     def __init__(self, writer: EpisodeWriter, mount: Mount | None = None) -> None:
         self.writer = writer
@@ -241,6 +242,7 @@ class TickLogger:
             log(topics.GRASP_ESTIMATE, estimate.t_s, grasp_estimate_json, estimate)
         if tick.transitions:
             self.writer.flush_soon()
+        self.writer.flush_if_due()
 
 
 # -- the tactile tap -----------------------------------------------------------------------

@@ -6,11 +6,13 @@ a flush is due, then encodes every record queued, appends them to the MCAP file
 (``foxglove-sdk``'s MCAP writer, in Rust: zstd chunks, compressed on this thread) and flushes
 the file (finishing the chunk in progress): one wake-up per flush rather than one per record
 (docs/EPISODES.md, "Cost"). A flush is due when ``log`` queues a record ``flush_interval_s``
-of log time past the one that woke the last (``log`` wakes the thread then, amid the
-loop's own work: cheaper than a wake-up on the thread's own timer), at once when ``flush_soon``
-asks (each phase change), and after ``2 * flush_interval_s`` of wall time without a wake-up
-(a stalled loop). A process killed with SIGKILL therefore leaves every record up to the last
-flush readable (controller/episode/reader.py); ``repair`` finishes such a file.
+of log time past the one that made the last due; the loop's observer wakes the thread then,
+after queueing its tick (``flush_if_due``: right after the loop's own work, cheaper than a
+wake-up on the thread's own timer). It flushes at once when ``flush_soon`` asks (each phase
+change), and after ``2 * flush_interval_s`` of wall time without a wake-up (a stalled loop,
+a writer fed without the loop's observer). A process killed with SIGKILL therefore leaves
+every record up to the last flush readable (controller/episode/reader.py); ``repair``
+finishes such a file.
 
 Order: the records are written in the order ``log`` queued them, so the file's order is the
 loop's; readers order messages by log time and keep the file's order among messages of equal
@@ -228,7 +230,8 @@ class EpisodeWriter:
         self._last_ns = self.offset_ns  # the newest log time written, ns
         self._wake = threading.Event()  # a flush or the stop is wanted now
         self._interval_ns = round(flush_interval_s * NS_PER_S)
-        self._due_ns = 0  # the log time at which ``log`` wakes the logger next, ns
+        self._due_ns = 0  # the log time from which a record makes a flush due, ns
+        self._due = False
         self._stopping = False
         self._error: OSError | None = None
         self._closed = False
@@ -249,12 +252,21 @@ class EpisodeWriter:
             self._queue.append((topic, t_ns, encode, payload))
             if t_ns >= self._due_ns:  # a flush's worth of log time queued
                 self._due_ns = t_ns + self._interval_ns
-                self._wake.set()
+                self._due = True
             return
         if not self.dropped[topic.name]:
             why = "queue full" if self._error is None and not self._closed else "writer stopped"
             log.warning("episode %s: %s, dropping %s records", self.path, why, topic.name)
         self.dropped[topic.name] += 1
+
+    def flush_if_due(self) -> None:
+        """Wake the logger thread if a flush is due (``log`` queued a record
+        ``flush_interval_s`` of log time past the one that made the last due): the loop's
+        observer calls it once each tick's records are queued, so the logger runs after the
+        loop's own work."""
+        if self._due:
+            self._due = False
+            self._wake.set()
 
     def flush_soon(self) -> None:
         """Ask the logger thread to flush after the records queued so far (a phase change)."""

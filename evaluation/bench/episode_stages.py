@@ -8,11 +8,12 @@ episode asks for it, on the loop's thread: ``compress_frames``), so it is not th
 it is timed too (the encoder the episode gives the twin) and reported on its own line, so the
 cost that moved is in view.
 
-The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
-slower than real time their count per second of loop time is not the real-time one; the
-last line therefore also gives the real-time estimate: the records' work per second of loop
-time plus one flush's mean cost times the flushes a real-time second makes. The timers add
-about a microsecond per record.
+The flushes follow the log time (one every ``flush_interval_s`` of it, and one at each phase
+change), so a run faster than real time makes about as many per second of loop time as a
+real-time one; the last line gives the real-time estimate: the records' work per second of
+loop time plus one flush's mean cost times the flushes a real-time second makes. The code
+runs warm here (no sleeps between batches), which a real-time run's does not (docs/EPISODES.md
+"Cost"). The timers add about a microsecond per record.
 
     python -m evaluation bench_episode_stages [--seconds 20] [--seed 1]
 """
