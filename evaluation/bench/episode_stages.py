@@ -13,9 +13,11 @@ change), so a run faster than real time makes about as many per second of loop t
 real-time one; the last line gives the real-time estimate: the records' work per second of
 loop time plus one flush's mean cost times the flushes a real-time second makes. The code
 runs warm here (no sleeps between batches), which a real-time run's does not (docs/EPISODES.md
-"Cost"). The timers add about a microsecond per record.
+"Cost"); ``--realtime`` runs the trial at real time instead (the watchdog's overrun policy
+relaxed as in evaluation/bench/episode.py), as a product run does. The timers add about a
+microsecond per record.
 
-    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1]
+    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime]
 """
 
 from __future__ import annotations
@@ -32,6 +34,7 @@ from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
 from core.subcommands import job_prog
 from drivers.sim.twins.tactile import SimTactileSensor
+from evaluation.bench.episode import RELAXED_OVERRUNS
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -141,18 +144,23 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--realtime", action="store_true", help="at real time: cold code after each wake-up"
+    )
     args = parser.parse_args(argv)
     budget = f"{args.seconds:g}"
     task = load_task("usb_c", [f"machine.timeouts.search_s={budget}",
                                f"machine.timeouts.total_s={budget}",
-                               "machine.search.uncertainty_xy_m=0.0003"])  # fmt: skip
+                               "machine.search.uncertainty_xy_m=0.0003",
+                               *(RELAXED_OVERRUNS if args.realtime else ())])  # fmt: skip
     stages = StageTimes()
     undo = stages.patch()
     try:
         with tempfile.TemporaryDirectory(prefix="bench_episode_stages_") as work:
             out = Path(work) / "trial"
             began = time.monotonic()
-            outcome = run(task, "dipole", args.seed, out_dir=out, episode=EpisodeOptions())
+            outcome = run(task, "dipole", args.seed, out_dir=out, episode=EpisodeOptions(),
+                          realtime=args.realtime)  # fmt: skip
             wall_s = time.monotonic() - began
             size = (out / EPISODE_FILE).stat().st_size
     finally:
