@@ -329,7 +329,7 @@ class EpisodeWriter:
                 written = self._drain()
                 if stopping:
                     return
-                if written:  # a record dropped was logged while others were queued
+                if written:  # else nothing to flush (a drop needs a full queue)
                     self._write_drops(self._last_ns)
                     self._flush()
         except OSError as error:
