@@ -45,9 +45,8 @@ def timestamp(t_s: float, offset_ns: int = 0) -> Timestamp:
     """``t_s`` (s on the loop's clock) plus ``offset_ns`` (the episode's offset to the wall
     clock, ``EpisodeWriter.offset_ns``; the result >= 0) as a protobuf timestamp: on the
     clock of the log times, so a viewer lines the message up with them."""
-    ns = round(t_s * 1e9) + offset_ns
-    sec, nsec = divmod(ns, 1_000_000_000)
-    return Timestamp(sec=int(sec), nsec=int(nsec))
+    sec, nsec = divmod(round(t_s * 1e9) + offset_ns, 1_000_000_000)
+    return Timestamp(sec=sec, nsec=nsec)
 
 
 def loop_time_s(stamp: Any, offset_ns: int = 0) -> float:

@@ -58,13 +58,19 @@ def command_json(tick: TickRecord) -> bytes:
     )
 
 
+def finite(values: tuple[float, ...]) -> tuple[float, ...] | None:
+    """``values``, or None when one is NaN or infinite (a simulated arm's joint angles): the
+    key ``json_bytes`` would leave out, left out before the encoding (no second pass)."""
+    return values if math.isfinite(sum(values)) else None
+
+
 def arm_json(arm: ArmStatus) -> bytes:
     return json_bytes(
         {
             "t_s": arm.t_s,
             "tcp_xyz_m": arm.tcp.xyz_m,
             "tcp_rpy_rad": arm.tcp.rpy_rad,
-            "joints_rad": arm.joints_rad,
+            "joints_rad": finite(arm.joints_rad),
             "mode": arm.mode.name.lower(),
             "state": arm.state.name.lower(),
             "error_code": arm.error_code,
@@ -205,7 +211,8 @@ def gripper_key(gripper: GripperStatus) -> tuple:
 class TickLogger:
     """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
     only when due, see ``Latch``; ``/tf_static`` with ``mount``, where the sensor sits on
-    the tool, when given), and asks for a flush at each phase change."""
+    the tool, when given), then wakes the writer if a flush is due, at once at each phase
+    change."""
 
     def __init__(self, writer: EpisodeWriter, mount: Mount | None = None) -> None:
         self.writer = writer
@@ -235,6 +242,7 @@ class TickLogger:
             log(topics.GRASP_ESTIMATE, estimate.t_s, grasp_estimate_json, estimate)
         if tick.transitions:
             self.writer.flush_soon()
+        self.writer.flush_if_due()
 
 
 # -- the tactile tap -----------------------------------------------------------------------

@@ -2,12 +2,17 @@
 
 The control loop's thread only enqueues (``log``: the topic, the time, an encoder and its
 payload appended to a deque; no lock, no encoding, no I/O). The logger thread sleeps until
-the next flush is due (every ``flush_interval_s``, or at once when ``flush_soon`` asks, at
-each phase change), then encodes every record queued, appends them to the MCAP file
+a flush is due, then encodes every record queued, appends them to the MCAP file
 (``foxglove-sdk``'s MCAP writer, in Rust: zstd chunks, compressed on this thread) and flushes
 the file (finishing the chunk in progress): one wake-up per flush rather than one per record
-(docs/EPISODES.md, "Cost"). A process killed with SIGKILL therefore leaves every record up to
-the last flush readable (controller/episode/reader.py); ``repair`` finishes such a file.
+(docs/EPISODES.md, "Cost"). A flush is due when ``log`` queues a record ``flush_interval_s``
+of log time past the one that made the last due; the loop's observer wakes the thread then,
+after queueing its tick (``flush_if_due``: right after the loop's own work, cheaper than a
+wake-up on the thread's own timer). It flushes at once when ``flush_soon`` asks (each phase
+change), and after ``2 * flush_interval_s`` of wall time without a wake-up (a stalled loop,
+a writer fed without the loop's observer). A process killed with SIGKILL therefore leaves
+every record up to the last flush readable (controller/episode/reader.py); ``repair``
+finishes such a file.
 
 Order: the records are written in the order ``log`` queued them, so the file's order is the
 loop's; readers order messages by log time and keep the file's order among messages of equal
@@ -60,9 +65,9 @@ NS_PER_S = 1_000_000_000
 QUEUE_SIZE = 4096
 """Records the queue holds (about 6 s of a simulated trial's 700 records a second)."""
 FLUSH_INTERVAL_S = 0.05
-"""Every 0.05 s: half the 0.1 s a SIGKILL may lose, so that the writer's own latency on a
-loaded machine (its wake-up, writing the records queued since the last flush) fits in the
-other half (docs/EPISODES.md "Cost", docs/BENCHMARKS.md "Episodes")."""
+"""Every 0.05 s of log time: half the 0.1 s a SIGKILL may lose, so that the writer's own
+latency on a loaded machine (its wake-up, writing the records queued since the last flush)
+fits in the other half (docs/EPISODES.md "Cost", docs/BENCHMARKS.md "Episodes")."""
 CHUNK_SIZE_BYTES = 4 * 1024 * 1024
 """A chunk is finished at this size or at the next flush, whichever comes first."""
 ZSTD_LEVEL = 1
@@ -196,7 +201,7 @@ class EpisodeWriter:
         """A log time (ns, the wall clock) minus this is the loop's time (ns)."""
         self._listeners = list(listeners)
         self.flush_interval_s = flush_interval_s
-        self._stream: IO[bytes] = self.path.open("xb")
+        self._stream: IO[bytes] = self.path.open("xb", buffering=0)  # the Rust writer buffers
         self._sink = _Sink(self._stream)
         self._context = Context()  # the channels and this file only: one per episode
         options = MCAPWriteOptions(  # the data section's CRC: damage outside the chunks shows
@@ -224,6 +229,9 @@ class EpisodeWriter:
         self._dropped_written = 0
         self._last_ns = self.offset_ns  # the newest log time written, ns
         self._wake = threading.Event()  # a flush or the stop is wanted now
+        self._interval_ns = round(flush_interval_s * NS_PER_S)
+        self._due_ns = 0  # the log time from which a record makes a flush due, ns
+        self._due = False
         self._stopping = False
         self._error: OSError | None = None
         self._closed = False
@@ -242,11 +250,23 @@ class EpisodeWriter:
         if self._error is None and not self._closed and len(self._queue) < self._queue_size:
             t_ns = round(t_s * NS_PER_S) + self.offset_ns
             self._queue.append((topic, t_ns, encode, payload))
+            if t_ns >= self._due_ns:  # a flush's worth of log time queued
+                self._due_ns = t_ns + self._interval_ns
+                self._due = True
             return
         if not self.dropped[topic.name]:
             why = "queue full" if self._error is None and not self._closed else "writer stopped"
             log.warning("episode %s: %s, dropping %s records", self.path, why, topic.name)
         self.dropped[topic.name] += 1
+
+    def flush_if_due(self) -> None:
+        """Wake the logger thread if a flush is due (``log`` queued a record
+        ``flush_interval_s`` of log time past the one that made the last due): the loop's
+        observer calls it once each tick's records are queued, so the logger runs after the
+        loop's own work."""
+        if self._due:
+            self._due = False
+            self._wake.set()
 
     def flush_soon(self) -> None:
         """Ask the logger thread to flush after the records queued so far (a phase change)."""
@@ -300,30 +320,33 @@ class EpisodeWriter:
 
     def _run(self) -> None:
         began = time.thread_time()
-        next_flush = time.monotonic() + self.flush_interval_s
+        idle_s = 2.0 * self.flush_interval_s
         try:
             while True:
-                self._wake.wait(max(0.0, next_flush - time.monotonic()))
+                self._wake.wait(idle_s)
                 self._wake.clear()
                 stopping = self._stopping
-                self._drain()
+                written = self._drain()
                 if stopping:
                     return
-                self._write_drops(self._last_ns)
-                self._flush()
-                next_flush = time.monotonic() + self.flush_interval_s
+                if written:  # else nothing to flush (a drop needs a full queue)
+                    self._write_drops(self._last_ns)
+                    self._flush()
         except OSError as error:
             self._error = error
             log.error("episode %s: writing stopped: %s", self.path, error)
         finally:
             self.busy_s = time.thread_time() - began
 
-    def _drain(self) -> None:
-        """Write every record queued now (OSError if a write failed)."""
-        pop, write = self._queue.popleft, self._write
-        while self._queue:
+    def _drain(self) -> int:
+        """Write every record queued now (OSError if a write failed); how many there were."""
+        queue = self._queue
+        pop, write = queue.popleft, self._write
+        count = len(queue)
+        for _ in range(count):
             write(pop())
         self._sink.check()
+        return count
 
     def _flush(self) -> None:
         """Finish the chunk in progress and flush the file (OSError if that failed)."""

@@ -8,13 +8,16 @@ episode asks for it, on the loop's thread: ``compress_frames``), so it is not th
 it is timed too (the encoder the episode gives the twin) and reported on its own line, so the
 cost that moved is in view.
 
-The flushes follow the wall clock (one every ``flush_interval_s``), so in a run faster or
-slower than real time their count per second of loop time is not the real-time one; the
-last line therefore also gives the real-time estimate: the records' work per second of loop
-time plus one flush's mean cost times the flushes a real-time second makes. The timers add
-about a microsecond per record.
+The flushes follow the log time (one every ``flush_interval_s`` of it, and one at each phase
+change), so a run faster than real time makes about as many per second of loop time as a
+real-time one; the last line gives the real-time estimate: the records' work per second of
+loop time plus one flush's mean cost times the flushes a real-time second makes. The code
+runs warm here (no sleeps between batches), which a real-time run's does not (docs/EPISODES.md
+"Cost"); ``--realtime`` runs the trial at real time instead (the watchdog's overrun policy
+relaxed as in evaluation/bench/episode.py), as a product run does. The timers add about a
+microsecond per record.
 
-    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1]
+    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime]
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ from controller.episode.writer import EpisodeWriter
 from controller.run import load_task
 from core.subcommands import job_prog
 from drivers.sim.twins.tactile import SimTactileSensor
+from evaluation.bench.episode import RELAXED_OVERRUNS
 from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
@@ -140,18 +144,23 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument(
+        "--realtime", action="store_true", help="at real time: cold code after each wake-up"
+    )
     args = parser.parse_args(argv)
     budget = f"{args.seconds:g}"
     task = load_task("usb_c", [f"machine.timeouts.search_s={budget}",
                                f"machine.timeouts.total_s={budget}",
-                               "machine.search.uncertainty_xy_m=0.0003"])  # fmt: skip
+                               "machine.search.uncertainty_xy_m=0.0003",
+                               *(RELAXED_OVERRUNS if args.realtime else ())])  # fmt: skip
     stages = StageTimes()
     undo = stages.patch()
     try:
         with tempfile.TemporaryDirectory(prefix="bench_episode_stages_") as work:
             out = Path(work) / "trial"
             began = time.monotonic()
-            outcome = run(task, "dipole", args.seed, out_dir=out, episode=EpisodeOptions())
+            outcome = run(task, "dipole", args.seed, out_dir=out, episode=EpisodeOptions(),
+                          realtime=args.realtime)  # fmt: skip
             wall_s = time.monotonic() - began
             size = (out / EPISODE_FILE).stat().st_size
     finally:

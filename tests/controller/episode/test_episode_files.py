@@ -101,7 +101,7 @@ def test_a_failed_write_stops_the_writer_and_close_raises_its_oserror(tmp_path):
     resource.setrlimit(resource.RLIMIT_FSIZE, (limit, hard))
     try:
         noise = np.random.default_rng(0).integers(0, 256, 4000, np.uint8).tobytes()
-        for i in range(200):  # 800 kB that zstd cannot shrink, flushed every 0.05 s
+        for i in range(200):  # 800 kB that zstd cannot shrink, flushed every 0.1 s
             writer.log(LOOP_TICK, i * 0.01, lambda _: noise, None)
             time.sleep(0.002)
         time.sleep(0.2)
