@@ -1,22 +1,22 @@
 """What the whole suite shares: artifacts made once per test run and shared by the
 pytest-xdist workers through a file lock in the run's common temporary folder (``made_once``):
 one recorded trial, the easy scene's calibrations, and the tests' own read-only inputs; and
-the order the tests start in (``LONGEST_FIRST``)."""
+the order the tests start in (``LONGEST_FIRST``). The fixtures import the project when first
+used: pytest-xdist's controller process, which loads this file only to hand out the tests,
+starts the workers without waiting for it."""
 
 from __future__ import annotations
 
 import shutil
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import pytest
 from filelock import FileLock
 
-from controller.episode.session import EPISODE_FILE, EpisodeOptions
-from controller.run import load_task
-from controller.run.task import Task
-from evaluation.trials.trial import run
-from tests.easy_scene import easy_scene_task, write_easy_calibration
+if TYPE_CHECKING:
+    from controller.run.task import Task
 
 RECORDED_TASK, RECORDED_CONTROLLER, RECORDED_SEED = "usb_c", "dipole", 0
 
@@ -79,6 +79,10 @@ def made_once(run_root: Path, name: str, make: Callable[[Path], None]) -> Path:
 
 
 def _record_trial(folder: Path) -> None:
+    from controller.episode.session import EPISODE_FILE, EpisodeOptions
+    from controller.run import load_task
+    from evaluation.trials.trial import run
+
     episode = EpisodeOptions(image_format="png")
     task = load_task(RECORDED_TASK)
     outcome = run(task, RECORDED_CONTROLLER, RECORDED_SEED, out_dir=folder, episode=episode)
@@ -99,6 +103,10 @@ FELT_OVERRIDES = ("touch_spiral.rock.at_pass=0",)  # FEEL at the first touch
 
 
 def _record_felt_trial(folder: Path) -> None:
+    from controller.episode.session import EPISODE_FILE, EpisodeOptions
+    from controller.run import load_task
+    from evaluation.trials.trial import run
+
     task = load_task(RECORDED_TASK, FELT_OVERRIDES)
     outcome = run(task, RECORDED_CONTROLLER, RECORDED_SEED, out_dir=folder,
                   episode=EpisodeOptions())  # fmt: skip
@@ -118,6 +126,7 @@ def felt_trial(run_root) -> Path:
 def easy_task(run_root) -> Callable[[str], Task]:
     """``easy_task(name)``: task ``name`` on the easy scene (tests/easy_scene.py) with the
     easy scene's own calibration, fitted once per test run."""
+    from tests.easy_scene import easy_scene_task, write_easy_calibration
 
     def task(name: str) -> Task:
         folder = made_once(run_root, f"easy_calibration_{name}",

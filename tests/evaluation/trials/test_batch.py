@@ -18,7 +18,7 @@ import pytest
 from controller.cli.support import ToolError
 from controller.episode import read_episode
 from controller.run.result import TrialResult
-from core.config import CONFIG_ROOT, ConfigError
+from core.config import CONFIG_ROOT
 from evaluation.trials.batch import (
     CSV_COLUMNS,
     CSV_NAME,
@@ -35,78 +35,10 @@ from evaluation.trials.executors import LocalExecutor, open_executor
 from evaluation.trials.records import keep_record, unfinished_record
 from evaluation.trials.spec import SeedSpecs, SpecError, TrialSpec, format_seeds, parse_seeds
 from evaluation.trials.summary import quantile_over_all, summarize, wilson_ci
+from tests.evaluation.trials.fake_trials import FORCE_LIMIT_N, fake_trial, slow_trial
 
 ROOT = Path(__file__).resolve().parents[3]
-FORCE_LIMIT_N = 20.0
-
-
-def fake_trial(spec: TrialSpec) -> TrialResult:
-    """Deterministic: seeds 3, 7, 11, ... time out; seed 5 raises; the rest succeed;
-    ``align`` estimates the plug in the hand (its FEEL, the width plane) 0.001 rad and 0.1 mm
-    off per seed, ``dipole`` the thickness plane (-0.001 rad, -0.1 mm; none on seed 2)."""
-    if spec.seed == 5:
-        raise RuntimeError("boom\nsecond line")
-    success = spec.seed % 4 != 3
-    speed = 1.0
-    for item in spec.overrides:
-        key, _, value = item.partition("=")
-        if key == "machine.insert.speed_m_s":
-            speed = float(value)
-    time_s = 5.0 + 0.5 * spec.seed / speed
-    return TrialResult(
-        task=spec.task,
-        controller=spec.controller,
-        seed=spec.seed,
-        success=success,
-        status="inserted" if success else "failed",
-        failure_reason=None if success else "timeout",
-        time_to_insert_s=time_s if success else None,
-        duration_s=time_s + 1.0,
-        max_wrist_force_n=10.0 + spec.seed,
-        force_limit_n=FORCE_LIMIT_N,
-        wall_time_s=0.25,
-        **_FAKE_POSES.get(spec.controller, lambda seed: {})(spec.seed),
-    )
-
-
-def _fake_pose(seed: int) -> dict[str, float]:
-    return {
-        "grasp_tilt_est_rad": 0.02 + 0.001 * seed,
-        "grasp_tilt_true_rad": 0.02,
-        "tip_x_est_m": 1e-4 * seed,
-        "tip_x_true_m": 0.0,
-        "grasp_tilt_thickness_true_rad": 0.01,
-        "tip_y_true_m": 0.0,
-    }
-
-
-def _fake_thickness_pose(seed: int) -> dict[str, float]:
-    """The press spiral's estimate: the thickness plane only, none on seed 2."""
-    return {
-        "grasp_tilt_thickness_est_rad": math.nan if seed == 2 else 0.01 - 0.001 * seed,
-        "grasp_tilt_thickness_true_rad": 0.01,
-        "tip_y_est_m": math.nan if seed == 2 else -1e-4 * seed,
-        "tip_y_true_m": 0.0,
-        "grasp_tilt_true_rad": 0.02,
-        "tip_x_true_m": 0.0,
-    }
-
-
-_FAKE_POSES = {"align": _fake_pose, "dipole": _fake_thickness_pose}
-
-
-def slow_trial(spec: TrialSpec) -> TrialResult:
-    """Seed 0 returns at once, the others take long (to interrupt)."""
-    if spec.seed > 0:
-        time.sleep(30)
-    return fake_trial(spec)
-
-
-def recording_trial(spec: TrialSpec) -> TrialResult:
-    """Writes the spec into its out_dir, as the real trial writes its record."""
-    spec.out_dir.mkdir(parents=True)
-    (spec.out_dir / "spec.txt").write_text(repr(spec))
-    return fake_trial(spec)
+TRIALS = fake_trial.__module__  # the trial functions by name (--trial-function)
 
 
 def specs(seeds, controller="dipole", overrides=()):
@@ -381,7 +313,7 @@ def test_a_resume_with_other_arguments_or_without_a_batch_is_refused(tmp_path, c
 
 def test_a_resume_keeps_a_finished_trials_record_and_reruns_only_the_unfinished(tmp_path):
     records = tmp_path / "out" / "records"
-    args = ["--seeds", "0:4", "--records", "--trial-function", f"{__name__}:recording_trial"]
+    args = ["--seeds", "0:4", "--records", "--trial-function", f"{TRIALS}:recording_trial"]
     out = tmp_path / "out"
     assert batch_main(["--task", "usb_c", "--out", str(out), *args]) == 0
     # as if killed: seed 1's row written but its record not yet renamed; seeds 2 and 3 not
@@ -449,16 +381,7 @@ def test_ray_gives_the_same_summary_as_local(tmp_path, ray_available):
 
 # -- command line --------------------------------------------------------------------------
 
-FAKE = f"{__name__}:fake_trial"
-
-
-def check_spec(spec: TrialSpec) -> None:
-    """The fake trial function's check: only usb_a and usb_c, only known override keys."""
-    if spec.task not in ("usb_a", "usb_c"):
-        raise ConfigError(f"unknown task configuration {spec.task!r}")
-    for item in spec.overrides:
-        if item.partition("=")[0] not in ("machine.insert.speed_m_s", "scene.friction"):
-            raise ConfigError(f"override {item!r}: unknown key")
+FAKE = f"{TRIALS}:fake_trial"
 
 
 def run_cli(tmp_path, *args, out="out"):
@@ -542,7 +465,7 @@ def test_records_give_each_trial_its_own_folder(tmp_path):
             "blind",
             "--records",
             "--trial-function",
-            f"{__name__}:recording_trial",
+            f"{TRIALS}:recording_trial",
         )
         == 0
     )
@@ -770,7 +693,7 @@ def test_sigterm_stops_the_batch_and_keeps_what_finished(tmp_path):
             "--out",
             str(out),
             "--trial-function",
-            f"{__name__}:slow_trial",
+            f"{TRIALS}:slow_trial",
         ],
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT)},

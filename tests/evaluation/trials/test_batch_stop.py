@@ -15,35 +15,17 @@ from pathlib import Path
 
 import pytest
 
-from controller.run.result import TrialResult
 from evaluation.trials.batch import CSV_NAME, SUMMARY_NAME
 from evaluation.trials.batch_cli import main as batch_main
-from evaluation.trials.spec import TrialSpec
+from tests.evaluation.trials.fake_trials import PIDS, long_trial
 
 ROOT = Path(__file__).resolve().parents[3]
-PIDS = "BATCH_STOP_TEST_PIDS"  # the folder where each trial notes its process id
+TRIALS = long_trial.__module__  # the trial functions by name (--trial-function)
 RUN_TRIALS = (
     "import sys; from evaluation.trials.batch_cli import main; sys.exit(main(sys.argv[1:]))"
 )
 STOP_WITHIN_S = 2.0
 GONE_WITHIN_S = 5.0
-
-
-def long_trial(spec: TrialSpec) -> TrialResult:
-    """Notes its process id and writes its record; seed 0 then returns, the others run on
-    for a minute (to be stopped)."""
-    (Path(os.environ[PIDS]) / f"{spec.seed}-{os.getpid()}").touch()
-    if spec.out_dir is not None:
-        spec.out_dir.mkdir(parents=True)
-        (spec.out_dir / "trial.json").write_text("{}")
-    if spec.seed > 0:
-        time.sleep(60)
-    return _inserted(spec)
-
-
-def _inserted(spec: TrialSpec) -> TrialResult:
-    return TrialResult(spec.task, spec.controller, spec.seed, True, "inserted", None, 1.0, 2.0,
-                       1.0, 20.0, 0.1)  # fmt: skip
 
 
 def _descendants(pid: int) -> set[int]:
@@ -96,7 +78,7 @@ def _start(tmp_path: Path, workers: int, seeds: str = "0:6") -> tuple[subprocess
             "--out",
             str(out),
             "--trial-function",
-            f"{__name__}:long_trial",
+            f"{TRIALS}:long_trial",
         ],  # fmt: skip
         cwd=ROOT,
         env={**os.environ, "PYTHONPATH": str(ROOT), PIDS: str(pids)},
@@ -165,13 +147,6 @@ def test_a_batch_killed_with_sigkill_leaves_no_worker(tmp_path):
     _assert_gone(below)
 
 
-def interrupted_at_seed_3(spec: TrialSpec) -> TrialResult:
-    """Seeds 0-2 succeed at once; seed 3 is a Ctrl-C."""
-    if spec.seed == 3:
-        raise KeyboardInterrupt
-    return _inserted(spec)
-
-
 @pytest.mark.parametrize("workers", [1, 2])
 def test_a_batch_of_a_hundred_million_seeds_starts_at_once_in_bounded_memory(
     tmp_path, capsys, workers
@@ -182,7 +157,7 @@ def test_a_batch_of_a_hundred_million_seeds_starts_at_once_in_bounded_memory(
     try:
         code = batch_main(["--task", "usb_c", "--seeds", "0:100000000", "--workers",
                            str(workers), "--out", str(out),
-                           "--trial-function", f"{__name__}:interrupted_at_seed_3"])  # fmt: skip
+                           "--trial-function", f"{TRIALS}:interrupted_at_seed_3"])  # fmt: skip
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
