@@ -84,13 +84,15 @@ def _blind_machine(config: TaskConfig) -> Machine:
 
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
     """The press spiral by touch (the product's machine): the axial force read from the
-    estimate, its torques turned into T for the torque servo when ``push_servo.on`` and for
-    FEEL's rock when ``rock.enabled``."""
+    estimate, its torques turned into T for the torque servo when ``push_servo.on``, for
+    FEEL's rock when ``rock.enabled`` and for the near misses when ``near_miss.enabled``."""
     spiral = config.touch_spiral
     s2t = s2t_matrix(config.machine.signals.torque_axes)
     reading = TactileAxialForce(spiral.axial_weights, spiral.force_window, s2t)
     servo = TorqueServo(spiral.push_servo) if spiral.push_servo.on else None
-    return SpiralMachine(spiral, config.plug, config.hole, reading, servo, spiral.rock)
+    return SpiralMachine(
+        spiral, config.plug, config.hole, reading, servo, spiral.rock, spiral.near_miss
+    )
 
 
 def _the_estimator(estimator: TactileEstimator, world: Any, seed: int) -> TactileEstimator:

@@ -12,6 +12,7 @@ from typing import Literal
 
 from controller.insertion.machine_config import GripperSettings
 from controller.insertion.spiral.spiral_feel import RockSettings
+from controller.insertion.spiral.spiral_near_miss import NearMissSettings
 from controller.insertion.spiral.torque_servo import TorqueServoSettings
 from core.config import Config, config_dataclass, number
 
@@ -23,9 +24,10 @@ class SpiralConfig(Config):
     ``pattern``, ``pitch_m``, ``half_width_m``: the search pattern (as ``machine.search``);
     ``inner_half_width_m``: with the spiral, the passes first sweep it out to this half-width
     at every yaw, then on to ``half_width_m`` at every yaw (0: the whole spiral at one yaw
-    after another); ``interleave``: with the spiral, every other pass of a stretch turns it by
-    half a turn about the opening's centre, so that its rings fall halfway between the last
-    pass's (a target that one pass misses by up to half the pitch, the next passes within a
+    after another); ``interleave``: with the spiral, the passes at every other yaw step turn
+    it by half a turn about the opening's centre, so that the rings of neighbouring yaws fall
+    halfway between each other (an opening whose yaw lies between two passes' is within reach
+    of both: a target that one misses by up to half the pitch, the other passes within a
     quarter of it);
     ``touch_force_n``: the board is met; ``press_force_n``: held while sweeping;
     ``force_gain_m_s_n``: the admittance, z speed per N of force error; ``force_window``: the
@@ -154,8 +156,10 @@ class TouchSpiralConfig(SpiralConfig):
     ``force_window`` counts tactile frames here, and the force is their median.
     ``push_servo``: INSERT's yield to the torques while pushing (``torque_servo``);
     ``rock``: FEEL, the plug's tilt in the hand about T x found by rocking it at the first
-    touch (``spiral_feel``)."""
+    touch (``spiral_feel``); ``near_miss``: the sweep's near misses felt in the tilt
+    torques, and retraced (``spiral_near_miss``)."""
 
     axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
     push_servo: TorqueServoSettings = TorqueServoSettings()
     rock: RockSettings = RockSettings()
+    near_miss: NearMissSettings = NearMissSettings()

@@ -66,6 +66,9 @@ from controller.insertion.spiral import (
     spiral_insert as insert,
 )
 from controller.insertion.spiral import (
+    spiral_near_miss as near_miss,
+)
+from controller.insertion.spiral import (
     spiral_overrides as overrides,
 )
 from controller.insertion.spiral import (
@@ -180,9 +183,13 @@ class SearchMemory:
     """What SEARCH and INSERT share through the run: the pass (``pass_index`` into the
     machine's ``passes``), the pattern's path length swept in it (``s_m``, m) and its recent
     history (time s, length m) for a rewind, the length at the last rewound probe
-    (``rewound_to_m``), the tared zero (``bias_n``, N; ``tared`` once one is taken) and the
-    TCP's height at the settled
-    press (``press_z_m``, B, m; None until the press settles after a tare)."""
+    (``rewound_to_m``), the tared zero (``bias_n``, N; ``tared`` once one is taken), the
+    TCP's height at the settled press (``press_z_m``, B, m; None until the press settles
+    after a tare), the place of a near miss not yet retraced (``near_miss_m``, path length,
+    m; None without one), and a retrace's: where it ends (``retrace_until_m``, m; None
+    outside one) and the sweep resumes (``resume_m``), whether its start has been reached
+    (``retrace_started``), its ring outside the pattern's (``across_m``, m) and the
+    retraces made in each pass so far (``retraces``, by pass index)."""
 
     pass_index: int = 0
     s_m: float = 0.0
@@ -193,6 +200,12 @@ class SearchMemory:
     bias_n: float = 0.0
     tared: bool = False
     press_z_m: float | None = None
+    near_miss_m: float | None = None
+    retrace_until_m: float | None = None
+    resume_m: float = 0.0
+    retrace_started: bool = False
+    across_m: float = 0.0
+    retraces: dict[int, int] = field(default_factory=dict)
 
     def s_at(self, t_s: float) -> float:
         """The pattern's swept length at time ``t_s`` (the earliest kept, if older)."""
@@ -231,7 +244,8 @@ class SpiralMachine:
     """The press-spiral machine (see the module doc); a ``Machine`` for the control loop.
     ``reading``: where the force comes from (the arm's F/T sensor by default); ``torque_servo``:
     INSERT's yield to the reading's torques while pushing (none: the plug held at the pass's
-    orientation)."""
+    orientation); ``rock``: FEEL's settings; ``near_misses``: the sweep's near misses in the
+    reading's tilt torques (none: not looked for)."""
 
     def __init__(
         self,
@@ -241,11 +255,17 @@ class SpiralMachine:
         reading: ForceReading | None = None,
         torque_servo: TorqueServo | None = None,
         rock: feel.RockSettings | None = None,
+        near_misses: near_miss.NearMissSettings | None = None,
     ) -> None:
         check_definition(SPIRAL)
         self.config, self.plug, self.hole = config, plug, hole
         self.torque_servo = torque_servo
         self.rock = rock if rock is not None and rock.enabled else None
+        self.near_misses = (
+            near_miss.NearMissDetector(near_misses)
+            if near_misses is not None and near_misses.enabled
+            else None
+        )
         # the TCP's commanded turn about T x and T y from upright (FEEL; about T y only
         # while FEEL rocks), rad
         self.tcp_turn_rad = [0.0, 0.0]
@@ -398,12 +418,17 @@ class SpiralMachine:
 
     def go(self, obs: Observation, target: Phase, guard: str, rule: str = "") -> None:
         """Move to ``target`` under ``guard`` (``rule``: which of the guard's rules fired);
-        the tick's rule is the guard unless a phase named one."""
+        the tick's rule is the guard unless a phase named one. A retrace ends with its
+        phase, and the near misses' baseline starts anew."""
         if not SPIRAL.allows(self._phase, target, guard):
             raise RuntimeError(f"spiral machine: no edge {self._phase} -> {target} ({guard})")
         if self._decided is None:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
+        self.memory.retrace_until_m, self.memory.across_m = None, 0.0
+        self.memory.near_miss_m = None
+        if self.near_misses is not None:
+            self.near_misses.reset()
         if self._phase is Phase.FEEL:  # the tip's place, by the estimate from here on
             self.grasp_turn_rad = [turn or 0.0 for turn in self.turn_estimate_rad]
             if target is not Phase.SEARCH:  # cut short: no rock; upright about T y
@@ -433,6 +458,14 @@ class SpiralMachine:
         if reading is not None:
             self.force_n, self.force_t_s = reading
         return reading is not None
+
+    def near_miss_at(self, obs: Observation) -> float | None:
+        """The capture time (s) of the newest frame if its tilt torques jumped as a near miss
+        does (spiral_near_miss.py), else None (and always without ``near_misses``)."""
+        if self.near_misses is None or obs.wrench is None:
+            return None
+        jumped = self.near_misses.jumped(self.reading.torque_t(), obs.wrench.t_s)
+        return obs.wrench.t_s if jumped else None
 
     def tared_force(self, obs: Observation) -> float:
         """The upward force on the tool (z in B, N) less the tare: the reading's newest (its
@@ -492,9 +525,14 @@ class SpiralMachine:
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
-        present pass's ``pattern_turn_rad``), ``height_m`` above the nominal board; at FEEL's
-        site (``at_feel_site``) ``rock.site_m`` from the nominal opening along its y instead."""
+        present pass's ``pattern_turn_rad``; in a retrace, ``across_m`` further from its
+        centre), ``height_m`` above the nominal board; at FEEL's site (``at_feel_site``)
+        ``rock.site_m`` from the nominal opening along its y instead."""
         u, v = self._pattern.offset(s_m)
+        radius = math.hypot(u, v)
+        if self.memory.across_m and radius > 0.0:  # a retrace's ring
+            scale = 1.0 + self.memory.across_m / radius
+            u, v = u * scale, v * scale
         turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
         if self.at_feel_site:
             assert self.rock is not None
@@ -527,6 +565,11 @@ class SpiralMachine:
     def reach(self, obs: Observation, tip: np.ndarray) -> bool:
         """The TCP is within ``pose_tol_m`` of where it puts the tip at ``tip`` (B, m)."""
         error = self._tcp_target(tip) - np.asarray(obs.arm.tcp.xyz_m)
+        return bool(np.linalg.norm(error) <= self.config.pose_tol_m)
+
+    def reach_xy(self, obs: Observation, tip: np.ndarray) -> bool:
+        """As ``reach``, in x and y only (the press sets z)."""
+        error = self._tcp_target(tip)[:2] - np.asarray(obs.arm.tcp.xyz_m[:2])
         return bool(np.linalg.norm(error) <= self.config.pose_tol_m)
 
     def turned(self, obs: Observation) -> bool:

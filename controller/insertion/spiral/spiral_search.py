@@ -17,7 +17,11 @@ then its outer part at every yaw. Each pass:
   (**probe**; with ``rewind``, first back to where it was at the time the reading
   describes, once per stretch) and the admittance lowers the TCP: the tip ``catch_drop_m``
   below its height at the press is caught (INSERT); the force back at the press, or
-  ``probe_s``, and the pattern goes on;
+  ``probe_s``, and the pattern goes on; with ``near_miss`` on, a jump of the tilt torques
+  (the face across the opening's rim) that the sweep passes without a catch sends the
+  pattern back over that stretch on the ring half a pitch outside its own (**retrace**,
+  spiral_near_miss.py), probing as the sweep does, and then on along its own ring from
+  where the sweep had reached;
 * **rise**: at the pass's end, up to the hover, then **turn** to the next pass's start and
   yaw (or RELEASE after the last, ``pattern_done``).
 """
@@ -56,7 +60,9 @@ def plan_passes(config: SpiralConfig) -> tuple[SearchPass, ...]:
     """SEARCH's passes in order: the whole pattern at each of ``yaw_offsets`` in turn, or,
     with ``inner_half_width_m``, the spiral out to it at each yaw, then the rest at each yaw
     (a tip near the opening's centre is then found at every yaw before the far ring is
-    swept at any); with ``interleave``, every other pass of a stretch turned by half a turn."""
+    swept at any); with ``interleave``, the passes at every other yaw step (the offsets
+    alternate: 0, +1, -1, +2, -2, ... steps) turned by half a turn, so that neighbouring yaws'
+    rings interleave."""
     whole = SearchPattern(config.pattern, config.pitch_m, config.half_width_m).length_m
     stretches = [(0.0, whole)]
     if config.inner_half_width_m > 0.0:
@@ -64,7 +70,7 @@ def plan_passes(config: SpiralConfig) -> tuple[SearchPass, ...]:
         stretches = [(0.0, inner), (inner, whole)]
     turns = (0.0, math.pi) if config.interleave and config.pattern == "spiral" else (0.0,)
     return tuple(
-        SearchPass(yaw, start, end, turns[k % len(turns)])
+        SearchPass(yaw, start, end, turns[((k + 1) // 2) % len(turns)])
         for start, end in stretches
         for k, yaw in enumerate(config.yaw_offsets)
     )
@@ -77,6 +83,7 @@ class SearchStage(Enum):
     TOUCH = "touch"
     SWEEP = "sweep"
     PROBE = "probe"
+    RETRACE = "retrace"
     RISE = "rise"
     TURN = "turn"
 
@@ -106,6 +113,9 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
     force = m.tared_force(obs)
     if state.stage is SearchStage.TOUCH:
         m.fire("touch")
+        if m.near_misses is not None:  # each pass's sweep takes its own baseline
+            m.near_misses.reset()
+            run.near_miss_m = None
         if force >= cfg.touch_force_n:
             if m.rock is not None and not m.felt and run.pass_index >= m.rock.at_pass:
                 m.felt = True
@@ -119,7 +129,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             m.go(obs, Phase.INSERT, "fell_in")
             return m.hold()
         return m.descend(obs, cfg.descend_speed_m_s)
-    if state.stage in (SearchStage.SWEEP, SearchStage.PROBE):
+    if state.stage in (SearchStage.SWEEP, SearchStage.PROBE, SearchStage.RETRACE):
         return _sweep_or_probe(m, obs, state, force)
     if state.stage is SearchStage.TURN:  # to the next pass's start, at its yaw
         target = m.tip_target(m.search_pass.start_m, cfg.hover_m)
@@ -153,7 +163,8 @@ def _sweep_or_probe(
             m.go(obs, Phase.INSERT, "caught")
             return m.hold()
         if force >= cfg.press_force_n or obs.t_s - state.since_t_s >= cfg.probe_s:
-            state.stage = SearchStage.SWEEP
+            retracing = run.retrace_until_m is not None
+            state.stage = SearchStage.RETRACE if retracing else SearchStage.SWEEP
         return m.pressed(obs, force)
     if run.press_z_m is not None and force < cfg.catch_ratio * cfg.press_force_n:
         state.next(SearchStage.PROBE, obs.t_s)
@@ -162,9 +173,50 @@ def _sweep_or_probe(
             run.s_m = run.s_at(m.force_t_s)
         m.fire("probe")
         return m.pressed(obs, force)
+    if state.stage is SearchStage.SWEEP and run.press_z_m is not None:
+        near_miss_t_s = m.near_miss_at(obs)
+        if near_miss_t_s is not None and run.near_miss_m is None:
+            run.near_miss_m = run.s_at(near_miss_t_s)
+        if run.near_miss_m is not None and _retrace_due(m):
+            state.stage = SearchStage.RETRACE
+    if state.stage is SearchStage.RETRACE and not run.retrace_started:
+        m.fire("retrace")  # back to its start, pressed, before it sweeps
+        run.retrace_started = m.reach_xy(obs, m.tip_target(run.s_m, 0.0))
+        return m.pressed(obs, force)
     run.s_m += cfg.sweep_speed_m_s * m.tick_s
     run.s_history.append((obs.t_s, run.s_m))
+    if state.stage is SearchStage.RETRACE:
+        m.fire("retrace")
+        assert run.retrace_until_m is not None and m.near_misses is not None
+        if run.s_m >= run.retrace_until_m:
+            run.s_m, run.retrace_until_m, run.across_m = run.resume_m, None, 0.0
+            m.near_misses.reset()  # the same rim once more is no new near miss
+            state.stage = SearchStage.SWEEP
+        return m.pressed(obs, force, moving=True)
     if run.s_m >= m.search_pass.end_m:
         state.stage = SearchStage.RISE
     m.fire("sweep")
     return m.pressed(obs, force, moving=True)
+
+
+def _retrace_due(m: SpiralMachine) -> bool:
+    """Begin the retrace of the near miss at ``near_miss_m`` once the sweep has gone
+    ``ahead_m`` past it without a catch, unless the pass has had its ``per_pass`` or comes
+    before ``from_pass``: from ``back_m`` before it (reached first, pressed) to ``ahead_m``
+    after it, on the ring ``across_m`` outside; the sweep then resumes where it had
+    reached."""
+    detector, run, there = m.near_misses, m.memory, m.memory.near_miss_m
+    assert detector is not None and there is not None
+    settings = detector.settings
+    if run.s_m < there + settings.ahead_m:
+        return False
+    run.near_miss_m = None
+    detector.reset()  # the same rim retraced is no new near miss
+    done = run.retraces.get(run.pass_index, 0)
+    if done >= settings.per_pass or run.pass_index < settings.from_pass:
+        return False
+    run.retraces[run.pass_index] = done + 1
+    run.resume_m, run.retrace_until_m = run.s_m, there + settings.ahead_m
+    run.s_m = max(m.search_pass.start_m, there - settings.back_m)
+    run.across_m, run.retrace_started = settings.across_m, False
+    return True

@@ -72,10 +72,16 @@ def test_an_inner_half_width_sweeps_the_inner_spiral_at_every_yaw_before_the_res
     assert reach.max() >= SMALL.half_width_m  # then out to the edge
 
 
-def test_interleaved_passes_turn_every_other_spiral_by_half_a_turn():
+def test_interleaved_passes_turn_the_spiral_by_half_a_turn_at_every_other_yaw_step():
     both = replace(SMALL, inner_half_width_m=0.001, interleave=True)
-    assert [p.pattern_turn_rad for p in plan_passes(both)] == [0.0, np.pi, 0.0] * 2
+    assert [p.pattern_turn_rad for p in plan_passes(both)] == [0.0, np.pi, np.pi] * 2
     assert {p.pattern_turn_rad for p in plan_passes(SMALL)} == {0.0}
+    # neighbouring yaws (an opening between them is within reach of both) never share rings
+    wide = replace(SMALL, interleave=True, yaw_range_rad=0.07)
+    turn = {p.yaw_offset_rad: p.pattern_turn_rad for p in plan_passes(wide)}
+    yaws = sorted(turn)
+    assert len(yaws) == 7
+    assert all(turn[a] != turn[b] for a, b in zip(yaws, yaws[1:], strict=False))
     world = ToyWorld(**NO_OPENING)
     machine = SpiralMachine(replace(SMALL, interleave=True), world.plug, world.hole)
     swept = run(world, machine)

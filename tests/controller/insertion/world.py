@@ -95,6 +95,10 @@ class ToyWorld:
     thickness_edge_m: float = 0.0012
     thickness_tol_rad: float | None = None
     noise: float = 0.0003
+    # the face across the opening's rim: a tip on the board within ``rim_width_m`` outside
+    # the catch region feels this tilt torque about T x (N*m; a near miss)
+    rim_torque: float = 0.0
+    rim_width_m: float = 0.0003
     # the arm's F/T reading (ArmStatus.external_force_n, N in B), for the blind baseline: the
     # board (or the opening's floor under the tip) pushing up k_arm_n_m per m of the tip's
     # depth below it, as through a wrist of that stiffness; plus a constant bias
@@ -251,7 +255,9 @@ class ToyWorld:
         z_t = self._turned([0.0, 0.0, 1.0])
         drag = np.array([self.v_tip[0], self.v_tip[1], 0.0])
         drag_axis = cross(z_t, drag) / max(float(np.linalg.norm(drag)), 0.001)
-        in_region = np.linalg.norm(tip[:2] - self.hole_xy) < self.hole_radius_m
+        from_hole = float(np.linalg.norm(tip[:2] - self.hole_xy))
+        on_rim = 0.0 <= from_hole - self.hole_radius_m < self.rim_width_m
+        in_region = from_hole < self.hole_radius_m
         in_region = in_region and self._upright_in_thickness()
         upright = float(np.dot(z_t, [0.0, 0.0, -1.0])) > math.cos(math.radians(2.0))
         if self.rim_blocks > 0 and (self.caught or self.on_rim) and upright and (tip[2] < surface):
@@ -286,6 +292,8 @@ class ToyWorld:
                 axial = self.k_board * max(0.0, support - tip[2])
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
+                if on_rim and axial > 0.0:
+                    torque_b += self.rim_torque * self._turned([1.0, 0.0, 0.0])
                 flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
                 torque_b += self.edge_torque * flat * self._turned([0.0, 1.0, 0.0])
                 if self.thickness_tilt_rad:  # the thickness edge's lever jumps where flat

@@ -1,0 +1,85 @@
+"""Near misses of the press-spiral machine on touch: the tilt torques' jump that says the
+plug's face crossed the opening without dropping in, and the retrace that goes back over it.
+
+Why: the plug drops in only where the tip crosses the opening within the clearance across
+its path (USB-C: 2.56 mm for 2.4 mm, about +-0.08 mm), and the spiral's rings lie a pitch
+apart (0.3 mm): a ring that passes the opening 0.1-0.2 mm off lets part of the face hang
+over it. The board then bears the face on one edge and the opening's rim catches the other;
+the tilt torques (about T x and T y) jump for a frame or two, several times the sweep's own
+noise, while the axial load does not drop (the face still rests on the board), so no probe
+starts. The jump's direction does not name the side the opening lies on (the records of the
+tuning seeds: the lateral force it implies points toward the opening about as often as
+away, docs/BENCHMARKS.md), so the retrace does not step to one side: it takes the ring that
+the pattern skips, half a pitch outward.
+
+**Detection** (``NearMissDetector``): each new frame's torques about T x and T y during the
+sweep, against the median of the ``baseline_frames`` frames before it in the same sweep (the
+friction of the drag is in the baseline); a jump of ``tilt_jump_nm`` or more is a near miss,
+described at the frame's capture time.
+
+**Retrace** (SEARCH's ``retrace`` sub-stage, spiral_search.py): once the sweep has gone
+``ahead_m`` past where the tip was at that time without a catch (the face overlaps the
+opening's end before the same ring brings the tip over it: a retrace at once would cut that
+catch short), the pattern goes back to ``back_m`` before it and sweeps to ``ahead_m`` after
+it, with the pattern's radius ``across_m`` larger (the ring halfway to the next); the
+sweep then resumes along its own ring where it had reached, its baseline taken anew. A load
+drop on the way is a probe as in the sweep. At most ``per_pass`` retraces a pass (a rim
+that chatters costs no more than that), from pass ``from_pass`` on.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from core.config import Config, config_dataclass, number
+
+
+@config_dataclass
+class NearMissSettings(Config):
+    """The task's ``touch_spiral.near_miss:`` (see the module doc): ``enabled``;
+    ``tilt_jump_nm``: the jump of the tilt torques (about T x and T y, N*m) that marks a near
+    miss; ``baseline_frames``: the frames before it whose median is the baseline;
+    ``back_m``, ``ahead_m``: the retrace sweeps from this far before the near miss's place
+    to this far after it (m of path);
+    ``across_m``: the retrace's ring this far outside the
+    pattern's (m); ``per_pass``: the most retraces in one pass; ``from_pass``: the first pass
+    (0: the first) whose near misses are retraced."""
+
+    enabled: bool = False
+    tilt_jump_nm: float = number(1e-5, 0.1, default=0.0015)
+    baseline_frames: int = number(2, 50, default=5)
+    back_m: float = number(0.0, 0.02, default=0.002)
+    ahead_m: float = number(0.0, 0.02, default=0.002)
+    across_m: float = number(0.0, 0.002, default=0.00015)
+    per_pass: int = number(0, 100, default=3)
+    from_pass: int = number(0, 100, default=0)
+
+
+class NearMissDetector:
+    """The tilt torques' jump over the sweep's baseline (see the module doc)."""
+
+    def __init__(self, settings: NearMissSettings) -> None:
+        self.settings = settings
+        self._tilts: deque[np.ndarray] = deque(maxlen=settings.baseline_frames)
+        self._frame_t_s = -np.inf
+
+    def reset(self) -> None:
+        """A new sweep: no baseline yet."""
+        self._tilts.clear()
+
+    def jumped(self, torque_t: np.ndarray | None, frame_t_s: float) -> bool:
+        """Whether the frame captured at ``frame_t_s`` (s), with torques ``torque_t`` (N*m,
+        in T), is a near miss; each frame is taken once, and a near miss's frame does not
+        join the baseline."""
+        if torque_t is None or frame_t_s <= self._frame_t_s:
+            return False
+        self._frame_t_s = frame_t_s
+        tilt = np.asarray(torque_t[:2], dtype=float)
+        if len(self._tilts) == self._tilts.maxlen:
+            jump = float(np.linalg.norm(tilt - np.median(self._tilts, axis=0)))
+            if jump >= self.settings.tilt_jump_nm:
+                return True
+        self._tilts.append(tilt)
+        return False
