@@ -5,12 +5,12 @@ Why: the plug drops in only where the tip crosses the opening within the clearan
 its path (USB-C: 2.56 mm for 2.4 mm, about +-0.08 mm), and the spiral's rings lie a pitch
 apart (0.3 mm): a ring that passes the opening 0.1-0.2 mm off lets part of the face hang
 over it. The board then bears the face on one edge and the opening's rim catches the other;
-the tilt torques (about T x and T y) jump for a frame or two, several times the sweep's own
-noise, while the axial load does not drop (the face still rests on the board), so no probe
-starts. The jump's direction does not name the side the opening lies on (the records of the
-tuning seeds: the lateral force it implies points toward the opening about as often as
-away, docs/BENCHMARKS.md), so the retrace does not step to one side: it takes the ring that
-the pattern skips, half a pitch outward.
+the tilt torques (about T x and T y) jump for a frame or two, while the axial load does not
+drop (the face still rests on the board), so no probe starts. The jump's direction does not
+name the side the opening lies on (the records of the tuning seeds: the lateral force it
+implies points toward the opening about as often as away, docs/BENCHMARKS.md), so the
+retrace does not step to one side: it takes the ring that the pattern skips, half a pitch
+outward.
 
 **Detection** (``NearMissDetector``): each new frame's torques about T x and T y during the
 sweep, against the median of the ``baseline_frames`` frames before it in the same sweep (the
@@ -25,6 +25,10 @@ it, with the pattern's radius ``across_m`` larger (the ring halfway to the next)
 sweep then resumes along its own ring where it had reached, its baseline taken anew. A load
 drop on the way is a probe as in the sweep. At most ``per_pass`` retraces a pass (a rim
 that chatters costs no more than that), from pass ``from_pass`` on.
+
+Off in the shipped tasks: on the tuning seeds every form of the retrace cost the first
+pass's catches more time than its own catches saved (docs/BENCHMARKS.md, "Near misses felt
+and retraced").
 """
 
 from __future__ import annotations
