@@ -13,7 +13,7 @@ retrace does not step to one side: it takes the ring that the pattern skips, hal
 outward.
 
 **Detection** (``NearMissDetector``): each new frame's torques about T x and T y during the
-sweep, against the median of the ``baseline_frames`` frames before it in the same sweep (the
+sweep, against the median of the ``median_frames`` frames before it in the same sweep (the
 friction of the drag is in the baseline); a jump of ``tilt_jump_nm`` or more is a near miss,
 described at the frame's capture time.
 
@@ -21,7 +21,7 @@ described at the frame's capture time.
 ``ahead_m`` past where the tip was at that time without a catch (the face overlaps the
 opening's end before the same ring brings the tip over it: a retrace at once would cut that
 catch short), the pattern goes back to ``back_m`` before it and sweeps to ``ahead_m`` after
-it, with the pattern's radius ``across_m`` larger (the ring halfway to the next); the
+it, with the pattern's radius ``outward_m`` larger (the ring halfway to the next); the
 sweep then resumes along its own ring where it had reached, its baseline taken anew. A load
 drop on the way is a probe as in the sweep. At most ``per_pass`` retraces a pass (a rim
 that chatters costs no more than that), from pass ``from_pass`` on.
@@ -44,19 +44,19 @@ from core.config import Config, config_dataclass, number
 class NearMissSettings(Config):
     """The task's ``touch_spiral.near_miss:`` (see the module doc): ``enabled``;
     ``tilt_jump_nm``: the jump of the tilt torques (about T x and T y, N*m) that marks a near
-    miss; ``baseline_frames``: the frames before it whose median is the baseline;
+    miss; ``median_frames``: the frames before it whose median is the baseline;
     ``back_m``, ``ahead_m``: the retrace sweeps from this far before the near miss's place
     to this far after it (m of path);
-    ``across_m``: the retrace's ring this far outside the
+    ``outward_m``: the retrace's ring this far outside the
     pattern's (m); ``per_pass``: the most retraces in one pass; ``from_pass``: the first pass
     (0: the first) whose near misses are retraced."""
 
     enabled: bool = False
     tilt_jump_nm: float = number(1e-5, 0.1, default=0.0015)
-    baseline_frames: int = number(2, 50, default=5)
+    median_frames: int = number(2, 50, default=5)
     back_m: float = number(0.0, 0.02, default=0.002)
     ahead_m: float = number(0.0, 0.02, default=0.002)
-    across_m: float = number(0.0, 0.002, default=0.00015)
+    outward_m: float = number(0.0, 0.002, default=0.00015)
     per_pass: int = number(0, 100, default=3)
     from_pass: int = number(0, 100, default=0)
 
@@ -66,7 +66,7 @@ class NearMissDetector:
 
     def __init__(self, settings: NearMissSettings) -> None:
         self.settings = settings
-        self._tilts: deque[np.ndarray] = deque(maxlen=settings.baseline_frames)
+        self._tilts: deque[np.ndarray] = deque(maxlen=settings.median_frames)
         self._frame_t_s = -np.inf
 
     def reset(self) -> None:

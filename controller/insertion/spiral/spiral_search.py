@@ -189,7 +189,7 @@ def _sweep_or_probe(
         m.fire("retrace")
         assert run.retrace_until_m is not None and m.near_misses is not None
         if run.s_m >= run.retrace_until_m:
-            run.s_m, run.retrace_until_m, run.across_m = run.resume_m, None, 0.0
+            run.s_m, run.retrace_until_m, run.outward_m = run.resume_m, None, 0.0
             m.near_misses.reset()  # the same rim once more is no new near miss
             state.stage = SearchStage.SWEEP
         return m.pressed(obs, force, moving=True)
@@ -203,7 +203,7 @@ def _retrace_due(m: SpiralMachine) -> bool:
     """Begin the retrace of the near miss at ``near_miss_m`` once the sweep has gone
     ``ahead_m`` past it without a catch, unless the pass has had its ``per_pass`` or comes
     before ``from_pass``: from ``back_m`` before it (reached first, pressed) to ``ahead_m``
-    after it, on the ring ``across_m`` outside; the sweep then resumes where it had
+    after it, on the ring ``outward_m`` outside; the sweep then resumes where it had
     reached."""
     detector, run, there = m.near_misses, m.memory, m.memory.near_miss_m
     assert detector is not None and there is not None
@@ -218,5 +218,5 @@ def _retrace_due(m: SpiralMachine) -> bool:
     run.retraces[run.pass_index] = done + 1
     run.resume_m, run.retrace_until_m = run.s_m, there + settings.ahead_m
     run.s_m = max(m.search_pass.start_m, there - settings.back_m)
-    run.across_m, run.retrace_started = settings.across_m, False
+    run.outward_m, run.retrace_started = settings.outward_m, False
     return True

@@ -22,7 +22,7 @@ from tests.controller.insertion.test_touch_spiral import SPIRAL, run, touch_worl
 
 SLOW = replace(SPIRAL, yaw_range_rad=0.0, sweep_speed_m_s=0.002)  # the toy's catch needs 0.1 s
 ON = NearMissSettings(enabled=True, tilt_jump_nm=0.0015, back_m=0.002,
-                      across_m=SPIRAL.pitch_m / 2, per_pass=3)  # fmt: skip
+                      outward_m=SPIRAL.pitch_m / 2, per_pass=3)  # fmt: skip
 
 
 def spiral(world, config: TouchSpiralConfig) -> SpiralMachine:
@@ -91,12 +91,12 @@ def test_a_near_miss_is_retraced_half_a_pitch_outside_and_caught():
             target = machine.tip_target(machine.memory.s_m, 0.0)[:2]
             nominal = np.array([world.hole.x_m, world.hole.y_m])
             assert np.linalg.norm(target - nominal) == pytest.approx(
-                math.hypot(u, v) + ON.across_m, abs=1e-9
+                math.hypot(u, v) + ON.outward_m, abs=1e-9
             )
     assert retraced, "no near miss"
     assert reasons(machine)[2] == "caught"
     assert np.linalg.norm(world.tip[:2] - hole) < world.hole_radius_m
-    assert machine.memory.across_m == 0.0  # the catch ends the retrace
+    assert machine.memory.outward_m == 0.0  # the catch ends the retrace
 
 
 def test_a_quiet_rim_starts_no_retrace():
@@ -119,7 +119,7 @@ def test_the_retraces_of_a_pass_are_capped():
 
 @pytest.mark.parametrize(
     ("key", "value"),
-    [("tilt_jump_nm", "0"), ("baseline_frames", "1"), ("across_m", "0.01"), ("per_pass", "-1")],
+    [("tilt_jump_nm", "0"), ("median_frames", "1"), ("outward_m", "0.01"), ("per_pass", "-1")],
 )
 def test_near_miss_settings_out_of_range_are_refused(key, value):
     with pytest.raises(ConfigError, match=f"touch_spiral.near_miss.{key}"):
