@@ -188,8 +188,8 @@ class SearchMemory:
     after a tare), the place of a near miss not yet retraced (``near_miss_m``, path length,
     m; None without one), and a retrace's: where it ends (``retrace_until_m``, m; None
     outside one) and the sweep resumes (``resume_m``), whether its start has been reached
-    (``retrace_started``), its ring outside the pattern's (``outward_m``, m) and the
-    retraces made in each pass so far (``retraces``, by pass index)."""
+    (``retrace_started``) and the retraces made in each pass so far (``retraces``, by pass
+    index)."""
 
     pass_index: int = 0
     s_m: float = 0.0
@@ -204,7 +204,6 @@ class SearchMemory:
     retrace_until_m: float | None = None
     resume_m: float = 0.0
     retrace_started: bool = False
-    outward_m: float = 0.0
     retraces: dict[int, int] = field(default_factory=dict)
 
     def s_at(self, t_s: float) -> float:
@@ -425,7 +424,7 @@ class SpiralMachine:
         if self._decided is None:
             self.fire(guard)
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
-        self.memory.retrace_until_m, self.memory.outward_m = None, 0.0
+        self.memory.retrace_until_m = None
         self.memory.near_miss_m = None
         if self.near_misses is not None:
             self.near_misses.reset()
@@ -525,13 +524,14 @@ class SpiralMachine:
 
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
-        present pass's ``pattern_turn_rad``; in a retrace, ``outward_m`` further from its
+        present pass's ``pattern_turn_rad``; in a retrace, ``near_miss.outward_m`` further from its
         centre), ``height_m`` above the nominal board; at FEEL's site (``at_feel_site``)
         ``rock.site_m`` from the nominal opening along its y instead."""
         u, v = self._pattern.offset(s_m)
         radius = math.hypot(u, v)
-        if self.memory.outward_m and radius > 0.0:  # a retrace's ring
-            scale = 1.0 + self.memory.outward_m / radius
+        detector = self.near_misses
+        if detector is not None and self.memory.retrace_until_m is not None and radius > 0.0:
+            scale = 1.0 + detector.settings.outward_m / radius  # a retrace's ring
             u, v = u * scale, v * scale
         turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
         if self.at_feel_site:

@@ -189,7 +189,7 @@ def _sweep_or_probe(
         m.fire("retrace")
         assert run.retrace_until_m is not None and m.near_misses is not None
         if run.s_m >= run.retrace_until_m:
-            run.s_m, run.retrace_until_m, run.outward_m = run.resume_m, None, 0.0
+            run.s_m, run.retrace_until_m = run.resume_m, None
             m.near_misses.reset()  # the same rim once more is no new near miss
             state.stage = SearchStage.SWEEP
         return m.pressed(obs, force, moving=True)
@@ -218,5 +218,5 @@ def _retrace_due(m: SpiralMachine) -> bool:
     run.retraces[run.pass_index] = done + 1
     run.resume_m, run.retrace_until_m = run.s_m, there + settings.ahead_m
     run.s_m = max(m.search_pass.start_m, there - settings.back_m)
-    run.outward_m, run.retrace_started = settings.outward_m, False
+    run.retrace_started = False
     return True

@@ -96,7 +96,7 @@ def test_a_near_miss_is_retraced_half_a_pitch_outside_and_caught():
     assert retraced, "no near miss"
     assert reasons(machine)[2] == "caught"
     assert np.linalg.norm(world.tip[:2] - hole) < world.hole_radius_m
-    assert machine.memory.outward_m == 0.0  # the catch ends the retrace
+    assert machine.memory.retrace_until_m is None  # the catch ends the retrace
 
 
 def test_a_quiet_rim_starts_no_retrace():
