@@ -17,7 +17,14 @@ runs warm here (no sleeps between batches), which a real-time run's does not (do
 relaxed as in evaluation/bench/episode.py), as a product run does. The timers add about a
 microsecond per record.
 
-    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime]
+``--replay`` asks what the pauses cost: the trial's records (as the writer took them) are
+written again into a new file on this thread, a flush's worth of log time at a time
+(encode, then each channel's ``log``, then the flush, each timed), three ways: back to back;
+after a sleep of one flush interval before each batch (as the logger waits at real time);
+and after spinning that long instead (the thread kept busy, so what is lost in the pause is
+not the thread's own). The same work, so any difference is the pause's.
+
+    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime | --replay]
 """
 
 from __future__ import annotations
@@ -138,14 +145,87 @@ def _timed_log(log: Any, name: str, stages: StageTimes) -> Any:
     return timed
 
 
+Record = tuple[Any, int, Any, Any]
+"""A queued record as the writer thread takes it: (topic, log time ns, encoder, payload)."""
+
+
+def keep_records(records: list[Record]) -> Any:
+    """Patch ``EpisodeWriter._write`` to append each record it writes to ``records``; returns
+    a function that undoes it."""
+    original = EpisodeWriter._write
+
+    def write(self, item):  # type: ignore[no-untyped-def]
+        records.append(item)
+        original(self, item)
+
+    EpisodeWriter._write = write  # type: ignore[method-assign]
+
+    def undo() -> None:
+        EpisodeWriter._write = original  # type: ignore[method-assign]
+
+    return undo
+
+
+def replay(records: list[Record], interval_s: float, pause: str) -> tuple[float, float, int]:
+    """Write ``records`` again into a new file on this thread, ``interval_s`` of log time at a
+    time: each batch's records (``_write``: encode and ``log``), then a flush, after
+    ``pause`` (``none``, ``sleep`` or ``spin``: ``interval_s`` of wall time slept or spun).
+    Returns the thread's CPU time for the records and for the flushes (s), and the batches.
+    The writer's own thread is stopped first, so the work is this thread's."""
+    with tempfile.TemporaryDirectory(prefix="bench_episode_replay_") as work:
+        writer = EpisodeWriter(Path(work) / EPISODE_FILE, {})
+        writer._stopping = True  # its logger thread returns at once (nothing queued)
+        writer._wake.set()
+        writer._thread.join()
+        step_ns = round(interval_s * 1e9)
+        records_ns = flush_ns = batches = 0
+        i, n = 0, len(records)
+        while i < n:
+            end_ns, j = records[i][1] + step_ns, i
+            while j < n and records[j][1] < end_ns:
+                j += 1
+            if pause == "sleep":
+                time.sleep(interval_s)
+            elif pause == "spin":
+                until = time.perf_counter() + interval_s
+                while time.perf_counter() < until:
+                    pass
+            began = time.thread_time_ns()
+            for item in records[i:j]:
+                writer._write(item)
+            wrote = time.thread_time_ns()
+            writer._flush()
+            records_ns += wrote - began
+            flush_ns += time.thread_time_ns() - wrote
+            batches, i = batches + 1, j
+        writer._finish()
+        writer._stream.close()
+    return records_ns / 1e9, flush_ns / 1e9, batches
+
+
+def report_replay(records: list[Record], loop_s: float, interval_s: float) -> None:
+    """Print ``replay``'s three ways, twice each, as % of a core per s of loop time."""
+    print(f"{len(records)} records replayed, {interval_s:g} s of log time a batch\n")
+    print("| pause before each batch | records, % | flushes, % | total, % of a core |")
+    print("|---|---:|---:|---:|")
+    for pause in ("none", "sleep", "spin") * 2:
+        records_s, flush_s, _ = replay(records, interval_s, pause)
+        print(f"| {pause} | {records_s / loop_s * 100:.2f} | {flush_s / loop_s * 100:.2f} | "
+              f"{(records_s + flush_s) / loop_s * 100:.2f} |")  # fmt: skip
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog=job_prog("bench_episode_stages"), description=__doc__.splitlines()[0]
     )
     parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument(
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument(
         "--realtime", action="store_true", help="at real time: cold code after each wake-up"
+    )
+    mode.add_argument(
+        "--replay", action="store_true", help="the records written again, with and without pauses"
     )
     args = parser.parse_args(argv)
     budget = f"{args.seconds:g}"
@@ -153,8 +233,8 @@ def main(argv: list[str] | None = None) -> int:
                                f"machine.timeouts.total_s={budget}",
                                "machine.search.uncertainty_xy_m=0.0003",
                                *(RELAXED_OVERRUNS if args.realtime else ())])  # fmt: skip
-    stages = StageTimes()
-    undo = stages.patch()
+    stages, records = StageTimes(), list[Record]()
+    undo = keep_records(records) if args.replay else stages.patch()
     try:
         with tempfile.TemporaryDirectory(prefix="bench_episode_stages_") as work:
             out = Path(work) / "trial"
@@ -167,6 +247,10 @@ def main(argv: list[str] | None = None) -> int:
         undo()
     loop_s = outcome.loop.stats.ticks / task.config.loop.rate_hz
     print(f"Machine: {describe_machine('the trial in one process, its writer thread')}")
+    if args.replay:
+        print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time")
+        report_replay(records, loop_s, EpisodeOptions().flush_interval_s)
+        return 0
     print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time in {wall_s:.1f} s of wall "
           f"time, {sum(stages.count.values())} records, file {size / 1e6:.2f} MB\n")  # fmt: skip
     print(
