@@ -24,7 +24,8 @@ after a sleep of one flush interval before each batch (as the logger waits at re
 and after spinning that long instead (the thread kept busy, so what is lost in the pause is
 not the thread's own). The same work, so any difference is the pause's.
 
-    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime | --replay]
+    python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime]
+    python -m evaluation bench_episode_stages --replay [--interval 0.05] [--seconds 20] [--seed 1]
 """
 
 from __future__ import annotations
@@ -46,14 +47,20 @@ from evaluation.common.machine_info import describe_machine
 from evaluation.trials.trial import run
 
 
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not 1.0 <= value <= 600.0:
-        raise argparse.ArgumentTypeError(f"expected seconds in [1, 600], got {text!r}")
-    return value
+def _seconds(low: float, high: float) -> Any:
+    """An argparse type: a number of seconds in [``low``, ``high``]."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not low <= value <= high:
+            expected = f"expected seconds in [{low:g}, {high:g}]"
+            raise argparse.ArgumentTypeError(f"{expected}, got {text!r}")
+        return value
+
+    return parse
 
 
 class StageTimes:
@@ -218,7 +225,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog=job_prog("bench_episode_stages"), description=__doc__.splitlines()[0]
     )
-    parser.add_argument("--seconds", type=_positive, default=20.0, help="loop time, s")
+    parser.add_argument("--seconds", type=_seconds(1.0, 600.0), default=20.0, help="loop time, s")
     parser.add_argument("--seed", type=int, default=1)
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument(
@@ -227,6 +234,10 @@ def main(argv: list[str] | None = None) -> int:
     mode.add_argument(
         "--replay", action="store_true", help="the records written again, with and without pauses"
     )
+    parser.add_argument(
+        "--interval", type=_seconds(0.001, 10.0), default=EpisodeOptions().flush_interval_s,
+        help="with --replay: the log time a batch spans, s (default: the writer's flush interval)",
+    )  # fmt: skip
     args = parser.parse_args(argv)
     budget = f"{args.seconds:g}"
     task = load_task("usb_c", [f"machine.timeouts.search_s={budget}",
@@ -249,7 +260,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"Machine: {describe_machine('the trial in one process, its writer thread')}")
     if args.replay:
         print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time")
-        report_replay(records, loop_s, EpisodeOptions().flush_interval_s)
+        report_replay(records, loop_s, args.interval)
         return 0
     print(f"usb_c seed {args.seed}: {loop_s:.1f} s of loop time in {wall_s:.1f} s of wall "
           f"time, {sum(stages.count.values())} records, file {size / 1e6:.2f} MB\n")  # fmt: skip
