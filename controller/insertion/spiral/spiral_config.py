@@ -44,6 +44,7 @@ class SpiralConfig(Config):
     and the force that ends it; ``stall_s``, ``stall_m``: a push whose TCP has gone no more
     than ``stall_m`` lower for ``stall_s`` has ended too (the arm's own limit); ``entry_m``:
     the least drop of the tip below its height at the press that counts as in;
+    ``lift_speed_m_s``: after a jam, back up to the press at this speed;
     ``jam_skip_m``: after a jam the pattern goes on this much further along; ``tare_s``: the
     sensor's zero is averaged over this at the hover; ``sweep_speed_m_s``: along the path;
     ``descend_speed_m_s``: down to the touch; ``fall_in_m``: the TCP this far below where it
@@ -85,6 +86,7 @@ class SpiralConfig(Config):
     stall_s: float = number(0.01, 10.0, default=0.3)
     stall_m: float = number(1e-6, 0.01, default=1e-4)
     entry_m: float = number(0.0, 0.05, default=0.002)
+    lift_speed_m_s: float = number(1e-4, 0.05, default=0.004)
     jam_skip_m: float = number(0.0, 0.05, default=0.001)
     tare_s: float = number(0.0, 5.0, default=0.2)
     sweep_speed_m_s: float = number(1e-4, 0.1, default=0.01)

@@ -3,7 +3,7 @@
 ``stall_m`` lower for ``stall_s`` (the arm's workspace floor). ``entry_m`` or more below the
 press's height the plug is in (RELEASE, ``bottomed``: on the receptacle's floor or the plug's
 shoulder, however long the plug sticks out of the grasp); less, it jammed on the rim: back
-up to the press, and SEARCH's sweep goes on ``jam_skip_m`` further along (``jammed``)."""
+up to the press at ``lift_speed_m_s``, and SEARCH's sweep goes on ``jam_skip_m`` further along (``jammed``)."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             m.state(SearchState).stage = SearchStage.SWEEP
             m.memory.s_m += cfg.jam_skip_m
             return m.pressed(obs, force)
-        return m.descend(obs, -cfg.push_speed_m_s, hold_xy=state.hold_xy)
+        return m.descend(obs, -cfg.lift_speed_m_s, hold_xy=state.hold_xy)
     z = obs.arm.tcp.xyz_m[2]
     if z < state.stall_z_m - cfg.stall_m:
         state.stall_z_m, state.stall_t_s = z, obs.t_s
@@ -70,7 +70,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             return m.hold()
         state.stage = InsertStage.LIFT
         m.fire("lift")
-        return m.descend(obs, -cfg.push_speed_m_s, hold_xy=state.hold_xy)
+        return m.descend(obs, -cfg.lift_speed_m_s, hold_xy=state.hold_xy)
     torque_t = m.reading.torque_t()
     if m.torque_servo is not None and torque_t is not None:
         if state.tip_xy is None:
