@@ -188,6 +188,17 @@ def test_a_catch_that_stops_short_of_the_entry_is_a_jam_and_the_sweep_goes_on():
     assert reasons(machine)[-3:] == ["pattern_done", "released", "retracted"]
 
 
+@pytest.mark.parametrize("lift_speed_m_s", [0.004, 0.02])
+def test_after_a_jam_it_backs_up_to_the_press_at_the_lift_speed(lift_speed_m_s):
+    world = ToyWorld(depth_limit_m=0.0015)  # every catch jams
+    config = replace(SMALL, lift_speed_m_s=lift_speed_m_s)
+    machine = SpiralMachine(config, world.plug, world.hole)
+    run(world, machine)
+    lifts = [c.twist.linear_m_s[2] for c in world.commands if c.rule == "insert.lift"]
+    assert lifts and max(lifts) == pytest.approx(lift_speed_m_s)  # up (B z) at that speed
+    assert "jammed" in reasons(machine)
+
+
 def test_the_tare_takes_up_the_sensor_bias():
     world = ToyWorld(force_bias_n=3.0)  # above the touch force: untared it would "touch" at once
     machine = SpiralMachine(SMALL, world.plug, world.hole)
