@@ -3,7 +3,8 @@
 ``stall_m`` lower for ``stall_s`` (the arm's workspace floor). ``entry_m`` or more below the
 press's height the plug is in (RELEASE, ``bottomed``: on the receptacle's floor or the plug's
 shoulder, however long the plug sticks out of the grasp); less, it jammed on the rim: back
-up to the press at ``lift_speed_m_s``, and SEARCH's sweep goes on ``jam_skip_m`` further along (``jammed``)."""
+up to the press at ``lift_speed_m_s``, and SEARCH's sweep goes on ``jam_skip_m`` further
+along (``jammed``)."""
 
 from __future__ import annotations
 
