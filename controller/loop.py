@@ -68,7 +68,7 @@ from controller.insertion.interface import (
 )
 from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
 from controller.tactile.wrench import WrenchEstimate
-from controller.tactile.wrench_source import WrenchSource
+from controller.tactile.wrench_source import WrenchSource, estimator_of
 from controller.teleop import TeleopArbiter, TeleopConfig
 from core.clock import Clock
 from core.config import Config, config_dataclass, number
@@ -275,6 +275,7 @@ class ControlLoop:
         self._stopped = False
         self._stop_error: Exception | None = None
         self._wrench: WrenchEstimate | None = None
+        self._contact_centre_s_m: tuple[float, float] | None = None  # Observation's
         self._frame_t_s: float | None = None
         self._arm_status: ArmStatus | None = None
         self._gripper_status: GripperStatus | None = None
@@ -371,6 +372,7 @@ class ControlLoop:
         if isinstance(frame, TactileFrame) and frame.t_s != self._frame_t_s:
             self._wrench = self.estimator.push(frame.image, frame.t_s)
             self._frame_t_s = frame.t_s
+            self._contact_centre_s_m = _contact_centre_s_m(self.estimator)
         arm = _read(devices.arm.read_status, errors, "arm")
         if arm is not None:
             self._arm_status = arm
@@ -379,8 +381,9 @@ class ControlLoop:
             self._gripper_status = gripper
         if self._arm_status is not None and self._gripper_status is not None:
             self._last_observation = Observation(
-                now, self._wrench, self._arm_status, self._gripper_status, teleop
-            )
+                now, self._wrench, self._arm_status, self._gripper_status, teleop,
+                contact_centre_s_m=self._contact_centre_s_m,
+            )  # fmt: skip
         else:
             self._last_observation = None
         trip = self.watchdog.check(
@@ -535,3 +538,12 @@ def _read(read: Callable[..., Any], errors: dict[str, Exception], role: str, *ar
     except DeviceError as error:
         errors[role] = error
         return None
+
+
+def _contact_centre_s_m(source: WrenchSource) -> tuple[float, float] | None:
+    """Where the grasp presses the gel (x, y in S, m) as ``source``'s estimator last measured
+    it against the open gel; None for a source without an estimator (a scripted one) or
+    before a measurement."""
+    estimator = estimator_of(source)
+    centre_mm = None if estimator is None else estimator.contact_centre_mm
+    return None if centre_mm is None else (centre_mm[0] * 1e-3, centre_mm[1] * 1e-3)

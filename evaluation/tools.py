@@ -51,6 +51,8 @@ GROUPS = (
                 "which per-seed scene draws a batch's failures share"),
             Job("fit_axial_map", "evaluation.trials.axial_map_cli",
                 "the touch spiral's axial-force map"),
+            Job("fit_imprint_gain", "evaluation.trials.imprint_gain_cli",
+                "the touch spiral's imprint gain (the plug's offset across the fingers)"),
             Job("grasp_scores", "evaluation.trials.grasp_scores_cli",
                 "FEEL's in-hand estimate against the truth, from batch folders"),
             Job("hole_finds", "evaluation.trials.hole_finds_cli",

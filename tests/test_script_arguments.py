@@ -1,6 +1,5 @@
 """Every script refuses nonsense counts, seeds and outputs with exit code 2 before any work."""
 
-
 import pytest
 
 from tests.script_runs import script_main

@@ -25,7 +25,7 @@ from controller.loop import TickRecord
 from controller.tactile.estimator import TactileEstimator
 from controller.tactile.field import VectorField
 from controller.tactile.wrench import FLAG_FIELDS, VALUE_FIELDS, WrenchEstimate
-from controller.tactile.wrench_source import WrenchSource
+from controller.tactile.wrench_source import WrenchSource, estimator_of
 from core.clock import Clock
 from core.devices import ArmStatus, GripperStatus, Twist
 from core.spatial import quat_from_rpy
@@ -258,16 +258,6 @@ def wrench_json(item: tuple[int, WrenchEstimate]) -> bytes:
 
 def call_json(row: dict[str, Any]) -> bytes:
     return json_bytes(row)
-
-
-def estimator_of(source: Any) -> TactileEstimator | None:
-    """The ``TactileEstimator`` at the bottom of ``source`` (through wrappers' ``.estimator``,
-    as ``TransformedSource``), None if there is none."""
-    while not isinstance(source, TactileEstimator):
-        source = getattr(source, "estimator", None)
-        if source is None:
-            return None
-    return source
 
 
 def field_of(estimator: TactileEstimator | None) -> VectorField | None:

@@ -73,7 +73,9 @@ class TeleopInput:
 class Observation:
     """Everything the machine may know at one tick. ``wrench`` is the tactile estimate of the
     newest frame (None before the first frame is processed); ``fault`` names a device or
-    watchdog fault the loop detected this tick (None: none)."""
+    watchdog fault the loop detected this tick (None: none); ``contact_centre_s_m``: where
+    the grasp presses the gel (x, y in S, m), measured against the open gel when the
+    estimator last took its reference (None: not measured)."""
 
     t_s: float
     wrench: WrenchEstimate | None
@@ -81,6 +83,7 @@ class Observation:
     gripper: GripperStatus
     teleop: TeleopInput
     fault: str | None = None
+    contact_centre_s_m: tuple[float, float] | None = None
 
 
 @dataclass(frozen=True)

@@ -216,11 +216,10 @@ class InsertionMachine:
         command = self._decide(observation)
         phase, stage = self._decided or (self._phase, self._state.stage)
         if stage not in self.definition.stages.get(phase, ()):
-            raise RuntimeError(f"sub-stage {phase.name}.{stage.name} is not in the machine's "
-                               "definition")
-        return dataclasses.replace(
-            command, rule=self._rule, stage=f"{phase.value}.{stage.value}"
-        )
+            raise RuntimeError(
+                f"sub-stage {phase.name}.{stage.name} is not in the machine's definition"
+            )
+        return dataclasses.replace(command, rule=self._rule, stage=f"{phase.value}.{stage.value}")
 
     def _decide(self, obs: Observation) -> Command:
         dt = 0.0 if self._last_t_s is None else max(obs.t_s - self._last_t_s, 0.0)
@@ -283,8 +282,10 @@ class InsertionMachine:
     def go(self, obs: Observation, target: Phase, guard: str, rule: str = "") -> None:
         """Move to ``target`` under ``guard`` (``rule``: which of the guard's rules fired)."""
         if not self.definition.allows(self._phase, target, guard):
-            raise RuntimeError(f"transition {self._phase.name} -> {target.name} ({guard}) "
-                               "is not in the machine's definition")
+            raise RuntimeError(
+                f"transition {self._phase.name} -> {target.name} ({guard}) "
+                "is not in the machine's definition"
+            )
         self._transitions.append(Transition(obs.t_s, self._phase, target, guard, rule))
         self.fire(f"{guard}:{rule}" if rule else guard)
         self._phase = target

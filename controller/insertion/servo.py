@@ -19,9 +19,7 @@ from core.spatial import tilt_of_tool_axis, tool_z_in_base
 
 def torque_tolerance(settings: AlignSettings) -> np.ndarray:
     """ALIGN's tolerances on the normalised torques (tau_x, tau_y, tau_z), noise units."""
-    return np.array(
-        [settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma]
-    )
+    return np.array([settings.tol_tau_x_sigma, settings.tol_tau_y_sigma, settings.tol_tau_z_sigma])
 
 
 def torques_within_tolerance(signals: TactileSignals, settings: AlignSettings) -> bool:
@@ -78,6 +76,4 @@ class YawSweep:
         if self.sign * yaw_rad >= sweep_rad:
             self.sign = -self.sign
             self.reversals += 1
-        return self.reversals >= 2 * sweeps and (
-            self.sign * (yaw_rad - self.start_yaw_rad) >= 0.0
-        )
+        return self.reversals >= 2 * sweeps and (self.sign * (yaw_rad - self.start_yaw_rad) >= 0.0)

@@ -32,6 +32,7 @@ from typing import Any
 
 from controller.insertion import InsertionMachine, Machine
 from controller.insertion.force_reading import TactileAxialForce
+from controller.insertion.imprint import FaceOffset
 from controller.insertion.machine_config import s2t_matrix
 from controller.insertion.spiral import SpiralMachine
 from controller.insertion.spiral.torque_servo import TorqueServo
@@ -85,13 +86,15 @@ def _blind_machine(config: TaskConfig) -> Machine:
 def _touch_spiral_machine(config: TaskConfig) -> Machine:
     """The press spiral by touch (the product's machine): the axial force read from the
     estimate, its torques turned into T for the torque servo when ``push_servo.on``, for
-    FEEL's rock when ``rock.enabled`` and for the near misses when ``near_miss.enabled``."""
+    FEEL's rock when ``rock.enabled`` and for the near misses when ``near_miss.enabled``;
+    the plug's offset across the fingers from the grasp's imprint when ``imprint_gain`` > 0."""
     spiral = config.touch_spiral
     s2t = s2t_matrix(config.machine.signals.torque_axes)
     reading = TactileAxialForce(spiral.axial_weights, spiral.force_window, s2t)
     servo = TorqueServo(spiral.push_servo) if spiral.push_servo.on else None
+    face = FaceOffset(spiral.imprint_gain, s2t) if spiral.imprint_gain > 0 else None
     return SpiralMachine(
-        spiral, config.plug, config.hole, reading, servo, spiral.rock, spiral.near_miss
+        spiral, config.plug, config.hole, reading, servo, spiral.rock, spiral.near_miss, face
     )
 
 

@@ -6,10 +6,11 @@ evaluation/trials/oracle.py)."""
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 
+from controller.tactile.estimator import TactileEstimator
 from controller.tactile.wrench import WrenchEstimate
 
 
@@ -56,3 +57,13 @@ class TransformedSource:
 
     def rezero(self, n_frames: int | None = None) -> None:
         self.estimator.rezero(n_frames)
+
+
+def estimator_of(source: Any) -> TactileEstimator | None:
+    """The ``TactileEstimator`` at the bottom of ``source`` (through wrappers' ``.estimator``,
+    as ``TransformedSource``), None if there is none."""
+    while not isinstance(source, TactileEstimator):
+        source = getattr(source, "estimator", None)
+        if source is None:
+            return None
+    return source

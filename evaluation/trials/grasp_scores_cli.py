@@ -86,9 +86,9 @@ def _plan(folder: Path) -> dict[str, Any]:
     return plan if isinstance(plan, dict) else {}
 
 
-def _with_tip_y(results: list[TrialResult], task: str, overrides: list[str]) -> tuple[
-    list[TrialResult], float
-]:
+def _with_tip_y(
+    results: list[TrialResult], task: str, overrides: list[str]
+) -> tuple[list[TrialResult], float]:
     """``results`` with ``tip_y_est_m`` from the thickness-plane tilt (where estimated) for a
     plug of the task's length; the length."""
     length = load_task(task, tuple(overrides), with_calibration=False).config.plug.length_m

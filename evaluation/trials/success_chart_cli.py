@@ -104,4 +104,3 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
     return run_tool(PROG, body)
-

@@ -200,6 +200,7 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     one: the align machine's width-plane tilt and tip, the press spiral's thickness-plane
     tilt and tip) and the scene's truth for ``seed`` (TrialResult's pose fields)."""
     # imported here: the scene's draws belong to the simulator, which a real run never loads
+    from drivers.sim.scenes.insertion.coupling import imprint
     from drivers.sim.scenes.insertion.draws import draw_scene
     from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilt_thickness_rad
 
@@ -211,14 +212,22 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     tilt = estimate.tilt_rad if estimate is not None else math.nan
     thickness = getattr(ran.machine, "tilt_x_estimate_rad", None)
     tip_y = getattr(ran.machine, "tip_y_estimate_m", None)
+    # the press spiral's (its imprint and FEEL), else the align machine's FEEL's
+    tip_x = getattr(ran.machine, "tip_x_estimate_m", None)
+    face = getattr(ran.machine, "face", None)
+    centre = None if face is None else face.centre_m
+    if tip_x is None and estimate is not None:
+        tip_x = estimate.tip_t[0]
     return {
         "grasp_tilt_est_rad": tilt,
         "grasp_tilt_true_rad": truth.tilt_width_rad,
         "grasp_tilt_thickness_true_rad": truth.tilt_thickness_rad,
         "thickness_tilt_to_receptacle_true_rad": truth.tilt_thickness_rad - receptacle,
         "grasp_tilt_thickness_est_rad": math.nan if thickness is None else thickness,
-        "tip_x_est_m": float(estimate.tip_t[0]) if estimate is not None else math.nan,
+        "tip_x_est_m": math.nan if tip_x is None else float(tip_x),
         "tip_x_true_m": float(truth.tip_t_m[0]),
         "tip_y_est_m": math.nan if tip_y is None else tip_y,
         "tip_y_true_m": float(truth.tip_t_m[1]),
+        "imprint_centre_m": math.nan if centre is None else centre,
+        "imprint_true_m": imprint(draw.grasp)[0][0],
     }

@@ -223,8 +223,12 @@ def takeover_machine(obs, k):
 
 
 def test_a_lost_gamepad_in_control_trips_the_watchdog(devices, clock):
-    devices.gamepad.play([PadEvent(0.05, axes={"vx": 0.5}, buttons={"deadman": True}),
-                          PadEvent(0.20, attached=False)])
+    devices.gamepad.play(
+        [
+            PadEvent(0.05, axes={"vx": 0.5}, buttons={"deadman": True}),
+            PadEvent(0.20, attached=False),
+        ]
+    )
     records = []
     machine = ScriptedMachine(takeover_machine)
     result = make_loop(machine, devices, clock, observer=records.append).run()
@@ -250,8 +254,12 @@ class ReadSpy:
 
 
 def test_a_lost_gamepad_stops_the_arm_before_the_ticks_other_reads(devices, clock):
-    devices.gamepad.play([PadEvent(0.05, axes={"vx": 0.5}, buttons={"deadman": True}),
-                          PadEvent(0.20, attached=False)])
+    devices.gamepad.play(
+        [
+            PadEvent(0.05, axes={"vx": 0.5}, buttons={"deadman": True}),
+            PadEvent(0.20, attached=False),
+        ]
+    )
     tactile, arm = ReadSpy(devices.tactile, clock), StopSpy(devices.arm, clock)
     records = []
     result = make_loop(ScriptedMachine(takeover_machine),

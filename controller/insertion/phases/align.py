@@ -139,8 +139,12 @@ def _seek(
     machine.fire("seek")
     v_edge = settings.seek_speed_m_s * state.direction
     v_edge[2] = -_press_rate(machine)
-    v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge,
-                           heel_yaw_rate(machine.signals, settings, rotation))
+    v_tcp, w = pivot_twist(
+        np.asarray(obs.arm.tcp.xyz_m, dtype=float),
+        edge,
+        v_edge,
+        heel_yaw_rate(machine.signals, settings, rotation),
+    )
     return twist_command(machine.config, v_tcp, w)
 
 
@@ -160,8 +164,9 @@ def _turn(
     v_edge = settings.seek_speed_m_s * held * state.direction
     v_edge[2] = machine.config.approach.pose_gain_1_s * (state.point[2] - edge[2])
     yaw_rate = heel_yaw_rate(machine.signals, settings, rotation)
-    w = clamp_norm(settings.upright_gain_1_s * angle * axis + yaw_rate,
-                   settings.max_turn_speed_rad_s)
+    w = clamp_norm(
+        settings.upright_gain_1_s * angle * axis + yaw_rate, settings.max_turn_speed_rad_s
+    )
     v_tcp, w = pivot_twist(np.asarray(obs.arm.tcp.xyz_m, dtype=float), edge, v_edge, w)
     return twist_command(machine.config, v_tcp, w)
 

@@ -89,7 +89,7 @@ def step(machine: InsertionMachine, obs: Observation, new: bool) -> Command:
         state.axis = np.array([-math.sin(yaw), math.cos(yaw), 0.0])
         state.tip_z0_m = float(tip_position(obs.arm.tcp, machine.plug.length_m)[2])
     angle = rock_angle(rotation, state.reference, state.axis)
-    state.angles = [*state.angles[-(_HISTORY_TICKS - 1):], (obs.t_s, angle)]
+    state.angles = [*state.angles[-(_HISTORY_TICKS - 1) :], (obs.t_s, angle)]
     if state.stage is FeelStage.LIFT:
         return _lift(machine, state, obs, rotation)
     torque = float(machine.signals.torque_t[1])

@@ -159,9 +159,12 @@ class TouchSpiralConfig(SpiralConfig):
     ``push_servo``: INSERT's yield to the torques while pushing (``torque_servo``);
     ``rock``: FEEL, the plug's tilt in the hand about T x found by rocking it at the first
     touch (``spiral_feel``); ``near_miss``: the sweep's near misses felt in the tilt
-    torques, and retraced (``spiral_near_miss``)."""
+    torques, and retraced (``spiral_near_miss``); ``imprint_gain``: the grasp's contact
+    centre on the gel read per unit of the plug's offset across the fingers (dimensionless;
+    0: the offset not taken from it; controller/insertion/imprint.py)."""
 
     axial_weights: AxialWeights = (0.0, 0.0, 0.0, 0.0, 2.0, 0.0, 0.0, 0.0, 0.0)
+    imprint_gain: float = number(0.0, 2.0, default=0.0)
     push_servo: TorqueServoSettings = TorqueServoSettings()
     rock: RockSettings = RockSettings()
     near_miss: NearMissSettings = NearMissSettings()

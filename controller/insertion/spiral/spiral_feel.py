@@ -217,9 +217,7 @@ def angle_at(angles: Iterable[tuple[float, float]], t_s: float) -> float:
     return float(np.interp(t_s, times, values))
 
 
-def sweep_step(
-    samples: list[tuple[float, float]], window: int
-) -> tuple[float, float] | None:
+def sweep_step(samples: list[tuple[float, float]], window: int) -> tuple[float, float] | None:
     """The largest torque step of a sweep (``samples``: (angle rad, torque N*m) in the
     sweep's order): (the angle between the two frames either side of it, the step's size
     N*m, the mean of ``window`` frames after less before); None with too few frames."""

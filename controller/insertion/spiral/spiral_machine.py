@@ -42,6 +42,7 @@ from scipy.spatial.transform import Rotation
 from controller.insertion.definition import Definition, Edge, check_definition
 from controller.insertion.force_reading import ArmForce, ForceReading
 from controller.insertion.grasp_estimate import GraspEstimate, tilt_tip_offset_m
+from controller.insertion.imprint import FaceOffset
 from controller.insertion.interface import (
     Command,
     FailureReason,
@@ -244,7 +245,8 @@ class SpiralMachine:
     ``reading``: where the force comes from (the arm's F/T sensor by default); ``torque_servo``:
     INSERT's yield to the reading's torques while pushing (none: the plug held at the pass's
     orientation); ``rock``: FEEL's settings; ``near_misses``: the sweep's near misses in the
-    reading's tilt torques (none: not looked for)."""
+    reading's tilt torques (none: not looked for); ``face``: the plug's offset across the
+    fingers from its imprint on the gel (none: the nominal grasp's 0)."""
 
     def __init__(
         self,
@@ -255,8 +257,13 @@ class SpiralMachine:
         torque_servo: TorqueServo | None = None,
         rock: feel.RockSettings | None = None,
         near_misses: near_miss.NearMissSettings | None = None,
+        face: FaceOffset | None = None,
     ) -> None:
         check_definition(SPIRAL)
+        self.face = face
+        # the plug's offset across the fingers (along T x, m) from its imprint, None before
+        # one is measured
+        self.face_offset_m: float | None = None
         self.config, self.plug, self.hole = config, plug, hole
         self.torque_servo = torque_servo
         self.rock = rock if rock is not None and rock.enabled else None
@@ -354,6 +361,17 @@ class SpiralMachine:
             return None
         return tilt_tip_offset_m(self.tilt_x_estimate_rad, self.plug.length_m)
 
+    @property
+    def tip_x_estimate_m(self) -> float | None:
+        """The tip's offset from the nominal along T x (m): the plug's offset across the
+        fingers (``face_offset_m``) plus the one FEEL's width-plane tilt implies
+        (``grasp``), None with neither: the trial's ``tip_x_est_m``."""
+        grasp = self.grasp
+        if grasp is None and self.face_offset_m is None:
+            return None
+        tilted = 0.0 if grasp is None else tilt_tip_offset_m(grasp.tilt_rad, grasp.length_m)
+        return (self.face_offset_m or 0.0) + tilted
+
     def step(self, obs: Observation) -> Command:
         """One tick: the command for ``obs``, naming the rule and the sub-stage that decided
         it."""
@@ -392,7 +410,18 @@ class SpiralMachine:
                 return self._fail(obs, F.SLIP)
             if self._limit_exceeded(obs):
                 return self._fail(obs, F.LIMIT_EXCEEDED)
+        self._read_face(obs)
         return _STEP[self._phase](self, obs)
+
+    def _read_face(self, obs: Observation) -> None:
+        """Take the plug's offset across the fingers from its imprint when a new one is
+        measured (the grasp's, a re-grasp's), and publish it (``method`` 'imprint': a tip
+        offset along T x, no tilt)."""
+        offset = None if self.face is None else self.face.read(obs)
+        if offset is None or offset == self.face_offset_m:
+            return
+        self.face_offset_m = offset
+        self.publish_in_hand(InHandEstimate(obs.t_s, "width", math.nan, offset, "imprint", True))
 
     def _limit_exceeded(self, obs: Observation) -> bool:
         """The tared force over ``tared_force_limit_n`` (once a tare is taken), or the TCP tilted
@@ -546,11 +575,12 @@ class SpiralMachine:
         return float(self._tcp_target(self.tip_target(self.memory.s_m, 0.0))[2])
 
     def tip_t(self) -> np.ndarray:
-        """The plug's tip in T (m): ``length_m`` along the plug's axis, T z turned back by
-        ``grasp_turn_rad`` (about T x, then T y: the axis that the TCP's turn by it sets
-        upright), T z for the nominal grasp. Every place the machine puts or reads the tip
-        takes it from here."""
-        return self.plug.length_m * _plug_axis_t(*self.grasp_turn_rad)
+        """The plug's tip in T (m): ``face_offset_m`` along T x, then ``length_m`` along the
+        plug's axis, T z turned back by ``grasp_turn_rad`` (about T x, then T y: the axis
+        that the TCP's turn by it sets upright), T z for the nominal grasp. Every place the
+        machine puts or reads the tip takes it from here."""
+        offset_t = np.array([self.face_offset_m or 0.0, 0.0, 0.0])
+        return offset_t + self.plug.length_m * _plug_axis_t(*self.grasp_turn_rad)
 
     def tip_b(self, obs: Observation) -> np.ndarray:
         """The plug's tip in B (m) with the TCP at ``obs``'s pose."""

@@ -174,9 +174,7 @@ def test_the_deadman_cannot_be_set_in_any_mode(tmp_path, capsys, backend, value)
     line with exit 2, whatever its value and backend, and nothing is written."""
     out = tmp_path / "o"
     override = f"teleop.require_deadman={value}"
-    code = demo_cli.main(
-        ["--no-view", "--backend", backend, "--set", override, "--out", str(out)]
-    )
+    code = demo_cli.main(["--no-view", "--backend", backend, "--set", override, "--out", str(out)])
     err = capsys.readouterr().err
     assert code == 2 and err.count("\n") == 1
     assert "teleop.require_deadman" in err and "safety rule" in err

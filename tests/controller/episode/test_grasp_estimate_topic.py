@@ -21,8 +21,10 @@ def test_feels_estimates_round_trip_with_the_trials_record(felt_trial):
     assert estimates and episode.counts[GRASP_ESTIMATE.name] == len(estimates)
     assert {(e.plane, e.method) for e in estimates} == {("thickness", "rock"), ("width", "rock")}
     # each plane's last is its kept one: the trial's tilt estimate and the tip offset it implies
-    for plane, tilt, tip in (("thickness", "grasp_tilt_thickness_est_rad", "tip_y_est_m"),
-                             ("width", "grasp_tilt_est_rad", "tip_x_est_m")):
+    for plane, tilt, tip in (
+        ("thickness", "grasp_tilt_thickness_est_rad", "tip_y_est_m"),
+        ("width", "grasp_tilt_est_rad", "tip_x_est_m"),
+    ):
         in_plane = [e for e in estimates if e.plane == plane]
         kept = [e for e in in_plane if e.kept]
         assert kept == in_plane[-1:]

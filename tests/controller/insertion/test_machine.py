@@ -198,14 +198,18 @@ def test_jams_at_one_height_mean_the_rim_whatever_the_depth_by_touch_says():
     world.run_until(machine, Phase.DONE, max_s=90.0)
     reasons = [r for _, _, r in path(machine)]
     first_jam = reasons.index("jam")
-    assert reasons[first_jam:first_jam + 3] == ["jam", "backed_off", "aligned"]
+    assert reasons[first_jam : first_jam + 3] == ["jam", "backed_off", "aligned"]
     second_jam = reasons.index("jam", first_jam + 1)
     assert "hole_found" not in reasons[first_jam:second_jam]  # both at the one catch
     # after the second jam at that height the plug no longer counts as entered there: no
     # third push; ALIGN's yaw stage finds it not over the opening, and it searches again
     next_catch = reasons.index("hole_found", second_jam)
     assert reasons[second_jam:next_catch] == [
-        "jam", "backed_off", "not_entered", "search_again", "surface_contact"
+        "jam",
+        "backed_off",
+        "not_entered",
+        "search_again",
+        "surface_contact",
     ]
     assert machine.phase is Phase.DONE
 
@@ -223,7 +227,7 @@ def test_the_walls_holding_the_yaw_end_the_sweep_early_in_the_servo():
     rules = [c.rule for c in world.commands]
     assert "align.yaw_sweep" in rules and "align.twist_held" in rules
     assert rules.index("align.twist_held") > rules.index("align.yaw_sweep")
-    assert "align.torque_servo" in rules[rules.index("align.twist_held"):]
+    assert "align.torque_servo" in rules[rules.index("align.twist_held") :]
     assert max(yaws) - min(yaws) < 0.5 * cfg.insert.yaw_sweep_rad  # the sweep cut short
     # with the rule off the same world sweeps the whole range (as on a bare rim)
     off = replace(cfg, align=replace(cfg.align, twist_sigma=0.0))
@@ -305,8 +309,12 @@ def test_a_search_out_of_time_searches_again_with_each_pass_at_another_yaw():
         if machine.phase is Phase.SEARCH and machine.memory.yaw_passes_from_m is None:
             assert abs(_yaw_from_approach(machine, world)) < 1e-3  # the nominal yaw
         elif machine.phase is Phase.SEARCH:
-            yaws.append((machine.memory.search_s_m - machine.memory.yaw_passes_from_m,
-                         _yaw_from_approach(machine, world)))
+            yaws.append(
+                (
+                    machine.memory.search_s_m - machine.memory.yaw_passes_from_m,
+                    _yaw_from_approach(machine, world),
+                )
+            )
     reasons = [r for _, _, r in path(machine)]
     assert reasons.count("search_timeout") == 2  # each a retry, not a failure
     assert path(machine)[-1] == ("SEARCH", "FAILED", "too_many_retries")

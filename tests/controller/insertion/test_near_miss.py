@@ -28,9 +28,7 @@ ON = NearMissSettings(enabled=True, tilt_jump_nm=0.0015, back_m=0.002,
 def spiral(world, config: TouchSpiralConfig) -> SpiralMachine:
     """The touch spiral on ``config``, its near misses as the product's are wired."""
     reading = TactileAxialForce(config.axial_weights, config.force_window)
-    return SpiralMachine(
-        config, world.plug, world.hole, reading, near_misses=config.near_miss
-    )
+    return SpiralMachine(config, world.plug, world.hole, reading, near_misses=config.near_miss)
 
 
 def between_rings_world(**kwargs):

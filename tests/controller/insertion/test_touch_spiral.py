@@ -13,8 +13,9 @@ import pytest
 from scipy.spatial.transform import Rotation
 
 from controller.insertion.force_reading import ArmForce, TactileAxialForce
+from controller.insertion.imprint import FaceOffset
 from controller.insertion.interface import Observation, Phase
-from controller.insertion.machine_config import GripperSettings
+from controller.insertion.machine_config import GripperSettings, s2t_matrix
 from controller.insertion.motion import tip_position
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
 from controller.insertion.spiral.spiral_feel import (
@@ -155,8 +156,6 @@ def observation(t_s: float, shear_y: float) -> Observation:
     world = ToyWorld()
     obs = world.observe()
     return replace(obs, t_s=t_s, wrench=estimate(t_s, shear_y=shear_y))
-
-
 
 
 def test_the_weights_read_every_term_and_the_torques_magnitudes():
@@ -411,3 +410,34 @@ def test_the_shipped_passes_yaw_out_to_the_openings_yaw_uncertainty(task):
     drawn = np.linspace(-edge, edge, 601)
     gap = np.abs(drawn[:, None] - offsets[None, :]).min(axis=1).max()
     assert gap <= spiral.yaw_step_rad / 2 + 1e-4
+
+
+def test_the_imprint_puts_the_tip_across_by_the_plugs_offset_in_the_fingers():
+    world = touch_world()
+    reading = TactileAxialForce(SPIRAL.axial_weights, SPIRAL.force_window)
+    face = FaceOffset(0.5, s2t_matrix(("+x", "+z", "-y")))
+    machine = SpiralMachine(SPIRAL, world.plug, world.hole, reading, face=face)
+    plain = spiral(world)
+    obs = world.observe()
+    for m in (machine, plain):
+        m.step(obs)
+    assert machine.face_offset_m is None and machine.tip_x_estimate_m is None
+    machine.step(replace(obs, t_s=obs.t_s + 0.01, contact_centre_s_m=(-0.0004, 0.003)))
+    assert face.centre_m == pytest.approx(-0.0004)
+    assert machine.face_offset_m == pytest.approx(-0.0008)  # the centre over the gain
+    assert machine.tip_t()[0] == pytest.approx(-0.0008)
+    assert machine.tip_t()[2] == pytest.approx(world.plug.length_m)
+    assert machine.tip_x_estimate_m == pytest.approx(-0.0008)
+    (published,) = machine.in_hand_estimates
+    assert published.method == "imprint" and published.tip_offset_m == pytest.approx(-0.0008)
+    assert plain.tip_t()[0] == 0.0 and plain.tip_x_estimate_m is None
+    unused = FaceOffset(0.0, np.eye(3))
+    assert unused.read(replace(obs, contact_centre_s_m=(0.001, 0.0))) is None
+
+
+def test_the_product_reads_the_imprint_with_its_tasks_gain():
+    config = load_task("usb_c", ["touch_spiral.imprint_gain=0.4"]).config
+    machine = CONTROLLERS["dipole"].machine(config)
+    assert machine.face is not None and machine.face.gain == 0.4
+    off = CONTROLLERS["dipole"].machine(load_task("usb_c", ["touch_spiral.imprint_gain=0"]).config)
+    assert off.face is None

@@ -19,6 +19,8 @@ from core.devices import Pose
 from core.spatial import rotation_from_rpy, rpy_from_rotation
 from core.task_geometry import HolePose, PlugGeometry
 from drivers.registry import load_device_config
+from drivers.sim.gel.model import GelModel
+from drivers.sim.gel.profile import ObjectShape, gel_profile
 from drivers.sim.scenes.insertion import (
     GraspPose,
     InsertionSceneConfig,
@@ -27,7 +29,8 @@ from drivers.sim.scenes.insertion import (
     build_insertion_sim,
     draw_scene,
 )
-from drivers.sim.scenes.insertion.coupling import GelCoupling
+from drivers.sim.scenes.insertion.coupling import GelCoupling, imprint
+from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP
 from drivers.sim.scenes.insertion.frames import quat_wxyz_from_pose, upright_pose
 from drivers.sim.scenes.insertion.mjcf import scene_xml
 from drivers.sim.scenes.insertion.physics import (
@@ -633,3 +636,38 @@ def test_in_real_time_the_world_follows_the_monotonic_clock():
     assert sim.clock.now() - start >= 0.03
     sim.clock.sleep(0.0)  # syncs to the present
     assert sim.world.physics.t_s >= start + 0.03 - section.scene.timestep_s
+
+
+class _HeldPlug:
+    """A world whose fingers hold the plug at ``grip_n`` with no other load."""
+
+    def __init__(self, grip_n: float) -> None:
+        self.grip_force_n = grip_n
+        self.physics = self
+
+    def sync(self, t_s: float) -> None:
+        pass
+
+    def gel_wrench_at(self, t_s: float) -> np.ndarray:
+        return np.zeros(6)
+
+
+def test_the_gel_is_pressed_where_the_grasp_puts_the_plug():
+    grasp = GraspPose(0.0, 0.05, 0.002, 0.0008)
+    (x_m, y_m), angle = imprint(grasp)
+    on_axis = grasp.place(np.array([0.0, -grasp.along_m / math.cos(0.05), 0.0]))
+    assert (x_m, y_m, angle) == pytest.approx((on_axis[0], 0.0, 0.05))
+    assert on_axis[1] == pytest.approx(0.0, abs=1e-12)  # the axis's point on the centre row
+    model = GelModel(gel_profile("gelsight_mini"), ObjectShape("square_peg", 0.00825, "y"))
+    columns = model.grid.x_m[0]
+    centres, fields = {}, {}
+    for name, pose in (("nominal", NOMINAL_GRASP), ("drawn", grasp)):
+        coupling = GelCoupling(_HeldPlug(20.0), model, pose)
+        fields[name] = coupling(0.0)
+        pressure = coupling._previous.normal.force_n  # the solve behind that field
+        centres[name] = float(pressure.sum(axis=0) @ columns / pressure.sum())
+        assert pressure[:, np.abs(columns - x_m) > 0.0075].sum() == 0.0  # the face's band
+    assert centres["nominal"] == pytest.approx(0.0, abs=1e-6)
+    # the grip presses the face's middle: no moment is left to tilt it
+    assert centres["drawn"] == pytest.approx(x_m, abs=2e-5)
+    assert not np.allclose(fields["nominal"], fields["drawn"])

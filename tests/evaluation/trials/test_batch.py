@@ -65,8 +65,7 @@ def test_spec_refuses_an_unknown_controller():
     with pytest.raises(
         SpecError,
         match=(
-            "expected one of dipole, fingervision, zero_torque, torque_only, align, "
-            "blind, oracle"
+            "expected one of dipole, fingervision, zero_torque, torque_only, align, blind, oracle"
         ),
     ):
         TrialSpec("usb_c", "magic", 0)
@@ -581,8 +580,10 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     # the in-hand estimate: table rows and a histogram per align and dipole cell (each scored
     # in its own plane, the other plane not estimated), none for the others
     assert sorted(p.name for p in out.glob("grasp_errors_*.png")) == [
-        "grasp_errors_align_0.01.png", "grasp_errors_align_0.02.png",
-        "grasp_errors_dipole_0.01.png", "grasp_errors_dipole_0.02.png",
+        "grasp_errors_align_0.01.png",
+        "grasp_errors_align_0.02.png",
+        "grasp_errors_dipole_0.01.png",
+        "grasp_errors_dipole_0.02.png",
     ]
     # the raising seed 5 has no estimate; dipole's seed 2 none either
     width, thickness = "tilt about T y (width plane), deg", "tilt about T x (thickness plane), deg"
@@ -596,8 +597,12 @@ def test_compare_runs_the_grid_and_writes_charts_and_table(tmp_path, capsys):
     dipole = json.loads((out / "cells" / "dipole" / "0.01" / SUMMARY_NAME).read_text())
     errors = dipole["grasp_estimate"]["errors"]
     assert set(errors) == {"thickness_tilt_deg", "tip_y_mm"}
-    assert errors["tip_y_mm"] == {"n": 4, "median": pytest.approx(0.2), "p95": pytest.approx(
-        0.385), "max": pytest.approx(0.4)}  # seeds 0, 1, 3, 4: 0, 0.1, 0.3, 0.4 mm
+    assert errors["tip_y_mm"] == {
+        "n": 4,
+        "median": pytest.approx(0.2),
+        "p95": pytest.approx(0.385),
+        "max": pytest.approx(0.4),
+    }  # seeds 0, 1, 3, 4: 0, 0.1, 0.3, 0.4 mm
     summary = json.loads((out / "cells" / "blind" / "0.02" / SUMMARY_NAME).read_text())
     assert summary["overrides"] == ["machine.insert.speed_m_s=0.02"]
     assert summary["controller"] == "blind" and summary["n"] == 6

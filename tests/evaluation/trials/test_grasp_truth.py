@@ -43,8 +43,11 @@ def test_the_receptacle_tilts_in_the_thickness_plane_with_the_board_about_its_x(
 
 def test_a_table_without_the_pose_columns_reads_them_as_unknown():
     result = TrialResult("usb_c", "dipole", 3, True, "inserted", None, 9.0, 12.0, 1.0, 20.0, 5.0)
-    row = {k: ("" if v is None else repr(v) if isinstance(v, float) else str(v))
-           for k, v in result.as_row().items() if not k.startswith(("grasp_", "tip_"))}
+    row = {
+        k: ("" if v is None else repr(v) if isinstance(v, float) else str(v))
+        for k, v in result.as_row().items()
+        if not k.startswith(("grasp_", "tip_"))
+    }
     back = TrialResult.from_row(row)
     assert math.isnan(back.grasp_tilt_est_rad) and math.isnan(back.tip_x_true_m)
     assert back.seed == 3 and back.time_to_insert_s == 9.0

@@ -154,7 +154,7 @@ def build_insertion_sim(
         devices.tactile,
         clock,
         rng=np.random.default_rng([devices.tactile.sim.seed, seed]),
-        field_source=GelCoupling(world, gel),
+        field_source=GelCoupling(world, gel, draw.grasp),
         appearance=scene.tactile_appearance,
         effects=ImageEffects(
             noise_grey=devices.tactile.sim.noise_grey,

@@ -6,9 +6,14 @@ carries ``load_share`` of the grasp's forces and of its torque about the grasp p
 plug's axis, about the gel's own centre (the moments of the two fingers' shear forces about
 the plug's axis cancel). That wrench, in S (``frames``), is what the gel exerts on the plug:
 the gel model's ``Wrench`` convention and the tactile estimate's. The plug's wide face is a
-``square_peg`` of the plug's width along S's y (the plug's axis runs down the image).
+``square_peg`` of the plug's width along its axis, which runs down the image (S's y) at the
+nominal grasp and where the seed's grasp puts it otherwise (``imprint``): across by the
+grasp's offset, turned by its tilt about S's z. The grip presses the face where the plug
+lies, so its own moment about the gel's centre (the grip force times the face's offset) is
+added to the wrench's: the gel then carries, about the face's centre, only the load's
+moment, as a real gel does.
 
-``GelCoupling(world, model, share)`` is the field source: for a frame captured at ``t_s``
+``GelCoupling(world, model, grasp)`` is the field source: for a frame captured at ``t_s``
 it syncs the world to ``t_s``, and when the fingers squeeze the plug it solves the gel for
 the grip force and the gel's wrench at that time (warm-started from the previous frame's
 solution) and returns its ``field_px``; ``None`` (the reference image) otherwise. The camera
@@ -21,9 +26,12 @@ press), its field is reused: far below what the estimator resolves (its noise is
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from drivers.sim.gel.model import GelModel, GelState, Wrench
+from drivers.sim.scenes.insertion.draws import NOMINAL_GRASP, GraspPose
 from drivers.sim.scenes.insertion.world import InsertionWorld
 
 REUSE_FORCE_N = 1e-3
@@ -31,12 +39,24 @@ REUSE_TORQUE_NM = 1e-5
 _TOLERANCE = np.array([REUSE_FORCE_N] * 4 + [REUSE_TORQUE_NM] * 3)  # grip, forces, torques
 
 
+def imprint(grasp: GraspPose) -> tuple[tuple[float, float], float]:
+    """Where the plug's face lies on the gel: the point of its axis on S's x axis (x, y in
+    S, m: the fingers press there) and the axis's turn about S's z (rad). The axis runs from
+    the grasp point (``across_m``, ``along_m``) along (-sin b, cos b) in S's x-y plane, b
+    the grasp's ``tilt_z_rad``, so it crosses y = 0 at x = across + along tan b."""
+    b = grasp.tilt_z_rad
+    return (grasp.across_m + grasp.along_m * math.tan(b), 0.0), b
+
+
 class GelCoupling:
     """See the module docstring."""
 
-    def __init__(self, world: InsertionWorld, model: GelModel) -> None:
+    def __init__(
+        self, world: InsertionWorld, model: GelModel, grasp: GraspPose = NOMINAL_GRASP
+    ) -> None:
         self._world = world
         self._model = model
+        self._offset_m, self._angle_rad = imprint(grasp)
         self._previous: GelState | None = None
         self._cached: tuple[float, np.ndarray | None] | None = None
         self._solved: tuple[np.ndarray, np.ndarray] | None = None  # (inputs, field)
@@ -59,8 +79,12 @@ class GelCoupling:
         inputs = np.concatenate([[grip_n], gel_wrench])
         if self._solved is not None and np.all(np.abs(inputs - self._solved[0]) <= _TOLERANCE):
             return self._solved[1]
-        wrench = Wrench(*(float(v) for v in gel_wrench))
-        state = self._model.solve(grip_n, wrench, start=self._previous)
+        fx, fy, fz, tau_x, tau_y, tau_z = (float(v) for v in gel_wrench)
+        x_m, y_m = self._offset_m  # the grip's moment: tau_x = sum y p, tau_y = -sum x p
+        wrench = Wrench(fx, fy, fz, tau_x + y_m * grip_n, tau_y - x_m * grip_n, tau_z)
+        state = self._model.solve(
+            grip_n, wrench, self._offset_m, self._angle_rad, start=self._previous
+        )
         self.solves += 1
         self._previous = state
         self._solved = (inputs, state.field_px)
