@@ -212,7 +212,8 @@ GRASP_ESTIMATE = Topic(
     "``t_s`` (when it was made), ``plane`` ('thickness': the tilt about T x, the tip moved "
     "along T y; 'width': about T y, along T x), ``tilt_rad`` (the TCP turn that sets the plug "
     "upright in that plane), ``tip_offset_m`` (the tip's offset from the nominal it implies, "
-    "m), ``method`` ('rock': the pressed tip rocked until its face lies flat) and ``kept`` "
+    "m), ``method`` ('rock': the pressed tip rocked until its face lies flat; 'imprint': the "
+    "grasp's contact centre, a tip along T x and no tilt, ``tilt_rad`` absent) and ``kept`` "
     "(it passed its checks: the machine acts on it; controller.insertion.InHandEstimate).",
 )
 LOOP_TICK = Topic(

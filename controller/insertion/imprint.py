@@ -29,12 +29,10 @@ class FaceOffset:
     def __init__(self, gain: float, s2t: np.ndarray) -> None:
         self.gain = float(gain)
         self._s2t = np.asarray(s2t, dtype=float)
-        self.centre_m: float | None = None  # the last centre read, along T x (m), no gain
 
     def read(self, obs: Observation) -> float | None:
         """The plug's offset along T x (m) from ``obs.contact_centre_s_m``, None without one."""
         centre = obs.contact_centre_s_m
         if centre is None or self.gain == 0.0:
             return None
-        self.centre_m = float((self._s2t @ np.array([centre[0], centre[1], 0.0]))[0])
-        return self.centre_m / self.gain
+        return float((self._s2t @ np.array([centre[0], centre[1], 0.0]))[0]) / self.gain

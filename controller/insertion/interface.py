@@ -149,8 +149,10 @@ class InHandEstimate:
     in that plane: about T x for ``thickness``, about T y for ``width``), the tip's offset
     ``tip_offset_m`` from the nominal it implies (m, along T y for ``thickness``, along T x
     for ``width``), ``method`` how it was found (``rock``: rocking the pressed tip until its
-    face lies flat) and ``kept`` whether it passed its checks (a kept estimate is the one the
-    machine acts on; one that failed them is published all the same)."""
+    face lies flat; ``imprint``: the grasp's contact centre on the gel, which gives the tip's
+    offset along T x only, ``tilt_rad`` NaN) and ``kept`` whether it passed its checks (a
+    kept estimate is the one the machine acts on; one that failed them is published all the
+    same)."""
 
     t_s: float
     plane: GraspPlane

@@ -47,15 +47,15 @@ class TrialResult:
     from the receptacle's axis (the board's normal; the board tilts), which FEEL's flat angle
     measures, ``grasp_tilt_thickness_est_rad`` the press spiral's
     estimate of it (its FEEL's flat angle; nan without one); ``tip_x_est_m`` the estimated tip's
-    offset along T x from the nominal (the press spiral's ``tip_x_estimate_m``: the imprint's
-    offset and the width-plane tilt's; the align machine's width-plane estimate's),
+    offset along T x from the nominal (the width-plane estimate's: for the press spiral with
+    the plug's offset across the fingers from its imprint, ``tip_x_estimate_m``),
     ``tip_y_est_m`` along T y
     (the thickness-plane estimate's, ``SpiralMachine.tip_y_estimate_m``: the plug's length
     times the sine of the tilt; nan without one), and ``tip_x_true_m``, ``tip_y_true_m`` the
-    true tip's along T x and T y (m); ``imprint_centre_m`` the grasp's contact centre on the
-    gel along T x as the press spiral last read it (m, before its ``imprint_gain``; nan
-    unread) and ``imprint_true_m`` where the plug's axis truly crosses the gel's centre row
-    (m along T x: the offset that centre stands for, controller/insertion/imprint.py).
+    true tip's along T x and T y (m); ``imprint_offset_est_m`` the plug's offset across the
+    fingers (along T x) that the press spiral last took from the grasp's imprint (m; nan
+    unread) and ``imprint_true_m`` the truth it stands for, where the plug's axis crosses
+    the gel's centre row (m along T x, controller/insertion/imprint.py).
     """
 
     task: str
@@ -84,7 +84,7 @@ class TrialResult:
     tip_x_true_m: float = float("nan")
     tip_y_est_m: float = float("nan")
     tip_y_true_m: float = float("nan")
-    imprint_centre_m: float = float("nan")
+    imprint_offset_est_m: float = float("nan")
     imprint_true_m: float = float("nan")
 
     def __post_init__(self) -> None:
@@ -134,6 +134,6 @@ POSE_FIELDS = (
     "tip_x_true_m",
     "tip_y_est_m",
     "tip_y_true_m",
-    "imprint_centre_m",
+    "imprint_offset_est_m",
     "imprint_true_m",
 )

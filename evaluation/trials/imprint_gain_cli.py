@@ -5,13 +5,15 @@ trials.
     python -m evaluation fit_imprint_gain --fit DIR [DIR ...] --check DIR [DIR ...]
 
 Each DIR is a batch folder of a tactile controller whose imprint was read (``tactile trials
---set touch_spiral.imprint_gain=G --out DIR``, any G > 0): its ``trials.csv`` holds, per
-trial, the contact centre the machine read (``imprint_centre_m``, before the gain) and where
-the plug's axis truly crosses the gel's centre row (``imprint_true_m``). The gain is the
-least-squares slope through the origin of the one on the other over the ``--fit`` trials;
-printed as the task file's line, then the offset's error (centre / gain - truth, mm) on the
-``--check`` trials: RMS, median and largest. Writes nothing. A DIR without a ``trials.csv``,
-in both lists, or without a trial that read an imprint: one line and exit code 2.
+--out DIR``, with the task's gain or ``--set touch_spiral.imprint_gain=G``, any G > 0): its
+``trials.csv`` holds, per trial, the plug's offset the machine took from the imprint
+(``imprint_offset_est_m``) and where the plug's axis truly crosses the gel's centre row
+(``imprint_true_m``); its ``batch.json`` names the task and the overrides, whose gain turns
+the offset back into the contact centre read. The gain is the least-squares slope through
+the origin of that centre on the truth over the ``--fit`` trials, printed as the task
+file's line; then the offset's error with it (mm) on the ``--check`` trials: RMS, median
+and largest. Writes nothing. A DIR that is not a batch's folder, in both lists, or without
+a trial that read an imprint: one line and exit code 2.
 """
 
 from __future__ import annotations
@@ -22,8 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from controller.cli.support import ToolError, run_tool
+from controller.run.task import load_task
+from core.config import ConfigError
 from core.subcommands import job_prog
-from evaluation.trials.batch import read_trials
+from evaluation.trials.batch import read_batch
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -41,16 +45,23 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def imprint_pairs(folders: list[Path]) -> tuple[np.ndarray, np.ndarray]:
-    """(read centres, true offsets), m, of the trials of ``folders`` that read an imprint."""
+    """(contact centres read, true offsets), m along T x, of the trials of ``folders`` that
+    read an imprint."""
     read, true = [], []
     for folder in folders:
-        rows = [r for r in read_trials(folder) if np.isfinite(r.imprint_centre_m)]
-        if not rows:
+        plan, results = read_batch(folder)
+        try:
+            config = load_task(plan["task"], list(plan.get("overrides", []))).config
+        except ConfigError as exc:
+            raise ToolError(f"'{folder}': batch.json's task does not load ({exc})") from None
+        gain = config.touch_spiral.imprint_gain
+        rows = [r for r in results if np.isfinite(r.imprint_offset_est_m)]
+        if not rows or gain == 0.0:
             raise ToolError(
-                f"'{folder}': no trial read an imprint (expected a batch run with "
-                "touch_spiral.imprint_gain > 0)"
+                f"'{folder}': no trial read an imprint (expected a tactile controller's batch "
+                "with touch_spiral.imprint_gain > 0)"
             )
-        read += [r.imprint_centre_m for r in rows]
+        read += [r.imprint_offset_est_m * gain for r in rows]
         true += [r.imprint_true_m for r in rows]
     return np.asarray(read), np.asarray(true)
 

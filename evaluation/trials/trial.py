@@ -214,8 +214,7 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     tip_y = getattr(ran.machine, "tip_y_estimate_m", None)
     # the press spiral's (its imprint and FEEL), else the align machine's FEEL's
     tip_x = getattr(ran.machine, "tip_x_estimate_m", None)
-    face = getattr(ran.machine, "face", None)
-    centre = None if face is None else face.centre_m
+    face = getattr(ran.machine, "face_offset_m", None)
     if tip_x is None and estimate is not None:
         tip_x = estimate.tip_t[0]
     return {
@@ -228,6 +227,6 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
         "tip_x_true_m": float(truth.tip_t_m[0]),
         "tip_y_est_m": math.nan if tip_y is None else tip_y,
         "tip_y_true_m": float(truth.tip_t_m[1]),
-        "imprint_centre_m": math.nan if centre is None else centre,
+        "imprint_offset_est_m": math.nan if face is None else face,
         "imprint_true_m": imprint(draw.grasp)[0][0],
     }

@@ -39,7 +39,8 @@ board, so the angle is the plug's tilt from the board's normal: the receptacle's
 pair of legs' flat angle, kept or not, is published with the tip's offset it implies, the
 plug's length times the sine of the tilt (``SpiralMachine.in_hand_estimates``); the kept
 ones give the trial's ``tip_y_est_m`` and ``tip_x_est_m``. The rock does not see the plug's
-offset across its width in the grasp (up to 1 mm in the scene).
+offset across its width in the grasp (up to 1 mm in the scene); the machine takes it from the
+grasp's imprint on the gel (controller/insertion/imprint.py).
 """
 
 from __future__ import annotations

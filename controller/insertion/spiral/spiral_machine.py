@@ -363,13 +363,13 @@ class SpiralMachine:
 
     @property
     def tip_x_estimate_m(self) -> float | None:
-        """The tip's offset from the nominal along T x (m): the plug's offset across the
-        fingers (``face_offset_m``) plus the one FEEL's width-plane tilt implies
-        (``grasp``), None with neither: the trial's ``tip_x_est_m``."""
+        """The tip's offset from the nominal along T x (m) once FEEL has the width-plane tilt
+        (``grasp``): the one that tilt implies plus the plug's offset across the fingers
+        (``face_offset_m``, 0 unread); None before: the trial's ``tip_x_est_m``."""
         grasp = self.grasp
-        if grasp is None and self.face_offset_m is None:
+        if grasp is None:
             return None
-        tilted = 0.0 if grasp is None else tilt_tip_offset_m(grasp.tilt_rad, grasp.length_m)
+        tilted = tilt_tip_offset_m(grasp.tilt_rad, grasp.length_m)
         return (self.face_offset_m or 0.0) + tilted
 
     def step(self, obs: Observation) -> Command:

@@ -9,13 +9,18 @@ import math
 import pytest
 
 from controller.run.result import TrialResult
+from controller.run.task import load_task
 from evaluation.trials.imprint_gain_cli import main
 from tests.evaluation.trials.test_grasp_scores_cli import _batch
 
 
 def _result(seed: int, true_m: float, read_m: float) -> TrialResult:
+    """A trial whose machine read the centre ``read_m`` with the task's gain."""
     base = TrialResult("usb_c", "dipole", seed, True, "inserted", None, 9.0, 12.0, 1.0, 20.0, 5.0)
-    return dataclasses.replace(base, imprint_true_m=true_m, imprint_centre_m=read_m)
+    return dataclasses.replace(base, imprint_true_m=true_m, imprint_offset_est_m=read_m / GAIN)
+
+
+GAIN = load_task("usb_c").config.touch_spiral.imprint_gain
 
 
 def test_the_gain_is_the_slope_and_the_check_reports_the_offsets_error(tmp_path, capsys):
@@ -40,4 +45,4 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, case):
     assert main(["--fit", str(fit), "--check", str(check)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "Traceback" not in err
-    assert {"overlap": "in both", "unread": "no trial read", "missing": "trials.csv"}[case] in err
+    assert {"overlap": "in both", "unread": "no trial read", "missing": "batch.json"}[case] in err
