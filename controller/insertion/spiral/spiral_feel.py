@@ -54,7 +54,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.insertion.grasp_estimate import tilt_tip_offset_m
 from controller.insertion.interface import Command, GraspPlane, InHandEstimate, Observation, Phase
 from controller.insertion.phases.stage import Staged
 from controller.insertion.spiral.spiral_search import SearchStage, SearchState
@@ -268,13 +267,14 @@ def _estimate(
     """The legs' flat angle (the TCP's turn about the plane's axis) if it passes its checks
     (``flat_angle``), else None; any candidate, kept or not, is published as the machine's
     in-hand estimate (``SpiralMachine.in_hand_estimates``: the plug's tilt in the plane and
-    the tip's offset it implies, ``SpiralMachine.grasp_tilt_of_turn``)."""
+    the tip's offset it implies, ``SpiralMachine.grasp_tilt_of_turn`` and
+    ``SpiralMachine.tip_offset_of_tilt``)."""
     candidate = flat_candidate(sweeps, settings)
     if candidate is None:
         return None
     turn, kept = candidate
     tilt = m.grasp_tilt_of_turn(plane.axis, turn)
     m.publish_in_hand(InHandEstimate(
-        obs.t_s, plane.name, tilt, tilt_tip_offset_m(tilt, m.plug.length_m), "rock", kept
+        obs.t_s, plane.name, tilt, m.tip_offset_of_tilt(plane.axis, tilt), "rock", kept
     ))  # fmt: skip
     return turn if kept else None

@@ -351,6 +351,14 @@ class SpiralMachine:
         T's ``axis`` sets upright: the turn itself about T x, its opposite about T y."""
         return turn_rad if axis == 0 else -turn_rad
 
+    def tip_offset_of_tilt(self, axis: int, tilt_rad: float) -> float:
+        """The tip's offset from the nominal (m; along T y for a tilt about T x, ``axis`` 0,
+        along T x for one about T y) that a tilt ``tilt_rad`` of the plug in the hand implies
+        (``grasp_estimate.tilt_tip_offset_m``), along T x with the plug's offset across the
+        fingers (``face_offset_m``, 0 unread)."""
+        offset = tilt_tip_offset_m(tilt_rad, self.plug.length_m)
+        return offset if axis == 0 else offset + (self.face_offset_m or 0.0)
+
     @property
     def tip_y_estimate_m(self) -> float | None:
         """The tip's offset from the nominal along T y (m) implied by FEEL's tilt estimate
@@ -367,10 +375,7 @@ class SpiralMachine:
         (``grasp``): the one that tilt implies plus the plug's offset across the fingers
         (``face_offset_m``, 0 unread); None before: the trial's ``tip_x_est_m``."""
         grasp = self.grasp
-        if grasp is None:
-            return None
-        tilted = tilt_tip_offset_m(grasp.tilt_rad, grasp.length_m)
-        return (self.face_offset_m or 0.0) + tilted
+        return None if grasp is None else self.tip_offset_of_tilt(1, grasp.tilt_rad)
 
     def step(self, obs: Observation) -> Command:
         """One tick: the command for ``obs``, naming the rule and the sub-stage that decided
