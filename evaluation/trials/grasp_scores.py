@@ -2,7 +2,7 @@
 (``TrialResult``'s pose fields, evaluation/trials/grasp_truth.py): the summary's block, the
 errors charts.py histograms and the ``grasp_scores`` tool's table.
 
-Five quantities (``QUANTITIES``), each scored on the trials that have an estimate of it:
+Six quantities (``QUANTITIES``), each scored on the trials that have an estimate of it:
 
 * ``thickness_tilt_deg``: the tilt about T x (the thickness plane), where
   ``grasp_tilt_thickness_est_rad`` is finite (the press spiral's FEEL: ``dipole`` and the
@@ -13,7 +13,10 @@ Five quantities (``QUANTITIES``), each scored on the trials that have an estimat
 * ``tip_y_mm``: the tip's offset along T y that tilt implies (``tip_y_est_m``);
 * ``width_tilt_deg``: the tilt about T y (the width plane), where ``grasp_tilt_est_rad`` is
   finite (the ``align`` machine's FEEL);
-* ``tip_x_mm``: the tip's offset along T x that tilt implies (``tip_x_est_m``).
+* ``tip_x_mm``: the tip's offset along T x that tilt implies (``tip_x_est_m``; the press
+  spiral's adds the next);
+* ``imprint_mm``: the plug's offset across the fingers that the press spiral takes from the
+  grasp's imprint on the gel (``imprint_offset_est_m``; controller/insertion/imprint.py).
 
 A quantity no trial estimates is "not estimated": its true size is given for scale. The
 summary's statistics are of the absolute error (estimate - truth); the histograms show the
@@ -61,6 +64,8 @@ QUANTITIES = (
              "grasp_tilt_true_rad", math.degrees(1.0), "grasp_tilt_est_rad"),
     Quantity("tip_x_mm", "tip offset along T x", "mm", "tip_x_est_m", "tip_x_true_m", 1e3,
              "grasp_tilt_est_rad"),
+    Quantity("imprint_mm", "plug offset across the fingers (imprint)", "mm",
+             "imprint_offset_est_m", "imprint_true_m", 1e3, "imprint_offset_est_m"),
 )  # fmt: skip
 """The scored quantities, the thickness plane's first."""
 
