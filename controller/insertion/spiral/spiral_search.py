@@ -21,7 +21,11 @@ then its outer part at every yaw. Each pass:
   (the face across the opening's rim) that the sweep passes without a catch sends the
   pattern back over that stretch on the ring half a pitch outside its own (**retrace**,
   spiral_near_miss.py), probing as the sweep does, and then on along its own ring from
-  where the sweep had reached;
+  where the sweep had reached. The TCP ``fall_in_m`` below where the tip would meet the
+  nominal board, the force under ``catch_ratio`` x the press, means the plug sank into the
+  opening while the admittance sought the press (INSERT, ``fell_in``, as at the touch): the
+  press's height is never reached there, and without this the pattern stood probing at the
+  arm's floor until the time ran out;
 * **rise**: at the pass's end, up to the hover, then **turn** to the next pass's start and
   yaw (or RELEASE after the last, ``pattern_done``).
 """
@@ -153,6 +157,14 @@ def _sweep_or_probe(
     m: SpiralMachine, obs: Observation, state: SearchState, force: float
 ) -> Command:
     cfg, run = m.config, m.memory
+    board_z = m.board_tcp_z_m()
+    if (
+        force < cfg.catch_ratio * cfg.press_force_n
+        and obs.arm.tcp.xyz_m[2] < board_z - cfg.fall_in_m
+    ):
+        run.press_z_m = board_z
+        m.go(obs, Phase.INSERT, "fell_in")
+        return m.hold()
     if run.press_z_m is None and abs(force - cfg.press_force_n) <= (
         cfg.settle_band * cfg.press_force_n
     ):

@@ -154,6 +154,22 @@ def test_a_plug_that_goes_into_the_opening_on_the_way_down_is_pushed_home_not_sw
     assert min(world_tip_heights(world)) < world.hole.z_m - SMALL.fall_in_m
 
 
+def test_a_plug_that_sinks_into_the_opening_before_the_press_settles_is_pushed_home():
+    world = ToyWorld(**NO_OPENING)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    while machine.stage is not SearchStage.SWEEP:
+        world.step(machine)
+    assert machine.memory.press_z_m is None  # the press not yet settled
+    world.board = False  # the tip slides down into the opening: nothing holds it up
+    start_s = world.t_s
+    run(world, machine, max_s=start_s + 10.0)
+    assert reasons(machine)[2] == "fell_in"  # not a probe at the arm's floor until the time ends
+    sank = machine.transitions[2]
+    assert machine.phase is not Phase.SEARCH and sank.t_s - start_s < 2.0
+    # it took the TCP fall_in_m below the nominal board's touch to say so
+    assert min(world_tip_heights(world)) < world.hole.z_m - SMALL.fall_in_m
+
+
 def test_a_board_met_late_whose_force_is_rising_is_a_touch_not_a_fall_in():
     # the board 0.7 mm short of the fall-in depth: there the force reads ~0.6 N (0.7 N, the
     # window's mean behind it), short of the touch's 1 N
