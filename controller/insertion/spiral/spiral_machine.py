@@ -186,11 +186,11 @@ class SearchMemory:
     history (time s, length m) for a rewind, the length at the last rewound probe
     (``rewound_to_m``), the tared zero (``bias_n``, N; ``tared`` once one is taken), the
     TCP's height at the settled press (``press_z_m``, B, m; None until the press settles
-    after a tare), the place of a near miss not yet retraced (``near_miss_m``, path length,
-    m; None without one), and a retrace's: where it ends (``retrace_until_m``, m; None
-    outside one) and the sweep resumes (``resume_m``), whether its start has been reached
-    (``retrace_started``) and the retraces made in each pass so far (``retraces``, by pass
-    index)."""
+    after a tare) and at the pass's touch (``touch_z_m``, B, m; None until it touches), the
+    place of a near miss not yet retraced (``near_miss_m``, path length, m; None without
+    one), and a retrace's: where it ends (``retrace_until_m``, m; None outside one) and the
+    sweep resumes (``resume_m``), whether its start has been reached (``retrace_started``)
+    and the retraces made in each pass so far (``retraces``, by pass index)."""
 
     pass_index: int = 0
     s_m: float = 0.0
@@ -201,6 +201,7 @@ class SearchMemory:
     bias_n: float = 0.0
     tared: bool = False
     press_z_m: float | None = None
+    touch_z_m: float | None = None
     near_miss_m: float | None = None
     retrace_until_m: float | None = None
     resume_m: float = 0.0

@@ -21,11 +21,11 @@ then its outer part at every yaw. Each pass:
   (the face across the opening's rim) that the sweep passes without a catch sends the
   pattern back over that stretch on the ring half a pitch outside its own (**retrace**,
   spiral_near_miss.py), probing as the sweep does, and then on along its own ring from
-  where the sweep had reached. The TCP ``fall_in_m`` below where the tip would meet the
-  nominal board, the force under ``catch_ratio`` x the press, means the plug sank into the
-  opening while the admittance sought the press (INSERT, ``fell_in``, as at the touch): the
-  press's height is never reached there, and without this the pattern stood probing at the
-  arm's floor until the time ran out;
+  where the sweep had reached. The TCP ``fall_in_m`` below its height at the pass's touch,
+  the force under ``catch_ratio`` x the press, means the plug sank into the opening while
+  the admittance sought the press (INSERT, ``fell_in``, the touch's height taken as the
+  press's): the press never settles there, and without this the pattern stood probing at
+  the arm's floor until the time ran out;
 * **rise**: at the pass's end, up to the hover, then **turn** to the next pass's start and
   yaw (or RELEASE after the last, ``pattern_done``).
 """
@@ -111,6 +111,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             state.tare_n.append(m.force_n)
         if obs.t_s - state.since_t_s >= cfg.tare_s and state.tare_n:
             run.bias_n, run.tared, run.press_z_m = float(np.mean(state.tare_n)), True, None
+            run.touch_z_m = None
             state.tare_n, state.stage = [], SearchStage.TOUCH
         m.fire("tare")
         return m.servo(obs, m.tip_target(run.s_m, cfg.hover_m))
@@ -121,6 +122,7 @@ def step(m: SpiralMachine, obs: Observation) -> Command:
             m.near_misses.reset()
             run.near_miss_m = None
         if force >= cfg.touch_force_n:
+            run.touch_z_m = obs.arm.tcp.xyz_m[2]
             if m.rock is not None and not m.felt and run.pass_index >= m.rock.at_pass:
                 m.felt = True
                 m.go(obs, Phase.FEEL, "touched")
@@ -157,12 +159,13 @@ def _sweep_or_probe(
     m: SpiralMachine, obs: Observation, state: SearchState, force: float
 ) -> Command:
     cfg, run = m.config, m.memory
-    board_z = m.board_tcp_z_m()
+    touch_z = run.touch_z_m
     if (
-        force < cfg.catch_ratio * cfg.press_force_n
-        and obs.arm.tcp.xyz_m[2] < board_z - cfg.fall_in_m
+        touch_z is not None
+        and force < cfg.catch_ratio * cfg.press_force_n
+        and obs.arm.tcp.xyz_m[2] < touch_z - cfg.fall_in_m
     ):
-        run.press_z_m = board_z
+        run.press_z_m = touch_z
         m.go(obs, Phase.INSERT, "fell_in")
         return m.hold()
     if run.press_z_m is None and abs(force - cfg.press_force_n) <= (
