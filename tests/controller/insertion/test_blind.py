@@ -166,8 +166,19 @@ def test_a_plug_that_sinks_into_the_opening_before_the_press_settles_is_pushed_h
     assert reasons(machine)[2] == "fell_in"  # not a probe at the arm's floor until the time ends
     sank = machine.transitions[2]
     assert machine.phase is not Phase.SEARCH and sank.t_s - start_s < 2.0
-    # it took the TCP fall_in_m below the nominal board's touch to say so
+    # it took the TCP fall_in_m below its height at the touch to say so
+    touch_z = machine.memory.touch_z_m
+    assert touch_z is not None and machine.memory.press_z_m == touch_z
     assert min(world_tip_heights(world)) < world.hole.z_m - SMALL.fall_in_m
+
+
+def test_a_catch_on_a_board_met_late_is_a_catch_not_a_fall_in():
+    # the board 2.5 mm low (or the plug short in the fingers): pressed, the TCP stands over
+    # fall_in_m below the nominal board's touch, but not below its own touch
+    world = ToyWorld(floor_drop_m=0.0025)
+    machine = SpiralMachine(SMALL, world.plug, world.hole)
+    run(world, machine)
+    assert reasons(machine)[2:4] == ["caught", "bottomed"]
 
 
 def test_a_board_met_late_whose_force_is_rising_is_a_touch_not_a_fall_in():
