@@ -67,6 +67,7 @@ from controller.insertion.interface import (
     in_hand_estimates,
 )
 from controller.safety import CommandLimiter, LimitsConfig, Watchdog, safe_stop
+from controller.tactile.estimator import TactileEstimator
 from controller.tactile.wrench import WrenchEstimate
 from controller.tactile.wrench_source import WrenchSource, estimator_of
 from controller.teleop import TeleopArbiter, TeleopConfig
@@ -276,6 +277,7 @@ class ControlLoop:
         self._stop_error: Exception | None = None
         self._wrench: WrenchEstimate | None = None
         self._contact_centre_s_m: tuple[float, float] | None = None  # Observation's
+        self._tactile_estimator = estimator_of(estimator)  # None: a scripted source
         self._frame_t_s: float | None = None
         self._arm_status: ArmStatus | None = None
         self._gripper_status: GripperStatus | None = None
@@ -372,7 +374,7 @@ class ControlLoop:
         if isinstance(frame, TactileFrame) and frame.t_s != self._frame_t_s:
             self._wrench = self.estimator.push(frame.image, frame.t_s)
             self._frame_t_s = frame.t_s
-            self._contact_centre_s_m = _contact_centre_s_m(self.estimator)
+            self._contact_centre_s_m = _contact_centre_s_m(self._tactile_estimator)
         arm = _read(devices.arm.read_status, errors, "arm")
         if arm is not None:
             self._arm_status = arm
@@ -540,10 +542,9 @@ def _read(read: Callable[..., Any], errors: dict[str, Exception], role: str, *ar
         return None
 
 
-def _contact_centre_s_m(source: WrenchSource) -> tuple[float, float] | None:
-    """Where the grasp presses the gel (x, y in S, m) as ``source``'s estimator last measured
-    it against the open gel; None for a source without an estimator (a scripted one) or
-    before a measurement."""
-    estimator = estimator_of(source)
+def _contact_centre_s_m(estimator: TactileEstimator | None) -> tuple[float, float] | None:
+    """Where the grasp presses the gel (x, y in S, m) as ``estimator`` last measured it
+    against the open gel; None without an estimator (a scripted source) or before a
+    measurement."""
     centre_mm = None if estimator is None else estimator.contact_centre_mm
     return None if centre_mm is None else (centre_mm[0] * 1e-3, centre_mm[1] * 1e-3)
