@@ -56,6 +56,12 @@ class TrialResult:
     fingers (along T x) that the press spiral last took from the grasp's imprint (m; nan
     unread) and ``imprint_true_m`` the truth it stands for, where the plug's axis crosses
     the gel's centre row (m along T x, controller/insertion/imprint.py).
+
+    The torques the opening's walls put on the plug as it goes in (the scene's truth,
+    evaluation/trials/entry_torque.py; nan when the tip never got 1 mm into the opening):
+    ``entry_tilt_torque_rms_nm`` the RMS of the tilt torque (about S x and S y) and
+    ``entry_inplane_torque_rms_nm`` of the in-plane torque (about S z, the gel's normal),
+    N*m, each the change at the gel from the plug's hold in the air.
     """
 
     task: str
@@ -86,6 +92,8 @@ class TrialResult:
     tip_y_true_m: float = float("nan")
     imprint_offset_est_m: float = float("nan")
     imprint_true_m: float = float("nan")
+    entry_tilt_torque_rms_nm: float = float("nan")
+    entry_inplane_torque_rms_nm: float = float("nan")
 
     def __post_init__(self) -> None:
         if self.status not in STATUSES:
@@ -104,7 +112,7 @@ class TrialResult:
         values: dict[str, Any] = {}
         for f in fields(cls):
             name = f.name
-            if name not in row and name in POSE_FIELDS:  # a table from before they existed
+            if name not in row and name in LATER_FIELDS:  # a table from before they existed
                 continue
             text = row[name]
             if name == "failure_reason":
@@ -137,3 +145,6 @@ POSE_FIELDS = (
     "imprint_offset_est_m",
     "imprint_true_m",
 )
+ENTRY_FIELDS = ("entry_tilt_torque_rms_nm", "entry_inplane_torque_rms_nm")
+#: the columns a table written before them may lack (they read as unknown)
+LATER_FIELDS = POSE_FIELDS + ENTRY_FIELDS

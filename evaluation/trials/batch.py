@@ -46,7 +46,7 @@ from tqdm import tqdm
 
 from controller.cli.outputs import atomic_file, check_output_folder, write_text
 from controller.cli.support import Terminated, ToolError, one_line
-from controller.run.result import POSE_FIELDS, TrialResult
+from controller.run.result import LATER_FIELDS, TrialResult
 from evaluation.trials.executors import Executor
 from evaluation.trials.records import (
     RECORDS,
@@ -161,8 +161,8 @@ def _rows(path: Path, older: bool = False) -> list[dict[str, str]]:
     stopped before its first row). Every row is written whole with its line end, so a last
     line without one, or a last row short of fields, is the row of a kill in mid-write and
     is dropped; a short row elsewhere is a damaged file (ToolError). Its columns must be
-    this version's; with ``older``, a table from before some of the record's pose columns
-    existed (``POSE_FIELDS``: they read as unknown) is taken too."""
+    this version's; with ``older``, a table from before some of its later columns existed
+    (``LATER_FIELDS``: they read as unknown) is taken too."""
     if not path.is_file():
         return []
     with open(path, newline="") as handle:
@@ -184,9 +184,9 @@ def _rows(path: Path, older: bool = False) -> list[dict[str, str]]:
 
 
 def _older_columns(columns: tuple[str, ...]) -> bool:
-    """``columns`` are this version's in its order, less some of ``POSE_FIELDS``."""
+    """``columns`` are this version's in its order, less some of ``LATER_FIELDS``."""
     kept = tuple(c for c in CSV_COLUMNS if c in columns)
-    return kept == columns and set(CSV_COLUMNS) - set(columns) <= set(POSE_FIELDS)
+    return kept == columns and set(CSV_COLUMNS) - set(columns) <= set(LATER_FIELDS)
 
 
 def read_table(path: Path) -> list[TrialResult]:

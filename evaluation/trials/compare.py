@@ -160,6 +160,11 @@ def _seconds(value: float | None) -> str:
     return "–" if value is None else f"{value:.2f}"
 
 
+def _milli(value: float | None) -> str:
+    """N*m as mN*m, or a dash for none."""
+    return "–" if value is None else f"{value * 1e3:.1f}"
+
+
 def comparison_markdown(
     task: str, seeds: str, speed_key: str, cells: Mapping[Cell, Batch], command: str
 ) -> str:
@@ -175,14 +180,17 @@ def comparison_markdown(
         "peak and largest p99 over the trials): the plug's insertion force (the net contact "
         "force along the hole's axis; a trial above the connector's specified insertion force "
         "fails), its summed normal contact force (a wedge's squeeze counts once per wall) and "
-        "the compliant wrist's force. Regenerate with:",
+        "the compliant wrist's force; the walls' torques on the plug as it went in are the "
+        "medians of the trials' RMS change at the gel from the hold in the air (the tilt "
+        "torque's magnitude and the in-plane torque's). Regenerate with:",
         "",
         f"    {command}",
         "",
         f"| controller | {speed_key} | trials | success | 95% CI | median time s | p90 time s "
         "| insertion force max N | insertion force p99 N | over insertion limit "
-        "| summed contact force max N | wrist force max N | failures |",
-        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
+        "| summed contact force max N | wrist force max N | entry tilt torque mN*m "
+        "| entry in-plane torque mN*m | failures |",
+        "|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|",
     ]
     for cell, batch in cells.items():
         s = batch.summary
@@ -196,6 +204,8 @@ def comparison_markdown(
             f"{_seconds(s['max_insertion_force_n'])} | {_seconds(s['p99_insertion_force_n'])} | "
             f"{s['insertion_force_violation_trials']} | {_seconds(s['max_contact_force_n'])} | "
             f"{_seconds(s['max_wrist_force_n'])} | "
+            f"{_milli(s.get('entry_tilt_torque_median_nm'))} | "
+            f"{_milli(s.get('entry_inplane_torque_median_nm'))} | "
             f"{failures} |"
         )
     incomplete = sum(not b.summary["complete"] for b in cells.values())

@@ -33,6 +33,12 @@ def _finite_or_none(value: float) -> float | None:
     return float(value) if math.isfinite(value) else None
 
 
+def _finite_median(values: Iterable[float]) -> float | None:
+    """The median of the finite ``values``, None with none."""
+    finite = [v for v in values if math.isfinite(v)]
+    return float(np.median(finite)) if finite else None
+
+
 def quantile_over_all(times_s: Iterable[float], n: int, q: float) -> float | None:
     """The ``q`` quantile (0..1, linear interpolation as NumPy's default) of the time to
     insert over ``n`` trials of which ``times_s`` are the successes' (s): a failure counts as
@@ -60,7 +66,10 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
     trial), ``p99_contact_force_n`` (the largest of the trials' 99th percentiles), the same of
     the insertion force (``max_insertion_force_n``, ``p99_insertion_force_n``), its limit
     ``contact_force_limit_n``, ``insertion_force_violations`` (summed) and
-    ``insertion_force_violation_trials`` (trials with at least one); ``sim_speed_x_realtime`` is
+    ``insertion_force_violation_trials`` (trials with at least one); the walls' torques on the
+    plug as it went in (``entry_tilt_torque_median_nm``, ``entry_inplane_torque_median_nm``:
+    medians of the trials' RMS, N*m, over the trials whose tip entered; None with none:
+    evaluation/trials/entry_torque.py); ``sim_speed_x_realtime`` is
     the simulated time over the wall time of the trials that ran to an outcome (error trials
     have no simulated time); ``grasp_estimate`` (only when some trial has one): FEEL's errors on
     the plug in the hand, per quantity estimated in either plane, and the true size of those not
@@ -99,6 +108,8 @@ def summarize(results: Iterable[TrialResult], **context: Any) -> dict[str, Any]:
         else contact_limits or None,
         insertion_force_violations=sum(r.insertion_force_violations for r in ordered),
         insertion_force_violation_trials=sum(r.insertion_force_violations > 0 for r in ordered),
+        entry_tilt_torque_median_nm=_finite_median(r.entry_tilt_torque_rms_nm for r in ran),
+        entry_inplane_torque_median_nm=_finite_median(r.entry_inplane_torque_rms_nm for r in ran),
         failures=dict(sorted(Counter(r.failure_reason or "unknown" for r in failed).items())),
         failed_seeds=sorted({r.seed for r in failed}),
         errors=sum(r.status == "error" for r in ordered),

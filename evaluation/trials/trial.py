@@ -28,6 +28,7 @@ from controller.run import insertion_trial as product_trial
 from controller.run.insertion_trial import TrialOutcome
 from controller.run.result import TrialResult
 from core.atomic_files import atomic_file
+from evaluation.trials.entry_torque import entry_torques
 from evaluation.trials.oracle import TRIAL_CONTROLLERS
 from evaluation.trials.spec import TrialSpec
 
@@ -172,6 +173,7 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         else:
             failure = f"loop ended: {ran.loop.reason}"
     wrist = truth["wrist_wrench_t"][:, :3]
+    entry_tilt, entry_inplane = entry_torques(truth, required)
     max_force = float(np.linalg.norm(wrist, axis=1).max()) if len(wrist) else 0.0
     return TrialResult(
         task=config.task,
@@ -191,6 +193,8 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
         p99_insertion_force_n=float(np.percentile(insertion, 99)) if len(insertion) else 0.0,
         contact_force_limit_n=config.contact_force_limit_n,
         insertion_force_violations=violations,
+        entry_tilt_torque_rms_nm=entry_tilt,
+        entry_inplane_torque_rms_nm=entry_inplane,
         **_grasp_fields(task, seed, ran),
     )
 
