@@ -57,6 +57,8 @@ GROUPS = (
                 "FEEL's in-hand estimate against the truth, from batch folders"),
             Job("hole_finds", "evaluation.trials.hole_finds_cli",
                 "where the tip really was at each hole find"),
+            Job("near_miss_sides", "evaluation.trials.near_miss_sides",
+                "whether the sweep's near misses name the opening's side"),
             Job("publish_trials", "evaluation.trials.publish",
                 "publish make trials' comparisons into docs/"),
             Job("search_torques", "evaluation.scene.search_torques",
