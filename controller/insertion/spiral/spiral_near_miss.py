@@ -6,11 +6,11 @@ its path (USB-C: 2.56 mm for 2.4 mm, about +-0.08 mm), and the spiral's rings li
 apart (0.3 mm): a ring that passes the opening 0.1-0.2 mm off lets part of the face hang
 over it. The board then bears the face on one edge and the opening's rim catches the other;
 the tilt torques (about T x and T y) jump for a frame or two, while the axial load does not
-drop (the face still rests on the board), so no probe starts. The jump's direction does not
-name the side the opening lies on (the records of the tuning seeds: the lateral force it
-implies points toward the opening about as often as away, docs/BENCHMARKS.md), so the
-retrace does not step to one side: it takes the ring that the pattern skips, half a pitch
-outward.
+drop (the face still rests on the board), so no probe starts. Across the plug's thickness,
+where the clearance is, the jump's direction does not name the side the opening lies on,
+not even in the true wrench (``python -m evaluation near_miss_sides``, docs/BENCHMARKS.md),
+so the retrace does not step to one side: it takes the ring that the pattern skips, half a
+pitch outward.
 
 **Detection** (``NearMissDetector``): each new frame's torques about T x and T y during the
 sweep, against the median of the ``median_frames`` frames before it in the same sweep (the
