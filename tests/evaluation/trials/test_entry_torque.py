@@ -5,7 +5,9 @@ import math
 import numpy as np
 import pytest
 
+from controller.run.result import TrialResult
 from evaluation.trials.entry_torque import entry_torques
+from evaluation.trials.summary import summarize
 
 
 def _truth(depth_mm, contact, torque_mnm):
@@ -43,3 +45,22 @@ def test_no_hold_in_the_air_reads_unknown():
     depth = [0, 2.0, 3.0]
     tilt, _ = entry_torques(_truth(depth, [1, 1, 1], [HOLD] * 3), depth_m=0.005)
     assert math.isnan(tilt)
+
+
+def _result(seed, tilt, inplane):
+    return TrialResult(
+        task="usb_c", controller="dipole", seed=seed, success=True, status="inserted",
+        failure_reason=None, time_to_insert_s=5.0, duration_s=8.0, max_wrist_force_n=2.0,
+        force_limit_n=20.0, wall_time_s=1.0, entry_tilt_torque_rms_nm=tilt,
+        entry_inplane_torque_rms_nm=inplane,
+    )  # fmt: skip
+
+
+def test_the_summary_takes_the_median_of_the_trials_that_entered():
+    s = summarize(
+        [_result(0, 0.002, 0.001), _result(1, 0.006, 0.003), _result(2, math.nan, math.nan)]
+    )
+    assert s["entry_tilt_torque_median_nm"] == pytest.approx(0.004)
+    assert s["entry_inplane_torque_median_nm"] == pytest.approx(0.002)
+    none = summarize([_result(0, math.nan, math.nan)])
+    assert none["entry_tilt_torque_median_nm"] is None
