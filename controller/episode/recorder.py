@@ -185,10 +185,19 @@ and otherwise again at the first tick this long after the last one written, s of
 (controller/episode/topics.py)."""
 
 
+TF_PERIOD_S = 0.035
+"""``/tf`` and ``/sim/tf`` are written at the first tick (truth row) this long or more after
+the last one written, s of loop time: every 4th tick of the 100 Hz loop (25 Hz, the
+camera's rate), enough for the 3D view, which interpolates between them; the pose at every
+tick is ``/arm/status`` (and ``/sim/truth``). A period short of 0.04 s, so a tick's time
+that float rounding puts a hair early is not skipped."""
+
+
 class Latch:
     """When a slowly changing value is due in the file: the first time, whenever ``key``
     differs from the last one written, and otherwise once ``period_s`` (s on the loop's
-    clock) has passed since the last one written."""
+    clock) has passed since the last one written. With a constant ``key`` (None), a
+    throttle: at most one per ``period_s``."""
 
     def __init__(self, period_s: float = LATCH_PERIOD_S) -> None:
         self.period_s = period_s
@@ -210,7 +219,7 @@ def gripper_key(gripper: GripperStatus) -> tuple:
 
 class TickLogger:
     """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
-    only when due, see ``Latch``; ``/tf_static`` with ``mount``, where the sensor sits on
+    only when due, see ``Latch``; ``/tf`` every ``TF_PERIOD_S``; ``/tf_static`` with ``mount``, where the sensor sits on
     the tool, when given), then wakes the writer if a flush is due, at once at each phase
     change."""
 
@@ -220,6 +229,7 @@ class TickLogger:
         self._gripper = Latch()
         self._teleop = Latch()
         self._static = Latch()
+        self._tf = Latch(TF_PERIOD_S)
         self._tcp_tf = functools.partial(tcp_tf, offset_ns=writer.offset_ns)
         self._static_tf = functools.partial(static_tf, offset_ns=writer.offset_ns)
 
@@ -233,7 +243,8 @@ class TickLogger:
         if self._teleop.due(obs.teleop, t):
             log(topics.TELEOP, t, teleop_json, obs.teleop)
         log(topics.LOOP_TICK, t, tick_json, tick)
-        log(topics.TCP_TF, t, self._tcp_tf, obs.arm)
+        if self._tf.due(None, t):
+            log(topics.TCP_TF, t, self._tcp_tf, obs.arm)
         if self.mount is not None and self._static.due(self.mount, t):
             log(topics.TF_STATIC, t, self._static_tf, (t, self.mount))
         for transition in tick.transitions:

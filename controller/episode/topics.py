@@ -230,7 +230,7 @@ TCP_TF = Topic(
     "foxglove.FrameTransforms",
     "protobuf",
     "B",
-    "every tick",
+    "every 4th tick (25 Hz: controller/episode/recorder.py, TF_PERIOD_S)",
     "The TCP pose: parent 'B', child 'T', translation in m, rotation a unit quaternion "
     "(from the xArm rpy, core.spatial's 'xyz' convention). ``/tf_static`` places S in T; in "
     "simulation the truth adds, on ``/sim/tf``, the plug ('plug', S2B) and the hole ('H').",
@@ -273,7 +273,7 @@ SIM_TF = Topic(
     "foxglove.FrameTransforms",
     "protobuf",
     "B",
-    "with each truth row (simulation only)",
+    "every 4th truth row (25 Hz, as ``/tf``; simulation only)",
     "The plug's true pose ('B' -> 'plug': origin at its tip, rotation S2B) and the true hole "
     "('B' -> 'H', with each row, so a viewer joining late still sees it).",
 )

@@ -1,6 +1,7 @@
 """The simulator's truth in a trial's episode (``/sim/truth``, ``/sim/tf``), written by the
 trial tools, never by the controller: a loop observer that, each tick, queues the truth rows
-the scene appended since the previous tick (controller/episode/topics.py). It reads the
+the scene appended since the previous tick (controller/episode/topics.py; ``/sim/tf`` at
+most every ``TF_PERIOD_S``, as ``/tf``). It reads the
 world only (never ``sync``, so recording does not change the run)."""
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import numpy as np
 
 from controller.episode import topics
 from controller.episode.foxglove_types import transforms_bytes
+from controller.episode.recorder import TF_PERIOD_S, Latch
 from controller.episode.session import EpisodeRecording
 from controller.episode.writer import json_bytes
 from controller.loop import TickRecord
@@ -58,6 +60,7 @@ class SimTruthLogger:
         self.recording = recording
         self.world: Any = None
         self._seen = 0
+        self._tf = Latch(TF_PERIOD_S)
 
     def attach(self, world: Any) -> None:
         self.world = world
@@ -76,4 +79,5 @@ class SimTruthLogger:
         for row in rows:
             t_s = float(row[0])
             writer.log(topics.SIM_TRUTH, t_s, truth_json, row)
-            writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole, writer.offset_ns))
+            if self._tf.due(None, t_s):
+                writer.log(topics.SIM_TF, t_s, _truth_tf, (row, truth.hole, writer.offset_ns))
