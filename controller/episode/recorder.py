@@ -219,9 +219,9 @@ def gripper_key(gripper: GripperStatus) -> tuple:
 
 class TickLogger:
     """The loop's observer: queues each tick's messages into ``writer`` (the latched topics
-    only when due, see ``Latch``; ``/tf`` every ``TF_PERIOD_S``; ``/tf_static`` with ``mount``, where the sensor sits on
-    the tool, when given), then wakes the writer if a flush is due, at once at each phase
-    change."""
+    only when due, see ``Latch``; ``/tf`` every ``TF_PERIOD_S``; ``/tf_static`` with
+    ``mount``, where the sensor sits on the tool, when given), then wakes the writer if a
+    flush is due, at once at each phase change."""
 
     def __init__(self, writer: EpisodeWriter, mount: Mount | None = None) -> None:
         self.writer = writer
