@@ -25,7 +25,7 @@ and after spinning that long instead (the thread kept busy, so what is lost in t
 not the thread's own). The same work, so any difference is the pause's.
 
     python -m evaluation bench_episode_stages [--seconds 20] [--seed 1] [--realtime]
-    python -m evaluation bench_episode_stages --replay [--interval 0.05] [--seconds 20] [--seed 1]
+    python -m evaluation bench_episode_stages --replay [--interval 0.07] [--seconds 20] [--seed 1]
 """
 
 from __future__ import annotations
