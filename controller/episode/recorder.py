@@ -188,9 +188,10 @@ and otherwise again at the first tick this long after the last one written, s of
 TF_PERIOD_S = 0.035
 """``/tf`` and ``/sim/tf`` are written at the first tick (truth row) this long or more after
 the last one written, s of loop time: every 4th tick of the 100 Hz loop (25 Hz, the
-camera's rate), enough for the 3D view (which places a message by the newest transform at or
-before its time); the pose at every tick is ``/arm/status`` (and ``/sim/truth``). A period short of 0.04 s, so a tick's time
-that float rounding puts a hair early is not skipped."""
+camera's rate), enough for the 3D view (which places a message by the newest transform at
+or before its time); the pose at every tick is ``/arm/status`` (and ``/sim/truth``). A
+period short of 0.04 s, so a tick's time that float rounding puts a hair early is not
+skipped."""
 
 
 class Latch:
