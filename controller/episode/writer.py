@@ -63,13 +63,13 @@ log = logging.getLogger(__name__)
 
 NS_PER_S = 1_000_000_000
 QUEUE_SIZE = 4096
-"""Records the queue holds (about 6 s of a simulated trial's 700 records a second)."""
+"""Records the queue holds (about 8 s of a simulated trial's 520 records a second)."""
 FLUSH_INTERVAL_S = 0.07
 """Every 0.07 s of log time: a SIGKILL loses at most this plus the writer's own latency (its
 wake-up, writing the records queued since the last flush: about a tick, 0.01 s), within the
 0.1 s allowed; each flush costs the logger about 0.25 ms of CPU on this project's machines,
-so fewer of them is most of what keeps it under 1% of a core (docs/EPISODES.md "Cost",
-docs/BENCHMARKS.md "Episodes")."""
+so fewer flushes are the main lever on the writer's share of a core (docs/EPISODES.md
+"Cost", docs/BENCHMARKS.md "Episodes")."""
 CHUNK_SIZE_BYTES = 4 * 1024 * 1024
 """A chunk is finished at this size or at the next flush, whichever comes first."""
 ZSTD_LEVEL = 1

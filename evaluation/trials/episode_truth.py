@@ -1,8 +1,8 @@
 """The simulator's truth in a trial's episode (``/sim/truth``, ``/sim/tf``), written by the
 trial tools, never by the controller: a loop observer that, each tick, queues the truth rows
 the scene appended since the previous tick (controller/episode/topics.py; ``/sim/tf`` at
-most every ``TF_PERIOD_S``, as ``/tf``). It reads the
-world only (never ``sync``, so recording does not change the run)."""
+most every ``TF_PERIOD_S``, as ``/tf``). It reads the world only (never ``sync``, so
+recording does not change the run)."""
 
 from __future__ import annotations
 

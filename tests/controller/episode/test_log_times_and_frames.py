@@ -12,7 +12,7 @@ from scipy.spatial.transform import Rotation
 
 from controller.episode import read_episode
 from controller.episode.foxglove_types import loop_time_s
-from controller.episode.recorder import sensor_mount
+from controller.episode.recorder import TF_PERIOD_S, sensor_mount
 from controller.episode.session import EPISODE_FILE
 from controller.episode.topics import FORMAT_VERSION
 from drivers.sim.scenes.insertion.frames import S_IN_T
@@ -69,3 +69,13 @@ def test_the_mount_follows_the_torque_axes_and_the_plugs_thickness():
     assert np.allclose(Rotation.from_quat([x, y, z, w]).as_matrix(), S_IN_T)
     _, quat = sensor_mount(("-x", "-z", "-y"), 0.003)
     assert np.allclose(Rotation.from_quat(quat).as_matrix()[:, 0], [-1, 0, 0])
+
+
+@pytest.mark.parametrize(("topic", "rows"), [("/tf", "/loop/tick"), ("/sim/tf", "/sim/truth")])
+def test_the_transforms_come_at_every_4th_tick_or_truth_row(episode, topic, rows):
+    times = np.array([m.t_s for m in episode.messages(topic)])
+    every = np.array([m.t_s for m in episode.messages(rows)])
+    assert times[0] == every[0] and np.all(np.isin(times, every))
+    assert np.diff(times).min() >= TF_PERIOD_S and len(times) == pytest.approx(
+        len(every) / 4, rel=0.05
+    )
