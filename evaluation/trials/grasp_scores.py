@@ -21,6 +21,12 @@ Six quantities (``QUANTITIES``), each scored on the trials that have an estimate
 A quantity no trial estimates is "not estimated": its true size is given for scale. The
 summary's statistics are of the absolute error (estimate - truth); the histograms show the
 signed error.
+
+``board_share``: how much of the thickness plane's errors the board's tilt explains. FEEL
+reads the plug against the receptacle's axis, which differs from the plug's tilt in the hand
+by the board's tilt (b = ``thickness_tilt_to_receptacle_true_rad`` -
+``grasp_tilt_thickness_true_rad``); an estimate exact against the receptacle's axis is off
+the hand's truth by b, and its tip by L (sin(a + b) - sin a).
 """
 
 from __future__ import annotations
@@ -133,6 +139,34 @@ def grasp_estimate_summary(results: Sequence[TrialResult]) -> dict[str, Any] | N
         "of": len(results),
         "errors": {q.key: _stats(signed_errors(results, q)) for q in scored},
         "not_estimated": not_estimated,
+    }
+
+
+def board_share(results: Sequence[TrialResult], length_m: float) -> dict[str, float] | None:
+    """The board's part of the thickness plane's errors over the trials with an estimate and
+    both truths (module doc; ``length_m``: the plug's length L from the TCP to the tip, m):
+    ``n``; ``board_tilt_median_deg``, the median |b|; ``correlation`` of the tilt's signed
+    error with b; ``tip_error_less_board_median_mm``, the median |tip error - the board's
+    share of it| (where the tip is estimated and true). None below 3 trials or without spread
+    in either (no correlation)."""
+    q = quantity("thickness_tilt_deg")
+    rows = [r for r in _estimated(results, q)
+            if _finite(r, "thickness_tilt_to_receptacle_true_rad")]  # fmt: skip
+    if len(rows) < 3:
+        return None
+    tilt = np.array([r.grasp_tilt_thickness_true_rad for r in rows])
+    board = np.array([r.thickness_tilt_to_receptacle_true_rad for r in rows]) - tilt
+    error = np.array([r.grasp_tilt_thickness_est_rad for r in rows]) - tilt
+    if np.ptp(board) == 0.0 or np.ptp(error) == 0.0:
+        return None
+    share_m = length_m * (np.sin(tilt + board) - np.sin(tilt))
+    tip = np.array([r.tip_y_est_m - r.tip_y_true_m for r in rows]) - share_m
+    tip = np.abs(tip[np.isfinite(tip)])
+    return {
+        "n": len(rows),
+        "board_tilt_median_deg": math.degrees(float(np.median(np.abs(board)))),
+        "correlation": float(np.corrcoef(error, board)[0, 1]),
+        "tip_error_less_board_median_mm": 1e3 * float(np.median(tip)) if tip.size else math.nan,
     }
 
 

@@ -10,11 +10,13 @@ tilt about T y and the tip along T x, the ``align`` machine's), the absolute err
 95th percentile and largest over the trials with an estimate of it; a quantity no trial
 estimates is "not estimated" (its true size, for scale). OUT_DIR gets:
 
-* ``grasp_scores.md``: the table, one row per batch and quantity, and the charts;
+* ``grasp_scores.md``: the table, one row per batch and quantity, a note per batch on the
+  board's share of the thickness plane's errors (``grasp_scores.board_share``: FEEL reads the
+  plug against the receptacle's axis, the board's tilt away from the hand's), and the charts;
 * ``grasp_errors_<DIR's name>.png``: per batch with an estimate, a histogram of the signed
   error (estimate - truth) of each quantity it estimates;
 * ``grasp_scores.json``: each batch's block (the summary's ``grasp_estimate``; null without
-  an estimate).
+  an estimate) and its ``board_share`` (null below 3 trials with both truths).
 
 A ``trials.csv`` written before a pose column existed reads it as unknown. One from before
 ``tip_y_est_m`` gets it from the thickness-plane tilt as the machine computes it
@@ -45,6 +47,7 @@ from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_trials
 from evaluation.trials.charts import grasp_error_chart
 from evaluation.trials.grasp_scores import (
     TABLE_HEADER,
+    board_share,
     chart_errors,
     grasp_estimate_summary,
     table_cells,
@@ -59,13 +62,15 @@ DERIVED = "tip_y_est_m"  # the column an older table lacks and this tool derives
 @dataclass(frozen=True)
 class Scored:
     """One batch: its folder, ``name`` (the folder's), ``title`` (task, controller, seeds),
-    its results and whether ``tip_y_est_m`` was derived (an older table)."""
+    its results, the plug's length from the TCP to the tip (m, the batch's task and
+    overrides) and whether ``tip_y_est_m`` was derived (an older table)."""
 
     folder: Path
     name: str
     title: str
     results: list[TrialResult]
-    derived_length_m: float | None
+    length_m: float
+    derived: bool
 
 
 def read_results(folder: Path) -> tuple[list[TrialResult], bool]:
@@ -86,19 +91,15 @@ def _plan(folder: Path) -> dict[str, Any]:
     return plan if isinstance(plan, dict) else {}
 
 
-def _with_tip_y(
-    results: list[TrialResult], task: str, overrides: list[str]
-) -> tuple[list[TrialResult], float]:
+def _with_tip_y(results: list[TrialResult], length_m: float) -> list[TrialResult]:
     """``results`` with ``tip_y_est_m`` from the thickness-plane tilt (where estimated) for a
-    plug of the task's length; the length."""
-    length = load_task(task, tuple(overrides), with_calibration=False).config.plug.length_m
-    derived = [
-        dataclasses.replace(r, tip_y_est_m=tilt_tip_offset_m(t, length))
+    plug ``length_m`` long."""
+    return [
+        dataclasses.replace(r, tip_y_est_m=tilt_tip_offset_m(t, length_m))
         if math.isfinite(t := r.grasp_tilt_thickness_est_rad)
         else r
         for r in results
     ]
-    return derived, length
 
 
 def score(folder: Path) -> Scored:
@@ -111,12 +112,12 @@ def score(folder: Path) -> Scored:
     task = plan.get("task") if isinstance(plan.get("task"), str) else min(tasks)
     controllers = ", ".join(sorted({r.controller for r in results}))
     seeds = plan.get("seeds") or f"{min(r.seed for r in results)}..{max(r.seed for r in results)}"
-    length = None
+    overrides = tuple(str(o) for o in plan.get("overrides", ()) or ())
+    length = load_task(str(task), overrides, with_calibration=False).config.plug.length_m
     if not has_tip_y:
-        overrides = [str(o) for o in plan.get("overrides", ()) or ()]
-        results, length = _with_tip_y(results, str(task), overrides)
+        results = _with_tip_y(results, length)
     title = f"{', '.join(sorted(tasks))}, {controllers}, seeds {seeds}"
-    return Scored(folder, folder.resolve().name, title, results, length)
+    return Scored(folder, folder.resolve().name, title, results, length, not has_tip_y)
 
 
 def chart_name(batch: Scored) -> str:
@@ -144,14 +145,28 @@ def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
             continue
         lines += [f"| {label} | " + " | ".join(row) + " |" for row in table_cells(block)]
         charts += [f"![in-hand estimate errors, {batch.name}]({chart_name(batch)})", ""]
-        if batch.derived_length_m is not None and "tip_y_mm" in block["errors"]:
+        if batch.derived and "tip_y_mm" in block["errors"]:
             notes.append(
                 f"- `{batch.name}`: its trials.csv has no `{DERIVED}` (written before it "
                 "existed); the tip's offset along T y is derived from "
                 "`grasp_tilt_thickness_est_rad` as the machine computes it, L sin(tilt) with "
-                f"L = {1e3 * batch.derived_length_m:g} mm (the task's plug length)."
+                f"L = {1e3 * batch.length_m:g} mm (the task's plug length)."
             )
+        if (share := board_share(batch.results, batch.length_m)) is not None:
+            notes.append(board_note(batch, share))
     return "\n".join([*lines, "", *notes, *([""] if notes else []), *charts]).rstrip() + "\n"
+
+
+def board_note(batch: Scored, share: dict[str, float]) -> str:
+    """The markdown note on the board's share of ``batch``'s thickness-plane errors."""
+    return (
+        f"- `{batch.name}`: the board's tilt about T x (the plug's tilt from the receptacle's "
+        f"axis less its tilt in the hand), {share['n']} trials: median "
+        f"{share['board_tilt_median_deg']:.2f} deg; the tilt's error follows it (correlation "
+        f"{share['correlation']:.2f}); the tip's error along T y less the board's share, "
+        f"L (sin(a + b) - sin a) with L = {1e3 * batch.length_m:g} mm: median "
+        f"{share['tip_error_less_board_median_mm']:.2f} mm."
+    )
 
 
 def write(batches: list[Scored], out: Path) -> list[dict[str, Any] | None]:
@@ -166,8 +181,11 @@ def write(batches: list[Scored], out: Path) -> list[dict[str, Any] | None]:
                 f"the plug in the hand by touch: {batch.title}",
                 len(batch.results),
             )
-    every = {b.name: {"folder": str(b.folder), "grasp_estimate": blk}
-             for b, blk in zip(batches, blocks, strict=True)}  # fmt: skip
+    every = {
+        b.name: {"folder": str(b.folder), "grasp_estimate": blk,
+                 "board_share": board_share(b.results, b.length_m)}
+        for b, blk in zip(batches, blocks, strict=True)
+    }  # fmt: skip
     write_text(out / BLOCKS, json.dumps(every, indent=2) + "\n")
     write_text(out / TABLE, markdown(batches, blocks))
     return blocks

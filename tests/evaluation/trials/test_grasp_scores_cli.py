@@ -103,3 +103,42 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     twin = _batch(tmp_path / "x" / "b", RESULTS)
     assert main([str(batch), str(twin), "--out", str(tmp_path / "o")]) == 2
     assert "two batch folders are named b" in capsys.readouterr().err
+
+
+def _on_a_tilted_board(seed: int, board_rad: float, rock_error_rad: float) -> TrialResult:
+    """A trial whose FEEL read the plug against the receptacle's axis, off by
+    ``rock_error_rad``, on a board tilted by ``board_rad`` in the thickness plane."""
+    tilt, against_receptacle = 0.05, 0.05 + board_rad
+    estimate = against_receptacle + rock_error_rad
+    return dataclasses.replace(
+        _result(seed, estimate=estimate), thickness_tilt_to_receptacle_true_rad=against_receptacle,
+        tip_y_true_m=USB_C_PLUG_M * math.sin(tilt),
+    )  # fmt: skip
+
+
+def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, capsys):
+    boards = [0.004, -0.012, 0.008, -0.016, 0.01]
+    exact = [_on_a_tilted_board(i, b, 0.0) for i, b in enumerate(boards)]
+    assert main([str(_batch(tmp_path / "exact", exact)), "--out", str(tmp_path / "s")]) == 0
+    table = capsys.readouterr().out
+    share = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["exact"]["board_share"]
+    assert share["n"] == 5
+    assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(0.01))
+    assert share["correlation"] == pytest.approx(1.0)
+    assert share["tip_error_less_board_median_mm"] == pytest.approx(0.0, abs=1e-9)
+    assert "`exact`: the board's tilt about T x" in table and "correlation 1.00" in table
+    # a rock error of its own, unrelated to the board: the share explains little of it
+    own = [0.01, 0.012, -0.015, -0.008, 0.011]
+    noisy = [_on_a_tilted_board(i, b, e) for i, (b, e) in enumerate(zip(boards, own, strict=True))]
+    assert main([str(_batch(tmp_path / "noisy", noisy)), "--out", str(tmp_path / "t")]) == 0
+    share = json.loads((tmp_path / "t" / "grasp_scores.json").read_text())["noisy"]["board_share"]
+    assert share["correlation"] < 0.8
+    assert share["tip_error_less_board_median_mm"] == pytest.approx(
+        1e3 * USB_C_PLUG_M * 0.011, rel=0.05
+    )  # L sin(a + b + e) - L sin(a + b) ~ L e, the median |e| 0.011 rad
+
+
+def test_too_few_trials_with_both_truths_give_no_board_share(tmp_path):
+    assert main([str(_batch(tmp_path / "b", RESULTS)), "--out", str(tmp_path / "s")]) == 0
+    scores = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())
+    assert scores["b"]["board_share"] is None
