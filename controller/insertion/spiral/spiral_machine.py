@@ -188,9 +188,11 @@ class SearchMemory:
     TCP's height at the settled press (``press_z_m``, B, m; None until the press settles
     after a tare) and at the pass's touch (``touch_z_m``, B, m; None until it touches), the
     place of a near miss not yet retraced (``near_miss_m``, path length, m; None without
-    one), and a retrace's: where it ends (``retrace_until_m``, m; None outside one) and the
-    sweep resumes (``resume_m``), whether its start has been reached (``retrace_started``)
-    and the retraces made in each pass so far (``retraces``, by pass index)."""
+    one) and the side it named (``near_miss_side_b``, a unit vector in B's x-y plane), and a
+    retrace's: where it ends (``retrace_until_m``, m; None outside one) and the sweep resumes
+    (``resume_m``), whether its start has been reached (``retrace_started``), whether its
+    ring lies inside the pattern's (``retrace_inward``) and the retraces made in each pass so
+    far (``retraces``, by pass index)."""
 
     pass_index: int = 0
     s_m: float = 0.0
@@ -203,9 +205,11 @@ class SearchMemory:
     press_z_m: float | None = None
     touch_z_m: float | None = None
     near_miss_m: float | None = None
+    near_miss_side_b: np.ndarray | None = None
     retrace_until_m: float | None = None
     resume_m: float = 0.0
     retrace_started: bool = False
+    retrace_inward: bool = False
     retraces: dict[int, int] = field(default_factory=dict)
 
     def s_at(self, t_s: float) -> float:
@@ -493,13 +497,17 @@ class SpiralMachine:
             self.force_n, self.force_t_s = reading
         return reading is not None
 
-    def near_miss_at(self, obs: Observation) -> float | None:
-        """The capture time (s) of the newest frame if its tilt torques jumped as a near miss
+    def near_miss_at(self, obs: Observation) -> tuple[float, np.ndarray] | None:
+        """The capture time (s) of the newest frame and the side it names (a unit vector in
+        B's x-y plane, ``near_miss.side_named_b``) if its tilt torques jumped as a near miss
         does (spiral_near_miss.py), else None (and always without ``near_misses``)."""
         if self.near_misses is None or obs.wrench is None:
             return None
-        jumped = self.near_misses.jumped(self.reading.torque_t(), obs.wrench.t_s)
-        return obs.wrench.t_s if jumped else None
+        jump_t = self.near_misses.jump(self.reading.torque_t(), obs.wrench.t_s)
+        if jump_t is None:
+            return None
+        t2b = rotation_from_rpy(obs.arm.tcp.rpy_rad)
+        return obs.wrench.t_s, near_miss.side_named_b(jump_t, t2b)
 
     def tared_force(self, obs: Observation) -> float:
         """The upward force on the tool (z in B, N) less the tare: the reading's newest (its
@@ -560,13 +568,15 @@ class SpiralMachine:
     def tip_target(self, s_m: float, height_m: float) -> np.ndarray:
         """The tip's target in B (m) at path length ``s_m`` of the pattern (turned by the
         present pass's ``pattern_turn_rad``; in a retrace, ``near_miss.outward_m`` further from its
-        centre), ``height_m`` above the nominal board; at FEEL's site (``at_feel_site``)
-        ``rock.site_m`` from the nominal opening along its y instead."""
+        centre, or nearer with ``retrace_inward``), ``height_m`` above the nominal board; at
+        FEEL's site (``at_feel_site``) ``rock.site_m`` from the nominal opening along its y
+        instead."""
         u, v = self._pattern.offset(s_m)
         radius = math.hypot(u, v)
-        detector = self.near_misses
-        if detector is not None and self.memory.retrace_until_m is not None and radius > 0.0:
-            scale = 1.0 + detector.settings.outward_m / radius  # a retrace's ring
+        detector, run = self.near_misses, self.memory
+        if detector is not None and run.retrace_until_m is not None and radius > 0.0:
+            step = detector.settings.outward_m * (-1.0 if run.retrace_inward else 1.0)
+            scale = max(0.0, 1.0 + step / radius)  # a retrace's ring
             u, v = u * scale, v * scale
         turn = self.hole.yaw_rad + self.search_pass.pattern_turn_rad
         if self.at_feel_site:

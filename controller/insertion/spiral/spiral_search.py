@@ -189,9 +189,10 @@ def _sweep_or_probe(
         m.fire("probe")
         return m.pressed(obs, force)
     if state.stage is SearchStage.SWEEP and run.press_z_m is not None:
-        near_miss_t_s = m.near_miss_at(obs)
-        if near_miss_t_s is not None and run.near_miss_m is None:
-            run.near_miss_m = run.s_at(near_miss_t_s)
+        near_miss = m.near_miss_at(obs)
+        if near_miss is not None and run.near_miss_m is None:
+            run.near_miss_m = run.s_at(near_miss[0])
+            run.near_miss_side_b = near_miss[1]
         if run.near_miss_m is not None and _retrace_due(m):
             state.stage = SearchStage.RETRACE
     if state.stage is SearchStage.RETRACE and not run.retrace_started:
@@ -218,8 +219,9 @@ def _retrace_due(m: SpiralMachine) -> bool:
     """Begin the retrace of the near miss at ``near_miss_m`` once the sweep has gone
     ``ahead_m`` past it without a catch, unless the pass has had its ``per_pass`` or comes
     before ``from_pass``: from ``back_m`` before it (reached first, pressed) to ``ahead_m``
-    after it, on the ring ``outward_m`` outside; the sweep then resumes where it had
-    reached."""
+    after it, on the ring ``outward_m`` outside, or inside with ``toward_side`` where the side
+    the near miss named points toward the pattern's centre; the sweep then resumes where it
+    had reached."""
     detector, run, there = m.near_misses, m.memory, m.memory.near_miss_m
     assert detector is not None and there is not None
     settings = detector.settings
@@ -231,6 +233,11 @@ def _retrace_due(m: SpiralMachine) -> bool:
     if done >= settings.per_pass or run.pass_index < settings.from_pass:
         return False
     run.retraces[run.pass_index] = done + 1
+    radial_b = m.tip_target(there, 0.0)[:2] - np.array([m.hole.x_m, m.hole.y_m])
+    side = run.near_miss_side_b
+    run.retrace_inward = bool(
+        settings.toward_side and side is not None and float(side @ radial_b) < 0.0
+    )
     run.resume_m, run.retrace_until_m = run.s_m, there + settings.ahead_m
     run.s_m = max(m.search_pass.start_m, there - settings.back_m)
     run.retrace_started = False

@@ -9,11 +9,16 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from scipy.spatial.transform import Rotation
 
 from controller.insertion.force_reading import TactileAxialForce
 from controller.insertion.interface import Phase
 from controller.insertion.spiral import SpiralMachine, TouchSpiralConfig
-from controller.insertion.spiral.spiral_near_miss import NearMissDetector, NearMissSettings
+from controller.insertion.spiral.spiral_near_miss import (
+    NearMissDetector,
+    NearMissSettings,
+    side_named_b,
+)
 from controller.insertion.spiral.spiral_search import SearchStage
 from controller.run.task import load_task
 from core.config import ConfigError
@@ -46,21 +51,37 @@ def between_rings_world(**kwargs):
 def test_a_jump_over_the_baseline_is_a_near_miss_and_each_frame_counts_once():
     detector = NearMissDetector(ON)
     quiet = [np.array([0.0002 * (-1) ** k, 0.0001, 0.0]) for k in range(5)]
-    assert not any(detector.jumped(tau, 0.04 * k) for k, tau in enumerate(quiet))
+    assert all(detector.jump(tau, 0.04 * k) is None for k, tau in enumerate(quiet))
     jump = np.array([0.0018, 0.0, 0.0])  # 1.8 mN*m about T x
-    assert detector.jumped(jump, 0.20)
-    assert not detector.jumped(jump, 0.20)  # the same frame again
-    assert not detector.jumped(np.array([0.0, 0.0, 0.01]), 0.24)  # about T z: not a tilt
-    assert not detector.jumped(np.array([0.001, 0.001, 0.0]), 0.28)  # 1.4 mN*m: under
+    change = detector.jump(jump, 0.20)
+    assert change is not None  # less the baseline, the median (0.0002 or -0.0002, 0.0001)
+    assert change == pytest.approx([0.0018 - 0.0002, -0.0001]) or change == pytest.approx(
+        [0.0018 + 0.0002, -0.0001]
+    )
+    assert detector.jump(jump, 0.20) is None  # the same frame again
+    assert detector.jump(np.array([0.0, 0.0, 0.01]), 0.24) is None  # about T z: not a tilt
+    assert detector.jump(np.array([0.001, 0.001, 0.0]), 0.28) is None  # 1.4 mN*m: under
 
 
 def test_a_new_sweep_takes_its_own_baseline():
     detector = NearMissDetector(ON)
     for k in range(5):
-        detector.jumped(np.zeros(3), 0.04 * k)
+        detector.jump(np.zeros(3), 0.04 * k)
     detector.reset()
     far = np.array([0.01, 0.0, 0.0])
-    assert not any(detector.jumped(far, 1.0 + 0.04 * k) for k in range(6))
+    assert all(detector.jump(far, 1.0 + 0.04 * k) is None for k in range(6))
+
+
+@pytest.mark.parametrize("yaw_deg", [0.0, 30.0, -120.0])
+@pytest.mark.parametrize("tip_from_opening", [(1.0, 0.0), (0.0, -1.0), (0.6, 0.8)])
+def test_the_side_a_jump_names_is_where_the_board_does_not_bear_the_face(yaw_deg, tip_from_opening):
+    # the tip off the opening along u (B): the board bears the face on the +u side, and the
+    # torque on the plug changes along -(u x z_B) (near_miss_sides' convention)
+    u = np.array([*tip_from_opening, 0.0])
+    change_b = -np.cross(u, [0.0, 0.0, 1.0])
+    t2b = Rotation.from_euler("z", math.radians(yaw_deg)) * Rotation.from_euler("x", math.pi)
+    change_t = t2b.inv().apply(change_b)
+    assert side_named_b(0.002 * change_t[:2], t2b) == pytest.approx(-u[:2])
 
 
 def test_without_near_misses_a_rim_between_the_rings_is_crossed_and_the_pass_goes_on():
@@ -95,6 +116,52 @@ def test_a_near_miss_is_retraced_half_a_pitch_outside_and_caught():
     assert reasons(machine)[2] == "caught"
     assert np.linalg.norm(world.tip[:2] - hole) < world.hole_radius_m
     assert machine.memory.retrace_until_m is None  # the catch ends the retrace
+
+
+def side_world(catch_m: float, rim_width_m: float):
+    """A catch region (0.1 mm) ``catch_m`` from the pattern's centre along its +y, where the
+    pattern's rings pass at 1.125 and 1.625 mm, with a rim ``rim_width_m`` wide around it that
+    names the side (the toy's tactile torques carry it about T x, so the side lies along y)."""
+    return touch_world(
+        hole_offset_m=(0.0, catch_m), hole_radius_m=0.0001, rim_width_m=rim_width_m,
+        friction=0.0, rim_torque=0.005, rim_names_side=True,
+    )  # fmt: skip
+
+
+def retraces_inward(world, config) -> tuple[list[bool], SpiralMachine]:
+    """Run the spiral on ``config`` in ``world``: at each tick of a retrace whether its ring
+    lies inside the pattern's; the machine."""
+    machine = spiral(world, config)
+    inward = []
+    while world.t_s < 40.0 and machine.phase not in (Phase.INSERT, Phase.RELEASE):
+        world.step(machine)
+        if machine.stage is SearchStage.RETRACE:
+            u, v = machine._pattern.offset(machine.memory.s_m)
+            target = machine.tip_target(machine.memory.s_m, 0.0)[:2]
+            nominal = np.array([world.hole.x_m, world.hole.y_m])
+            inward.append(bool(np.linalg.norm(target - nominal) < math.hypot(u, v)))
+    return inward, machine
+
+
+TOWARD_SIDE = replace(SLOW, near_miss=replace(ON, toward_side=True))
+
+
+def test_a_rim_crossed_inside_the_catch_names_the_outside():
+    # the ring at 1.125 mm crosses the rim 0.25 mm inside the catch: out to 1.375 mm
+    inward, machine = retraces_inward(side_world(0.001375, 0.0003), TOWARD_SIDE)
+    assert inward and not any(inward)
+    assert reasons(machine)[2] == "caught"
+
+
+def test_a_rim_crossed_outside_the_catch_names_the_inside_where_outward_misses():
+    # only the ring at 1.625 mm crosses the rim, 0.18 mm outside the catch at 1.445 mm: the
+    # retrace half a pitch inside (1.375 mm) reaches the catch, one outside (1.875 mm) does not
+    inward, machine = retraces_inward(side_world(0.001445, 0.0002), TOWARD_SIDE)
+    assert inward and all(inward)
+    assert reasons(machine)[2] == "caught"
+    inward, machine = retraces_inward(side_world(0.001445, 0.0002), replace(SLOW, near_miss=ON))
+    assert inward and not any(inward)
+    assert "caught" not in reasons(machine)
 
 
 def test_a_quiet_rim_starts_no_retrace():

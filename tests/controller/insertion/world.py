@@ -96,9 +96,12 @@ class ToyWorld:
     thickness_tol_rad: float | None = None
     noise: float = 0.0003
     # the face across the opening's rim: a tip on the board within ``rim_width_m`` outside
-    # the catch region feels this tilt torque about T x (N*m; a near miss)
+    # the catch region feels this tilt torque about T x (N*m; a near miss), or with
+    # ``rim_names_side`` along -(u x z_B), u the unit vector from the opening to the tip (the
+    # board bearing the face on the side away from the opening)
     rim_torque: float = 0.0
     rim_width_m: float = 0.0003
+    rim_names_side: bool = False
     # the arm's F/T reading (ArmStatus.external_force_n, N in B), for the blind baseline: the
     # board (or the opening's floor under the tip) pushing up k_arm_n_m per m of the tip's
     # depth below it, as through a wrist of that stiffness; plus a constant bias
@@ -146,6 +149,13 @@ class ToyWorld:
         self.rezero_count = 0
 
     # -- geometry ----------------------------------------------------------------------
+
+    def _rim_axis(self, tip: np.ndarray) -> np.ndarray:
+        """The unit axis (B) of the rim's torque on a tip at ``tip`` (see ``rim_torque``)."""
+        if not self.rim_names_side:
+            return self._turned([1.0, 0.0, 0.0])
+        u = np.array([*(tip[:2] - self.hole_xy), 0.0])
+        return -cross(u / max(float(np.linalg.norm(u)), 1e-12), [0.0, 0.0, 1.0])
 
     def _turned(self, vector: Sequence[float]) -> np.ndarray:
         """``self.rotation.apply(vector)``, remembered (read only) while the rotation is the
@@ -293,7 +303,7 @@ class ToyWorld:
                 force_t[2] = axial
                 torque_b += self.friction * axial * drag_axis
                 if on_rim and axial > 0.0:
-                    torque_b += self.rim_torque * self._turned([1.0, 0.0, 0.0])
+                    torque_b += self.rim_torque * self._rim_axis(tip)
                 flat = math.tanh(self._edge_slope() / 0.003) * math.tanh(axial / 0.01)
                 torque_b += self.edge_torque * flat * self._turned([0.0, 1.0, 0.0])
                 if self.thickness_tilt_rad:  # the thickness edge's lever jumps where flat
