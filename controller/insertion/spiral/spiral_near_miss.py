@@ -29,9 +29,9 @@ sweep then resumes along its own ring where it had reached, its baseline taken a
 drop on the way is a probe as in the sweep. At most ``per_pass`` retraces a pass (a rim
 that chatters costs no more than that), from pass ``from_pass`` on.
 
-Off in the shipped tasks: on the tuning seeds every form of the retrace cost the first
-pass's catches more time than its own catches saved (docs/BENCHMARKS.md, "Near misses felt
-and retraced").
+Off in the shipped tasks: on the tuning seeds every form of the retrace, toward the named
+side too, cost the first pass's catches more time than its own catches saved
+(docs/BENCHMARKS.md, "Near misses felt and retraced").
 """
 
 from __future__ import annotations
