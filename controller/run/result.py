@@ -22,12 +22,13 @@ class TrialResult:
 
     ``task``: the task name (usb_a, usb_c); ``controller``: the controller's name (dipole,
     fingervision, align, blind, oracle, ...: controller/run/controllers.py); ``seed``: the
-    scene's seed; ``success``: the plug reached the depth and the machine ended in DONE;
+    scene's seed; ``success``: the plug at the depth at the end and the machine in DONE;
     ``status``: how the trial ended (``TrialStatus``; ``inserted`` exactly when
     ``success``); ``failure_reason``: the FAILED transition's reason, or the error's (None on
     success); ``time_to_insert_s``: simulated time from the controller's first tick (the
     devices' start-up, such as the gripper's activation, comes before it) to reaching the
-    depth (None when it never did); ``duration_s``: simulated time of the whole run;
+    depth for good (the last arrival, from which the plug stays at depth to the end; None
+    when it never did); ``duration_s``: simulated time of the whole run;
     ``max_wrist_force_n``: the largest true force of the compliant wrist's springs (ground
     truth, N); ``force_limit_n``: the task's limit on it;
     ``wall_time_s``: the wall-clock time the trial took; ``max_contact_force_n`` and

@@ -149,18 +149,35 @@ def insertion_force_violations(insertion_force_n: np.ndarray, limit_n: float) ->
     return int(np.count_nonzero(over[1:] & ~over[:-1]) + (1 if over.size and over[0] else 0))
 
 
+def final_insertion(depth_m: np.ndarray, required_m: float) -> int | None:
+    """The index of the truth row from which the plug stays at ``required_m`` or deeper to
+    the end (the start of the last run of ``depth_m`` >= it), or None when the last row is
+    not at that depth. A plug that reached the depth, was pulled out and went in again is
+    inserted from its last arrival, not its first."""
+    at = np.asarray(depth_m) >= required_m
+    if not at.size or not at[-1]:
+        return None
+    out = np.flatnonzero(~at)
+    return int(out[-1] + 1) if out.size else 0
+
+
+DONE_NOT_AT_DEPTH = "done with the plug not at the depth"
+"""The failure reason of a trial whose machine finished with the plug out of the depth it
+had reached before (pulled out again)."""
+
+
 def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
     config = task.config
     depth = truth["depth_m"]
     t = truth["t_s"]
     required = config.machine.insert.depth_m
-    reached = np.flatnonzero(depth >= required)
+    final = final_insertion(depth, required)
     started = ran.loop.stats.first_tick_s  # after the devices' start-up (activation)
-    time_to_insert = float(t[reached[0]] - started) if reached.size else None
+    time_to_insert = float(t[final] - started) if final is not None else None
     done = ran.machine.phase is Phase.DONE
     contact, insertion = truth["contact_force_n"], truth["insertion_force_n"]
     violations = insertion_force_violations(insertion, config.contact_force_limit_n)
-    success = done and reached.size > 0 and violations == 0
+    success = done and final is not None and violations == 0
     failure = None
     if not success:
         failed = [tr for tr in ran.transitions if tr.target is Phase.FAILED]
@@ -168,6 +185,8 @@ def _result(task, controller, seed, ran: RunOutcome, truth) -> TrialResult:
             failure = INSERTION_FORCE_EXCEEDED
         elif failed:
             failure = failed[-1].reason
+        elif done and bool(np.any(depth >= required)):
+            failure = DONE_NOT_AT_DEPTH
         elif done:
             failure = "done without reaching the depth"
         else:

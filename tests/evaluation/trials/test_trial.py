@@ -157,3 +157,18 @@ def test_a_trial_that_ends_in_a_fault_says_so_in_its_exit_code(tmp_path, capsys)
     assert code == 1 and err.count("\n") == 1, err
     assert err.startswith("run_trial: error: the run ended in a fault (safe stop done): stale")
     assert (out / "trial.json").is_file()  # the record is kept, complete
+
+
+@pytest.mark.parametrize(
+    ("depth_mm", "expected"),
+    [
+        ([0, 2, 5, 6, 6.5], 2),  # in once, to the end
+        ([0, 5.5, 6, 1, 0, 5, 6.5], 5),  # in, pulled out, in again: the last arrival
+        ([0, 5, 6, 6.5, 3], None),  # in, then out at the end: not inserted
+        ([0, 1, 4.9], None),  # never at the depth
+        ([5, 5, 5], 0),
+        ([], None),
+    ],
+)
+def test_the_insertion_counts_from_the_plugs_last_arrival_at_the_depth(depth_mm, expected):
+    assert trial.final_insertion(np.array(depth_mm, float) * 1e-3, 0.005) == expected
