@@ -43,7 +43,10 @@ class SpiralConfig(Config):
     ``probe_s``: the longest a pause lasts; ``push_speed_m_s``, ``stop_force_n``: the push
     and the force that ends it; ``stall_s``, ``stall_m``: a push whose TCP has gone no more
     than ``stall_m`` lower for ``stall_s`` has ended too (the arm's own limit); ``entry_m``:
-    the least drop of the tip below its height at the press that counts as in;
+    the least drop of the tip below its height at the press that counts as in; ``sink_m``:
+    while sweeping pressed, a tip this far below its height at the press has sunk into the
+    opening even though the force did not drop (the walls bear the press as the pattern drags
+    the plug in the opening's mouth): INSERT, ``sank`` (0: off);
     ``lift_speed_m_s``: after a jam, back up to the press at this speed;
     ``jam_skip_m``: after a jam the pattern goes on this much further along; ``tare_s``: the
     sensor's zero is averaged over this at the hover; ``sweep_speed_m_s``: along the path;
@@ -86,6 +89,7 @@ class SpiralConfig(Config):
     stall_s: float = number(0.01, 10.0, default=0.3)
     stall_m: float = number(1e-6, 0.01, default=1e-4)
     entry_m: float = number(0.0, 0.05, default=0.002)
+    sink_m: float = number(0.0, 0.05, default=0.0)
     lift_speed_m_s: float = number(1e-4, 0.05, default=0.004)
     jam_skip_m: float = number(0.0, 0.05, default=0.001)
     tare_s: float = number(0.0, 5.0, default=0.2)

@@ -137,6 +137,7 @@ SPIRAL = Definition(
         Edge(Phase.APPROACH, Phase.SEARCH, "above_the_opening"),
         Edge(Phase.SEARCH, Phase.INSERT, "caught"),
         Edge(Phase.SEARCH, Phase.INSERT, "fell_in"),
+        Edge(Phase.SEARCH, Phase.INSERT, "sank"),
         Edge(Phase.SEARCH, Phase.FEEL, "touched"),
         Edge(Phase.FEEL, Phase.SEARCH, "felt"),
         Edge(Phase.FEEL, Phase.SEARCH, "no_flat_face"),

@@ -25,7 +25,9 @@ then its outer part at every yaw. Each pass:
   the force under ``catch_ratio`` x the press, means the plug sank into the opening while
   the admittance sought the press (INSERT, ``fell_in``, the touch's height taken as the
   press's): the press never settles there, and without this the pattern stood probing at
-  the arm's floor until the time ran out;
+  the arm's floor until the time ran out. With ``sink_m``, the tip that far below its height
+  at the press while sweeping has sunk in with no force drop (the walls bear the press while
+  the pattern drags the plug in the opening's mouth): INSERT, ``sank``;
 * **rise**: at the pass's end, up to the hover, then **turn** to the next pass's start and
   yaw (or RELEASE after the last, ``pattern_done``).
 """
@@ -188,6 +190,14 @@ def _sweep_or_probe(
             run.s_m = run.s_at(m.force_t_s)
         m.fire("probe")
         return m.pressed(obs, force)
+    if (
+        state.stage is SearchStage.SWEEP
+        and run.press_z_m is not None
+        and cfg.sink_m > 0.0
+        and m.catch_drop_m(obs, force) >= cfg.sink_m
+    ):
+        m.go(obs, Phase.INSERT, "sank")
+        return m.hold()
     if state.stage is SearchStage.SWEEP and run.press_z_m is not None:
         near_miss = m.near_miss_at(obs)
         if near_miss is not None and run.near_miss_m is None:

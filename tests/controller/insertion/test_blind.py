@@ -172,6 +172,27 @@ def test_a_plug_that_sinks_into_the_opening_before_the_press_settles_is_pushed_h
     assert min(world_tip_heights(world)) < world.hole.z_m - SMALL.fall_in_m
 
 
+@pytest.mark.parametrize("sink_m", [0.0, 0.002])
+def test_a_tip_that_sinks_while_the_press_holds_is_in_only_with_sink_m(sink_m):
+    # the press settled, the surface under the tip gives way slowly (a plug dragged into the
+    # opening's mouth, the walls bearing the press): the force never drops, the tip goes down
+    world = ToyWorld(**NO_OPENING)
+    machine = SpiralMachine(replace(SMALL, sink_m=sink_m), world.plug, world.hole)
+    while machine.memory.press_z_m is None:
+        world.step(machine)
+    start_s = world.t_s
+    while world.t_s < start_s + 4.0 and machine.phase is Phase.SEARCH:
+        world.floor_drop_m = min(0.004, world.floor_drop_m + 2e-5)  # 2 mm/s, to 4 mm
+        world.step(machine)
+    if sink_m:
+        assert reasons(machine)[2] == "sank"
+        # about sink_m under its height at the press (the press's height is the TCP's when
+        # the force first came within the settle band, up to 0.4 mm above the full press)
+        assert 0.0015 <= world.floor_drop_m < 0.003
+    else:
+        assert machine.phase is Phase.SEARCH and "probe" not in {c.rule for c in world.commands}
+
+
 def test_a_catch_on_a_board_met_late_is_a_catch_not_a_fall_in():
     # the board 2.5 mm low (or the plug short in the fingers): pressed, the TCP stands over
     # fall_in_m below the nominal board's touch, but not below its own touch
