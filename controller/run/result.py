@@ -46,7 +46,8 @@ class TrialResult:
     and ``grasp_tilt_true_rad`` the scene's; ``grasp_tilt_thickness_true_rad`` the true tilt
     in the thickness plane (about T x), ``thickness_tilt_to_receptacle_true_rad`` the same
     from the receptacle's axis (the board's normal; the board tilts), which FEEL's flat angle
-    measures, ``grasp_tilt_thickness_est_rad`` the press spiral's
+    measures, ``width_tilt_to_receptacle_true_rad`` the width plane's tilt from that axis,
+    ``grasp_tilt_thickness_est_rad`` the press spiral's
     estimate of it (its FEEL's flat angle; nan without one); ``tip_x_est_m`` the estimated tip's
     offset along T x from the nominal (the width-plane estimate's: for the press spiral with
     the plug's offset across the fingers from its imprint, ``tip_x_estimate_m``),
@@ -87,6 +88,7 @@ class TrialResult:
     grasp_tilt_thickness_true_rad: float = float("nan")
     grasp_tilt_thickness_est_rad: float = float("nan")
     thickness_tilt_to_receptacle_true_rad: float = float("nan")
+    width_tilt_to_receptacle_true_rad: float = float("nan")
     tip_x_est_m: float = float("nan")
     tip_x_true_m: float = float("nan")
     tip_y_est_m: float = float("nan")
@@ -139,6 +141,7 @@ POSE_FIELDS = (
     "grasp_tilt_thickness_true_rad",
     "grasp_tilt_thickness_est_rad",
     "thickness_tilt_to_receptacle_true_rad",
+    "width_tilt_to_receptacle_true_rad",
     "tip_x_est_m",
     "tip_x_true_m",
     "tip_y_est_m",

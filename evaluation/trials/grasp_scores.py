@@ -12,7 +12,9 @@ Six quantities (``QUANTITIES``), each scored on the trials that have an estimate
   board measures: the board's tilt (up to 1 degree) is not an error of the rock;
 * ``tip_y_mm``: the tip's offset along T y that tilt implies (``tip_y_est_m``);
 * ``width_tilt_deg``: the tilt about T y (the width plane), where ``grasp_tilt_est_rad`` is
-  finite (the ``align`` machine's FEEL);
+  finite (the press spiral's FEEL with ``rock.width``, or the ``align`` machine's);
+* ``width_tilt_receptacle_deg``: the same estimate against the plug's tilt from the
+  receptacle's axis in that plane (``width_tilt_to_receptacle_true_rad``);
 * ``tip_x_mm``: the tip's offset along T x that tilt implies (``tip_x_est_m``; the press
   spiral's adds the next);
 * ``imprint_mm``: the plug's offset across the fingers that the press spiral takes from the
@@ -22,11 +24,11 @@ A quantity no trial estimates is "not estimated": its true size is given for sca
 summary's statistics are of the absolute error (estimate - truth); the histograms show the
 signed error.
 
-``board_share``: how much of the thickness plane's errors the board's tilt explains. FEEL
+``board_share``: how much of a plane's errors the board's tilt explains (``PLANES``). FEEL
 reads the plug against the receptacle's axis, which differs from the plug's tilt in the hand
-by the board's tilt (b = ``thickness_tilt_to_receptacle_true_rad`` -
-``grasp_tilt_thickness_true_rad``); an estimate exact against the receptacle's axis is off
-the hand's truth by b, and its tip by L (sin(a + b) - sin a).
+by the board's tilt in that plane (b = the tilt from the receptacle's axis less the tilt in
+the hand); an estimate exact against the receptacle's axis is off the hand's truth by b, and
+its tip by L (sin(a + b) - sin a).
 """
 
 from __future__ import annotations
@@ -68,6 +70,9 @@ QUANTITIES = (
              "grasp_tilt_thickness_est_rad"),
     Quantity("width_tilt_deg", "tilt about T y (width plane)", "deg", "grasp_tilt_est_rad",
              "grasp_tilt_true_rad", math.degrees(1.0), "grasp_tilt_est_rad"),
+    Quantity("width_tilt_receptacle_deg", "tilt about T y from the receptacle's axis", "deg",
+             "grasp_tilt_est_rad", "width_tilt_to_receptacle_true_rad", math.degrees(1.0),
+             "grasp_tilt_est_rad"),
     Quantity("tip_x_mm", "tip offset along T x", "mm", "tip_x_est_m", "tip_x_true_m", 1e3,
              "grasp_tilt_est_rad"),
     Quantity("imprint_mm", "plug offset across the fingers (imprint)", "mm",
@@ -142,32 +147,62 @@ def grasp_estimate_summary(results: Sequence[TrialResult]) -> dict[str, Any] | N
     }
 
 
-def board_share(results: Sequence[TrialResult], length_m: float) -> dict[str, float] | None:
-    """The board's part of the thickness plane's errors over the trials with an estimate and
-    both truths (module doc; ``length_m``: the plug's length L from the TCP to the tip, m):
-    ``n``; ``board_tilt_median_deg``, the median |b|; ``correlation`` of the tilt's signed
-    error with b; ``tip_error_less_board_median_mm``, the median |tip error - the board's
-    share of it| (where the tip is estimated and true). None below 3 trials or without spread
-    in either (no correlation)."""
-    q = quantity("thickness_tilt_deg")
-    rows = [r for r in _estimated(results, q)
-            if _finite(r, "thickness_tilt_to_receptacle_true_rad")]  # fmt: skip
+@dataclass(frozen=True)
+class Plane:
+    """One plane of FEEL's estimate for ``board_share``: its ``name``, the axis its tilt
+    turns about (``about``) and the axis its tip moves along (``along``), the quantity of its
+    tilt (``tilt``: its estimate and truth), the ``TrialResult`` field of the tilt from the
+    receptacle's axis (``to_receptacle``) and the quantity of its tip (``tip``)."""
+
+    name: str
+    about: str
+    along: str
+    tilt: str
+    to_receptacle: str
+    tip: str
+
+
+PLANES = (
+    Plane("thickness", "T x", "T y", "thickness_tilt_deg",
+          "thickness_tilt_to_receptacle_true_rad", "tip_y_mm"),
+    Plane("width", "T y", "T x", "width_tilt_deg", "width_tilt_to_receptacle_true_rad",
+          "tip_x_mm"),
+)  # fmt: skip
+"""The planes whose errors ``board_share`` splits."""
+
+
+def board_share(
+    results: Sequence[TrialResult], length_m: float, plane: Plane
+) -> dict[str, float] | None:
+    """The board's part of ``plane``'s errors over the trials with an estimate and both
+    truths (module doc; ``length_m``: the plug's length L from the TCP to the tip, m): ``n``;
+    ``board_tilt_median_deg``, the median |b|; ``correlation`` of the tilt's signed error with
+    b; ``tip_error_less_board_median_mm``, the median |tip error - the board's share of it|
+    (where the tip is estimated and true). None below 3 trials or without spread in either
+    (no correlation)."""
+    q, tip = quantity(plane.tilt), quantity(plane.tip)
+    rows = [r for r in _estimated(results, q) if _finite(r, plane.to_receptacle)]
     if len(rows) < 3:
         return None
-    tilt = np.array([r.grasp_tilt_thickness_true_rad for r in rows])
-    board = np.array([r.thickness_tilt_to_receptacle_true_rad for r in rows]) - tilt
-    error = np.array([r.grasp_tilt_thickness_est_rad for r in rows]) - tilt
+    tilt = np.array([getattr(r, q.truth) for r in rows])
+    board = np.array([getattr(r, plane.to_receptacle) for r in rows]) - tilt
+    error = np.array([getattr(r, q.estimate) for r in rows]) - tilt
     if np.ptp(board) == 0.0 or np.ptp(error) == 0.0:
         return None
     share_m = length_m * (np.sin(tilt + board) - np.sin(tilt))
-    tip = np.array([r.tip_y_est_m - r.tip_y_true_m for r in rows]) - share_m
-    tip = np.abs(tip[np.isfinite(tip)])
+    off = np.array([getattr(r, tip.estimate) - getattr(r, tip.truth) for r in rows]) - share_m
+    off = np.abs(off[np.isfinite(off)])
     return {
         "n": len(rows),
         "board_tilt_median_deg": math.degrees(float(np.median(np.abs(board)))),
         "correlation": float(np.corrcoef(error, board)[0, 1]),
-        "tip_error_less_board_median_mm": 1e3 * float(np.median(tip)) if tip.size else math.nan,
+        "tip_error_less_board_median_mm": 1e3 * float(np.median(off)) if off.size else math.nan,
     }
+
+
+def board_shares(results: Sequence[TrialResult], length_m: float) -> dict[str, Any]:
+    """``board_share`` of each of ``PLANES``, by its name (None where it has none)."""
+    return {plane.name: board_share(results, length_m, plane) for plane in PLANES}
 
 
 def chart_errors(results: Sequence[TrialResult]) -> dict[str, list[float]]:

@@ -10,13 +10,14 @@ tilt about T y and the tip along T x, the ``align`` machine's), the absolute err
 95th percentile and largest over the trials with an estimate of it; a quantity no trial
 estimates is "not estimated" (its true size, for scale). OUT_DIR gets:
 
-* ``grasp_scores.md``: the table, one row per batch and quantity, a note per batch on the
-  board's share of the thickness plane's errors (``grasp_scores.board_share``: FEEL reads the
-  plug against the receptacle's axis, the board's tilt away from the hand's), and the charts;
+* ``grasp_scores.md``: the table, one row per batch and quantity, a note per batch and plane
+  on the board's share of its errors (``grasp_scores.board_share``: FEEL reads the plug
+  against the receptacle's axis, the board's tilt away from the hand's), and the charts;
 * ``grasp_errors_<DIR's name>.png``: per batch with an estimate, a histogram of the signed
   error (estimate - truth) of each quantity it estimates;
 * ``grasp_scores.json``: each batch's block (the summary's ``grasp_estimate``; null without
-  an estimate) and its ``board_share`` (null below 3 trials with both truths).
+  an estimate) and its ``board_share`` per plane (``thickness``, ``width``: null below 3
+  trials with both truths).
 
 A ``trials.csv`` written before a pose column existed reads it as unknown. One from before
 ``tip_y_est_m`` gets it from the thickness-plane tilt as the machine computes it
@@ -46,8 +47,11 @@ from core.subcommands import job_prog
 from evaluation.trials.batch import CSV_NAME, PLAN_NAME, read_trials
 from evaluation.trials.charts import grasp_error_chart
 from evaluation.trials.grasp_scores import (
+    PLANES,
     TABLE_HEADER,
+    Plane,
     board_share,
+    board_shares,
     chart_errors,
     grasp_estimate_summary,
     table_cells,
@@ -152,18 +156,19 @@ def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
                 "`grasp_tilt_thickness_est_rad` as the machine computes it, L sin(tilt) with "
                 f"L = {1e3 * batch.length_m:g} mm (the task's plug length)."
             )
-        if (share := board_share(batch.results, batch.length_m)) is not None:
-            notes.append(board_note(batch, share))
+        for plane in PLANES:
+            if (share := board_share(batch.results, batch.length_m, plane)) is not None:
+                notes.append(board_note(batch, plane, share))
     return "\n".join([*lines, "", *notes, *([""] if notes else []), *charts]).rstrip() + "\n"
 
 
-def board_note(batch: Scored, share: dict[str, float]) -> str:
-    """The markdown note on the board's share of ``batch``'s thickness-plane errors."""
+def board_note(batch: Scored, plane: Plane, share: dict[str, float]) -> str:
+    """The markdown note on the board's share of ``batch``'s errors in ``plane``."""
     return (
-        f"- `{batch.name}`: the board's tilt about T x (the plug's tilt from the receptacle's "
-        f"axis less its tilt in the hand), {share['n']} trials: median "
+        f"- `{batch.name}`: the board's tilt about {plane.about} (the plug's tilt from the "
+        f"receptacle's axis less its tilt in the hand), {share['n']} trials: median "
         f"{share['board_tilt_median_deg']:.2f} deg; the tilt's error follows it (correlation "
-        f"{share['correlation']:.2f}); the tip's error along T y less the board's share, "
+        f"{share['correlation']:.2f}); the tip's error along {plane.along} less the board's share, "
         f"L (sin(a + b) - sin a) with L = {1e3 * batch.length_m:g} mm: median "
         f"{share['tip_error_less_board_median_mm']:.2f} mm."
     )
@@ -183,7 +188,7 @@ def write(batches: list[Scored], out: Path) -> list[dict[str, Any] | None]:
             )
     every = {
         b.name: {"folder": str(b.folder), "grasp_estimate": blk,
-                 "board_share": board_share(b.results, b.length_m)}
+                 "board_share": board_shares(b.results, b.length_m)}
         for b, blk in zip(batches, blocks, strict=True)
     }  # fmt: skip
     write_text(out / BLOCKS, json.dumps(every, indent=2) + "\n")

@@ -9,8 +9,8 @@ finds) is atan2(p_x, p_z), the thickness-plane tilt atan2(p_y, p_z).
 
 FEEL by rocking finds where the tip's face lies flat on the board, so it measures the plug's
 tilt from the board's normal, the receptacle's axis (the board tilts by up to a degree,
-``board_tilt_rad``): ``receptacle_tilt_thickness_rad`` is that axis's tilt in T's thickness
-plane with the tool upright at the hole's yaw (T x along H x, T y and T z along -H y and -H z).
+``board_tilt_rad``): ``receptacle_tilts_rad`` gives that axis's tilts in T's two planes with
+the tool upright at the hole's yaw (T x along H x, T y and T z along -H y and -H z).
 """
 
 from __future__ import annotations
@@ -49,10 +49,14 @@ def grasp_truth(grasp: GraspPose, length_m: float) -> GraspTruth:
     )
 
 
-def receptacle_tilt_thickness_rad(board_tilt_rad: tuple[float, float]) -> float:
-    """The receptacle's axis (into the board, -the board's normal) in T's thickness plane
-    (about T x, rad, the sign of ``GraspTruth.tilt_thickness_rad``) for a board tilted by
-    ``board_tilt_rad`` about H's x and then its y (rad), the tool upright at the hole's yaw."""
+def receptacle_tilts_rad(board_tilt_rad: tuple[float, float]) -> tuple[float, float]:
+    """The receptacle's axis (into the board, -the board's normal) in T's width plane (about
+    T y) and its thickness plane (about T x), rad, the signs of ``GraspTruth``'s tilts, for a
+    board tilted by ``board_tilt_rad`` about H's x and then its y (rad), the tool upright at
+    the hole's yaw."""
     into_h = Rotation.from_euler("xy", board_tilt_rad).apply([0.0, 0.0, -1.0])
     into_t = np.array([into_h[0], -into_h[1], -into_h[2]])
-    return math.atan2(float(into_t[1]), float(into_t[2]))
+    return (
+        math.atan2(float(into_t[0]), float(into_t[2])),
+        math.atan2(float(into_t[1]), float(into_t[2])),
+    )

@@ -225,12 +225,13 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
     # imported here: the scene's draws belong to the simulator, which a real run never loads
     from drivers.sim.scenes.insertion.coupling import imprint
     from drivers.sim.scenes.insertion.draws import draw_scene
-    from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilt_thickness_rad
+    from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilts_rad
 
     length = task.config.plug.length_m
     draw = draw_scene(task.config.hole, task.scene, seed)
     truth = grasp_truth(draw.grasp, length)
-    receptacle = receptacle_tilt_thickness_rad(draw.board_tilt_rad)
+    # the receptacle's axis about T y and about T x (rad)
+    about_y, about_x = receptacle_tilts_rad(draw.board_tilt_rad)
     estimate = getattr(ran.machine, "grasp", None)
     tilt = estimate.tilt_rad if estimate is not None else math.nan
     thickness = getattr(ran.machine, "tilt_x_estimate_rad", None)
@@ -244,7 +245,8 @@ def _grasp_fields(task: Task, seed: int, ran: RunOutcome) -> dict[str, float]:
         "grasp_tilt_est_rad": tilt,
         "grasp_tilt_true_rad": truth.tilt_width_rad,
         "grasp_tilt_thickness_true_rad": truth.tilt_thickness_rad,
-        "thickness_tilt_to_receptacle_true_rad": truth.tilt_thickness_rad - receptacle,
+        "thickness_tilt_to_receptacle_true_rad": truth.tilt_thickness_rad - about_x,
+        "width_tilt_to_receptacle_true_rad": truth.tilt_width_rad - about_y,
         "grasp_tilt_thickness_est_rad": math.nan if thickness is None else thickness,
         "tip_x_est_m": math.nan if tip_x is None else float(tip_x),
         "tip_x_true_m": float(truth.tip_t_m[0]),

@@ -121,7 +121,9 @@ def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, cap
     exact = [_on_a_tilted_board(i, b, 0.0) for i, b in enumerate(boards)]
     assert main([str(_batch(tmp_path / "exact", exact)), "--out", str(tmp_path / "s")]) == 0
     table = capsys.readouterr().out
-    share = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["exact"]["board_share"]
+    shares = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["exact"]["board_share"]
+    assert shares["width"] is None  # no width-plane estimate
+    share = shares["thickness"]
     assert share["n"] == 5
     assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(0.01))
     assert share["correlation"] == pytest.approx(1.0)
@@ -131,7 +133,8 @@ def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, cap
     own = [0.01, 0.012, -0.015, -0.008, 0.011]
     noisy = [_on_a_tilted_board(i, b, e) for i, (b, e) in enumerate(zip(boards, own, strict=True))]
     assert main([str(_batch(tmp_path / "noisy", noisy)), "--out", str(tmp_path / "t")]) == 0
-    share = json.loads((tmp_path / "t" / "grasp_scores.json").read_text())["noisy"]["board_share"]
+    shares = json.loads((tmp_path / "t" / "grasp_scores.json").read_text())["noisy"]["board_share"]
+    share = shares["thickness"]
     assert share["correlation"] < 0.8
     assert share["tip_error_less_board_median_mm"] == pytest.approx(
         1e3 * USB_C_PLUG_M * 0.011, rel=0.05
@@ -141,4 +144,29 @@ def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, cap
 def test_too_few_trials_with_both_truths_give_no_board_share(tmp_path):
     assert main([str(_batch(tmp_path / "b", RESULTS)), "--out", str(tmp_path / "s")]) == 0
     scores = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())
-    assert scores["b"]["board_share"] is None
+    assert scores["b"]["board_share"] == {"thickness": None, "width": None}
+
+
+def test_the_width_plane_has_its_own_board_share(tmp_path, capsys):
+    # FEEL about T y exact against the receptacle's axis, the board tilted about T y: the
+    # width plane's error is the board's tilt, its tip's the board's share along T x
+    boards = [0.006, -0.01, 0.012, -0.004]
+    tilt = 0.03  # _result's width-plane truth
+    trials = [
+        dataclasses.replace(
+            _result(i), grasp_tilt_est_rad=tilt + b, width_tilt_to_receptacle_true_rad=tilt + b,
+            tip_x_est_m=0.001 + USB_C_PLUG_M * (math.sin(tilt + b) - math.sin(tilt)),
+        )
+        for i, b in enumerate(boards)
+    ]  # fmt: skip
+    assert main([str(_batch(tmp_path / "w", trials)), "--out", str(tmp_path / "s")]) == 0
+    table = capsys.readouterr().out
+    shares = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["w"]["board_share"]
+    assert shares["thickness"] is None
+    share = shares["width"]
+    assert share["n"] == 4
+    assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(0.008))
+    assert share["correlation"] == pytest.approx(1.0)
+    assert share["tip_error_less_board_median_mm"] == pytest.approx(0.0, abs=1e-9)
+    assert "`w`: the board's tilt about T y" in table and "error along T x less" in table
+    assert "tilt about T y from the receptacle's axis, deg | 4/4 | 0.00" in table

@@ -9,7 +9,7 @@ import pytest
 from controller.run.result import TrialResult
 from drivers.sim.scenes.insertion.draws import GraspPose
 from evaluation.trials.grasp_scores import chart_errors, quantity, signed_errors, table_cells
-from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilt_thickness_rad
+from evaluation.trials.grasp_truth import grasp_truth, receptacle_tilts_rad
 from evaluation.trials.summary import summarize
 
 
@@ -33,12 +33,13 @@ def test_the_offsets_move_the_tip_across_and_along():
     assert truth.tip_t_m == pytest.approx([-0.0005, 0.0, 0.021])
 
 
-def test_the_receptacle_tilts_in_the_thickness_plane_with_the_board_about_its_x():
-    # the board turned by b about H x turns the receptacle's axis by -b about T x (T y = -H y)
-    assert receptacle_tilt_thickness_rad((0.01, 0.0)) == pytest.approx(-0.01)
-    # about H y: the width plane only
-    assert receptacle_tilt_thickness_rad((0.0, 0.02)) == pytest.approx(0.0, abs=1e-12)
-    assert receptacle_tilt_thickness_rad((0.0, 0.0)) == 0.0
+def test_the_receptacle_tilts_in_each_plane_with_the_board_about_its_axis():
+    # the board turned by b about H x turns the receptacle's axis by -b about T x (T y = -H y),
+    # the width plane unchanged
+    assert receptacle_tilts_rad((0.01, 0.0)) == pytest.approx((0.0, -0.01), abs=1e-12)
+    # about H y by b: the axis (-sin b, 0, -cos b) in H is (-sin b, 0, cos b) in T, -b about T y
+    assert receptacle_tilts_rad((0.0, 0.02)) == pytest.approx((-0.02, 0.0), abs=1e-12)
+    assert receptacle_tilts_rad((0.0, 0.0)) == (0.0, 0.0)
 
 
 def test_a_table_without_the_pose_columns_reads_them_as_unknown():
