@@ -5,10 +5,11 @@
 Each DIR is a batch folder (``tactile trials --out``: its ``trials.csv``; ``batch.json``, if
 there, names the seeds); no trial runs. The scores are evaluation/trials/grasp_scores.py's,
 as a batch's ``summary.json`` and ``tactile compare`` give them: for each quantity some
-trial estimates (the tilt about T x and the tip's offset along T y, the press spiral's; the
-tilt about T y and the tip along T x, the ``align`` machine's), the absolute error's median,
-95th percentile and largest over the trials with an estimate of it; a quantity no trial
-estimates is "not estimated" (its true size, for scale). OUT_DIR gets:
+trial estimates (the tilts about T x and T y, each against the hand and against the
+receptacle's axis; the tip's offsets along T y and T x; the plug's offset across the
+fingers), the absolute error's median, 95th percentile and largest over the trials with an
+estimate of it; a quantity no trial estimates is "not estimated" (its true size, for scale).
+OUT_DIR gets:
 
 * ``grasp_scores.md``: the table, one row per batch and quantity, a note per batch and plane
   on the board's share of its errors (``grasp_scores.board_share``: FEEL reads the plug
