@@ -51,7 +51,6 @@ from evaluation.trials.grasp_scores import (
     PLANES,
     TABLE_HEADER,
     Plane,
-    board_share,
     board_shares,
     chart_errors,
     grasp_estimate_summary,
@@ -129,8 +128,13 @@ def chart_name(batch: Scored) -> str:
     return f"grasp_errors_{batch.name}.png"
 
 
-def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
-    """The table of every batch's scores, the notes and the charts."""
+def markdown(
+    batches: list[Scored],
+    blocks: list[dict[str, Any] | None],
+    shares: list[dict[str, Any]],
+) -> str:
+    """The table of every batch's scores, the notes (``shares``: each batch's ``board_shares``)
+    and the charts."""
     lines = [
         "## The plug in the hand by touch (FEEL) against the scene's truth",
         "",
@@ -142,7 +146,7 @@ def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
         "|---|---|---:|---:|---:|---:|",
     ]
     notes, charts = [], []
-    for batch, block in zip(batches, blocks, strict=True):
+    for batch, block, share_of in zip(batches, blocks, shares, strict=True):
         label = f"{batch.title} (`{batch.name}`)"
         if block is None:
             lines.append(f"| {label} | every quantity | no estimate of {len(batch.results)} | "
@@ -158,7 +162,7 @@ def markdown(batches: list[Scored], blocks: list[dict[str, Any] | None]) -> str:
                 f"L = {1e3 * batch.length_m:g} mm (the task's plug length)."
             )
         for plane in PLANES:
-            if (share := board_share(batch.results, batch.length_m, plane)) is not None:
+            if (share := share_of[plane.name]) is not None:
                 notes.append(board_note(batch, plane, share))
     return "\n".join([*lines, "", *notes, *([""] if notes else []), *charts]).rstrip() + "\n"
 
@@ -187,13 +191,13 @@ def write(batches: list[Scored], out: Path) -> list[dict[str, Any] | None]:
                 f"the plug in the hand by touch: {batch.title}",
                 len(batch.results),
             )
+    shares = [board_shares(b.results, b.length_m) for b in batches]
     every = {
-        b.name: {"folder": str(b.folder), "grasp_estimate": blk,
-                 "board_share": board_shares(b.results, b.length_m)}
-        for b, blk in zip(batches, blocks, strict=True)
-    }  # fmt: skip
+        b.name: {"folder": str(b.folder), "grasp_estimate": blk, "board_share": share}
+        for b, blk, share in zip(batches, blocks, shares, strict=True)
+    }
     write_text(out / BLOCKS, json.dumps(every, indent=2) + "\n")
-    write_text(out / TABLE, markdown(batches, blocks))
+    write_text(out / TABLE, markdown(batches, blocks, shares))
     return blocks
 
 

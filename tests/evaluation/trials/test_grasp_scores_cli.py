@@ -116,25 +116,33 @@ def _on_a_tilted_board(seed: int, board_rad: float, rock_error_rad: float) -> Tr
     )  # fmt: skip
 
 
+def _board_shares(out: Path, name: str) -> dict:
+    """The ``board_share`` block of batch ``name`` in ``out``'s grasp_scores.json."""
+    return json.loads((out / "grasp_scores.json").read_text())[name]["board_share"]
+
+
+def _assert_the_board_explains_it_all(share: dict, n: int, board_median_rad: float) -> None:
+    """An estimate exact against the receptacle's axis: its error is all the board's."""
+    assert share["n"] == n
+    assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(board_median_rad))
+    assert share["correlation"] == pytest.approx(1.0)
+    assert share["tip_error_less_board_median_mm"] == pytest.approx(0.0, abs=1e-9)
+
+
 def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, capsys):
     boards = [0.004, -0.012, 0.008, -0.016, 0.01]
     exact = [_on_a_tilted_board(i, b, 0.0) for i, b in enumerate(boards)]
     assert main([str(_batch(tmp_path / "exact", exact)), "--out", str(tmp_path / "s")]) == 0
     table = capsys.readouterr().out
-    shares = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["exact"]["board_share"]
+    shares = _board_shares(tmp_path / "s", "exact")
     assert shares["width"] is None  # no width-plane estimate
-    share = shares["thickness"]
-    assert share["n"] == 5
-    assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(0.01))
-    assert share["correlation"] == pytest.approx(1.0)
-    assert share["tip_error_less_board_median_mm"] == pytest.approx(0.0, abs=1e-9)
+    _assert_the_board_explains_it_all(shares["thickness"], 5, 0.01)
     assert "`exact`: the board's tilt about T x" in table and "correlation 1.00" in table
     # a rock error of its own, unrelated to the board: the share explains little of it
     own = [0.01, 0.012, -0.015, -0.008, 0.011]
     noisy = [_on_a_tilted_board(i, b, e) for i, (b, e) in enumerate(zip(boards, own, strict=True))]
     assert main([str(_batch(tmp_path / "noisy", noisy)), "--out", str(tmp_path / "t")]) == 0
-    shares = json.loads((tmp_path / "t" / "grasp_scores.json").read_text())["noisy"]["board_share"]
-    share = shares["thickness"]
+    share = _board_shares(tmp_path / "t", "noisy")["thickness"]
     assert share["correlation"] < 0.8
     assert share["tip_error_less_board_median_mm"] == pytest.approx(
         1e3 * USB_C_PLUG_M * 0.011, rel=0.05
@@ -143,8 +151,7 @@ def test_the_board_share_names_the_error_that_the_board_tilt_makes(tmp_path, cap
 
 def test_too_few_trials_with_both_truths_give_no_board_share(tmp_path):
     assert main([str(_batch(tmp_path / "b", RESULTS)), "--out", str(tmp_path / "s")]) == 0
-    scores = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())
-    assert scores["b"]["board_share"] == {"thickness": None, "width": None}
+    assert _board_shares(tmp_path / "s", "b") == {"thickness": None, "width": None}
 
 
 def test_the_width_plane_has_its_own_board_share(tmp_path, capsys):
@@ -161,12 +168,8 @@ def test_the_width_plane_has_its_own_board_share(tmp_path, capsys):
     ]  # fmt: skip
     assert main([str(_batch(tmp_path / "w", trials)), "--out", str(tmp_path / "s")]) == 0
     table = capsys.readouterr().out
-    shares = json.loads((tmp_path / "s" / "grasp_scores.json").read_text())["w"]["board_share"]
+    shares = _board_shares(tmp_path / "s", "w")
     assert shares["thickness"] is None
-    share = shares["width"]
-    assert share["n"] == 4
-    assert share["board_tilt_median_deg"] == pytest.approx(math.degrees(0.008))
-    assert share["correlation"] == pytest.approx(1.0)
-    assert share["tip_error_less_board_median_mm"] == pytest.approx(0.0, abs=1e-9)
+    _assert_the_board_explains_it_all(shares["width"], 4, 0.008)
     assert "`w`: the board's tilt about T y" in table and "error along T x less" in table
     assert "tilt about T y from the receptacle's axis, deg | 4/4 | 0.00" in table
